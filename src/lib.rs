@@ -1,0 +1,14 @@
+//! raycost measures what ray-tracing acceleration structures really cost and holds every measurement
+//! against closed-form theory.
+//!
+//! ```text
+//! experiments/NAME.toml ─parse+validate─▶ Spec ─expand sweep─▶ [Point] ─run (rayon)─▶ [Row]
+//!                                                  engines + theory (pure)     results/NAME/NAME.csv
+//! ```
+//! Layers, each depending only on those above it: `geom`, `sample`, `stats`, `theory`, `scene`,
+//! `grid`, `spec`, `experiment`, `output`; `cli` and `main.rs` sit on top.
+#![warn(missing_docs)]
+
+pub mod geom;
+pub mod sample;
+pub mod scene;
