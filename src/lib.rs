@@ -9,6 +9,17 @@
 //! `grid`, `spec`, `experiment`, `output`; `cli` and `main.rs` sit on top.
 #![warn(missing_docs)]
 
+#[cfg(feature = "embree")]
+pub mod embree;
+pub mod app;
+pub mod bench;
+pub mod cli;
+pub mod experiment;
 pub mod geom;
+pub mod grid;
+pub mod output;
 pub mod sample;
 pub mod scene;
+pub mod spec;
+pub mod stats;
+pub mod theory;

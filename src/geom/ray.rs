@@ -16,8 +16,14 @@ impl Ray {
     /// A ray from `o` along `d`; −0.0 components of `d` become +0.0.
     pub fn new(o: DVec3, d: DVec3) -> Self {
         use super::float::positive_zero as pz;
-        debug_assert!((d.length_squared() - 1.0).abs() < 1e-9, "direction must be unit: {d}");
-        Self { o, d: DVec3::new(pz(d.x), pz(d.y), pz(d.z)) }
+        debug_assert!(
+            (d.length_squared() - 1.0).abs() < 1e-9,
+            "direction must be unit: {d}"
+        );
+        Self {
+            o,
+            d: DVec3::new(pz(d.x), pz(d.y), pz(d.z)),
+        }
     }
 
     /// The point at parameter `t`.

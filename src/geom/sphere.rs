@@ -74,26 +74,48 @@ mod tests {
 
     #[test]
     fn head_on_hit_is_at_distance_minus_radius() {
-        let s = Sphere { c: DVec3::new(10.0, 0.0, 0.0), r: 1.0, id: 0 };
+        let s = Sphere {
+            c: DVec3::new(10.0, 0.0, 0.0),
+            r: 1.0,
+            id: 0,
+        };
         assert_eq!(s.intersect(&ray([0.0; 3], [1.0, 0.0, 0.0])), Some(9.0));
         assert_eq!(s.intersect(&ray([0.0; 3], [-1.0, 0.0, 0.0])), None);
     }
 
     #[test]
     fn sphere_containing_or_touching_the_origin_is_ignored() {
-        let s = Sphere { c: DVec3::new(0.5, 0.0, 0.0), r: 1.0, id: 0 };
+        let s = Sphere {
+            c: DVec3::new(0.5, 0.0, 0.0),
+            r: 1.0,
+            id: 0,
+        };
         assert_eq!(s.intersect(&ray([0.0; 3], [1.0, 0.0, 0.0])), None);
-        let touching = Sphere { c: DVec3::new(1.0, 0.0, 0.0), r: 1.0, id: 0 };
+        let touching = Sphere {
+            c: DVec3::new(1.0, 0.0, 0.0),
+            r: 1.0,
+            id: 0,
+        };
         assert_eq!(touching.intersect(&ray([0.0; 3], [1.0, 0.0, 0.0])), None);
     }
 
     #[test]
     fn tangent_ray_hits_at_the_foot_point() {
-        let s = Sphere { c: DVec3::new(5.0, 1.0, 0.0), r: 1.0, id: 0 };
-        let t = s.intersect(&ray([0.0; 3], [1.0, 0.0, 0.0])).expect("tangent ray hits");
+        let s = Sphere {
+            c: DVec3::new(5.0, 1.0, 0.0),
+            r: 1.0,
+            id: 0,
+        };
+        let t = s
+            .intersect(&ray([0.0; 3], [1.0, 0.0, 0.0]))
+            .expect("tangent ray hits");
         // A few ulps, the accuracy the module documents (c = (|f|−r)(|f|+r) rounds |f| = √26).
         assert!((t - 5.0).abs() <= 4.0 * f64::EPSILON * 5.0, "t = {t}");
-        let missed = Sphere { c: DVec3::new(5.0, 1.0 + 1e-12, 0.0), r: 1.0, id: 0 };
+        let missed = Sphere {
+            c: DVec3::new(5.0, 1.0 + 1e-12, 0.0),
+            r: 1.0,
+            id: 0,
+        };
         assert_eq!(missed.intersect(&ray([0.0; 3], [1.0, 0.0, 0.0])), None);
     }
 
@@ -101,9 +123,18 @@ mod tests {
     fn tiny_far_sphere_keeps_full_relative_accuracy() {
         // |f| / r = 1e12: the textbook discriminant b² − c cancels completely here.
         let r = 1e-6;
-        let s = Sphere { c: DVec3::new(1e6, 0.5 * r, 0.0), r, id: 0 };
-        let t = s.intersect(&ray([0.0; 3], [1.0, 0.0, 0.0])).expect("grazing hit");
+        let s = Sphere {
+            c: DVec3::new(1e6, 0.5 * r, 0.0),
+            r,
+            id: 0,
+        };
+        let t = s
+            .intersect(&ray([0.0; 3], [1.0, 0.0, 0.0]))
+            .expect("grazing hit");
         let exact = 1e6 - (r * r - 0.25 * r * r).sqrt();
-        assert!(((t - exact) / exact).abs() < 1e-15, "t = {t}, exact = {exact}");
+        assert!(
+            ((t - exact) / exact).abs() < 1e-15,
+            "t = {t}, exact = {exact}"
+        );
     }
 }

@@ -62,9 +62,18 @@ mod tests {
 
     #[test]
     fn same_key_same_numbers_different_key_different_numbers() {
-        let a: Vec<u64> = (0..4).map(|_| 0).scan(stream(&[1, 2, 3]), |s, _: u64| Some(s.gen())).collect();
-        let b: Vec<u64> = (0..4).map(|_| 0).scan(stream(&[1, 2, 3]), |s, _: u64| Some(s.gen())).collect();
-        let c: Vec<u64> = (0..4).map(|_| 0).scan(stream(&[1, 2, 4]), |s, _: u64| Some(s.gen())).collect();
+        let a: Vec<u64> = (0..4)
+            .map(|_| 0)
+            .scan(stream(&[1, 2, 3]), |s, _: u64| Some(s.gen()))
+            .collect();
+        let b: Vec<u64> = (0..4)
+            .map(|_| 0)
+            .scan(stream(&[1, 2, 3]), |s, _: u64| Some(s.gen()))
+            .collect();
+        let c: Vec<u64> = (0..4)
+            .map(|_| 0)
+            .scan(stream(&[1, 2, 4]), |s, _: u64| Some(s.gen()))
+            .collect();
         assert_eq!(a, b);
         assert_ne!(a, c);
     }

@@ -93,7 +93,10 @@ impl RadiusDist {
                 if lo == hi {
                     return vec![(lo, 1.0)];
                 }
-                gauss_legendre_panels(lo, hi, n, 8).into_iter().map(|(x, w)| (x, w / (hi - lo))).collect()
+                gauss_legendre_panels(lo, hi, n, 8)
+                    .into_iter()
+                    .map(|(x, w)| (x, w / (hi - lo)))
+                    .collect()
             }
             Self::LogNormal { median, sigma, max } => {
                 let nrm = std_normal();
@@ -174,7 +177,11 @@ mod tests {
 
     #[test]
     fn truncated_lognormal_moments_match_sampling() {
-        let d = RadiusDist::LogNormal { median: 0.1, sigma: 0.5, max: 0.4 };
+        let d = RadiusDist::LogNormal {
+            median: 0.1,
+            sigma: 0.5,
+            max: 0.4,
+        };
         assert!((d.expect(|_| 1.0) - 1.0).abs() < 1e-12);
         let mut rng = stream(&[3]);
         let n = 400_000;
@@ -187,6 +194,10 @@ mod tests {
         }
         let (m1, m2) = (s1 / n as f64, s2 / n as f64);
         let se = ((m2 - m1 * m1) / n as f64).sqrt();
-        assert!((m1 - d.expect(|r| r)).abs() < 5.0 * se, "{m1} vs {}", d.expect(|r| r));
+        assert!(
+            (m1 - d.expect(|r| r)).abs() < 5.0 * se,
+            "{m1} vs {}",
+            d.expect(|r| r)
+        );
     }
 }

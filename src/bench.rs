@@ -1,0 +1,172 @@
+//! `raycost bench`: speed of every engine on identical scenes, side by side in one run.
+//!
+//! Scene: n centres uniform in a cube at ρ = 1 (side n^⅓), r = 0.1; rays from the cube's centre in
+//! uniform directions, first hit only (PERFORMANCE.md's setting). The finite grid runs with the cell
+//! width the cost model picks from T_I and T_S measured on this machine, on one thread and on all;
+//! the lazily generated infinite scene and brute force (a subset of rays) run beside it. Every grid
+//! answer is checked against brute force on the rays brute force traces (`mismatches` must be 0).
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::Context;
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::experiment::grid::BATCH;
+use crate::experiment::machine;
+use crate::experiment::Row;
+use crate::geom::{Aabb, Ray, Sphere};
+use crate::grid::{build::frame_around, brute_force, mailbox::Mailbox, trace, FiniteGrid, GridFrame, TraceCounts};
+use crate::output::sink::{Sink, SinkOptions};
+use crate::sample::{directions::uniform_direction, rng::stream};
+use crate::scene::finite::{FiniteScene, FiniteSize};
+use crate::scene::lazy::LazyScene;
+use crate::scene::{RadiusClass, RadiusDist, RadiusDraw};
+use crate::theory::grid::{self as th, Eye, GridTheoryInput, QueryCost};
+
+const RHO: f64 = 1.0;
+const R: f64 = 0.1;
+
+/// Peak resident memory of this process so far (VmHWM), bytes; 0 where /proc is unavailable.
+pub fn peak_rss_bytes() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok()))
+        .map_or(0, |kb| kb * 1024)
+}
+
+fn pool(threads: usize) -> anyhow::Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("could not start a thread pool")
+}
+
+/// Traces `rays` through a finite grid on the current pool; returns counts and seconds.
+pub fn trace_finite(grid: &FiniteGrid, rays: &[Ray]) -> (Vec<TraceCounts>, f64) {
+    let start = Instant::now();
+    let counts: Vec<TraceCounts> = rays
+        .par_chunks(4096)
+        .flat_map_iter(|chunk| {
+            let mut mb = Mailbox::default();
+            let mut lists = grid;
+            chunk.iter().map(move |r| trace(&mut lists, r, &mut mb, true, u32::MAX)).collect::<Vec<_>>()
+        })
+        .collect();
+    (counts, start.elapsed().as_secs_f64())
+}
+
+/// Runs the benchmark and writes `OUT/bench/bench.csv`.
+pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
+    let sizes: &[u64] = if quick { &[10_000, 100_000] } else { &[10_000, 100_000, 1_000_000, 10_000_000] };
+    let n_rays: usize = if quick { 200_000 } else { 2_000_000 };
+    let bf_rays: usize = if quick { 2_000 } else { 500 };
+    let all = rayon::current_num_threads();
+    let dir = out.join("bench");
+    let mut sink = Sink::open(&dir, "bench", "bench", SinkOptions { force, resume: false })?;
+
+    let costs = machine::measure();
+    let classes = [RadiusClass { fraction: 1.0, radius: RadiusDist::Constant(R) }];
+    let probe = GridTheoryInput { intensity: RHO, classes: &classes, draw: RadiusDraw::PerSphere, cell_width: 1.0 };
+    let a = th::best_cell_width(&probe, &QueryCost { t_i: costs.t_i, t_s: costs.t_s, eye: Eye::Uniform, mailbox: true }, 0.1, 5.0);
+    println!("machine: T_I = {:.2} ns, T_S = {:.2} ns → cost-model cell width a = {a:.3}", costs.t_i * 1e9, costs.t_s * 1e9);
+    println!("{:<14} {:>9} {:>7} {:>12} {:>9} {:>12} {:>10} {:>8} {:>8}", "engine", "n", "threads", "rays/s", "build s", "peak MB", "mismatch", "N_I", "N_S");
+    let emit = |sink: &mut Sink, row: Row| -> anyhow::Result<()> {
+        let g = |c: &str| row.get(c).and_then(|v| v.as_f64()).unwrap_or(f64::NAN);
+        println!(
+            "{:<14} {:>9} {:>7} {:>12.4e} {:>9.3} {:>12.1} {:>10} {:>8.2} {:>8.2}",
+            row.get("engine").map_or(String::new(), |v| v.render()),
+            g("n"),
+            g("threads"),
+            g("rays_per_s"),
+            g("build_s"),
+            g("peak_mem_bytes") / 1e6,
+            g("mismatches"),
+            g("n_i_mean"),
+            g("n_s_mean")
+        );
+        sink.append(&row, &[]).context("could not append to the bench table")?;
+        Ok(())
+    };
+
+    let mut rng = stream(&[0x6265_6e63, 0]);
+    let dirs: Vec<DVec3> = (0..n_rays).map(|_| uniform_direction(&mut rng)).collect();
+    for &n in sizes {
+        let scene = FiniteScene { intensity: RHO, classes: classes.to_vec(), draw: RadiusDraw::PerSphere, size: FiniteSize::Count(n), center: DVec3::ZERO };
+        let spheres: Vec<Sphere> = scene.generate(&[0x6265_6e63, n]);
+        let start = Instant::now();
+        let b = scene.centre_box();
+        let bounds = Aabb::new(b.lo - DVec3::splat(R), b.hi + DVec3::splat(R));
+        let grid = FiniteGrid::build(frame_around(bounds, a, DVec3::ZERO), &spheres);
+        let build_s = start.elapsed().as_secs_f64();
+        let peak = peak_rss_bytes();
+        let rays: Vec<Ray> = dirs.iter().map(|&d| Ray::new(DVec3::ZERO, d)).collect();
+
+        // Brute force on a subset: the oracle for mismatches, and its own speed.
+        let bf_n = bf_rays.min(rays.len());
+        let bf_start = Instant::now();
+        let oracle: Vec<Option<u64>> = pool(all)?.install(|| rays[..bf_n].par_iter().map(|r| brute_force(&spheres, r).map(|h| h.id)).collect());
+        let bf_s = bf_start.elapsed().as_secs_f64();
+
+        for threads in [1, all] {
+            let (counts, secs) = pool(threads)?.install(|| trace_finite(&grid, &rays));
+            let mismatches = counts[..bf_n].iter().zip(&oracle).filter(|(c, o)| c.hit.map(|h| h.id) != **o).count();
+            let mut row = Row::default();
+            row.s("engine", "grid").u("n", n).u("threads", threads as u64).f("cell_width", a).u("rays", rays.len() as u64);
+            row.f("rays_per_s", rays.len() as f64 / secs).f("build_s", build_s).u("peak_mem_bytes", peak).u("grid_bytes", grid.bytes());
+            row.u("checked", bf_n as u64).u("mismatches", mismatches as u64);
+            row.f("n_i_mean", mean(counts.iter().map(|c| f64::from(c.n_i_mb)))).f("n_s_mean", mean(counts.iter().map(|c| f64::from(c.n_s))));
+            emit(&mut sink, row)?;
+        }
+        let mut row = Row::default();
+        row.s("engine", "brute-force").u("n", n).u("threads", all as u64).f("cell_width", f64::NAN).u("rays", bf_n as u64);
+        row.f("rays_per_s", bf_n as f64 / bf_s).f("build_s", 0.0).u("peak_mem_bytes", peak).u("grid_bytes", 0);
+        row.u("checked", bf_n as u64).u("mismatches", 0).f("n_i_mean", n as f64).f("n_s_mean", 0.0);
+        emit(&mut sink, row)?;
+        #[cfg(feature = "embree")]
+        crate::embree::bench_rows(&spheres, &rays, &oracle, n, all, &mut |row| emit(&mut sink, row))?;
+        drop(grid);
+    }
+
+    // The lazily generated infinite scene (no n: it has no boundary), same a, same directions.
+    for threads in [1, all] {
+        let start = Instant::now();
+        let (n_i, n_s) = pool(threads)?.install(|| {
+            let parts: Vec<(f64, f64)> = dirs
+                .par_chunks(BATCH as usize)
+                .enumerate()
+                .map(|(b, chunk)| {
+                    let scene = LazyScene::new(RHO, &classes, RadiusDraw::PerSphere, a, &[0x6265_6e63, 1, b as u64]);
+                    let mut lists = scene.cells(GridFrame { origin: DVec3::ZERO, width: a, dims: None }, 2.0 * a);
+                    let mut mb = Mailbox::default();
+                    let eye = DVec3::splat(0.5 * a);
+                    chunk.iter().fold((0.0, 0.0), |acc, &d| {
+                        let c = trace(&mut lists, &Ray::new(eye, d), &mut mb, true, 10_000_000);
+                        (acc.0 + f64::from(c.n_i_mb), acc.1 + f64::from(c.n_s))
+                    })
+                })
+                .collect();
+            parts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1))
+        });
+        let secs = start.elapsed().as_secs_f64();
+        let mut row = Row::default();
+        row.s("engine", "grid-infinite").u("n", 0).u("threads", threads as u64).f("cell_width", a).u("rays", dirs.len() as u64);
+        row.f("rays_per_s", dirs.len() as f64 / secs).f("build_s", 0.0).u("peak_mem_bytes", peak_rss_bytes()).u("grid_bytes", 0);
+        row.u("checked", 0).u("mismatches", 0).f("n_i_mean", n_i / dirs.len() as f64).f("n_s_mean", n_s / dirs.len() as f64);
+        emit(&mut sink, row)?;
+    }
+    let meta = format!(
+        "[bench]\nquick = {quick}\nthreads = {all}\nhost = \"{}\"\nt_i_s = {:e}\nt_s_s = {:e}\ncell_width = {a}\nfinished = \"{}\"\n",
+        crate::output::meta::host_name(),
+        costs.t_i,
+        costs.t_s,
+        crate::output::time::now_rfc3339()
+    );
+    for p in sink.finish(&meta)? {
+        println!("wrote {}", p.display());
+    }
+    Ok(())
+}
+
+fn mean(it: impl Iterator<Item = f64>) -> f64 {
+    let (s, n) = it.fold((0.0, 0u64), |(s, n), x| (s + x, n + 1));
+    s / n.max(1) as f64
+}

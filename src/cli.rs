@@ -1,0 +1,133 @@
+//! Command-line definitions only (clap derive). Nothing below this layer imports clap.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+use crate::experiment::runner::Shard;
+
+/// Measure what ray-tracing acceleration structures really cost, against closed-form theory.
+#[derive(Debug, Parser)]
+#[command(name = "raycost", version, about, long_about = None, propagate_version = true)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Run an experiment spec and write DIR/NAME/NAME.csv (+ .meta.toml, .hist.csv).
+    Run(RunArgs),
+    /// Validate a spec and print its expanded points; runs nothing.
+    Check(CheckArgs),
+    /// Print closed forms for given parameters.
+    Theory(TheoryArgs),
+    /// Speed figures of every engine, side by side in one run (results/bench/bench.csv).
+    Bench(BenchArgs),
+}
+
+/// `raycost run`.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// The experiment spec (TOML).
+    pub spec: PathBuf,
+    /// Results root.
+    #[arg(long, default_value = "results")]
+    pub out: PathBuf,
+    /// Override a spec key, e.g. --set grid.cell_width=0.7 (TOML value syntax); repeatable.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Replace existing results (or a partial run).
+    #[arg(long)]
+    pub force: bool,
+    /// No progress bar and no summary.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Run only the points with index ≡ K (mod N); writes NAME.shard-K-of-N.csv.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<Shard>,
+    /// Continue a partial run, skipping the points it finished.
+    #[arg(long)]
+    pub resume: bool,
+}
+
+/// `raycost check`.
+#[derive(Debug, Args)]
+pub struct CheckArgs {
+    /// The experiment spec (TOML).
+    pub spec: PathBuf,
+    /// Override a spec key; repeatable.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+}
+
+/// `raycost theory`.
+#[derive(Debug, Args)]
+pub struct TheoryArgs {
+    /// Which theory.
+    #[command(subcommand)]
+    pub which: TheoryCommand,
+}
+
+/// Theories.
+#[derive(Debug, Subcommand)]
+pub enum TheoryCommand {
+    /// Regular grid over Poisson spheres (Márton & Szirmay-Kalos).
+    Grid(GridTheoryArgs),
+}
+
+/// `raycost theory grid`.
+#[derive(Debug, Args)]
+pub struct GridTheoryArgs {
+    /// ρ, sphere centres per unit volume.
+    #[arg(long)]
+    pub intensity: f64,
+    /// r, sphere radius.
+    #[arg(long)]
+    pub radius: f64,
+    /// a, cell width.
+    #[arg(long = "cell-width")]
+    pub cell_width: f64,
+    /// Eye placement in its cell.
+    #[arg(long, value_enum, default_value = "uniform")]
+    pub eye: EyeArg,
+}
+
+/// Eye placement.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum EyeArg {
+    /// On a cell corner.
+    Corner,
+    /// Uniform in its cell.
+    Uniform,
+}
+
+/// `raycost bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Small sizes only (for CI): n up to 10⁵.
+    #[arg(long)]
+    pub quick: bool,
+    /// Results root.
+    #[arg(long, default_value = "results")]
+    pub out: PathBuf,
+    /// Replace an existing bench table.
+    #[arg(long)]
+    pub force: bool,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cli_definition_is_consistent() {
+        use clap::CommandFactory;
+        Cli::command().debug_assert();
+    }
+}

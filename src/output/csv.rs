@@ -1,0 +1,42 @@
+//! CSV serialisation, pure: rows in, bytes out (file I/O lives in `sink`).
+
+use crate::experiment::Row;
+
+/// The header line of rows shaped like `row`.
+pub fn header(row: &Row) -> Vec<u8> {
+    let mut w = ::csv::Writer::from_writer(Vec::new());
+    w.write_record(row.0.iter().map(|(c, _)| c.as_str())).expect("writing to memory cannot fail");
+    w.into_inner().expect("flush to memory")
+}
+
+/// One record line; the columns must match the header.
+pub fn record(row: &Row) -> Vec<u8> {
+    let mut w = ::csv::Writer::from_writer(Vec::new());
+    w.write_record(row.0.iter().map(|(_, v)| v.render())).expect("writing to memory cannot fail");
+    w.into_inner().expect("flush to memory")
+}
+
+/// A whole table: header (from the first row) and records.
+pub fn serialize(rows: &[Row]) -> Vec<u8> {
+    let mut out = Vec::new();
+    if let Some(first) = rows.first() {
+        out.extend(header(first));
+        for r in rows {
+            out.extend(record(r));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn header_and_records_line_up() {
+        let mut r = Row::default();
+        r.u("point", 0).f("n_i_mean", 1.5).s("n_i_band", "inside").f("x", f64::NAN);
+        let text = String::from_utf8(serialize(&[r.clone(), r])).expect("utf8");
+        assert_eq!(text, "point,n_i_mean,n_i_band,x\n0,1.5,inside,NaN\n0,1.5,inside,NaN\n");
+    }
+}

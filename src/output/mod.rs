@@ -1,0 +1,23 @@
+//! Where results go: CSV tables and metadata written so that nothing a user has is ever lost.
+//!
+//! Rows are appended and flushed point by point to `.partial` files beside the final ones; only a
+//! finished run renames them into place (an atomic rename on one file system). An existing result
+//! is never replaced without `--force`, and every check that could refuse a run happens before the
+//! first point is traced.
+
+pub mod csv;
+pub mod meta;
+pub mod progress;
+pub mod sink;
+pub mod summary;
+pub mod time;
+
+/// A problem with the output location that is the user's to fix (exit code 2).
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: {message}")]
+pub struct OutputError {
+    /// The file or folder at fault.
+    pub path: String,
+    /// What is wrong.
+    pub message: String,
+}

@@ -1,0 +1,171 @@
+//! The result files of one run: `DIR/NAME/STEM.csv`, `STEM.hist.csv`, `STEM.meta.toml`, with
+//! `STEM = NAME` or `NAME.shard-K-of-N`.
+//!
+//! While a run goes, rows are appended to `STEM.csv.partial` (and `.hist.csv.partial`) and flushed
+//! after every point, so a killed run keeps every finished point; `--resume` reads them back (after
+//! checking the spec hash recorded in `STEM.meta.toml.partial`), drops a torn last line, and goes on.
+//! Only a finished run renames the partial files into place.
+
+use std::collections::BTreeSet;
+use std::fs::{self, File, OpenOptions};
+use std::io::{Read, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+use super::csv::{header, record};
+use super::OutputError;
+use crate::experiment::Row;
+
+/// How a run treats existing files.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SinkOptions {
+    /// Replace existing final results.
+    pub force: bool,
+    /// Continue a partial run.
+    pub resume: bool,
+}
+
+/// Open result files of a run in progress.
+#[derive(Debug)]
+pub struct Sink {
+    dir: PathBuf,
+    stem: String,
+    csv: File,
+    hist: File,
+    csv_has_header: bool,
+    hist_has_header: bool,
+    done: BTreeSet<usize>,
+}
+
+fn err(path: &Path, message: impl Into<String>) -> OutputError {
+    OutputError { path: path.display().to_string(), message: message.into() }
+}
+
+impl Sink {
+    /// Path of a file of this run: `suffix` is `csv`, `hist.csv` or `meta.toml`.
+    pub fn path(dir: &Path, stem: &str, suffix: &str) -> PathBuf {
+        dir.join(format!("{stem}.{suffix}"))
+    }
+
+    fn partial(dir: &Path, stem: &str, suffix: &str) -> PathBuf {
+        dir.join(format!("{stem}.{suffix}.partial"))
+    }
+
+    /// Opens (or, with `resume`, reopens) the files of run `stem` in `dir`. Refuses, before anything
+    /// is written, to replace a finished result without `force` or to discard a partial one without
+    /// `resume` or `force`.
+    pub fn open(dir: &Path, stem: &str, spec_hash: &str, opts: SinkOptions) -> Result<Sink, OutputError> {
+        fs::create_dir_all(dir).map_err(|e| err(dir, format!("cannot create the results folder: {e}")))?;
+        let probe = dir.join(format!(".{stem}.write-test"));
+        File::create(&probe).map_err(|e| err(dir, format!("the results folder is not writable: {e}")))?;
+        let _ = fs::remove_file(&probe);
+        for suffix in ["csv", "hist.csv", "meta.toml"] {
+            let p = Self::path(dir, stem, suffix);
+            if p.exists() && !opts.force {
+                return Err(err(&p, "exists already; pass --force to replace it (nothing was written)"));
+            }
+        }
+        let csv_p = Self::partial(dir, stem, "csv");
+        let hist_p = Self::partial(dir, stem, "hist.csv");
+        let meta_p = Self::partial(dir, stem, "meta.toml");
+        let mut done = BTreeSet::new();
+        let (mut csv_has_header, mut hist_has_header) = (false, false);
+        if csv_p.exists() && opts.resume {
+            let recorded = fs::read_to_string(&meta_p).unwrap_or_default();
+            let want = format!("spec_hash = \"{spec_hash}\"");
+            if !recorded.contains(&want) {
+                return Err(err(&csv_p, "was written by a different spec (spec hash differs); it cannot be resumed. Move it away or pass --force without --resume to start over"));
+            }
+            let rows = read_complete(&csv_p).map_err(|e| err(&csv_p, e))?;
+            csv_has_header = !rows.is_empty();
+            for line in rows.iter().skip(1) {
+                let point = line.split(',').next().and_then(|p| p.parse::<usize>().ok()).ok_or_else(|| err(&csv_p, format!("unreadable row: {line}")))?;
+                done.insert(point);
+            }
+            // Keep histogram rows only of points whose main row was written.
+            let hist_rows = if hist_p.exists() { read_complete(&hist_p).map_err(|e| err(&hist_p, e))? } else { Vec::new() };
+            let mut kept = String::new();
+            for (i, line) in hist_rows.iter().enumerate() {
+                let keep = i == 0 || line.split(',').next().and_then(|p| p.parse::<usize>().ok()).is_some_and(|p| done.contains(&p));
+                if keep {
+                    kept.push_str(line);
+                    kept.push('\n');
+                }
+            }
+            hist_has_header = !hist_rows.is_empty();
+            fs::write(&hist_p, kept).map_err(|e| err(&hist_p, e.to_string()))?;
+        } else if csv_p.exists() && !opts.force {
+            return Err(err(&csv_p, "a partial run exists: pass --resume to continue it, or --force to start over"));
+        } else {
+            for p in [&csv_p, &hist_p] {
+                File::create(p).map_err(|e| err(p, e.to_string()))?;
+            }
+            let mut m = File::create(&meta_p).map_err(|e| err(&meta_p, e.to_string()))?;
+            writeln!(m, "spec_hash = \"{spec_hash}\"\nstarted = \"{}\"", super::time::now_rfc3339()).map_err(|e| err(&meta_p, e.to_string()))?;
+        }
+        let open = |p: &Path| OpenOptions::new().append(true).open(p).map_err(|e| err(p, e.to_string()));
+        Ok(Sink { dir: dir.to_path_buf(), stem: stem.to_string(), csv: open(&csv_p)?, hist: open(&hist_p)?, csv_has_header, hist_has_header, done })
+    }
+
+    /// Points already finished (from a resumed partial run).
+    pub fn done(&self) -> &BTreeSet<usize> {
+        &self.done
+    }
+
+    /// Appends one point: its histogram rows first, then its main row, each flushed to disk.
+    pub fn append(&mut self, row: &Row, hist: &[Row]) -> std::io::Result<()> {
+        let mut h = Vec::new();
+        if !hist.is_empty() && !self.hist_has_header {
+            h.extend(header(&hist[0]));
+            self.hist_has_header = true;
+        }
+        for r in hist {
+            h.extend(record(r));
+        }
+        self.hist.write_all(&h)?;
+        self.hist.sync_data()?;
+        let mut m = Vec::new();
+        if !self.csv_has_header {
+            m.extend(header(row));
+            self.csv_has_header = true;
+        }
+        m.extend(record(row));
+        self.csv.write_all(&m)?;
+        self.csv.sync_data()
+    }
+
+    /// Writes the metadata and renames the partial files into place.
+    pub fn finish(self, meta: &str) -> std::io::Result<Vec<PathBuf>> {
+        let (dir, stem) = (self.dir, self.stem);
+        drop(self.csv);
+        drop(self.hist);
+        let meta_p = Self::partial(&dir, &stem, "meta.toml");
+        fs::write(&meta_p, meta)?;
+        let mut written = Vec::new();
+        let hist_p = Self::partial(&dir, &stem, "hist.csv");
+        if fs::metadata(&hist_p)?.len() > 0 {
+            fs::rename(&hist_p, Self::path(&dir, &stem, "hist.csv"))?;
+            written.push(Self::path(&dir, &stem, "hist.csv"));
+        } else {
+            fs::remove_file(&hist_p)?;
+        }
+        fs::rename(&meta_p, Self::path(&dir, &stem, "meta.toml"))?;
+        fs::rename(Self::partial(&dir, &stem, "csv"), Self::path(&dir, &stem, "csv"))?;
+        written.insert(0, Self::path(&dir, &stem, "meta.toml"));
+        written.insert(0, Self::path(&dir, &stem, "csv"));
+        Ok(written)
+    }
+}
+
+/// The complete lines of a file; a torn last line (no newline: the writer was killed mid-write) is
+/// cut off the file itself, so appending continues cleanly.
+fn read_complete(p: &Path) -> Result<Vec<String>, String> {
+    let mut f = OpenOptions::new().read(true).write(true).open(p).map_err(|e| e.to_string())?;
+    let mut text = String::new();
+    f.read_to_string(&mut text).map_err(|e| e.to_string())?;
+    let keep = text.rfind('\n').map_or(0, |i| i + 1);
+    if keep < text.len() {
+        f.set_len(keep as u64).map_err(|e| e.to_string())?;
+        f.seek(SeekFrom::End(0)).map_err(|e| e.to_string())?;
+    }
+    Ok(text[..keep].lines().map(str::to_string).collect())
+}

@@ -1,0 +1,222 @@
+//! The validated configuration of one point: what the engines see, with the checks that span keys.
+
+use glam::DVec3;
+
+use super::raw::{Extent, Kind, RawDist, RawDraw, RawRadius, RawSpec};
+use crate::grid::build::estimated_bytes;
+use crate::scene::finite::{FiniteScene, FiniteSize};
+use crate::scene::{RadiusClass, RadiusDist, RadiusDraw};
+use crate::theory::grid::Eye;
+
+/// The scene model of a point.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SceneModel {
+    /// Infinite Poisson scene, generated lazily; a new realisation per ray batch.
+    Infinite,
+    /// A finite cube, one realisation per point, built into a grid.
+    Finite(FiniteScene),
+}
+
+/// Everything the grid engines need for one point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridConfig {
+    /// Experiment kind.
+    pub kind: Kind,
+    /// Master seed.
+    pub seed: u64,
+    /// Rays to trace.
+    pub rays: u64,
+    /// ρ.
+    pub intensity: f64,
+    /// Radius classes (one class of constant radius for `scene.radius`).
+    pub classes: Vec<RadiusClass>,
+    /// When radii are drawn.
+    pub draw: RadiusDraw,
+    /// Infinite or finite.
+    pub scene: SceneModel,
+    /// a.
+    pub cell_width: f64,
+    /// Mailboxing on (skip repeated tests).
+    pub mailbox: bool,
+    /// Eye placement.
+    pub eye: Eye,
+    /// Walk cut-off in infinite scenes.
+    pub max_steps: u64,
+    /// t* histogram bins.
+    pub bins: usize,
+    /// t* histogram right edge, mean free paths.
+    pub t_max_mfp: f64,
+    /// Brute force only for n ≤ this.
+    pub brute_force_max_n: u64,
+    /// Rays checked by brute force.
+    pub brute_force_rays: u64,
+    /// c of Proposition 4.1.
+    pub concentration_c: f64,
+}
+
+/// A failed cross-key check: (dotted key to blame, message).
+pub type ConfigError = (String, String);
+
+impl GridConfig {
+    /// Validates the cross-key rules of a raw point spec.
+    pub fn from_raw(raw: &RawSpec) -> Result<Self, ConfigError> {
+        let e = |k: &str, m: String| (k.to_string(), m);
+        let s = &raw.scene;
+        let classes = match (s.radius, s.class.is_empty()) {
+            (Some(r), true) => vec![RadiusClass {
+                fraction: 1.0,
+                radius: RadiusDist::Constant(r),
+            }],
+            (None, false) => s
+                .class
+                .iter()
+                .map(|c| RadiusClass {
+                    fraction: c.fraction,
+                    radius: match &c.radius {
+                        RawRadius::Constant(r) => RadiusDist::Constant(*r),
+                        RawRadius::Dist(RawDist::Uniform { lo, hi }) => {
+                            RadiusDist::Uniform { lo: *lo, hi: *hi }
+                        }
+                        RawRadius::Dist(RawDist::Lognormal { median, sigma, max }) => {
+                            RadiusDist::LogNormal {
+                                median: *median,
+                                sigma: *sigma,
+                                max: *max,
+                            }
+                        }
+                    },
+                })
+                .collect(),
+            (Some(_), false) => {
+                return Err(e(
+                    "scene.radius",
+                    "give either scene.radius or [[scene.class]] tables, not both".into(),
+                ))
+            }
+            (None, true) => {
+                return Err(e(
+                    "scene.radius",
+                    "missing: give scene.radius or [[scene.class]] tables".into(),
+                ))
+            }
+        };
+        let total: f64 = classes.iter().map(|c| c.fraction).sum();
+        if (total - 1.0).abs() > 1e-9 {
+            return Err(e(
+                "scene.class",
+                format!("fractions sum to {total}, expected 1"),
+            ));
+        }
+        let draw = match s.radius_draw {
+            None | Some(RawDraw::PerSphere) => RadiusDraw::PerSphere,
+            Some(RawDraw::PerScene) => RadiusDraw::PerScene,
+        };
+        let center = s.center.map(DVec3::from).unwrap_or(DVec3::ZERO);
+        let size = match (s.extent, s.spheres) {
+            (Some(Extent::Side(_)), Some(_)) => return Err(e("scene.spheres", "give either a numeric scene.extent or scene.spheres, not both".into())),
+            (Some(Extent::Infinite), Some(_)) => return Err(e("scene.spheres", "an infinite scene has no sphere count; set scene.extent to a side or drop scene.spheres".into())),
+            (Some(Extent::Side(l)), None) => Some(FiniteSize::Side(l)),
+            (None, Some(n)) => Some(FiniteSize::Count(n)),
+            (None | Some(Extent::Infinite), None) => None,
+        };
+        let scene = match size {
+            None => {
+                if s.center.is_some() {
+                    return Err(e(
+                        "scene.center",
+                        "only a finite scene has a centre (the infinite scene is stationary)"
+                            .into(),
+                    ));
+                }
+                SceneModel::Infinite
+            }
+            Some(size) => SceneModel::Finite(FiniteScene {
+                intensity: s.intensity,
+                classes: classes.clone(),
+                draw,
+                size,
+                center,
+            }),
+        };
+        let kind = raw.experiment.kind;
+        if kind == Kind::GridScaling && scene == SceneModel::Infinite {
+            return Err(e("scene.spheres", "kind grid-scaling needs a finite scene: set scene.spheres (or scene.extent to a side)".into()));
+        }
+        if raw.scaling.is_some() && kind != Kind::GridScaling {
+            return Err(e(
+                "scaling",
+                format!(
+                    "the [scaling] table belongs to kind grid-scaling, not {}",
+                    kind.as_str()
+                ),
+            ));
+        }
+        let g = &raw.grid;
+        let a = g.cell_width;
+        // Memory of a finite grid, estimated before anything is allocated.
+        if let SceneModel::Finite(fs) = &scene {
+            let n = fs.expected_count();
+            let side = fs.side() + 2.0 * fs.max_radius() + 2.0 * a;
+            let cells = (side / a).ceil().powi(3);
+            let per_sphere: f64 = classes
+                .iter()
+                .map(|c| {
+                    c.fraction
+                        * c.radius
+                            .expect(|r| crate::theory::grid::offset_cube_volume(a, r))
+                        / (a * a * a)
+                })
+                .sum();
+            let listings = n * per_sphere;
+            let spheres_bytes = n * 40.0;
+            let bytes = estimated_bytes(cells.min(1e18) as u64, listings.min(1e18) as u64) as f64
+                + spheres_bytes;
+            let budget = g.memory_budget_gib * (1u64 << 30) as f64;
+            if !(bytes <= budget) || cells > u32::MAX as f64 || listings > u32::MAX as f64 {
+                return Err(e(
+                    "grid.cell_width",
+                    format!(
+                        "a grid of {cells:.3e} cells listing {listings:.3e} spheres would need about {:.2} GiB, over the budget of {} GiB (grid.memory_budget_gib) or the 2³² index limit; use a larger cell width or fewer spheres",
+                        bytes / (1u64 << 30) as f64,
+                        g.memory_budget_gib
+                    ),
+                ));
+            }
+        }
+        if raw.experiment.rays > 10_000_000_000 {
+            return Err(e(
+                "experiment.rays",
+                format!("got {}, at most 10¹⁰", raw.experiment.rays),
+            ));
+        }
+        let h = raw.histogram.clone().unwrap_or_default();
+        if h.bins > 100_000 {
+            return Err(e(
+                "histogram.bins",
+                format!("got {}, at most 100000", h.bins),
+            ));
+        }
+        let sc = raw.scaling.clone().unwrap_or_default();
+        Ok(Self {
+            kind,
+            seed: raw.experiment.seed,
+            rays: raw.experiment.rays,
+            intensity: s.intensity,
+            classes,
+            draw,
+            scene,
+            cell_width: a,
+            mailbox: g.mailbox,
+            eye: match g.eye {
+                super::raw::Eye::Corner => Eye::Corner,
+                super::raw::Eye::Uniform => Eye::Uniform,
+            },
+            max_steps: g.max_steps,
+            bins: h.bins as usize,
+            t_max_mfp: h.t_max_mfp,
+            brute_force_max_n: sc.brute_force_max_n,
+            brute_force_rays: sc.brute_force_rays,
+            concentration_c: sc.c,
+        })
+    }
+}

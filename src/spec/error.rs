@@ -1,0 +1,99 @@
+//! Spec errors in the contract's form: `FILE:LINE:COL: KEY: what is wrong (what is allowed)`.
+
+use std::fmt;
+
+/// One bad-input error, located as precisely as the input allows.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub struct SpecError {
+    /// Where: the spec path, or the `--set` flag.
+    pub source_name: String,
+    /// 1-based line and column in the file, when known.
+    pub location: Option<(usize, usize)>,
+    /// The dotted key at fault, when known.
+    pub key: Option<String>,
+    /// What is wrong and what is allowed.
+    pub message: String,
+}
+
+impl fmt::Display for SpecError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.source_name)?;
+        if let Some((l, c)) = self.location {
+            write!(f, ":{l}:{c}")?;
+        }
+        if let Some(k) = &self.key {
+            write!(f, ": {k}")?;
+        }
+        write!(f, ": {}", self.message)
+    }
+}
+
+/// 1-based (line, column) of byte offset `at` in `text`.
+pub fn line_col(text: &str, at: usize) -> (usize, usize) {
+    let at = at.min(text.len());
+    let before = &text[..at];
+    let line = before.matches('\n').count() + 1;
+    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, col)
+}
+
+/// Best-effort location of a dotted key's definition in the text: the `[sweep]` entry `"key" =`, or
+/// the line `leaf =` inside its table. Used for errors found after expansion, where serde has no span.
+pub fn find_key(text: &str, key: &str) -> Option<(usize, usize)> {
+    let quoted = format!("\"{key}\"");
+    if let Some(i) = text.find(&quoted) {
+        return Some(line_col(text, i));
+    }
+    let (table, leaf) = key.rsplit_once('.')?;
+    let header = format!("[{table}]");
+    let start = text.find(&header)?;
+    let mut offset = start;
+    for line in text[start..].split_inclusive('\n').skip(1) {
+        offset += 0;
+        let trimmed = line.trim_start();
+        if trimmed.starts_with('[') {
+            break;
+        }
+        if let Some(rest) = trimmed.strip_prefix(leaf) {
+            if rest.trim_start().starts_with('=') {
+                let pos = text[start..]
+                    .find(line)
+                    .map(|p| start + p + (line.len() - trimmed.len()))?;
+                return Some(line_col(text, pos));
+            }
+        }
+    }
+    let _ = offset;
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn locations_are_one_based() {
+        let t = "a = 1\n[grid]\ncell_width = 2\n";
+        assert_eq!(line_col(t, 0), (1, 1));
+        assert_eq!(line_col(t, 13), (3, 1));
+        assert_eq!(find_key(t, "grid.cell_width"), Some((3, 1)));
+        assert_eq!(
+            find_key("[sweep]\n\"grid.cell_width\" = [1]\n", "grid.cell_width"),
+            Some((2, 1))
+        );
+    }
+
+    #[test]
+    fn display_follows_the_contract() {
+        let e = SpecError {
+            source_name: "x.toml".into(),
+            location: Some((3, 14)),
+            key: Some("scene.radius".into()),
+            message: "got -1, expected > 0".into(),
+        };
+        assert_eq!(
+            e.to_string(),
+            "x.toml:3:14: scene.radius: got -1, expected > 0"
+        );
+    }
+}

@@ -1,0 +1,17 @@
+//! Experiment specs: TOML text → validated points.
+//!
+//! Two levels, as ripgrep's low/high args: [`raw::RawSpec`] mirrors the file and rejects unknown keys
+//! and out-of-range values where they are read (with file, line, column and dotted key); then each
+//! sweep point is expanded on the TOML tree, read again, and turned into a [`GridConfig`], the only
+//! thing engines see. Checks that span several keys (one radius source, fractions summing to 1, the
+//! memory a finite grid would need) come last and name the key they blame.
+
+pub mod config;
+pub mod error;
+pub mod raw;
+pub mod sweep;
+
+pub use config::{GridConfig, SceneModel};
+pub use error::SpecError;
+pub use raw::{Kind, RawSpec};
+pub use sweep::{Point, Spec};

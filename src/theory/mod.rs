@@ -1,0 +1,12 @@
+//! Closed-form theory: pure functions (no I/O, no randomness, no `Result`) that give the value each
+//! measurement is held against.
+//!
+//! - [`grid`]: the regular grid over Poisson spheres, Márton & Szirmay-Kalos, "average-case
+//!   complexity of the regular grid" (`papers/grid-average-case-complexity.txt`): eqs. (3)–(9),
+//!   Results 3.1 and 3.2, plus the cell-step counts and sharper test-count predictors that the paper
+//!   does not state (derived in that module's doc comments).
+//!
+//! Note on layering: the theory reads the radius laws of [`crate::scene::radius`] (a plain data type
+//! with its own quadrature), so that theory and scene integrate exactly the same truncated law.
+
+pub mod grid;
