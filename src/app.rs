@@ -8,7 +8,7 @@ use crate::cli::{Cli, Command, EyeArg, TheoryCommand};
 use crate::experiment::runner::{self, RunOptions};
 use crate::output::OutputError;
 use crate::scene::{RadiusClass, RadiusDist, RadiusDraw};
-use crate::spec::{SpecError, Spec};
+use crate::spec::{Spec, SpecError};
 use crate::theory::grid::{self as th, Eye, GridTheoryInput};
 
 /// A usage error that clap cannot see (a bad flag value found later).
@@ -18,7 +18,9 @@ pub struct UsageError(pub String);
 
 /// Exit code for an error chain: 2 when the input is at fault, 1 otherwise.
 pub fn exit_code(e: &anyhow::Error) -> u8 {
-    let bad_input = e.chain().any(|c| c.is::<SpecError>() || c.is::<OutputError>() || c.is::<UsageError>());
+    let bad_input = e
+        .chain()
+        .any(|c| c.is::<SpecError>() || c.is::<OutputError>() || c.is::<UsageError>());
     if bad_input {
         2
     } else {
@@ -34,10 +36,20 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 if n == 0 {
                     return Err(UsageError("--threads must be at least 1".into()).into());
                 }
-                rayon::ThreadPoolBuilder::new().num_threads(n).build_global().context("could not start the thread pool")?;
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .build_global()
+                    .context("could not start the thread pool")?;
             }
             let spec = Spec::load(&a.spec, &a.set)?;
-            let opts = RunOptions { out: a.out, force: a.force, resume: a.resume, quiet: a.quiet, shard: a.shard, sets: a.set };
+            let opts = RunOptions {
+                out: a.out,
+                force: a.force,
+                resume: a.resume,
+                quiet: a.quiet,
+                shard: a.shard,
+                sets: a.set,
+            };
             let (written, summary) = runner::run(&spec, &opts)?;
             if !a.quiet {
                 let mut out = std::io::stdout().lock();
@@ -55,13 +67,28 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Theory(t) => match t.which {
             TheoryCommand::Grid(g) => {
-                for (name, v) in [("--intensity", g.intensity), ("--radius", g.radius), ("--cell-width", g.cell_width)] {
+                for (name, v) in [
+                    ("--intensity", g.intensity),
+                    ("--radius", g.radius),
+                    ("--cell-width", g.cell_width),
+                ] {
                     if !(v.is_finite() && v > 0.0) {
-                        return Err(UsageError(format!("{name}: got {v}, expected a finite number > 0")).into());
+                        return Err(UsageError(format!(
+                            "{name}: got {v}, expected a finite number > 0"
+                        ))
+                        .into());
                     }
                 }
-                let classes = [RadiusClass { fraction: 1.0, radius: RadiusDist::Constant(g.radius) }];
-                let inp = GridTheoryInput { intensity: g.intensity, classes: &classes, draw: RadiusDraw::PerSphere, cell_width: g.cell_width };
+                let classes = [RadiusClass {
+                    fraction: 1.0,
+                    radius: RadiusDist::Constant(g.radius),
+                }];
+                let inp = GridTheoryInput {
+                    intensity: g.intensity,
+                    classes: &classes,
+                    draw: RadiusDraw::PerSphere,
+                    cell_width: g.cell_width,
+                };
                 let eye = match g.eye {
                     EyeArg::Corner => Eye::Corner,
                     EyeArg::Uniform => Eye::Uniform,
@@ -71,6 +98,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             }
         },
         Command::Bench(b) => crate::bench::run(b.quick, &b.out, b.force),
+        Command::Merge(m) => {
+            crate::output::merge::run(&m.inputs, m.out.as_deref(), m.force, m.quiet)
+        }
     }
 }
 
@@ -80,19 +110,37 @@ pub fn grid_theory_table(inp: &GridTheoryInput, eye: Eye) -> String {
     let n_s = th::n_s_mean(inp, eye);
     let r = inp.classes[0].radius.expect(|r| r);
     let rows = [
-        ("first-hit rate λ = ρπr² (1/length)", th::first_hit_rate(inp)),
+        (
+            "first-hit rate λ = ρπr² (1/length)",
+            th::first_hit_rate(inp),
+        ),
         ("E[t*] = 1/λ (length)", th::mean_first_hit(inp)),
-        ("|o(a,r)| offset cube volume", th::offset_cube_volume(inp.cell_width, r)),
+        (
+            "|o(a,r)| offset cube volume",
+            th::offset_cube_volume(inp.cell_width, r),
+        ),
         ("E[N_I] lower (Result 3.1)", band.lower),
         ("E[N_I] upper (Result 3.1)", band.upper),
         ("E[N_S] (this eye placement)", n_s),
-        ("E[N_S] eye uniform in cell = 1.5·E[t*]/a", th::n_s_uniform_eye(inp)),
+        (
+            "E[N_S] eye uniform in cell = 1.5·E[t*]/a",
+            th::n_s_uniform_eye(inp),
+        ),
         ("E[N_S] eye at cell corner", th::n_s_corner_eye(inp)),
         ("E[N_I] predictor, no mailbox", th::n_i_predictor(inp, n_s)),
-        ("E[N_I] (1+E[N_S])·ρ|o| (plain)", th::n_i_plain_predictor(inp, n_s)),
-        ("E[N_I] predictor, mailboxed", th::n_i_mb_predictor(inp, n_s)),
+        (
+            "E[N_I] (1+E[N_S])·ρ|o| (plain)",
+            th::n_i_plain_predictor(inp, n_s),
+        ),
+        (
+            "E[N_I] predictor, mailboxed",
+            th::n_i_mb_predictor(inp, n_s),
+        ),
     ];
-    let mut s = format!("grid theory: ρ = {}, r = {r}, a = {}, eye {:?}\n", inp.intensity, inp.cell_width, eye);
+    let mut s = format!(
+        "grid theory: ρ = {}, r = {r}, a = {}, eye {:?}\n",
+        inp.intensity, inp.cell_width, eye
+    );
     for (k, v) in rows {
         s.push_str(&format!("  {k:<44} {v:>14.6}\n"));
     }

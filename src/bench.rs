@@ -17,7 +17,9 @@ use crate::experiment::grid::BATCH;
 use crate::experiment::machine;
 use crate::experiment::Row;
 use crate::geom::{Aabb, Ray, Sphere};
-use crate::grid::{build::frame_around, brute_force, mailbox::Mailbox, trace, FiniteGrid, GridFrame, TraceCounts};
+use crate::grid::{
+    brute_force, build::frame_around, mailbox::Mailbox, trace, FiniteGrid, GridFrame, TraceCounts,
+};
 use crate::output::sink::{Sink, SinkOptions};
 use crate::sample::{directions::uniform_direction, rng::stream};
 use crate::scene::finite::{FiniteScene, FiniteSize};
@@ -32,12 +34,19 @@ const R: f64 = 0.1;
 pub fn peak_rss_bytes() -> u64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
+        })
         .map_or(0, |kb| kb * 1024)
 }
 
 fn pool(threads: usize) -> anyhow::Result<rayon::ThreadPool> {
-    rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("could not start a thread pool")
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .context("could not start a thread pool")
 }
 
 /// Traces `rays` through a finite grid on the current pool; returns counts and seconds.
@@ -48,7 +57,10 @@ pub fn trace_finite(grid: &FiniteGrid, rays: &[Ray]) -> (Vec<TraceCounts>, f64) 
         .flat_map_iter(|chunk| {
             let mut mb = Mailbox::default();
             let mut lists = grid;
-            chunk.iter().map(move |r| trace(&mut lists, r, &mut mb, true, u32::MAX)).collect::<Vec<_>>()
+            chunk
+                .iter()
+                .map(move |r| trace(&mut lists, r, &mut mb, true, u32::MAX))
+                .collect::<Vec<_>>()
         })
         .collect();
     (counts, start.elapsed().as_secs_f64())
@@ -56,19 +68,56 @@ pub fn trace_finite(grid: &FiniteGrid, rays: &[Ray]) -> (Vec<TraceCounts>, f64) 
 
 /// Runs the benchmark and writes `OUT/bench/bench.csv`.
 pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
-    let sizes: &[u64] = if quick { &[10_000, 100_000] } else { &[10_000, 100_000, 1_000_000, 10_000_000] };
+    let sizes: &[u64] = if quick {
+        &[10_000, 100_000]
+    } else {
+        &[10_000, 100_000, 1_000_000, 10_000_000]
+    };
     let n_rays: usize = if quick { 200_000 } else { 2_000_000 };
     let bf_rays: usize = if quick { 2_000 } else { 500 };
     let all = rayon::current_num_threads();
     let dir = out.join("bench");
-    let mut sink = Sink::open(&dir, "bench", "bench", SinkOptions { force, resume: false })?;
+    let mut sink = Sink::open(
+        &dir,
+        "bench",
+        "bench",
+        SinkOptions {
+            force,
+            resume: false,
+        },
+    )?;
 
     let costs = machine::measure();
-    let classes = [RadiusClass { fraction: 1.0, radius: RadiusDist::Constant(R) }];
-    let probe = GridTheoryInput { intensity: RHO, classes: &classes, draw: RadiusDraw::PerSphere, cell_width: 1.0 };
-    let a = th::best_cell_width(&probe, &QueryCost { t_i: costs.t_i, t_s: costs.t_s, eye: Eye::Uniform, mailbox: true }, 0.1, 5.0);
-    println!("machine: T_I = {:.2} ns, T_S = {:.2} ns → cost-model cell width a = {a:.3}", costs.t_i * 1e9, costs.t_s * 1e9);
-    println!("{:<14} {:>9} {:>7} {:>12} {:>9} {:>12} {:>10} {:>8} {:>8}", "engine", "n", "threads", "rays/s", "build s", "peak MB", "mismatch", "N_I", "N_S");
+    let classes = [RadiusClass {
+        fraction: 1.0,
+        radius: RadiusDist::Constant(R),
+    }];
+    let probe = GridTheoryInput {
+        intensity: RHO,
+        classes: &classes,
+        draw: RadiusDraw::PerSphere,
+        cell_width: 1.0,
+    };
+    let a = th::best_cell_width(
+        &probe,
+        &QueryCost {
+            t_i: costs.t_i,
+            t_s: costs.t_s,
+            eye: Eye::Uniform,
+            mailbox: true,
+        },
+        0.1,
+        5.0,
+    );
+    println!(
+        "machine: T_I = {:.2} ns, T_S = {:.2} ns → cost-model cell width a = {a:.3}",
+        costs.t_i * 1e9,
+        costs.t_s * 1e9
+    );
+    println!(
+        "{:<14} {:>9} {:>7} {:>12} {:>9} {:>12} {:>10} {:>8} {:>8}",
+        "engine", "n", "threads", "rays/s", "build s", "peak MB", "mismatch", "N_I", "N_S"
+    );
     let emit = |sink: &mut Sink, row: Row| -> anyhow::Result<()> {
         let g = |c: &str| row.get(c).and_then(|v| v.as_f64()).unwrap_or(f64::NAN);
         println!(
@@ -83,14 +132,21 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
             g("n_i_mean"),
             g("n_s_mean")
         );
-        sink.append(&row, &[]).context("could not append to the bench table")?;
+        sink.append(&row, &[])
+            .context("could not append to the bench table")?;
         Ok(())
     };
 
     let mut rng = stream(&[0x6265_6e63, 0]);
     let dirs: Vec<DVec3> = (0..n_rays).map(|_| uniform_direction(&mut rng)).collect();
     for &n in sizes {
-        let scene = FiniteScene { intensity: RHO, classes: classes.to_vec(), draw: RadiusDraw::PerSphere, size: FiniteSize::Count(n), center: DVec3::ZERO };
+        let scene = FiniteScene {
+            intensity: RHO,
+            classes: classes.to_vec(),
+            draw: RadiusDraw::PerSphere,
+            size: FiniteSize::Count(n),
+            center: DVec3::ZERO,
+        };
         let spheres: Vec<Sphere> = scene.generate(&[0x6265_6e63, n]);
         let start = Instant::now();
         let b = scene.centre_box();
@@ -103,27 +159,94 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         // Brute force on a subset: the oracle for mismatches, and its own speed.
         let bf_n = bf_rays.min(rays.len());
         let bf_start = Instant::now();
-        let oracle: Vec<Option<u64>> = pool(all)?.install(|| rays[..bf_n].par_iter().map(|r| brute_force(&spheres, r).map(|h| h.id)).collect());
+        let oracle: Vec<Option<u64>> = pool(all)?.install(|| {
+            rays[..bf_n]
+                .par_iter()
+                .map(|r| brute_force(&spheres, r).map(|h| h.id))
+                .collect()
+        });
         let bf_s = bf_start.elapsed().as_secs_f64();
 
+        let mut grid_ids: Vec<Option<u64>> = Vec::new();
         for threads in [1, all] {
             let (counts, secs) = pool(threads)?.install(|| trace_finite(&grid, &rays));
-            let mismatches = counts[..bf_n].iter().zip(&oracle).filter(|(c, o)| c.hit.map(|h| h.id) != **o).count();
+            let mismatches = counts[..bf_n]
+                .iter()
+                .zip(&oracle)
+                .filter(|(c, o)| c.hit.map(|h| h.id) != **o)
+                .count();
             let mut row = Row::default();
-            row.s("engine", "grid").u("n", n).u("threads", threads as u64).f("cell_width", a).u("rays", rays.len() as u64);
-            row.f("rays_per_s", rays.len() as f64 / secs).f("build_s", build_s).u("peak_mem_bytes", peak).u("grid_bytes", grid.bytes());
-            row.u("checked", bf_n as u64).u("mismatches", mismatches as u64);
-            row.f("n_i_mean", mean(counts.iter().map(|c| f64::from(c.n_i_mb)))).f("n_s_mean", mean(counts.iter().map(|c| f64::from(c.n_s))));
+            row.s("engine", "grid")
+                .u("n", n)
+                .u("threads", threads as u64)
+                .f("cell_width", a)
+                .u("rays", rays.len() as u64);
+            row.f("rays_per_s", rays.len() as f64 / secs)
+                .f("build_s", build_s)
+                .u("peak_mem_bytes", peak)
+                .u("grid_bytes", grid.bytes());
+            row.u("checked", bf_n as u64)
+                .u("mismatches", mismatches as u64);
+            row.f("n_i_mean", mean(counts.iter().map(|c| f64::from(c.n_i_mb))))
+                .f("n_s_mean", mean(counts.iter().map(|c| f64::from(c.n_s))));
             emit(&mut sink, row)?;
+            grid_ids = counts.iter().map(|c| c.hit.map(|h| h.id)).collect();
         }
         let mut row = Row::default();
-        row.s("engine", "brute-force").u("n", n).u("threads", all as u64).f("cell_width", f64::NAN).u("rays", bf_n as u64);
-        row.f("rays_per_s", bf_n as f64 / bf_s).f("build_s", 0.0).u("peak_mem_bytes", peak).u("grid_bytes", 0);
-        row.u("checked", bf_n as u64).u("mismatches", 0).f("n_i_mean", n as f64).f("n_s_mean", 0.0);
+        row.s("engine", "brute-force")
+            .u("n", n)
+            .u("threads", all as u64)
+            .f("cell_width", f64::NAN)
+            .u("rays", bf_n as u64);
+        row.f("rays_per_s", bf_n as f64 / bf_s)
+            .f("build_s", 0.0)
+            .u("peak_mem_bytes", peak)
+            .u("grid_bytes", 0);
+        row.u("checked", bf_n as u64)
+            .u("mismatches", 0)
+            .f("n_i_mean", n as f64)
+            .f("n_s_mean", 0.0);
         emit(&mut sink, row)?;
-        #[cfg(feature = "embree")]
-        crate::embree::bench_rows(&spheres, &rays, &oracle, n, all, &mut |row| emit(&mut sink, row))?;
         drop(grid);
+        // Embree on the same spheres and rays; checked against the grid on every ray (Embree works
+        // in f32, so only sphere ids are compared).
+        #[cfg(feature = "embree")]
+        {
+            let start = Instant::now();
+            let scene = crate::embree::EmbreeScene::build(&spheres)?;
+            let e_build = start.elapsed().as_secs_f64();
+            let e_peak = peak_rss_bytes();
+            for threads in [1, all] {
+                let mut hits = vec![None; rays.len()];
+                let start = Instant::now();
+                pool(threads)?.install(|| {
+                    hits.par_chunks_mut(4096)
+                        .zip(rays.par_chunks(4096))
+                        .for_each(|(h, r)| scene.first_hits(r, h))
+                });
+                let secs = start.elapsed().as_secs_f64();
+                let ids: Vec<Option<u64>> =
+                    hits.iter().map(|h| h.map(|(i, _)| spheres[i].id)).collect();
+                let mismatches = ids.iter().zip(&grid_ids).filter(|(e, g)| e != g).count();
+                let mut row = Row::default();
+                row.s("engine", "embree")
+                    .u("n", n)
+                    .u("threads", threads as u64)
+                    .f("cell_width", f64::NAN)
+                    .u("rays", rays.len() as u64);
+                row.f("rays_per_s", rays.len() as f64 / secs)
+                    .f("build_s", e_build)
+                    .u("peak_mem_bytes", e_peak)
+                    .u("grid_bytes", 0);
+                row.u("checked", rays.len() as u64)
+                    .u("mismatches", mismatches as u64)
+                    .f("n_i_mean", f64::NAN)
+                    .f("n_s_mean", f64::NAN);
+                emit(&mut sink, row)?;
+            }
+        }
+        #[cfg(not(feature = "embree"))]
+        let _ = &grid_ids;
     }
 
     // The lazily generated infinite scene (no n: it has no boundary), same a, same directions.
@@ -134,8 +257,21 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
                 .par_chunks(BATCH as usize)
                 .enumerate()
                 .map(|(b, chunk)| {
-                    let scene = LazyScene::new(RHO, &classes, RadiusDraw::PerSphere, a, &[0x6265_6e63, 1, b as u64]);
-                    let mut lists = scene.cells(GridFrame { origin: DVec3::ZERO, width: a, dims: None }, 2.0 * a);
+                    let scene = LazyScene::new(
+                        RHO,
+                        &classes,
+                        RadiusDraw::PerSphere,
+                        a,
+                        &[0x6265_6e63, 1, b as u64],
+                    );
+                    let mut lists = scene.cells(
+                        GridFrame {
+                            origin: DVec3::ZERO,
+                            width: a,
+                            dims: None,
+                        },
+                        2.0 * a,
+                    );
                     let mut mb = Mailbox::default();
                     let eye = DVec3::splat(0.5 * a);
                     chunk.iter().fold((0.0, 0.0), |acc, &d| {
@@ -148,9 +284,19 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         });
         let secs = start.elapsed().as_secs_f64();
         let mut row = Row::default();
-        row.s("engine", "grid-infinite").u("n", 0).u("threads", threads as u64).f("cell_width", a).u("rays", dirs.len() as u64);
-        row.f("rays_per_s", dirs.len() as f64 / secs).f("build_s", 0.0).u("peak_mem_bytes", peak_rss_bytes()).u("grid_bytes", 0);
-        row.u("checked", 0).u("mismatches", 0).f("n_i_mean", n_i / dirs.len() as f64).f("n_s_mean", n_s / dirs.len() as f64);
+        row.s("engine", "grid-infinite")
+            .u("n", 0)
+            .u("threads", threads as u64)
+            .f("cell_width", a)
+            .u("rays", dirs.len() as u64);
+        row.f("rays_per_s", dirs.len() as f64 / secs)
+            .f("build_s", 0.0)
+            .u("peak_mem_bytes", peak_rss_bytes())
+            .u("grid_bytes", 0);
+        row.u("checked", 0)
+            .u("mismatches", 0)
+            .f("n_i_mean", n_i / dirs.len() as f64)
+            .f("n_s_mean", n_s / dirs.len() as f64);
         emit(&mut sink, row)?;
     }
     let meta = format!(

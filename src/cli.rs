@@ -26,6 +26,8 @@ pub enum Command {
     Theory(TheoryArgs),
     /// Speed figures of every engine, side by side in one run (results/bench/bench.csv).
     Bench(BenchArgs),
+    /// Join the shards of a sweep (NAME.shard-K-of-N.csv) into NAME.csv, checking that they fit.
+    Merge(MergeArgs),
 }
 
 /// `raycost run`.
@@ -54,6 +56,23 @@ pub struct RunArgs {
     /// Continue a partial run, skipping the points it finished.
     #[arg(long)]
     pub resume: bool,
+}
+
+/// `raycost merge`.
+#[derive(Debug, Args)]
+pub struct MergeArgs {
+    /// A results folder DIR/NAME holding NAME.shard-K-of-N.csv (+ .meta.toml, .hist.csv), or those CSV files.
+    #[arg(required = true, value_name = "DIR|FILES")]
+    pub inputs: Vec<PathBuf>,
+    /// The merged table (default: NAME.csv beside the shards; .hist.csv and .meta.toml go beside it).
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Replace existing merged files.
+    #[arg(long)]
+    pub force: bool,
+    /// Print nothing on success.
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 /// `raycost check`.

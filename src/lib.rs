@@ -9,11 +9,11 @@
 //! `grid`, `spec`, `experiment`, `output`; `cli` and `main.rs` sit on top.
 #![warn(missing_docs)]
 
-#[cfg(feature = "embree")]
-pub mod embree;
 pub mod app;
 pub mod bench;
 pub mod cli;
+#[cfg(feature = "embree")]
+pub mod embree;
 pub mod experiment;
 pub mod geom;
 pub mod grid;

@@ -1,1 +1,6 @@
+//! One integration binary (ripgrep/xsv style): CLI end to end, brute-force oracles, bad input.
 
+mod bad_input;
+mod cli;
+mod common;
+mod oracle;

@@ -16,7 +16,9 @@ use rayon::prelude::*;
 use super::machine::MachineCosts;
 use super::row::Row;
 use crate::geom::{Aabb, Ray, Sphere};
-use crate::grid::{build::frame_around, brute_force, mailbox::Mailbox, trace, FiniteGrid, GridFrame, TraceCounts};
+use crate::grid::{
+    brute_force, build::frame_around, mailbox::Mailbox, trace, FiniteGrid, GridFrame, TraceCounts,
+};
 use crate::sample::{directions::uniform_direction, rng::domain, rng::stream};
 use crate::scene::lazy::LazyScene;
 use crate::spec::{GridConfig, Kind, SceneModel};
@@ -76,7 +78,15 @@ impl Acc {
     }
 
     fn end_batch(&mut self) {
-        for m in [&mut self.n_i, &mut self.n_i_mb, &mut self.n_s, &mut self.t_hit, &mut self.hit, &mut self.p_log, &mut self.p_sqrt] {
+        for m in [
+            &mut self.n_i,
+            &mut self.n_i_mb,
+            &mut self.n_s,
+            &mut self.t_hit,
+            &mut self.hit,
+            &mut self.p_log,
+            &mut self.p_sqrt,
+        ] {
             m.end_batch();
         }
     }
@@ -119,8 +129,10 @@ impl Acc {
             None => self.hit.push(0.0),
         }
         if let Some((h_log, h_sqrt)) = thresholds {
-            self.p_log.push(f64::from(u8::from(f64::from(c.n_i) >= h_log)));
-            self.p_sqrt.push(f64::from(u8::from(f64::from(c.n_i) >= h_sqrt)));
+            self.p_log
+                .push(f64::from(u8::from(f64::from(c.n_i) >= h_log)));
+            self.p_sqrt
+                .push(f64::from(u8::from(f64::from(c.n_i) >= h_sqrt)));
         }
     }
 }
@@ -147,11 +159,21 @@ pub struct PointResult {
 
 /// The theory input of a config.
 pub fn theory_input(cfg: &GridConfig) -> GridTheoryInput<'_> {
-    GridTheoryInput { intensity: cfg.intensity, classes: &cfg.classes, draw: cfg.draw, cell_width: cfg.cell_width }
+    GridTheoryInput {
+        intensity: cfg.intensity,
+        classes: &cfg.classes,
+        draw: cfg.draw,
+        cell_width: cfg.cell_width,
+    }
 }
 
 /// Runs one point. `progress` is called with the number of rays finished, per chunk of batches.
-pub fn run_point(cfg: &GridConfig, point: u64, machine: Option<MachineCosts>, progress: &(dyn Fn(u64) + Sync)) -> PointResult {
+pub fn run_point(
+    cfg: &GridConfig,
+    point: u64,
+    machine: Option<MachineCosts>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> PointResult {
     let inp = theory_input(cfg);
     let mean_t = th::mean_first_hit(&inp);
     let a = cfg.cell_width;
@@ -166,7 +188,11 @@ pub fn run_point(cfg: &GridConfig, point: u64, machine: Option<MachineCosts>, pr
             let b = fs.centre_box();
             let bounds = Aabb::new(b.lo - DVec3::splat(rmax), b.hi + DVec3::splat(rmax));
             let grid = FiniteGrid::build(frame_around(bounds, a, fs.center), &spheres);
-            Some(Finite { spheres, grid, build_s: start.elapsed().as_secs_f64() })
+            Some(Finite {
+                spheres,
+                grid,
+                build_s: start.elapsed().as_secs_f64(),
+            })
         }
     };
     let anchor = match &cfg.scene {
@@ -174,11 +200,16 @@ pub fn run_point(cfg: &GridConfig, point: u64, machine: Option<MachineCosts>, pr
         SceneModel::Finite(fs) => fs.center,
     };
     let n_spheres = finite.as_ref().map(|f| f.spheres.len() as u64);
-    let thresholds = n_spheres.filter(|_| cfg.kind == Kind::GridScaling).map(|n| {
-        let n = (n.max(2)) as f64;
-        (cfg.concentration_c * n.ln(), cfg.concentration_c * n.sqrt())
-    });
-    let brute = finite.as_ref().is_some_and(|f| f.spheres.len() as u64 <= cfg.brute_force_max_n) && cfg.kind == Kind::GridScaling;
+    let thresholds = n_spheres
+        .filter(|_| cfg.kind == Kind::GridScaling)
+        .map(|n| {
+            let n = (n.max(2)) as f64;
+            (cfg.concentration_c * n.ln(), cfg.concentration_c * n.sqrt())
+        });
+    let brute = finite
+        .as_ref()
+        .is_some_and(|f| f.spheres.len() as u64 <= cfg.brute_force_max_n)
+        && cfg.kind == Kind::GridScaling;
 
     let t_hi = cfg.t_max_mfp * mean_t;
     let batches = cfg.rays.div_ceil(BATCH);
@@ -202,13 +233,28 @@ pub fn run_point(cfg: &GridConfig, point: u64, machine: Option<MachineCosts>, pr
         let counts: Vec<TraceCounts> = match &finite {
             Some(f) => {
                 let mut lists = &f.grid;
-                rays.iter().map(|r| trace(&mut lists, r, &mut mailbox, cfg.mailbox, max_steps)).collect()
+                rays.iter()
+                    .map(|r| trace(&mut lists, r, &mut mailbox, cfg.mailbox, max_steps))
+                    .collect()
             }
             None => {
-                let scene = LazyScene::new(cfg.intensity, &cfg.classes, cfg.draw, a, &[domain::SCENE, cfg.seed, point, b]);
-                let frame = GridFrame { origin: DVec3::ZERO, width: a, dims: None };
+                let scene = LazyScene::new(
+                    cfg.intensity,
+                    &cfg.classes,
+                    cfg.draw,
+                    a,
+                    &[domain::SCENE, cfg.seed, point, b],
+                );
+                let frame = GridFrame {
+                    origin: DVec3::ZERO,
+                    width: a,
+                    dims: None,
+                };
                 let mut lists = scene.cells(frame, 2.0 * a);
-                let c = rays.iter().map(|r| trace(&mut lists, r, &mut mailbox, cfg.mailbox, max_steps)).collect();
+                let c = rays
+                    .iter()
+                    .map(|r| trace(&mut lists, r, &mut mailbox, cfg.mailbox, max_steps))
+                    .collect();
                 acc.generated += lists.generated() as u64;
                 c
             }
@@ -278,14 +324,41 @@ fn make_result(
             "inside"
         }
     };
-    let (n_i, n_i_mb, n_s) = (acc.n_i.estimate(), acc.n_i_mb.estimate(), acc.n_s.estimate());
-    row.estimate("n_i", &n_i).f("n_i_theory", n_i_th).f("n_i_lower", band.lower).f("n_i_upper", band.upper).s("n_i_band", verdict(&n_i));
-    row.estimate("n_i_mb", &n_i_mb).f("n_i_mb_theory", n_i_mb_th).f("n_i_mb_lower", band.lower).f("n_i_mb_upper", band.upper).s("n_i_mb_band", verdict(&n_i_mb));
+    let (n_i, n_i_mb, n_s) = (
+        acc.n_i.estimate(),
+        acc.n_i_mb.estimate(),
+        acc.n_s.estimate(),
+    );
+    row.estimate("n_i", &n_i)
+        .f("n_i_theory", n_i_th)
+        .f("n_i_lower", band.lower)
+        .f("n_i_upper", band.upper)
+        .s("n_i_band", verdict(&n_i));
+    row.estimate("n_i_mb", &n_i_mb)
+        .f("n_i_mb_theory", n_i_mb_th)
+        .f("n_i_mb_lower", band.lower)
+        .f("n_i_mb_upper", band.upper)
+        .s("n_i_mb_band", verdict(&n_i_mb));
     row.f("n_i_plain_theory", th::n_i_plain_predictor(inp, n_s_th));
     row.estimate("n_s", &n_s).f("n_s_theory", n_s_th);
-    summary.push(("n_i".into(), n_i, format!("{n_i_th:.3} [{:.3}, {:.3}]", band.lower, band.upper), verdict(&n_i).into()));
-    summary.push(("n_i_mb".into(), n_i_mb, format!("{n_i_mb_th:.3} [{:.3}, {:.3}]", band.lower, band.upper), verdict(&n_i_mb).into()));
-    summary.push(("n_s".into(), n_s, format!("{n_s_th:.3}"), z_verdict(&n_s, n_s_th)));
+    summary.push((
+        "n_i".into(),
+        n_i,
+        format!("{n_i_th:.3} [{:.3}, {:.3}]", band.lower, band.upper),
+        verdict(&n_i).into(),
+    ));
+    summary.push((
+        "n_i_mb".into(),
+        n_i_mb,
+        format!("{n_i_mb_th:.3} [{:.3}, {:.3}]", band.lower, band.upper),
+        verdict(&n_i_mb).into(),
+    ));
+    summary.push((
+        "n_s".into(),
+        n_s,
+        format!("{n_s_th:.3}"),
+        z_verdict(&n_s, n_s_th),
+    ));
 
     let t_hit = acc.t_hit.estimate();
     let hit = acc.hit.estimate();
@@ -295,15 +368,26 @@ fn make_result(
     };
     row.estimate("t_hit", &t_hit).f("t_hit_theory", mean_t);
     row.estimate("hit", &hit).f("hit_theory", hit_th);
-    summary.push(("t_hit".into(), t_hit, format!("{mean_t:.4}"), z_verdict(&t_hit, mean_t)));
-    summary.push(("hit".into(), hit, format!("{hit_th:.4}"), z_verdict(&hit, hit_th)));
+    summary.push((
+        "t_hit".into(),
+        t_hit,
+        format!("{mean_t:.4}"),
+        z_verdict(&t_hit, mean_t),
+    ));
+    summary.push((
+        "hit".into(),
+        hit,
+        format!("{hit_th:.4}"),
+        z_verdict(&hit, hit_th),
+    ));
 
     // Laws: exponential first-hit distance (KS and χ² on the histogram), geometric N_I.
     let mut sorted = acc.t_samples.clone();
     sorted.sort_by(f64::total_cmp);
     let survival = |t: f64| th::first_hit_survival(inp, t);
     let d = gof::ks_statistic(&sorted, |t| 1.0 - survival(t));
-    row.f("t_hit_ks", d).f("t_hit_ks_p", gof::ks_p_value(d, sorted.len()));
+    row.f("t_hit_ks", d)
+        .f("t_hit_ks_p", gof::ks_p_value(d, sorted.len()));
     let hits = acc.hist_t.total();
     let mut obs: Vec<u64> = acc.hist_t.counts.clone();
     obs.push(acc.hist_t.overflow);
@@ -315,37 +399,71 @@ fn make_result(
         .collect();
     exp.push(hits as f64 * survival(acc.hist_t.hi));
     let chi_t = gof::chi_square(&obs, &exp, 0);
-    row.f("t_hit_chi2", chi_t.statistic).u("t_hit_chi2_dof", u64::from(chi_t.dof)).f("t_hit_chi2_p", chi_t.p_value);
+    row.f("t_hit_chi2", chi_t.statistic)
+        .u("t_hit_chi2_dof", u64::from(chi_t.dof))
+        .f("t_hit_chi2_p", chi_t.p_value);
 
     let mut hist = Vec::new();
     for k in 0..acc.hist_t.counts.len() {
         let (lo, hi) = acc.hist_t.edges(k);
         let mut r = Row::default();
-        r.s("metric", "t_hit").f("bin_lo", lo).f("bin_hi", hi).u("count", obs[k]).f("expected", exp[k]);
+        r.s("metric", "t_hit")
+            .f("bin_lo", lo)
+            .f("bin_hi", hi)
+            .u("count", obs[k])
+            .f("expected", exp[k]);
         hist.push(r);
     }
     let mut r = Row::default();
-    r.s("metric", "t_hit").f("bin_lo", acc.hist_t.hi).f("bin_hi", f64::INFINITY).u("count", acc.hist_t.overflow).f("expected", *exp.last().expect("overflow bin"));
+    r.s("metric", "t_hit")
+        .f("bin_lo", acc.hist_t.hi)
+        .f("bin_hi", f64::INFINITY)
+        .u("count", acc.hist_t.overflow)
+        .f("expected", *exp.last().expect("overflow bin"));
     hist.push(r);
 
     // Geometric law of N_I (distinct tests, hitting rays), p fitted by the mean: p = 1/E[N_I].
     let n_hits: u64 = acc.ni_mb_counts.iter().sum();
-    let mean_hit_ni: f64 = acc.ni_mb_counts.iter().enumerate().map(|(k, &c)| k as f64 * c as f64).sum::<f64>() / n_hits.max(1) as f64;
+    let mean_hit_ni: f64 = acc
+        .ni_mb_counts
+        .iter()
+        .enumerate()
+        .map(|(k, &c)| k as f64 * c as f64)
+        .sum::<f64>()
+        / n_hits.max(1) as f64;
     let p = (1.0 / mean_hit_ni).clamp(1e-12, 1.0);
-    let kmax = acc.ni_mb_counts.iter().rposition(|&c| c > 0).unwrap_or(1).clamp(1, NI_BINS - 1);
+    let kmax = acc
+        .ni_mb_counts
+        .iter()
+        .rposition(|&c| c > 0)
+        .unwrap_or(1)
+        .clamp(1, NI_BINS - 1);
     let mut g_obs: Vec<u64> = acc.ni_mb_counts[1..=kmax].to_vec();
     g_obs.push(acc.ni_mb_counts[kmax + 1..].iter().sum());
-    let mut g_exp: Vec<f64> = (1..=kmax as u64).map(|k| n_hits as f64 * th::geometric_pmf(p, k)).collect();
+    let mut g_exp: Vec<f64> = (1..=kmax as u64)
+        .map(|k| n_hits as f64 * th::geometric_pmf(p, k))
+        .collect();
     g_exp.push(n_hits as f64 * (1.0 - p).powi(kmax as i32));
     let chi_g = gof::chi_square(&g_obs, &g_exp, 1);
     let r0 = cfg.classes[0].radius.expect(|r| r);
-    row.f("n_i_geometric_p", p).f("n_i_geometric_s", r0 * (1.0 / p.sqrt() - 1.0));
-    row.f("n_i_mb_chi2", chi_g.statistic).u("n_i_mb_chi2_dof", u64::from(chi_g.dof)).f("n_i_mb_chi2_p", chi_g.p_value);
+    row.f("n_i_geometric_p", p)
+        .f("n_i_geometric_s", r0 * (1.0 / p.sqrt() - 1.0));
+    row.f("n_i_mb_chi2", chi_g.statistic)
+        .u("n_i_mb_chi2_dof", u64::from(chi_g.dof))
+        .f("n_i_mb_chi2_p", chi_g.p_value);
     for (k, (&o, &e)) in g_obs.iter().zip(&g_exp).enumerate() {
         let mut r = Row::default();
         let lo = (k + 1) as f64;
-        let hi = if k + 1 == g_obs.len() { f64::INFINITY } else { lo + 1.0 };
-        r.s("metric", "n_i_mb").f("bin_lo", lo).f("bin_hi", hi).u("count", o).f("expected", e);
+        let hi = if k + 1 == g_obs.len() {
+            f64::INFINITY
+        } else {
+            lo + 1.0
+        };
+        r.s("metric", "n_i_mb")
+            .f("bin_lo", lo)
+            .f("bin_hi", hi)
+            .u("count", o)
+            .f("expected", e);
         hist.push(r);
     }
 
@@ -353,24 +471,42 @@ fn make_result(
     match finite {
         None => {
             let batches = cfg.rays.div_ceil(BATCH);
-            row.f("generated_spheres_per_batch", acc.generated as f64 / batches as f64);
+            row.f(
+                "generated_spheres_per_batch",
+                acc.generated as f64 / batches as f64,
+            );
         }
         Some(f) => {
-            row.u("spheres", f.spheres.len() as u64).u("grid_cells", f.grid.cells() as u64).u("grid_listings", f.grid.listings() as u64).u("grid_bytes", f.grid.bytes());
+            row.u("spheres", f.spheres.len() as u64)
+                .u("grid_cells", f.grid.cells() as u64)
+                .u("grid_listings", f.grid.listings() as u64)
+                .u("grid_bytes", f.grid.bytes());
         }
     }
     if cfg.kind == Kind::GridScaling {
         let (pl, ps) = (acc.p_log.estimate(), acc.p_sqrt.estimate());
         let n = finite.map_or(2, |f| f.spheres.len().max(2)) as f64;
-        row.f("h_log", cfg.concentration_c * n.ln()).estimate("p_log", &pl);
-        row.f("h_sqrt", cfg.concentration_c * n.sqrt()).estimate("p_sqrt", &ps);
-        row.u("bf_rays", acc.bf_checked).u("bf_mismatches", acc.bf_mismatches);
-        row.f("bf_rays_per_s", if acc.bf_time > 0.0 { acc.bf_checked as f64 / acc.bf_time } else { f64::NAN });
+        row.f("h_log", cfg.concentration_c * n.ln())
+            .estimate("p_log", &pl);
+        row.f("h_sqrt", cfg.concentration_c * n.sqrt())
+            .estimate("p_sqrt", &ps);
+        row.u("bf_rays", acc.bf_checked)
+            .u("bf_mismatches", acc.bf_mismatches);
+        row.f(
+            "bf_rays_per_s",
+            if acc.bf_time > 0.0 {
+                acc.bf_checked as f64 / acc.bf_time
+            } else {
+                f64::NAN
+            },
+        );
     }
 
     // Timing columns (the only ones allowed to differ between runs).
     let rays_per_s = cfg.rays as f64 / trace_s;
-    row.f("trace_s", trace_s).f("rays_per_s", rays_per_s).f("time_per_ray_s", acc.trace_time / cfg.rays as f64);
+    row.f("trace_s", trace_s)
+        .f("rays_per_s", rays_per_s)
+        .f("time_per_ray_s", acc.trace_time / cfg.rays as f64);
     if let Some(f) = finite {
         row.f("build_s", f.build_s);
     }
@@ -378,10 +514,21 @@ fn make_result(
         let tested = if cfg.mailbox { n_i_mb.mean } else { n_i.mean };
         let tested_th = if cfg.mailbox { n_i_mb_th } else { n_i_th };
         row.f("t_i_s", m.t_i).f("t_s_s", m.t_s);
-        row.f("time_model_s", th::query_time(tested_th, n_s_th, m.t_i, m.t_s));
-        row.f("time_counts_model_s", th::query_time(tested, n_s.mean, m.t_i, m.t_s));
+        row.f(
+            "time_model_s",
+            th::query_time(tested_th, n_s_th, m.t_i, m.t_s),
+        );
+        row.f(
+            "time_counts_model_s",
+            th::query_time(tested, n_s.mean, m.t_i, m.t_s),
+        );
     }
-    PointResult { row, hist, summary, rays_per_s }
+    PointResult {
+        row,
+        hist,
+        summary,
+        rays_per_s,
+    }
 }
 
 /// "ok" when the measurement is within the 99 % CI of a prediction, else how many SE away.
@@ -402,7 +549,9 @@ fn z_verdict(e: &Estimate, theory: f64) -> String {
 /// over (z, φ) (deterministic, no sampling). Ignores the eye offset (< a) and spheres poking in
 /// from outside the centre cube (the grid box includes them, so measured hits can slightly exceed).
 fn hit_probability_in_cube(cfg: &GridConfig, inp: &GridTheoryInput) -> f64 {
-    let SceneModel::Finite(fs) = &cfg.scene else { return 1.0 };
+    let SceneModel::Finite(fs) = &cfg.scene else {
+        return 1.0;
+    };
     let half = 0.5 * fs.side();
     let (nz, nphi) = (200, 400);
     let mut acc = 0.0;
@@ -411,7 +560,10 @@ fn hit_probability_in_cube(cfg: &GridConfig, inp: &GridTheoryInput) -> f64 {
         let s = (1.0 - z * z).sqrt();
         for j in 0..nphi {
             let phi = (j as f64 + 0.5) * std::f64::consts::TAU / nphi as f64;
-            let m = (s * phi.cos()).abs().max((s * phi.sin()).abs()).max(z.abs());
+            let m = (s * phi.cos())
+                .abs()
+                .max((s * phi.sin()).abs())
+                .max(z.abs());
             acc += 1.0 - th::first_hit_survival(inp, half / m);
         }
     }

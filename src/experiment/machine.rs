@@ -25,12 +25,29 @@ pub struct MachineCosts {
 /// Measures T_I and T_S (about 0.2 s). Takes the best of three repetitions to shed interference.
 pub fn measure() -> MachineCosts {
     let mut rng = stream(&[0x6d61_6368]);
-    let rays: Vec<Ray> = (0..4096).map(|_| Ray::new(DVec3::splat(0.3), uniform_direction(&mut rng))).collect();
-    let spheres: Vec<Sphere> = (0..256)
-        .map(|i| Sphere { c: DVec3::new(rand::Rng::gen_range(&mut rng, -9.0..9.0), rand::Rng::gen_range(&mut rng, -9.0..9.0), rand::Rng::gen_range(&mut rng, -9.0..9.0)), r: 0.1, id: i })
+    let rays: Vec<Ray> = (0..4096)
+        .map(|_| Ray::new(DVec3::splat(0.3), uniform_direction(&mut rng)))
         .collect();
-    let frame = GridFrame { origin: DVec3::ZERO, width: 1.0, dims: None };
-    let mut best = MachineCosts { t_i: f64::INFINITY, t_s: f64::INFINITY };
+    let spheres: Vec<Sphere> = (0..256)
+        .map(|i| Sphere {
+            c: DVec3::new(
+                rand::Rng::gen_range(&mut rng, -9.0..9.0),
+                rand::Rng::gen_range(&mut rng, -9.0..9.0),
+                rand::Rng::gen_range(&mut rng, -9.0..9.0),
+            ),
+            r: 0.1,
+            id: i,
+        })
+        .collect();
+    let frame = GridFrame {
+        origin: DVec3::ZERO,
+        width: 1.0,
+        dims: None,
+    };
+    let mut best = MachineCosts {
+        t_i: f64::INFINITY,
+        t_s: f64::INFINITY,
+    };
     for _ in 0..3 {
         let start = Instant::now();
         let mut sink = 0.0;
@@ -42,7 +59,9 @@ pub fn measure() -> MachineCosts {
             }
         }
         std::hint::black_box(sink);
-        best.t_i = best.t_i.min(start.elapsed().as_secs_f64() / (rays.len() * spheres.len()) as f64);
+        best.t_i = best
+            .t_i
+            .min(start.elapsed().as_secs_f64() / (rays.len() * spheres.len()) as f64);
 
         let start = Instant::now();
         let mut steps = 0u64;

@@ -59,7 +59,9 @@ impl Row {
 
     /// Appends `M_mean, M_se, M_n` of an estimate.
     pub fn estimate(&mut self, m: &str, e: &crate::stats::Estimate) -> &mut Self {
-        self.f(format!("{m}_mean"), e.mean).f(format!("{m}_se"), e.se).u(format!("{m}_n"), e.n)
+        self.f(format!("{m}_mean"), e.mean)
+            .f(format!("{m}_se"), e.se)
+            .u(format!("{m}_n"), e.n)
     }
 
     /// The value of a column.

@@ -28,9 +28,17 @@ pub struct Shard {
 impl std::str::FromStr for Shard {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        let (k, n) = s.split_once('/').ok_or_else(|| format!("'{s}': expected K/N, e.g. 0/4"))?;
-        let k: usize = k.trim().parse().map_err(|_| format!("'{s}': K must be a whole number"))?;
-        let n: usize = n.trim().parse().map_err(|_| format!("'{s}': N must be a whole number"))?;
+        let (k, n) = s
+            .split_once('/')
+            .ok_or_else(|| format!("'{s}': expected K/N, e.g. 0/4"))?;
+        let k: usize = k
+            .trim()
+            .parse()
+            .map_err(|_| format!("'{s}': K must be a whole number"))?;
+        let n: usize = n
+            .trim()
+            .parse()
+            .map_err(|_| format!("'{s}': N must be a whole number"))?;
         if n == 0 || k >= n {
             return Err(format!("'{s}': need 0 ≤ K < N and N ≥ 1"));
         }
@@ -68,14 +76,36 @@ pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::Pat
     let name = &spec.base.experiment.name;
     let dir = opts.out.join(name);
     let stem = stem(name, opts.shard);
-    let mut sink = Sink::open(&dir, &stem, &spec.hash, SinkOptions { force: opts.force, resume: opts.resume })?;
+    let mut sink = Sink::open(
+        &dir,
+        &stem,
+        &spec.hash,
+        SinkOptions {
+            force: opts.force,
+            resume: opts.resume,
+        },
+    )?;
     let started = now_rfc3339();
     let t0 = Instant::now();
-    let mine: Vec<usize> = spec.points.iter().map(|p| p.index).filter(|i| opts.shard.is_none_or(|s| i % s.n == s.k)).collect();
-    let resumed: Vec<usize> = mine.iter().copied().filter(|i| sink.done().contains(i)).collect();
-    let todo: Vec<usize> = mine.iter().copied().filter(|i| !sink.done().contains(i)).collect();
+    let mine: Vec<usize> = spec
+        .points
+        .iter()
+        .map(|p| p.index)
+        .filter(|i| opts.shard.is_none_or(|s| i % s.n == s.k))
+        .collect();
+    let resumed: Vec<usize> = mine
+        .iter()
+        .copied()
+        .filter(|i| sink.done().contains(i))
+        .collect();
+    let todo: Vec<usize> = mine
+        .iter()
+        .copied()
+        .filter(|i| !sink.done().contains(i))
+        .collect();
 
-    let machine: Option<MachineCosts> = (spec.base.experiment.kind == Kind::GridCostModel).then(machine::measure);
+    let machine: Option<MachineCosts> =
+        (spec.base.experiment.kind == Kind::GridCostModel).then(machine::measure);
     let total_rays: u64 = todo.iter().map(|&i| spec.points[i].config.rays).sum();
     let bar = progress(total_rays, todo.len(), opts.quiet);
     let mut finished = Vec::new();
@@ -88,19 +118,37 @@ pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::Pat
         let result: PointResult = run_point(&p.config, i as u64, machine, &|k| bar.inc(k));
         let wall = start.elapsed().as_secs_f64();
         let row = with_point_columns(i, &p.params, &result.row);
-        let hist: Vec<Row> = result.hist.iter().map(|h| with_point_columns(i, &[], h)).collect();
+        let hist: Vec<Row> = result
+            .hist
+            .iter()
+            .map(|h| with_point_columns(i, &[], h))
+            .collect();
         if timing.is_empty() {
-            timing = row.0.iter().map(|(c, _)| c.clone()).filter(|c| is_timing_column(c)).collect();
+            timing = row
+                .0
+                .iter()
+                .map(|(c, _)| c.clone())
+                .filter(|c| is_timing_column(c))
+                .collect();
         }
-        sink.append(&row, &hist).with_context(|| format!("could not append point {i} to {}", dir.display()))?;
-        let params = p.params.iter().map(|(k, v)| format!("{}={v}", short(k))).collect::<Vec<_>>().join(" ");
+        sink.append(&row, &hist)
+            .with_context(|| format!("could not append point {i} to {}", dir.display()))?;
+        let params = p
+            .params
+            .iter()
+            .map(|(k, v)| format!("{}={v}", short(k)))
+            .collect::<Vec<_>>()
+            .join(" ");
         finished.push((i, params, result, wall));
         walls.push(wall);
     }
     bar.finish();
 
     let mut spec_table = toml::Table::new();
-    spec_table.insert("base".into(), toml::Value::try_from(&spec.base).context("serialising the spec")?);
+    spec_table.insert(
+        "base".into(),
+        toml::Value::try_from(&spec.base).context("serialising the spec")?,
+    );
     let mut sw = toml::Table::new();
     for (k, v) in &spec.sweep {
         sw.insert(k.clone(), toml::Value::Array(v.clone()));
@@ -113,21 +161,29 @@ pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::Pat
             spec_hash: spec.hash.clone(),
             seed: spec.base.experiment.seed,
             threads: rayon::current_num_threads(),
-            shard: opts.shard.map_or("all".into(), |s| format!("{}/{}", s.k, s.n)),
+            shard: opts
+                .shard
+                .map_or("all".into(), |s| format!("{}/{}", s.k, s.n)),
             set: opts.sets.clone(),
             host: host_name(),
             started,
             finished: now_rfc3339(),
             wall_s: t0.elapsed().as_secs_f64(),
+            points_total: spec.points.len(),
             points: todo.clone(),
             point_wall_s: walls,
             resumed_points: resumed,
         },
-        machine: machine.map(|m| MachineInfo { t_i_s: m.t_i, t_s_s: m.t_s }),
+        machine: machine.map(|m| MachineInfo {
+            t_i_s: m.t_i,
+            t_s_s: m.t_s,
+        }),
         timing_columns: timing,
         spec: spec_table,
     };
-    let written = sink.finish(&meta.render()).with_context(|| format!("could not finish the result files in {}", dir.display()))?;
+    let written = sink
+        .finish(&meta.render())
+        .with_context(|| format!("could not finish the result files in {}", dir.display()))?;
     Ok((written, summary::render(&finished)))
 }
 
@@ -154,14 +210,34 @@ fn with_point_columns(index: usize, params: &[(String, toml::Value)], row: &Row)
 
 /// Validates a spec and describes its points (`raycost check`).
 pub fn describe(spec: &Spec) -> String {
-    let mut s = format!("{}: kind {}, {} point(s), spec hash {}\n", spec.path, spec.base.experiment.kind.as_str(), spec.points.len(), &spec.hash[..16]);
+    let mut s = format!(
+        "{}: kind {}, {} point(s), spec hash {}\n",
+        spec.path,
+        spec.base.experiment.kind.as_str(),
+        spec.points.len(),
+        &spec.hash[..16]
+    );
     for p in &spec.points {
-        let params = p.params.iter().map(|(k, v)| format!("{k} = {v}")).collect::<Vec<_>>().join(", ");
+        let params = p
+            .params
+            .iter()
+            .map(|(k, v)| format!("{k} = {v}"))
+            .collect::<Vec<_>>()
+            .join(", ");
         let scene = match &p.config.scene {
             crate::spec::SceneModel::Infinite => "infinite scene".to_string(),
-            crate::spec::SceneModel::Finite(f) => format!("finite scene, ~{:.0} spheres, side {:.4}", f.expected_count(), f.side()),
+            crate::spec::SceneModel::Finite(f) => format!(
+                "finite scene, ~{:.0} spheres, side {:.4}",
+                f.expected_count(),
+                f.side()
+            ),
         };
-        s.push_str(&format!("  point {:>4}: {params}{}{scene}, {} rays\n", p.index, if params.is_empty() { "" } else { "; " }, p.config.rays));
+        s.push_str(&format!(
+            "  point {:>4}: {params}{}{scene}, {} rays\n",
+            p.index,
+            if params.is_empty() { "" } else { "; " },
+            p.config.rays
+        ));
     }
     s
 }

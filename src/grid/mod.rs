@@ -13,7 +13,7 @@ pub mod trace;
 pub use build::FiniteGrid;
 pub use dda::Dda;
 pub use frame::GridFrame;
-pub use trace::{brute_force, trace, Hit, TraceCounts};
+pub use trace::{brute_force, exit_distance, trace, Hit, TraceCounts};
 
 use crate::geom::Sphere;
 

@@ -60,8 +60,11 @@ pub fn trace<L: CellLists + ?Sized>(
     let mut best: Option<Hit> = None;
     mailbox.clear();
     let mut visited = 0u32;
+    let mut last_exit = 0.0;
+    let mut stopped = false;
     for (cell, _t_enter, t_exit) in Dda::new(&frame, ray) {
         visited += 1;
+        last_exit = t_exit;
         for s in lists.list(cell) {
             counts.n_i += 1;
             if mailbox.insert(s.id) {
@@ -76,16 +79,31 @@ pub fn trace<L: CellLists + ?Sized>(
             }
         }
         if matches!(best, Some(b) if b.t <= t_exit) {
+            stopped = true;
             break;
         }
         if visited > max_steps {
             counts.truncated = best.is_none();
+            stopped = true;
             break;
         }
     }
     counts.n_s = visited.saturating_sub(1);
-    counts.hit = best;
+    // The ray left a finite grid: a sphere entered beyond the last cell (listed because it pokes
+    // into the grid) is outside the indexed region, so it is not this grid's hit.
+    counts.hit = if stopped {
+        best
+    } else {
+        best.filter(|b| b.t <= last_exit)
+    };
     counts
+}
+
+/// The distance at which `ray` leaves the finite grid of `frame` (as the DDA computes it), or ∞.
+pub fn exit_distance(frame: &crate::grid::GridFrame, ray: &Ray) -> f64 {
+    Dda::new(frame, ray)
+        .last()
+        .map_or(f64::INFINITY, |(_, _, t)| t)
 }
 
 /// The first sphere `ray` enters among all of `spheres` (the oracle), with the same tie rule.

@@ -5,14 +5,16 @@ use crate::experiment::Row;
 /// The header line of rows shaped like `row`.
 pub fn header(row: &Row) -> Vec<u8> {
     let mut w = ::csv::Writer::from_writer(Vec::new());
-    w.write_record(row.0.iter().map(|(c, _)| c.as_str())).expect("writing to memory cannot fail");
+    w.write_record(row.0.iter().map(|(c, _)| c.as_str()))
+        .expect("writing to memory cannot fail");
     w.into_inner().expect("flush to memory")
 }
 
 /// One record line; the columns must match the header.
 pub fn record(row: &Row) -> Vec<u8> {
     let mut w = ::csv::Writer::from_writer(Vec::new());
-    w.write_record(row.0.iter().map(|(_, v)| v.render())).expect("writing to memory cannot fail");
+    w.write_record(row.0.iter().map(|(_, v)| v.render()))
+        .expect("writing to memory cannot fail");
     w.into_inner().expect("flush to memory")
 }
 
@@ -35,8 +37,14 @@ mod tests {
     #[test]
     fn header_and_records_line_up() {
         let mut r = Row::default();
-        r.u("point", 0).f("n_i_mean", 1.5).s("n_i_band", "inside").f("x", f64::NAN);
+        r.u("point", 0)
+            .f("n_i_mean", 1.5)
+            .s("n_i_band", "inside")
+            .f("x", f64::NAN);
         let text = String::from_utf8(serialize(&[r.clone(), r])).expect("utf8");
-        assert_eq!(text, "point,n_i_mean,n_i_band,x\n0,1.5,inside,NaN\n0,1.5,inside,NaN\n");
+        assert_eq!(
+            text,
+            "point,n_i_mean,n_i_band,x\n0,1.5,inside,NaN\n0,1.5,inside,NaN\n"
+        );
     }
 }

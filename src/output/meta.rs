@@ -30,7 +30,12 @@ pub struct Build {
 impl Build {
     /// This binary.
     pub fn current() -> Self {
-        Self { version: env!("CARGO_PKG_VERSION").into(), git_commit: option_env!("RAYCOST_GIT_COMMIT").unwrap_or("unknown").into() }
+        Self {
+            version: env!("CARGO_PKG_VERSION").into(),
+            git_commit: option_env!("RAYCOST_GIT_COMMIT")
+                .unwrap_or("unknown")
+                .into(),
+        }
     }
 }
 
@@ -57,6 +62,8 @@ pub struct RunInfo {
     pub finished: String,
     /// Wall seconds of the whole run.
     pub wall_s: f64,
+    /// Points of the whole sweep (all shards); `raycost merge` checks coverage against it.
+    pub points_total: usize,
     /// Points in this file.
     pub points: Vec<usize>,
     /// Wall seconds of each point, in the order of `points`.

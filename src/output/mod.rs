@@ -6,6 +6,7 @@
 //! first point is traced.
 
 pub mod csv;
+pub mod merge;
 pub mod meta;
 pub mod progress;
 pub mod sink;

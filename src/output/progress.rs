@@ -40,7 +40,11 @@ pub fn progress(total: u64, points: usize, quiet: bool) -> Progress {
         Progress::Bar(bar)
     } else {
         let now = Instant::now();
-        Progress::Log { total, state: Mutex::new((0, now, now)), every: Duration::from_secs(10) }
+        Progress::Log {
+            total,
+            state: Mutex::new((0, now, now)),
+            every: Duration::from_secs(10),
+        }
     }
 }
 
@@ -50,7 +54,11 @@ impl Progress {
         match self {
             Progress::Hidden => {}
             Progress::Bar(b) => b.inc(n),
-            Progress::Log { total, state, every } => {
+            Progress::Log {
+                total,
+                state,
+                every,
+            } => {
                 let mut s = state.lock().expect("progress lock");
                 s.0 += n;
                 if s.2.elapsed() >= *every {
@@ -58,7 +66,14 @@ impl Progress {
                     let el = s.1.elapsed().as_secs_f64();
                     let rate = s.0 as f64 / el.max(1e-9);
                     let eta = (*total - s.0.min(*total)) as f64 / rate.max(1e-9);
-                    eprintln!("progress: {}/{} rays ({:.1} %), {:.3e} rays/s, eta {:.0} s", s.0, total, 100.0 * s.0 as f64 / *total as f64, rate, eta);
+                    eprintln!(
+                        "progress: {}/{} rays ({:.1} %), {:.3e} rays/s, eta {:.0} s",
+                        s.0,
+                        total,
+                        100.0 * s.0 as f64 / *total as f64,
+                        rate,
+                        eta
+                    );
                 }
             }
         }

@@ -37,7 +37,10 @@ pub struct Sink {
 }
 
 fn err(path: &Path, message: impl Into<String>) -> OutputError {
-    OutputError { path: path.display().to_string(), message: message.into() }
+    OutputError {
+        path: path.display().to_string(),
+        message: message.into(),
+    }
 }
 
 impl Sink {
@@ -53,15 +56,25 @@ impl Sink {
     /// Opens (or, with `resume`, reopens) the files of run `stem` in `dir`. Refuses, before anything
     /// is written, to replace a finished result without `force` or to discard a partial one without
     /// `resume` or `force`.
-    pub fn open(dir: &Path, stem: &str, spec_hash: &str, opts: SinkOptions) -> Result<Sink, OutputError> {
-        fs::create_dir_all(dir).map_err(|e| err(dir, format!("cannot create the results folder: {e}")))?;
+    pub fn open(
+        dir: &Path,
+        stem: &str,
+        spec_hash: &str,
+        opts: SinkOptions,
+    ) -> Result<Sink, OutputError> {
+        fs::create_dir_all(dir)
+            .map_err(|e| err(dir, format!("cannot create the results folder: {e}")))?;
         let probe = dir.join(format!(".{stem}.write-test"));
-        File::create(&probe).map_err(|e| err(dir, format!("the results folder is not writable: {e}")))?;
+        File::create(&probe)
+            .map_err(|e| err(dir, format!("the results folder is not writable: {e}")))?;
         let _ = fs::remove_file(&probe);
         for suffix in ["csv", "hist.csv", "meta.toml"] {
             let p = Self::path(dir, stem, suffix);
             if p.exists() && !opts.force {
-                return Err(err(&p, "exists already; pass --force to replace it (nothing was written)"));
+                return Err(err(
+                    &p,
+                    "exists already; pass --force to replace it (nothing was written)",
+                ));
             }
         }
         let csv_p = Self::partial(dir, stem, "csv");
@@ -78,14 +91,27 @@ impl Sink {
             let rows = read_complete(&csv_p).map_err(|e| err(&csv_p, e))?;
             csv_has_header = !rows.is_empty();
             for line in rows.iter().skip(1) {
-                let point = line.split(',').next().and_then(|p| p.parse::<usize>().ok()).ok_or_else(|| err(&csv_p, format!("unreadable row: {line}")))?;
+                let point = line
+                    .split(',')
+                    .next()
+                    .and_then(|p| p.parse::<usize>().ok())
+                    .ok_or_else(|| err(&csv_p, format!("unreadable row: {line}")))?;
                 done.insert(point);
             }
             // Keep histogram rows only of points whose main row was written.
-            let hist_rows = if hist_p.exists() { read_complete(&hist_p).map_err(|e| err(&hist_p, e))? } else { Vec::new() };
+            let hist_rows = if hist_p.exists() {
+                read_complete(&hist_p).map_err(|e| err(&hist_p, e))?
+            } else {
+                Vec::new()
+            };
             let mut kept = String::new();
             for (i, line) in hist_rows.iter().enumerate() {
-                let keep = i == 0 || line.split(',').next().and_then(|p| p.parse::<usize>().ok()).is_some_and(|p| done.contains(&p));
+                let keep = i == 0
+                    || line
+                        .split(',')
+                        .next()
+                        .and_then(|p| p.parse::<usize>().ok())
+                        .is_some_and(|p| done.contains(&p));
                 if keep {
                     kept.push_str(line);
                     kept.push('\n');
@@ -94,16 +120,37 @@ impl Sink {
             hist_has_header = !hist_rows.is_empty();
             fs::write(&hist_p, kept).map_err(|e| err(&hist_p, e.to_string()))?;
         } else if csv_p.exists() && !opts.force {
-            return Err(err(&csv_p, "a partial run exists: pass --resume to continue it, or --force to start over"));
+            return Err(err(
+                &csv_p,
+                "a partial run exists: pass --resume to continue it, or --force to start over",
+            ));
         } else {
             for p in [&csv_p, &hist_p] {
                 File::create(p).map_err(|e| err(p, e.to_string()))?;
             }
             let mut m = File::create(&meta_p).map_err(|e| err(&meta_p, e.to_string()))?;
-            writeln!(m, "spec_hash = \"{spec_hash}\"\nstarted = \"{}\"", super::time::now_rfc3339()).map_err(|e| err(&meta_p, e.to_string()))?;
+            writeln!(
+                m,
+                "spec_hash = \"{spec_hash}\"\nstarted = \"{}\"",
+                super::time::now_rfc3339()
+            )
+            .map_err(|e| err(&meta_p, e.to_string()))?;
         }
-        let open = |p: &Path| OpenOptions::new().append(true).open(p).map_err(|e| err(p, e.to_string()));
-        Ok(Sink { dir: dir.to_path_buf(), stem: stem.to_string(), csv: open(&csv_p)?, hist: open(&hist_p)?, csv_has_header, hist_has_header, done })
+        let open = |p: &Path| {
+            OpenOptions::new()
+                .append(true)
+                .open(p)
+                .map_err(|e| err(p, e.to_string()))
+        };
+        Ok(Sink {
+            dir: dir.to_path_buf(),
+            stem: stem.to_string(),
+            csv: open(&csv_p)?,
+            hist: open(&hist_p)?,
+            csv_has_header,
+            hist_has_header,
+            done,
+        })
     }
 
     /// Points already finished (from a resumed partial run).
@@ -149,7 +196,10 @@ impl Sink {
             fs::remove_file(&hist_p)?;
         }
         fs::rename(&meta_p, Self::path(&dir, &stem, "meta.toml"))?;
-        fs::rename(Self::partial(&dir, &stem, "csv"), Self::path(&dir, &stem, "csv"))?;
+        fs::rename(
+            Self::partial(&dir, &stem, "csv"),
+            Self::path(&dir, &stem, "csv"),
+        )?;
         written.insert(0, Self::path(&dir, &stem, "meta.toml"));
         written.insert(0, Self::path(&dir, &stem, "csv"));
         Ok(written)
@@ -159,7 +209,11 @@ impl Sink {
 /// The complete lines of a file; a torn last line (no newline: the writer was killed mid-write) is
 /// cut off the file itself, so appending continues cleanly.
 fn read_complete(p: &Path) -> Result<Vec<String>, String> {
-    let mut f = OpenOptions::new().read(true).write(true).open(p).map_err(|e| e.to_string())?;
+    let mut f = OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(p)
+        .map_err(|e| e.to_string())?;
     let mut text = String::new();
     f.read_to_string(&mut text).map_err(|e| e.to_string())?;
     let keep = text.rfind('\n').map_or(0, |i| i + 1);

@@ -44,9 +44,17 @@ pub fn find_key(text: &str, key: &str) -> Option<(usize, usize)> {
     if let Some(i) = text.find(&quoted) {
         return Some(line_col(text, i));
     }
-    let (table, leaf) = key.rsplit_once('.')?;
+    let Some((table, leaf)) = key.rsplit_once('.') else {
+        // A whole table: its header line.
+        return [format!("[[{key}]]"), format!("[{key}]")]
+            .iter()
+            .find_map(|h| text.find(h.as_str()))
+            .map(|i| line_col(text, i));
+    };
     let header = format!("[{table}]");
-    let start = text.find(&header)?;
+    let Some(start) = text.find(&header) else {
+        return find_key(text, table);
+    };
     let mut offset = start;
     for line in text[start..].split_inclusive('\n').skip(1) {
         offset += 0;
@@ -64,7 +72,8 @@ pub fn find_key(text: &str, key: &str) -> Option<(usize, usize)> {
         }
     }
     let _ = offset;
-    None
+    // The key is not written in its table (a default or a cross-key rule): point at the table.
+    Some(line_col(text, start))
 }
 
 #[cfg(test)]

@@ -121,6 +121,7 @@ impl Spec {
 
         // --set overrides: a set key is no longer swept.
         let mut set_keys = Vec::new();
+        let mut set_flags = Vec::new();
         for s in sets {
             let flag = || format!("--set {s}");
             let (key, value) = s.split_once('=').ok_or_else(|| SpecError {
@@ -143,6 +144,7 @@ impl Spec {
                 message: m,
             })?;
             sweep.retain(|(k, _)| *k != key);
+            set_flags.push(flag());
             set_keys.push(key);
         }
 
@@ -162,10 +164,10 @@ impl Spec {
         let base: RawSpec = deserialize_tree(&tree).map_err(|(k, m)| {
             let from_set = set_keys
                 .iter()
-                .find(|s| k.starts_with(s.as_str()) || s.starts_with(&k));
+                .position(|s| k.starts_with(s.as_str()) || s.starts_with(&k));
             match from_set {
-                Some(s) => SpecError {
-                    source_name: format!("--set {s}"),
+                Some(i) => SpecError {
+                    source_name: set_flags[i].clone(),
                     location: None,
                     key: Some(k),
                     message: m,
@@ -212,9 +214,9 @@ impl Spec {
             })?;
             let config = GridConfig::from_raw(&raw).map_err(|(k, m)| {
                 let swept = sweep.iter().find(|(s, _)| *s == k).map(|(s, _)| s.clone());
-                if let Some(s) = set_keys.iter().find(|s| **s == k) {
+                if let Some(i) = set_keys.iter().position(|s| *s == k) {
                     return SpecError {
-                        source_name: format!("--set {s}"),
+                        source_name: set_flags[i].clone(),
                         location: None,
                         key: Some(k.clone()),
                         message: m.clone(),

@@ -1,0 +1,929 @@
+//! `raycost merge`: joins the shard files of a sweep (`NAME.shard-K-of-N.csv`, their side tables such
+//! as `.hist.csv`, and their `.meta.toml`) into the table one unsharded run would have written.
+//!
+//! Everything is read and checked before anything is written: all N shards present once, one spec
+//! hash and one raycost version, one header per table, every point of the sweep present exactly once
+//! and in the shard it belongs to, no torn line (a file not ending in a newline, or a row with the
+//! wrong number of fields). Any problem is an [`OutputError`] naming the file (exit code 2), and no
+//! output is created. Rows are re-serialised with the same CSV writer settings as the runner, so the
+//! merged table is byte-identical to an unsharded run's in every non-timing column; side-table rows
+//! keep their order within a point. Outputs are written to temporary files and renamed into place;
+//! existing outputs are replaced only with `--force`.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use super::meta::host_name;
+use super::time::now_rfc3339;
+use super::OutputError;
+
+fn err(path: &Path, message: impl Into<String>) -> OutputError {
+    OutputError {
+        path: path.display().to_string(),
+        message: message.into(),
+    }
+}
+
+/// Merges the shards named by `inputs` (one results folder, or shard CSV files) and prints what it
+/// wrote unless `quiet`. `out` names the merged main table (default: `NAME.csv` beside the shards).
+pub fn run(inputs: &[PathBuf], out: Option<&Path>, force: bool, quiet: bool) -> anyhow::Result<()> {
+    let merged = merge(inputs, out, force)?;
+    if !quiet {
+        let mut so = std::io::stdout().lock();
+        writeln!(
+            so,
+            "merged {} shards, {} points",
+            merged.shards, merged.points
+        )?;
+        for p in &merged.written {
+            writeln!(so, "wrote {}", p.display())?;
+        }
+    }
+    Ok(())
+}
+
+/// What a merge wrote.
+#[derive(Debug)]
+pub struct Merged {
+    /// Number of shards joined.
+    pub shards: usize,
+    /// Number of points in the merged table.
+    pub points: usize,
+    /// The files written: main table, side tables, metadata.
+    pub written: Vec<PathBuf>,
+}
+
+/// Checks and merges; see the module documentation.
+pub fn merge(inputs: &[PathBuf], out: Option<&Path>, force: bool) -> Result<Merged, OutputError> {
+    let files = collect(inputs)?;
+    let n = files[0].n;
+    let name = files[0].name.clone();
+    let shards: Vec<Shard> = files
+        .into_iter()
+        .map(Shard::load)
+        .collect::<Result<_, _>>()?;
+    let first = &shards[0];
+
+    // One spec, one version, one sweep size.
+    for s in &shards[1..] {
+        if s.spec_hash != first.spec_hash {
+            return Err(err(
+                &s.meta_path,
+                format!(
+                    "spec hash {} differs from {} in {}: the shards come from different specs (or different --set overrides); rerun them from one spec",
+                    short_hash(&s.spec_hash),
+                    short_hash(&first.spec_hash),
+                    first.meta_path.display()
+                ),
+            ));
+        }
+        if s.version != first.version {
+            return Err(err(
+                &s.meta_path,
+                format!("written by raycost {}, but {} by raycost {}: rerun the shards with one raycost version", s.version, first.meta_path.display(), first.version),
+            ));
+        }
+        if s.points_total != first.points_total {
+            return Err(err(
+                &s.meta_path,
+                format!(
+                    "records {} sweep points, but {} records {}",
+                    s.points_total,
+                    first.meta_path.display(),
+                    first.points_total
+                ),
+            ));
+        }
+    }
+    let total = first.points_total;
+
+    // Main table: one header, every point exactly once, in its own shard.
+    let with_rows: Vec<&Shard> = shards.iter().filter(|s| s.main.header.is_some()).collect();
+    let header = with_rows.first().and_then(|s| s.main.header.clone());
+    for s in &with_rows[..] {
+        check_header(&s.main, &with_rows[0].main)?;
+    }
+    let mut seen: BTreeMap<usize, (&Path, u64)> = BTreeMap::new();
+    for s in &shards {
+        for r in &s.main.rows {
+            if r.point >= total {
+                return Err(err(
+                    &s.main.path,
+                    format!(
+                        "line {}: point {} is out of range: the spec has {total} points (0 to {})",
+                        r.line,
+                        r.point,
+                        total.saturating_sub(1)
+                    ),
+                ));
+            }
+            if r.point % n != s.k {
+                return Err(err(
+                    &s.main.path,
+                    format!(
+                        "line {}: point {} does not belong to shard {}/{n} (it is in shard {}/{n})",
+                        r.line,
+                        r.point,
+                        s.k,
+                        r.point % n
+                    ),
+                ));
+            }
+            if let Some((p, line)) = seen.get(&r.point) {
+                return Err(err(
+                    &s.main.path,
+                    format!(
+                        "line {}: point {} is duplicated (also at {} line {line})",
+                        r.line,
+                        r.point,
+                        p.display()
+                    ),
+                ));
+            }
+            seen.insert(r.point, (&s.main.path, r.line));
+        }
+    }
+    for s in &shards {
+        let missing: Vec<usize> = (s.k..total)
+            .step_by(n)
+            .filter(|p| !seen.contains_key(p))
+            .collect();
+        if !missing.is_empty() {
+            return Err(err(
+                &s.main.path,
+                format!(
+                    "{} missing (they belong to shard {}/{n}; the sweep has {total} points)",
+                    list_points(&missing),
+                    s.k
+                ),
+            ));
+        }
+        let listed: BTreeSet<usize> = s.meta_points.iter().copied().collect();
+        let rows: BTreeSet<usize> = s.main.rows.iter().map(|r| r.point).collect();
+        if listed != rows {
+            let extra: Vec<usize> = rows.difference(&listed).copied().collect();
+            let absent: Vec<usize> = listed.difference(&rows).copied().collect();
+            let what = if !extra.is_empty() {
+                format!(
+                    "has rows for points {} that {} does not list",
+                    join(&extra),
+                    s.meta_path.display()
+                )
+            } else {
+                format!(
+                    "has no rows for points {} that {} lists",
+                    join(&absent),
+                    s.meta_path.display()
+                )
+            };
+            return Err(err(
+                &s.main.path,
+                format!("{what}: the CSV and its metadata come from different runs"),
+            ));
+        }
+    }
+
+    // Side tables (e.g. `hist`): every shard with points has the same ones, with one header, and
+    // their rows belong to points of the shard's main table.
+    let mut table_names: BTreeSet<String> = BTreeSet::new();
+    for s in &shards {
+        table_names.extend(s.tables.keys().cloned());
+    }
+    for t in &table_names {
+        let mut reference: Option<&Table> = None;
+        for s in &shards {
+            let Some(tab) = s.tables.get(t) else {
+                if s.main.rows.is_empty() {
+                    continue;
+                }
+                let want = s.csv.with_file_name(format!("{}.{t}.csv", s.stem));
+                return Err(err(
+                    &want,
+                    format!("is missing: other shards have a {t} table"),
+                ));
+            };
+            let main_points: BTreeSet<usize> = s.main.rows.iter().map(|r| r.point).collect();
+            if let Some(r) = tab.rows.iter().find(|r| !main_points.contains(&r.point)) {
+                return Err(err(
+                    &tab.path,
+                    format!(
+                        "line {}: a row of point {}, which has no row in {}",
+                        r.line,
+                        r.point,
+                        s.main.path.display()
+                    ),
+                ));
+            }
+            if tab.header.is_some() {
+                match reference {
+                    None => reference = Some(tab),
+                    Some(re) => check_header(tab, re)?,
+                }
+            }
+        }
+    }
+
+    // Output paths; refuse to replace anything without --force.
+    let main_out = match out {
+        Some(p) => {
+            if p.extension().and_then(|e| e.to_str()) != Some("csv") {
+                return Err(err(p, "--out must name the merged .csv file (its .hist.csv and .meta.toml go beside it)"));
+            }
+            p.to_path_buf()
+        }
+        None => first.csv.with_file_name(format!("{name}.csv")),
+    };
+    let base = main_out
+        .to_string_lossy()
+        .strip_suffix(".csv")
+        .map(str::to_string)
+        .unwrap_or_default();
+    let table_out = |t: &str| PathBuf::from(format!("{base}.{t}.csv"));
+    let meta_out = PathBuf::from(format!("{base}.meta.toml"));
+    let mut outputs: Vec<PathBuf> = vec![main_out.clone()];
+    outputs.extend(table_names.iter().map(|t| table_out(t)));
+    outputs.push(meta_out.clone());
+    for p in &outputs {
+        if shards.iter().any(|s| same_file(p, &s.csv)) {
+            return Err(err(
+                p,
+                "is one of the shard files being merged; choose another --out",
+            ));
+        }
+        if p.exists() && !force {
+            return Err(err(
+                p,
+                "exists already; pass --force to replace it (nothing was written)",
+            ));
+        }
+    }
+
+    // Assemble, in point order (stable: side-table rows keep their order within a point).
+    let mut contents: Vec<(PathBuf, Vec<u8>)> = Vec::new();
+    let mut main_bytes = header.unwrap_or_default();
+    let mut rows: Vec<&Line> = shards.iter().flat_map(|s| s.main.rows.iter()).collect();
+    rows.sort_by_key(|r| r.point);
+    for r in rows {
+        main_bytes.extend_from_slice(&r.bytes);
+    }
+    for t in &table_names {
+        let tabs: Vec<&Table> = shards.iter().filter_map(|s| s.tables.get(t)).collect();
+        let mut bytes = tabs
+            .iter()
+            .find_map(|t| t.header.clone())
+            .unwrap_or_default();
+        let mut rows: Vec<&Line> = tabs.iter().flat_map(|t| t.rows.iter()).collect();
+        rows.sort_by_key(|r| r.point);
+        for r in rows {
+            bytes.extend_from_slice(&r.bytes);
+        }
+        contents.push((table_out(t), bytes));
+    }
+    contents.push((
+        meta_out.clone(),
+        merged_meta(&shards, total, n).into_bytes(),
+    ));
+    contents.push((main_out.clone(), main_bytes));
+    write_all_atomically(&contents)?;
+
+    let mut written = vec![main_out];
+    written.extend(table_names.iter().map(|t| table_out(t)));
+    written.push(meta_out);
+    Ok(Merged {
+        shards: n,
+        points: total,
+        written,
+    })
+}
+
+/// One shard's file names.
+#[derive(Debug, Clone)]
+struct ShardFile {
+    csv: PathBuf,
+    name: String,
+    stem: String,
+    k: usize,
+    n: usize,
+}
+
+/// `NAME.shard-K-of-N.csv` → (NAME, K, N).
+fn parse_shard_name(file_name: &str) -> Option<(String, usize, usize)> {
+    let stem = file_name.strip_suffix(".csv")?;
+    let (name, kn) = stem.rsplit_once(".shard-")?;
+    let (k, n) = kn.split_once("-of-")?;
+    let num = |s: &str| {
+        (!s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()))
+            .then(|| s.parse::<usize>().ok())
+            .flatten()
+    };
+    (!name.is_empty()).then_some(())?;
+    Some((name.to_string(), num(k)?, num(n)?))
+}
+
+fn shard_file(csv: PathBuf) -> Option<ShardFile> {
+    let file_name = csv.file_name()?.to_str()?.to_string();
+    let (name, k, n) = parse_shard_name(&file_name)?;
+    let stem = file_name.strip_suffix(".csv")?.to_string();
+    Some(ShardFile {
+        csv,
+        name,
+        stem,
+        k,
+        n,
+    })
+}
+
+/// The shard files named by the inputs, checked for one experiment, one N, and all K present once;
+/// sorted by K.
+fn collect(inputs: &[PathBuf]) -> Result<Vec<ShardFile>, OutputError> {
+    let mut files: Vec<ShardFile> = Vec::new();
+    let mut partials: Vec<PathBuf> = Vec::new();
+    for input in inputs {
+        if input.is_dir() {
+            let entries = fs::read_dir(input)
+                .map_err(|e| err(input, format!("cannot list the folder: {e}")))?;
+            let mut found = Vec::new();
+            for entry in entries {
+                let entry =
+                    entry.map_err(|e| err(input, format!("cannot list the folder: {e}")))?;
+                let path = entry.path();
+                if !path.is_file() {
+                    continue;
+                }
+                let fname = entry.file_name().to_string_lossy().to_string();
+                if fname
+                    .strip_suffix(".partial")
+                    .and_then(parse_shard_name)
+                    .is_some()
+                {
+                    partials.push(path);
+                } else if let Some(f) = shard_file(path) {
+                    found.push(f);
+                }
+            }
+            if found.is_empty() {
+                let hint = if partials.is_empty() {
+                    String::new()
+                } else {
+                    format!(" (only unfinished runs: {}; complete them with raycost run SPEC --shard K/N --resume)", names(&partials))
+                };
+                return Err(err(
+                    input,
+                    format!("no shard files NAME.shard-K-of-N.csv in this folder{hint}"),
+                ));
+            }
+            found.sort_by(|a, b| a.csv.cmp(&b.csv));
+            files.extend(found);
+        } else if input.is_file() {
+            files.push(shard_file(input.clone()).ok_or_else(|| {
+                err(
+                    input,
+                    "is not a shard table: expected a folder or files named NAME.shard-K-of-N.csv",
+                )
+            })?);
+        } else {
+            return Err(err(input, "no such file or folder"));
+        }
+    }
+    let Some(first) = files.first().cloned() else {
+        return Err(err(
+            Path::new("."),
+            "nothing to merge: name a results folder or shard files",
+        ));
+    };
+    for f in &files[1..] {
+        if f.name != first.name {
+            return Err(err(&f.csv, format!("is a shard of experiment '{}', but {} is of '{}': merge one experiment at a time", f.name, first.csv.display(), first.name)));
+        }
+        if f.n != first.n {
+            return Err(err(
+                &f.csv,
+                format!("is one of {} shards, but {} is one of {}: shards of different splits cannot be merged (remove one set, or name the files to merge)", f.n, first.csv.display(), first.n),
+            ));
+        }
+    }
+    let n = first.n;
+    if n == 0 {
+        return Err(err(&first.csv, "has N = 0 in its name: expected K < N"));
+    }
+    let mut by_k: BTreeMap<usize, &ShardFile> = BTreeMap::new();
+    for f in &files {
+        if f.k >= n {
+            return Err(err(
+                &f.csv,
+                format!("has K = {} ≥ N = {n} in its name", f.k),
+            ));
+        }
+        if let Some(other) = by_k.insert(f.k, f) {
+            let what = if same_file(&other.csv, &f.csv) {
+                "is given twice".to_string()
+            } else {
+                format!("is shard {}/{n}, like {}", f.k, other.csv.display())
+            };
+            return Err(err(&f.csv, what));
+        }
+    }
+    if let Some(k) = (0..n).find(|k| !by_k.contains_key(k)) {
+        let want = first
+            .csv
+            .with_file_name(format!("{}.shard-{k}-of-{n}.csv", first.name));
+        let partial = PathBuf::from(format!("{}.partial", want.display()));
+        let hint = if partial.exists() {
+            format!(" (an unfinished run left {}: complete it with raycost run SPEC --shard {k}/{n} --resume)", partial.display())
+        } else {
+            format!(" (run it with raycost run SPEC --shard {k}/{n})")
+        };
+        return Err(err(
+            &want,
+            format!("is missing: shard {k} of {n} is needed{hint}"),
+        ));
+    }
+    files.sort_by_key(|f| f.k);
+    Ok(files)
+}
+
+/// One CSV row: its point, its line number (1-based), and its bytes as the runner writes them.
+#[derive(Debug)]
+struct Line {
+    point: usize,
+    line: u64,
+    bytes: Vec<u8>,
+}
+
+/// A CSV table of one shard.
+#[derive(Debug)]
+struct Table {
+    path: PathBuf,
+    /// Header line bytes; `None` for an empty file (a shard without points).
+    header: Option<Vec<u8>>,
+    columns: Vec<String>,
+    rows: Vec<Line>,
+}
+
+fn record_bytes<'a>(fields: impl IntoIterator<Item = &'a [u8]>) -> Vec<u8> {
+    let mut w = ::csv::Writer::from_writer(Vec::new());
+    w.write_record(fields)
+        .expect("writing to memory cannot fail");
+    w.into_inner().expect("flush to memory")
+}
+
+/// Reads and checks a table: ends with a newline, every row has the header's number of fields and a
+/// point index in its first column.
+fn read_table(path: &Path) -> Result<Table, OutputError> {
+    let bytes = fs::read(path).map_err(|e| err(path, format!("cannot read: {e}")))?;
+    let mut table = Table {
+        path: path.to_path_buf(),
+        header: None,
+        columns: Vec::new(),
+        rows: Vec::new(),
+    };
+    if bytes.is_empty() {
+        return Ok(table);
+    }
+    if !bytes.ends_with(b"\n") {
+        let line = bytes.iter().filter(|&&b| b == b'\n').count() + 1;
+        return Err(err(path, format!("line {line} is truncated (the file does not end with a newline: was the run killed mid-write?)")));
+    }
+    let mut reader = ::csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .from_reader(&bytes[..]);
+    let mut record = ::csv::ByteRecord::new();
+    let mut width = 0;
+    loop {
+        match reader.read_byte_record(&mut record) {
+            Ok(false) => break,
+            Ok(true) => {}
+            Err(e) => return Err(err(path, format!("unreadable CSV: {e}"))),
+        }
+        let line = record.position().map_or(0, |p| p.line());
+        if table.header.is_none() {
+            table.columns = record
+                .iter()
+                .map(|f| String::from_utf8_lossy(f).into_owned())
+                .collect();
+            if table.columns.first().map(String::as_str) != Some("point") {
+                return Err(err(
+                    path,
+                    format!(
+                        "line {line}: the first column is '{}', expected 'point'",
+                        table.columns.first().map_or("", String::as_str)
+                    ),
+                ));
+            }
+            width = record.len();
+            table.header = Some(record_bytes(record.iter()));
+            continue;
+        }
+        if record.len() != width {
+            return Err(err(path, format!("line {line} has {} fields, but the header has {width} (a torn or corrupted row)", record.len())));
+        }
+        let cell = String::from_utf8_lossy(&record[0]).into_owned();
+        let point = cell.parse::<usize>().map_err(|_| {
+            err(
+                path,
+                format!("line {line}: point '{cell}' is not a point index"),
+            )
+        })?;
+        table.rows.push(Line {
+            point,
+            line,
+            bytes: record_bytes(record.iter()),
+        });
+    }
+    Ok(table)
+}
+
+fn check_header(t: &Table, reference: &Table) -> Result<(), OutputError> {
+    if t.header == reference.header {
+        return Ok(());
+    }
+    let i = t
+        .columns
+        .iter()
+        .zip(&reference.columns)
+        .position(|(a, b)| a != b)
+        .unwrap_or(t.columns.len().min(reference.columns.len()));
+    let col = |c: &[String]| {
+        c.get(i)
+            .map_or_else(|| "(none)".to_string(), |s| format!("'{s}'"))
+    };
+    Err(err(
+        &t.path,
+        format!(
+            "its header differs from {}'s: column {} is {} there and {} here ({} vs {} columns)",
+            reference.path.display(),
+            i + 1,
+            col(&reference.columns),
+            col(&t.columns),
+            reference.columns.len(),
+            t.columns.len()
+        ),
+    ))
+}
+
+/// One shard, read and checked on its own.
+#[derive(Debug)]
+struct Shard {
+    csv: PathBuf,
+    stem: String,
+    k: usize,
+    meta_path: PathBuf,
+    meta: toml::Table,
+    spec_hash: String,
+    version: String,
+    points_total: usize,
+    /// `run.points` and `run.resumed_points` of the metadata.
+    meta_points: Vec<usize>,
+    main: Table,
+    tables: BTreeMap<String, Table>,
+}
+
+fn get<'a>(t: &'a toml::Table, dotted: &str) -> Option<&'a toml::Value> {
+    let mut parts = dotted.split('.');
+    let mut v = t.get(parts.next()?)?;
+    for p in parts {
+        v = v.as_table()?.get(p)?;
+    }
+    Some(v)
+}
+
+impl Shard {
+    fn load(f: ShardFile) -> Result<Shard, OutputError> {
+        let meta_path = f.csv.with_file_name(format!("{}.meta.toml", f.stem));
+        let text = fs::read_to_string(&meta_path).map_err(|e| err(&meta_path, format!("cannot read the shard's metadata ({e}); it holds the spec hash the merge checks")))?;
+        let meta: toml::Table = text.parse().map_err(|e: toml::de::Error| {
+            err(&meta_path, format!("is not valid TOML: {}", e.message()))
+        })?;
+        let string = |key: &str| -> Result<String, OutputError> {
+            get(&meta, key)
+                .and_then(|v| v.as_str())
+                .map(str::to_string)
+                .ok_or_else(|| {
+                    err(
+                        &meta_path,
+                        format!("has no {key}: not the metadata of a raycost run"),
+                    )
+                })
+        };
+        let spec_hash = string("run.spec_hash")?;
+        let version = string("raycost.version")?;
+        let shard = string("run.shard")?;
+        if shard != format!("{}/{}", f.k, f.n) {
+            return Err(err(
+                &meta_path,
+                format!(
+                    "records shard {shard}, but the file name says {}/{}: was it renamed?",
+                    f.k, f.n
+                ),
+            ));
+        }
+        let points_total = match get(&meta, "run.points_total").and_then(toml::Value::as_integer) {
+            Some(p) => usize::try_from(p).map_err(|_| err(&meta_path, "run.points_total is negative"))?,
+            None => match get(&meta, "spec.sweep").and_then(toml::Value::as_table) {
+                Some(sw) => sw.values().map(|v| v.as_array().map_or(1, Vec::len)).product(),
+                None => return Err(err(&meta_path, "has neither run.points_total nor spec.sweep: cannot tell how many points the sweep has")),
+            },
+        };
+        let ints = |key: &str| -> Vec<usize> {
+            get(&meta, key)
+                .and_then(toml::Value::as_array)
+                .map(|a| {
+                    a.iter()
+                        .filter_map(|v| v.as_integer())
+                        .filter_map(|i| usize::try_from(i).ok())
+                        .collect()
+                })
+                .unwrap_or_default()
+        };
+        let mut meta_points = ints("run.points");
+        meta_points.extend(ints("run.resumed_points"));
+
+        let main = read_table(&f.csv)?;
+        let mut tables = BTreeMap::new();
+        let dir = match f.csv.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let prefix = format!("{}.", f.stem);
+        let entries =
+            fs::read_dir(&dir).map_err(|e| err(&dir, format!("cannot list the folder: {e}")))?;
+        for entry in entries.flatten() {
+            let fname = entry.file_name().to_string_lossy().to_string();
+            let Some(table) = fname
+                .strip_prefix(&prefix)
+                .and_then(|r| r.strip_suffix(".csv"))
+            else {
+                continue;
+            };
+            if table.is_empty() || table.contains('.') || !entry.path().is_file() {
+                continue;
+            }
+            tables.insert(table.to_string(), read_table(&entry.path())?);
+        }
+        Ok(Shard {
+            csv: f.csv,
+            stem: f.stem,
+            k: f.k,
+            meta_path,
+            meta,
+            spec_hash,
+            version,
+            points_total,
+            meta_points,
+            main,
+            tables,
+        })
+    }
+}
+
+/// The merged metadata: the spec and hash, the union of timing columns, every point's wall time,
+/// and one `[[shards]]` entry per shard with its host, threads and times.
+fn merged_meta(shards: &[Shard], total: usize, n: usize) -> String {
+    use toml::Value as V;
+    let first = &shards[0].meta;
+    let mut root = toml::Table::new();
+
+    let mut timing: Vec<V> = Vec::new();
+    for s in shards {
+        for c in get(&s.meta, "timing_columns")
+            .and_then(V::as_array)
+            .into_iter()
+            .flatten()
+        {
+            if !timing.contains(c) {
+                timing.push(c.clone());
+            }
+        }
+    }
+    root.insert("timing_columns".into(), V::Array(timing));
+
+    let mut build = toml::Table::new();
+    build.insert("version".into(), V::String(shards[0].version.clone()));
+    let commits: BTreeSet<String> = shards
+        .iter()
+        .filter_map(|s| {
+            get(&s.meta, "raycost.git_commit")
+                .and_then(V::as_str)
+                .map(str::to_string)
+        })
+        .collect();
+    build.insert(
+        "git_commit".into(),
+        V::String(commits.into_iter().collect::<Vec<_>>().join(" ")),
+    );
+    root.insert("raycost".into(), V::Table(build));
+
+    let mut run = toml::Table::new();
+    for key in ["spec_path", "spec_hash", "seed", "set"] {
+        if let Some(v) = get(first, &format!("run.{key}")) {
+            run.insert(key.into(), v.clone());
+        }
+    }
+    run.insert("shard".into(), V::String(format!("merged from {n} shards")));
+    let strs = |key: &str| {
+        shards
+            .iter()
+            .filter_map(|s| get(&s.meta, key).and_then(V::as_str).map(str::to_string))
+            .collect::<Vec<_>>()
+    };
+    if let Some(s) = strs("run.started").into_iter().min() {
+        run.insert("started".into(), V::String(s));
+    }
+    if let Some(s) = strs("run.finished").into_iter().max() {
+        run.insert("finished".into(), V::String(s));
+    }
+    run.insert("merged".into(), V::String(now_rfc3339()));
+    run.insert("merged_on".into(), V::String(host_name()));
+    run.insert("points_total".into(), V::Integer(total as i64));
+    run.insert(
+        "points".into(),
+        V::Array((0..total).map(|p| V::Integer(p as i64)).collect()),
+    );
+    // Wall time of each point in point order; NaN where a resumed shard did not record it.
+    let mut walls = vec![f64::NAN; total];
+    for s in shards {
+        let pts = get(&s.meta, "run.points")
+            .and_then(V::as_array)
+            .cloned()
+            .unwrap_or_default();
+        let ws = get(&s.meta, "run.point_wall_s")
+            .and_then(V::as_array)
+            .cloned()
+            .unwrap_or_default();
+        for (p, w) in pts.iter().zip(&ws) {
+            if let (Some(p), Some(w)) = (
+                p.as_integer().and_then(|p| usize::try_from(p).ok()),
+                w.as_float(),
+            ) {
+                if p < total {
+                    walls[p] = w;
+                }
+            }
+        }
+    }
+    run.insert(
+        "point_wall_s".into(),
+        V::Array(walls.into_iter().map(V::Float).collect()),
+    );
+    root.insert("run".into(), V::Table(run));
+
+    let mut list = Vec::new();
+    for s in shards {
+        let mut t = toml::Table::new();
+        t.insert(
+            "file".into(),
+            V::String(
+                s.csv
+                    .file_name()
+                    .map_or_else(String::new, |f| f.to_string_lossy().into_owned()),
+            ),
+        );
+        if let Some(V::Table(r)) = s.meta.get("run") {
+            for key in [
+                "shard",
+                "host",
+                "threads",
+                "started",
+                "finished",
+                "wall_s",
+                "points",
+                "point_wall_s",
+                "resumed_points",
+                "spec_path",
+                "set",
+            ] {
+                if let Some(v) = r.get(key) {
+                    t.insert(key.into(), v.clone());
+                }
+            }
+        }
+        if let Some(c) = get(&s.meta, "raycost.git_commit") {
+            t.insert("git_commit".into(), c.clone());
+        }
+        if let Some(m) = s.meta.get("machine") {
+            t.insert("machine".into(), m.clone());
+        }
+        list.push(V::Table(t));
+    }
+    root.insert("shards".into(), V::Array(list));
+    if let Some(spec) = first.get("spec") {
+        root.insert("spec".into(), spec.clone());
+    }
+    toml::to_string(&root).expect("metadata serializes")
+}
+
+/// Writes every file to a temporary beside it, then renames them into place in order (the last one
+/// last); on any failure the temporaries are removed and nothing is renamed.
+fn write_all_atomically(contents: &[(PathBuf, Vec<u8>)]) -> Result<(), OutputError> {
+    let tmp_of = |p: &Path| {
+        p.with_file_name(format!(
+            ".{}.merge-tmp-{}",
+            p.file_name()
+                .map_or_else(String::new, |f| f.to_string_lossy().into_owned()),
+            std::process::id()
+        ))
+    };
+    let mut made: Vec<PathBuf> = Vec::new();
+    let cleanup = |made: &[PathBuf]| {
+        for t in made {
+            let _ = fs::remove_file(t);
+        }
+    };
+    for (path, bytes) in contents {
+        let tmp = tmp_of(path);
+        let res = (|| -> std::io::Result<()> {
+            if let Some(d) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+                fs::create_dir_all(d)?;
+            }
+            let mut f = fs::File::create(&tmp)?;
+            f.write_all(bytes)?;
+            f.sync_all()
+        })();
+        if let Err(e) = res {
+            cleanup(&made);
+            let _ = fs::remove_file(&tmp);
+            return Err(err(
+                path,
+                format!("cannot write the merged file: {e} (nothing was written)"),
+            ));
+        }
+        made.push(tmp);
+    }
+    for (i, (path, _)) in contents.iter().enumerate() {
+        if let Err(e) = fs::rename(&made[i], path) {
+            cleanup(&made[i..]);
+            return Err(err(
+                path,
+                format!("cannot move the merged file into place: {e}"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (fs::canonicalize(a), fs::canonicalize(b)) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => a == b,
+    }
+}
+
+fn short_hash(h: &str) -> &str {
+    &h[..h.len().min(16)]
+}
+
+fn join(points: &[usize]) -> String {
+    let mut s = points
+        .iter()
+        .take(10)
+        .map(usize::to_string)
+        .collect::<Vec<_>>()
+        .join(", ");
+    if points.len() > 10 {
+        s.push_str(&format!(", … ({} in all)", points.len()));
+    }
+    s
+}
+
+fn list_points(points: &[usize]) -> String {
+    if points.len() == 1 {
+        format!("point {} is", points[0])
+    } else {
+        format!("points {} are", join(points))
+    }
+}
+
+fn names(paths: &[PathBuf]) -> String {
+    paths
+        .iter()
+        .map(|p| {
+            p.file_name()
+                .map_or_else(String::new, |f| f.to_string_lossy().into_owned())
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shard_names() {
+        assert_eq!(
+            parse_shard_name("grid.shard-2-of-4.csv"),
+            Some(("grid".into(), 2, 4))
+        );
+        assert_eq!(
+            parse_shard_name("a.b.shard-0-of-10.csv"),
+            Some(("a.b".into(), 0, 10))
+        );
+        assert_eq!(parse_shard_name("grid.shard-2-of-4.hist.csv"), None);
+        assert_eq!(parse_shard_name("grid.csv"), None);
+        assert_eq!(parse_shard_name("grid.shard--of-4.csv"), None);
+        assert_eq!(parse_shard_name(".shard-1-of-2.csv"), None);
+    }
+}

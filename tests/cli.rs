@@ -1,0 +1,220 @@
+//! The CLI end to end: results land where the contract says, existing results are never lost,
+//! and measured columns do not depend on the thread count.
+
+use crate::common::{files_below, measured_columns, raycost, read_csv, root};
+
+const SMALL: &str = r#"
+[experiment]
+name = "small"
+kind = "grid"
+seed = 7
+rays = 3000
+
+[scene]
+intensity = 1.0
+radius = 0.2
+
+[grid]
+cell_width = 0.5
+
+[sweep]
+"grid.cell_width" = [0.3, 0.8]
+"grid.eye" = ["corner", "uniform"]
+"#;
+
+fn write_spec(dir: &std::path::Path, text: &str) -> std::path::PathBuf {
+    let p = dir.join("small.toml");
+    std::fs::write(&p, text).expect("write spec");
+    p
+}
+
+#[test]
+fn run_writes_csv_meta_and_histograms_with_contract_columns() {
+    let tmp = tempfile::tempdir().expect("temp");
+    let spec = write_spec(tmp.path(), SMALL);
+    let out = tmp.path().join("results");
+    let o = raycost()
+        .arg("run")
+        .arg(&spec)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("measured ± 95% CI") && stdout.contains("n_i_mb"),
+        "summary table: {stdout}"
+    );
+    let (header, rows) = read_csv(&out.join("small/small.csv"));
+    assert_eq!(rows.len(), 4);
+    assert_eq!(&header[..3], ["point", "grid.cell_width", "grid.eye"]);
+    for col in [
+        "n_i_mean",
+        "n_i_se",
+        "n_i_n",
+        "n_i_lower",
+        "n_i_upper",
+        "n_i_theory",
+        "n_i_mb_mean",
+        "n_s_mean",
+        "n_s_theory",
+        "t_hit_mean",
+        "t_hit_theory",
+        "hit_mean",
+        "rays_per_s",
+    ] {
+        assert!(header.iter().any(|h| h == col), "missing column {col}");
+    }
+    assert_eq!(rows[3][0], "3");
+    assert_eq!(rows[3][2], "uniform");
+    let meta = std::fs::read_to_string(out.join("small/small.meta.toml")).expect("meta");
+    assert!(
+        meta.contains("spec_hash")
+            && meta.contains("timing_columns")
+            && meta.contains("git_commit"),
+        "{meta}"
+    );
+    let (h, hist) = read_csv(&out.join("small/small.hist.csv"));
+    assert_eq!(
+        h,
+        ["point", "metric", "bin_lo", "bin_hi", "count", "expected"]
+    );
+    assert!(hist.iter().any(|r| r[1] == "t_hit") && hist.iter().any(|r| r[1] == "n_i_mb"));
+    assert!(
+        !files_below(&out)
+            .iter()
+            .any(|p| p.to_string_lossy().ends_with(".partial")),
+        "no partial file left"
+    );
+}
+
+#[test]
+fn existing_results_are_never_replaced_without_force() {
+    let tmp = tempfile::tempdir().expect("temp");
+    let spec = write_spec(tmp.path(), &SMALL.replace("rays = 3000", "rays = 500"));
+    let out = tmp.path().join("results");
+    raycost()
+        .arg("run")
+        .arg(&spec)
+        .arg("--out")
+        .arg(&out)
+        .arg("--quiet")
+        .assert()
+        .success();
+    let csv = out.join("small/small.csv");
+    std::fs::write(&csv, "my precious edits\n").expect("edit");
+    let o = raycost()
+        .arg("run")
+        .arg(&spec)
+        .arg("--out")
+        .arg(&out)
+        .arg("--quiet")
+        .output()
+        .expect("runs");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--force"));
+    assert_eq!(
+        std::fs::read_to_string(&csv).expect("kept"),
+        "my precious edits\n"
+    );
+    raycost()
+        .arg("run")
+        .arg(&spec)
+        .arg("--out")
+        .arg(&out)
+        .arg("--quiet")
+        .arg("--force")
+        .assert()
+        .success();
+    assert!(std::fs::read_to_string(&csv)
+        .expect("replaced")
+        .starts_with("point,"));
+}
+
+#[test]
+fn measured_columns_are_identical_for_one_and_two_threads() {
+    let tmp = tempfile::tempdir().expect("temp");
+    let finite = SMALL.replace("radius = 0.2", "radius = 0.2\nspheres = 20000");
+    for (name, text) in [("infinite", SMALL.to_string()), ("finite", finite)] {
+        let spec = write_spec(tmp.path(), &text);
+        let mut tables = Vec::new();
+        for threads in ["1", "2"] {
+            let out = tmp.path().join(format!("{name}-{threads}"));
+            raycost()
+                .arg("run")
+                .arg(&spec)
+                .arg("--out")
+                .arg(&out)
+                .args(["--quiet", "--threads", threads])
+                .assert()
+                .success();
+            tables.push((
+                measured_columns(&out.join("small/small.csv")),
+                std::fs::read(out.join("small/small.hist.csv")).expect("hist"),
+            ));
+        }
+        assert_eq!(
+            tables[0], tables[1],
+            "{name}: thread count changed a measured column"
+        );
+    }
+}
+
+#[test]
+fn check_prints_points_and_runs_nothing() {
+    let tmp = tempfile::tempdir().expect("temp");
+    let spec = write_spec(tmp.path(), SMALL);
+    let o = raycost()
+        .arg("check")
+        .arg(&spec)
+        .args(["--set", "grid.cell_width=0.7"])
+        .current_dir(tmp.path())
+        .output()
+        .expect("runs");
+    assert!(o.status.success());
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        s.contains("2 point(s)") && s.contains("grid.cell_width = 0.7"),
+        "{s}"
+    );
+    assert!(!tmp.path().join("results").exists());
+}
+
+#[test]
+fn theory_prints_the_closed_forms() {
+    let o = raycost()
+        .args([
+            "theory",
+            "grid",
+            "--intensity",
+            "1",
+            "--radius",
+            "0.1",
+            "--cell-width",
+            "0.5",
+        ])
+        .output()
+        .expect("runs");
+    assert!(o.status.success());
+    let s = String::from_utf8_lossy(&o.stdout);
+    // E[t*] = 1/(ρπr²) = 31.8310, E[N_S] uniform = 1.5·E[t*]/a = 95.4930.
+    assert!(s.contains("31.830989") && s.contains("95.492966"), "{s}");
+}
+
+/// The shipped quickstart spec is valid and every shipped experiment spec checks.
+#[test]
+fn shipped_specs_check() {
+    for e in std::fs::read_dir(root().join("experiments"))
+        .expect("experiments/")
+        .flatten()
+    {
+        let o = raycost().arg("check").arg(e.path()).output().expect("runs");
+        assert!(
+            o.status.success(),
+            "{}: {}",
+            e.path().display(),
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+}

@@ -1,0 +1,61 @@
+//! Helpers shared by the integration tests.
+
+use std::path::{Path, PathBuf};
+
+/// The `raycost` binary under test.
+pub fn raycost() -> assert_cmd::Command {
+    assert_cmd::Command::cargo_bin("raycost").expect("the raycost binary is built")
+}
+
+/// The repository root (where `experiments/` and `tests/specs/` live).
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Every file below `dir`, relative, sorted: to assert that a failed run wrote nothing.
+pub fn files_below(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    if let Ok(rd) = std::fs::read_dir(dir) {
+        for e in rd.flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                out.extend(files_below(&p));
+            } else {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Parses a CSV into (header, rows).
+pub fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let mut r = csv::Reader::from_path(path)
+        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
+    let header = r
+        .headers()
+        .expect("a header")
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let rows = r
+        .records()
+        .map(|rec| rec.expect("a record").iter().map(str::to_string).collect())
+        .collect();
+    (header, rows)
+}
+
+/// The non-timing columns of a CSV (timing columns end in `_s` or are `rays_per_s`).
+pub fn measured_columns(path: &Path) -> Vec<Vec<(String, String)>> {
+    let (h, rows) = read_csv(path);
+    rows.into_iter()
+        .map(|r| {
+            h.iter()
+                .cloned()
+                .zip(r)
+                .filter(|(c, _)| !(c.ends_with("_s") || c == "rays_per_s"))
+                .collect()
+        })
+        .collect()
+}
