@@ -123,7 +123,7 @@ def read_csv(path, required=()):
     file is missing or empty, or when a column of `required` is absent."""
     if not os.path.exists(path):
         raise PlotError(
-            "%s: no such file (run the experiment first, e.g. `raycost run experiments/....toml`, "
+            "%s: no such file (run the experiment first (`raycost run SPEC.toml` or `raycost bench`), "
             "or pass --input)" % path
         )
     with open(path, newline="") as f:

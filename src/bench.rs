@@ -256,29 +256,33 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
             let parts: Vec<(f64, f64)> = dirs
                 .par_chunks(BATCH as usize)
                 .enumerate()
-                .map(|(b, chunk)| {
-                    let scene = LazyScene::new(
-                        RHO,
-                        &classes,
-                        RadiusDraw::PerSphere,
-                        a,
-                        &[0x6265_6e63, 1, b as u64],
-                    );
-                    let mut lists = scene.cells(
-                        GridFrame {
-                            origin: DVec3::ZERO,
-                            width: a,
-                            dims: None,
-                        },
-                        2.0 * a,
-                    );
-                    let mut mb = Mailbox::default();
-                    let eye = DVec3::splat(0.5 * a);
-                    chunk.iter().fold((0.0, 0.0), |acc, &d| {
-                        let c = trace(&mut lists, &Ray::new(eye, d), &mut mb, true, 10_000_000);
-                        (acc.0 + f64::from(c.n_i_mb), acc.1 + f64::from(c.n_s))
-                    })
-                })
+                .map_init(
+                    crate::scene::lazy::LazyCache::default,
+                    |cache, (b, chunk)| {
+                        let scene = LazyScene::new(
+                            RHO,
+                            &classes,
+                            RadiusDraw::PerSphere,
+                            a,
+                            &[0x6265_6e63, 1, b as u64],
+                        );
+                        let mut lists = scene.cells(
+                            GridFrame {
+                                origin: DVec3::ZERO,
+                                width: a,
+                                dims: None,
+                            },
+                            2.0 * a,
+                            cache,
+                        );
+                        let mut mb = Mailbox::default();
+                        let eye = DVec3::splat(0.5 * a);
+                        chunk.iter().fold((0.0, 0.0), |acc, &d| {
+                            let c = trace(&mut lists, &Ray::new(eye, d), &mut mb, true, 10_000_000);
+                            (acc.0 + f64::from(c.n_i_mb), acc.1 + f64::from(c.n_s))
+                        })
+                    },
+                )
                 .collect();
             parts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1))
         });

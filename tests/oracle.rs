@@ -315,7 +315,7 @@ fn random_scenes_at_any_magnitude_agree() {
     let mut total = 0;
     for (case, mag) in [1e-3_f64, 1.0, 1e3, 1e8].into_iter().enumerate() {
         let mut rng = stream(&[46, case as u64]);
-        let a = 0.3 * mag.max(1.0).min(1e3);
+        let a = 0.3 * mag.clamp(1.0, 1e3);
         let center = DVec3::splat(mag);
         let f = frame(center - DVec3::splat(8.0 * a), a, 16);
         let spheres: Vec<Sphere> = (0..1500)
@@ -375,6 +375,7 @@ fn lazy_infinite_scene_agrees_with_brute_force() {
         let scene = LazyScene::new(1.0, &classes, RadiusDraw::PerSphere, a, &[47, case as u64]);
         let reach = 12.0;
         let all = scene.spheres_in(DVec3::splat(-reach - 1.0), DVec3::splat(reach + 1.0));
+        let mut cache = raycost::scene::lazy::LazyCache::default();
         let mut lists = scene.cells(
             GridFrame {
                 origin: DVec3::ZERO,
@@ -382,6 +383,7 @@ fn lazy_infinite_scene_agrees_with_brute_force() {
                 dims: None,
             },
             2.0,
+            &mut cache,
         );
         let mut rng = stream(&[48, case as u64]);
         let mut mb = Mailbox::default();

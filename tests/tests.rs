@@ -3,4 +3,7 @@
 mod bad_input;
 mod cli;
 mod common;
+mod merge;
 mod oracle;
+mod resume;
+mod slurm;

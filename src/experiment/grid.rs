@@ -20,7 +20,7 @@ use crate::grid::{
     brute_force, build::frame_around, mailbox::Mailbox, trace, FiniteGrid, GridFrame, TraceCounts,
 };
 use crate::sample::{directions::uniform_direction, rng::domain, rng::stream};
-use crate::scene::lazy::LazyScene;
+use crate::scene::lazy::{LazyCache, LazyScene};
 use crate::spec::{GridConfig, Kind, SceneModel};
 use crate::stats::{gof, ClusteredMean, Estimate, Histogram};
 use crate::theory::grid::{self as th, Eye, GridTheoryInput};
@@ -213,7 +213,7 @@ pub fn run_point(
 
     let t_hi = cfg.t_max_mfp * mean_t;
     let batches = cfg.rays.div_ceil(BATCH);
-    let run_batch = |b: u64| -> Acc {
+    let run_batch = |cache: &mut LazyCache, b: u64| -> Acc {
         let mut acc = Acc::new(t_hi, cfg.bins);
         let mut rng = stream(&[domain::RAYS, cfg.seed, point, b]);
         let n_rays = BATCH.min(cfg.rays - b * BATCH);
@@ -238,24 +238,24 @@ pub fn run_point(
                     .collect()
             }
             None => {
-                let scene = LazyScene::new(
-                    cfg.intensity,
-                    &cfg.classes,
-                    cfg.draw,
-                    a,
-                    &[domain::SCENE, cfg.seed, point, b],
-                );
+                // Each group of `rays_per_scene` rays shares one scene realisation.
                 let frame = GridFrame {
                     origin: DVec3::ZERO,
                     width: a,
                     dims: None,
                 };
-                let mut lists = scene.cells(frame, 2.0 * a);
-                let c = rays
-                    .iter()
-                    .map(|r| trace(&mut lists, r, &mut mailbox, cfg.mailbox, max_steps))
-                    .collect();
-                acc.generated += lists.generated() as u64;
+                let mut c = Vec::with_capacity(rays.len());
+                for (g, group) in rays.chunks(cfg.rays_per_scene as usize).enumerate() {
+                    let key = [domain::SCENE, cfg.seed, point, b, g as u64];
+                    let scene = LazyScene::new(cfg.intensity, &cfg.classes, cfg.draw, a, &key);
+                    let mut lists = scene.cells(frame, 2.0 * a, cache);
+                    c.extend(
+                        group
+                            .iter()
+                            .map(|r| trace(&mut lists, r, &mut mailbox, cfg.mailbox, max_steps)),
+                    );
+                    acc.generated += lists.generated() as u64;
+                }
                 c
             }
         };
@@ -286,7 +286,10 @@ pub fn run_point(
     let mut b0 = 0;
     while b0 < batches {
         let b1 = (b0 + CHUNK_BATCHES).min(batches);
-        let parts: Vec<Acc> = (b0..b1).into_par_iter().map(run_batch).collect();
+        let parts: Vec<Acc> = (b0..b1)
+            .into_par_iter()
+            .map_init(LazyCache::default, run_batch)
+            .collect();
         for p in &parts {
             total.merge(p);
         }

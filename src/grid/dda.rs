@@ -57,14 +57,14 @@ impl Dda {
             dims: frame.dims,
             done: false,
         };
-        for i in 0..3 {
-            if d[i] > 0.0 {
+        for (i, &di) in d.iter().enumerate() {
+            if di > 0.0 {
                 dda.step[i] = 1;
-            } else if d[i] < 0.0 {
+            } else if di < 0.0 {
                 dda.step[i] = -1;
             }
-            if d[i] != 0.0 {
-                dda.inv_d[i] = 1.0 / d[i];
+            if di != 0.0 {
+                dda.inv_d[i] = 1.0 / di;
             }
             dda.t_next[i] = dda.boundary_t(i);
         }

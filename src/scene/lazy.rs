@@ -116,18 +116,43 @@ impl LazyScene {
         out
     }
 
-    /// A cell-list source over this realisation for a grid placed by `frame` (unbounded).
-    pub fn cells(&self, frame: GridFrame, eye_magnitude: f64) -> LazyCells<'_> {
+    /// A cell-list source over this realisation for a grid placed by `frame` (unbounded), using
+    /// (and first clearing) `cache`: one cache per thread, reused batch after batch, so the memory
+    /// of one batch is allocated once and not faulted in again for every batch.
+    pub fn cells<'a>(
+        &'a self,
+        frame: GridFrame,
+        eye_magnitude: f64,
+        cache: &'a mut LazyCache,
+    ) -> LazyCells<'a> {
+        cache.clear();
         LazyCells {
             scene: self,
             frame,
             eye_magnitude,
-            blocks: FxHashMap::default(),
-            block_arena: Vec::new(),
-            cells: FxHashMap::default(),
-            cell_arena: Vec::new(),
-            scratch: Vec::new(),
+            cache,
         }
+    }
+}
+
+/// The buffers behind [`LazyCells`]: generated blocks and built cell lists of one batch.
+#[derive(Debug, Default)]
+pub struct LazyCache {
+    blocks: FxHashMap<(usize, Cell), (u32, u32)>,
+    block_arena: Vec<Sphere>,
+    cells: FxHashMap<Cell, (u32, u32)>,
+    cell_arena: Vec<Sphere>,
+    scratch: Vec<Sphere>,
+}
+
+impl LazyCache {
+    /// Forgets everything, keeping the allocations.
+    pub fn clear(&mut self) {
+        self.blocks.clear();
+        self.block_arena.clear();
+        self.cells.clear();
+        self.cell_arena.clear();
+        self.scratch.clear();
     }
 }
 
@@ -137,39 +162,36 @@ pub struct LazyCells<'a> {
     scene: &'a LazyScene,
     frame: GridFrame,
     eye_magnitude: f64,
-    blocks: FxHashMap<(usize, Cell), (u32, u32)>,
-    block_arena: Vec<Sphere>,
-    cells: FxHashMap<Cell, (u32, u32)>,
-    cell_arena: Vec<Sphere>,
-    scratch: Vec<Sphere>,
+    cache: &'a mut LazyCache,
 }
 
 impl LazyCells<'_> {
     /// Number of spheres generated so far (the memory this batch holds).
     pub fn generated(&self) -> usize {
-        self.block_arena.len()
+        self.cache.block_arena.len()
     }
 
     /// Number of cell lists built so far.
     pub fn cells_built(&self) -> usize {
-        self.cells.len()
+        self.cache.cells.len()
     }
 
     fn block(&mut self, class: usize, b: Cell) -> (u32, u32) {
-        if let Some(&r) = self.blocks.get(&(class, b)) {
+        if let Some(&r) = self.cache.blocks.get(&(class, b)) {
             return r;
         }
-        let start = self.block_arena.len() as u32;
-        self.scene.generate_block(class, b, &mut self.block_arena);
-        let r = (start, self.block_arena.len() as u32);
-        self.blocks.insert((class, b), r);
+        let start = self.cache.block_arena.len() as u32;
+        self.scene
+            .generate_block(class, b, &mut self.cache.block_arena);
+        let r = (start, self.cache.block_arena.len() as u32);
+        self.cache.blocks.insert((class, b), r);
         r
     }
 
     fn build_list(&mut self, cell: Cell) -> (u32, u32) {
         let cb = self.frame.cell_box(cell);
         let magnitude = cb.magnitude() + self.eye_magnitude;
-        self.scratch.clear();
+        self.cache.scratch.clear();
         for class in 0..self.scene.classes.len() {
             let reach_r = self.scene.reach(class);
             let reach = reach_r + self.frame.pad(magnitude, reach_r);
@@ -180,19 +202,20 @@ impl LazyCells<'_> {
                 for y in bl.y as i64..=bh.y as i64 {
                     for x in bl.x as i64..=bh.x as i64 {
                         let (s, e) = self.block(class, [x, y, z]);
-                        for sp in &self.block_arena[s as usize..e as usize] {
+                        for sp in &self.cache.block_arena[s as usize..e as usize] {
                             let rr = sp.r + self.frame.pad(magnitude, sp.r);
                             if cb.distance_squared(sp.c) <= rr * rr {
-                                self.scratch.push(*sp);
+                                self.cache.scratch.push(*sp);
                             }
                         }
                     }
                 }
             }
         }
-        let start = self.cell_arena.len() as u32;
-        self.cell_arena.extend_from_slice(&self.scratch);
-        (start, self.cell_arena.len() as u32)
+        let c = &mut *self.cache;
+        let start = c.cell_arena.len() as u32;
+        c.cell_arena.extend_from_slice(&c.scratch);
+        (start, c.cell_arena.len() as u32)
     }
 }
 
@@ -203,15 +226,15 @@ impl CellLists for LazyCells<'_> {
 
     #[inline]
     fn list(&mut self, cell: Cell) -> &[Sphere] {
-        let (s, e) = match self.cells.get(&cell) {
+        let (s, e) = match self.cache.cells.get(&cell) {
             Some(&r) => r,
             None => {
                 let r = self.build_list(cell);
-                self.cells.insert(cell, r);
+                self.cache.cells.insert(cell, r);
                 r
             }
         };
-        &self.cell_arena[s as usize..e as usize]
+        &self.cache.cell_arena[s as usize..e as usize]
     }
 }
 

@@ -40,6 +40,8 @@ pub struct GridConfig {
     pub mailbox: bool,
     /// Eye placement.
     pub eye: Eye,
+    /// Rays sharing one infinite-scene realisation (divides nothing: the last group may be short).
+    pub rays_per_scene: u64,
     /// Walk cut-off in infinite scenes.
     pub max_steps: u64,
     /// t* histogram bins.
@@ -172,7 +174,11 @@ impl GridConfig {
             let bytes = estimated_bytes(cells.min(1e18) as u64, listings.min(1e18) as u64) as f64
                 + spheres_bytes;
             let budget = g.memory_budget_gib * (1u64 << 30) as f64;
-            if !(bytes <= budget) || cells > u32::MAX as f64 || listings > u32::MAX as f64 {
+            if bytes.is_nan()
+                || bytes > budget
+                || cells > u32::MAX as f64
+                || listings > u32::MAX as f64
+            {
                 return Err(e(
                     "grid.cell_width",
                     format!(
@@ -187,6 +193,16 @@ impl GridConfig {
             return Err(e(
                 "experiment.rays",
                 format!("got {}, at most 10¹⁰", raw.experiment.rays),
+            ));
+        }
+        if g.rays_per_scene > crate::experiment::grid::BATCH {
+            return Err(e(
+                "grid.rays_per_scene",
+                format!(
+                    "got {}, at most {} (one batch)",
+                    g.rays_per_scene,
+                    crate::experiment::grid::BATCH
+                ),
             ));
         }
         let h = raw.histogram.clone().unwrap_or_default();
@@ -211,6 +227,7 @@ impl GridConfig {
                 super::raw::Eye::Corner => Eye::Corner,
                 super::raw::Eye::Uniform => Eye::Uniform,
             },
+            rays_per_scene: g.rays_per_scene,
             max_steps: g.max_steps,
             bins: h.bins as usize,
             t_max_mfp: h.t_max_mfp,

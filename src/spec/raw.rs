@@ -258,6 +258,10 @@ pub struct RawGrid {
     /// Memory the cell lists of a finite grid may take, GiB.
     #[serde(default = "default_budget", deserialize_with = "positive")]
     pub memory_budget_gib: f64,
+    /// Rays that share one realisation of an infinite scene (1 ..= 256). Fewer give independent
+    /// samples (exact goodness-of-fit p-values); more amortise scene generation near the eye.
+    #[serde(default = "default_rays_per_scene", deserialize_with = "count")]
+    pub rays_per_scene: u64,
     /// Most cells one ray may visit in an infinite scene before it is cut off.
     #[serde(default = "default_max_steps", deserialize_with = "count")]
     pub max_steps: u64,
@@ -334,6 +338,9 @@ fn default_budget() -> f64 {
 }
 fn default_max_steps() -> u64 {
     10_000_000
+}
+fn default_rays_per_scene() -> u64 {
+    256
 }
 fn default_bins() -> u64 {
     40

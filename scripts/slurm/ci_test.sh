@@ -1,0 +1,133 @@
+#!/usr/bin/env bash
+# ci_test.sh — the real Slurm test of issue 4, run by .ci/run.
+#
+#   RAYCOST=target/release/raycost bash scripts/slurm/ci_test.sh
+#
+# Starts a private one-node Slurm cluster (cluster.sh up: installs slurmctld/slurmd/munge with
+# apt-get if missing), submits tests/specs/slurm-sweep.toml (8 points) as a job array of 4 shards
+# plus the dependent merge job (submit.sh --wait, which prints the squeue/scontrol/sacct lines and
+# checks every task completed 0:0), runs the same spec locally without shards, and compares the
+# merged table with the local one: every non-timing column byte for byte, and the histogram table
+# whole. The cluster is always brought down again (trap), by the pids cluster.sh recorded.
+#
+# Builds nothing. Environment: RAYCOST (default target/release/raycost in the repository), SPEC
+# (default tests/specs/slurm-sweep.toml), SHARDS (default 4), RAYCOST_SLURM_* (see cluster.sh).
+# Exit codes: 0 passed, or skipped because Slurm cannot be made available here (a line
+# "SKIP slurm: <reason>"); 1 failed.
+set -euo pipefail
+
+HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+ROOT=$(cd "$HERE/../.." && pwd)
+RAYCOST=${RAYCOST:-$ROOT/target/release/raycost}
+SPEC=${SPEC:-$ROOT/tests/specs/slurm-sweep.toml}
+SHARDS=${SHARDS:-4}
+
+say() { printf 'slurm: %s\n' "$*"; }
+fail() { printf 'slurm: FAIL: %s\n' "$*" >&2; exit 1; }
+
+[[ $RAYCOST == */* ]] || RAYCOST=$(command -v "$RAYCOST" || true)
+[[ -x $RAYCOST ]] || fail "RAYCOST=$RAYCOST is not an executable (build it first: cargo build --release)"
+RAYCOST=$(realpath "$RAYCOST")
+[[ -f $SPEC ]] || fail "spec $SPEC: no such file"
+command -v python3 >/dev/null 2>&1 || fail "python3 is needed for the table comparison"
+
+work=$(mktemp -d "${TMPDIR:-/tmp}/raycost-slurm-ci.XXXXXX")
+cluster_started=0
+finish() {
+    local rc=$?
+    if [[ $cluster_started -eq 1 ]]; then
+        if [[ $rc -ne 0 ]]; then
+            # Whatever the jobs said, for the CI log.
+            for f in "$work"/slurm/slurm-logs/*.out; do
+                [[ -s $f ]] || continue
+                printf -- '--- %s ---\n' "$f" >&2
+                tail -n 20 "$f" >&2
+            done
+        fi
+        bash "$HERE/cluster.sh" down || { echo "slurm: cluster.sh down failed" >&2; [[ $rc -ne 0 ]] || rc=1; }
+    fi
+    if [[ $rc -eq 0 ]]; then rm -rf "$work"; else echo "slurm: files kept in $work" >&2; fi
+    exit "$rc"
+}
+trap finish EXIT
+trap 'exit 130' INT TERM
+
+# --- cluster -------------------------------------------------------------------------------
+rc=0
+bash "$HERE/cluster.sh" up 2>"$work/up.err" || rc=$?
+cat "$work/up.err" >&2
+if [[ $rc -eq 3 ]]; then
+    reason=$(sed -n 's/^cluster.sh: unavailable: //p' "$work/up.err" | tail -n 1)
+    echo "SKIP slurm: ${reason:-cluster.sh up said Slurm is unavailable here}"
+    exit 0
+fi
+cluster_started=1 # from here on, bring it down whatever happens (up also stops a half-started one)
+[[ $rc -eq 0 ]] || fail "cluster.sh up failed (exit $rc)"
+eval "$(bash "$HERE/cluster.sh" env)"
+say "cluster up: $(sinfo -h -o '%P %D nodes %c CPUs %T' | head -n 1) (SLURM_CONF=$SLURM_CONF)"
+
+# --- the sweep as a job array, merged by the dependent job -----------------------------------
+name=$(awk '
+    /^[[:space:]]*\[/ { section = $0; gsub(/[[:space:]]/, "", section); next }
+    section == "[experiment]" && /^[[:space:]]*name[[:space:]]*=/ {
+        sub(/^[^=]*=[[:space:]]*/, ""); sub(/[[:space:]]*(#.*)?$/, "")
+        gsub(/^["\047]|["\047]$/, ""); print; exit
+    }' "$SPEC")
+points=$("$RAYCOST" check "$SPEC" | sed -n 's/.*, \([0-9][0-9]*\) point(s),.*/\1/p')
+[[ -n $name && -n $points ]] || fail "could not read experiment.name and the point count of $SPEC"
+[[ $points -ge 8 ]] || fail "$SPEC has $points points; the test needs at least 8"
+say "submitting $SPEC ($name, $points points) as an array of $SHARDS tasks + merge"
+t0=$SECONDS
+RAYCOST=$RAYCOST bash "$HERE/submit.sh" --wait --timeout 900 "$SPEC" "$SHARDS" "$work/slurm" ||
+    fail "submit.sh --wait failed"
+say "array and merge done in $((SECONDS - t0)) s"
+merged=$work/slurm/$name
+for k in $(seq 0 $((SHARDS - 1))); do
+    f=$merged/$name.shard-$k-of-$SHARDS.csv
+    [[ -s $f ]] || fail "array task $k wrote no $f"
+    say "task $k: $(($(wc -l <"$f") - 1)) points in $(basename "$f"), host $(sed -n 's/^host = "\(.*\)"/\1/p' "$merged/$name.shard-$k-of-$SHARDS.meta.toml")"
+done
+for log in "$work"/slurm/slurm-logs/*.out; do sed 's/^/  log: /' "$log"; done
+
+# --- the same spec locally, unsharded; compare -------------------------------------------------
+"$RAYCOST" run "$SPEC" --out "$work/local" --quiet
+python3 - "$merged/$name.csv" "$work/local/$name/$name.csv" "$merged/$name.hist.csv" "$work/local/$name/$name.hist.csv" "$merged/$name.meta.toml" "$SHARDS" "$points" <<'EOF'
+import csv, sys, tomllib
+
+merged, local, mhist, lhist, mmeta, shards, points = sys.argv[1:]
+shards, points = int(shards), int(points)
+
+def timing(col):
+    return col.endswith("_s") or col == "rays_per_s"
+
+def table(path):
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    return rows[0], rows[1:]
+
+hm, rm = table(merged)
+hl, rl = table(local)
+if hm != hl:
+    sys.exit(f"slurm: FAIL: headers differ:\n  merged {hm}\n  local  {hl}")
+if len(rm) != points or len(rl) != points:
+    sys.exit(f"slurm: FAIL: {len(rm)} merged rows, {len(rl)} local rows, expected {points}")
+keep = [i for i, c in enumerate(hm) if not timing(c)]
+bad = [(n, hm[i], a[i], b[i]) for n, (a, b) in enumerate(zip(rm, rl)) for i in keep if a[i] != b[i]]
+if bad:
+    for n, c, a, b in bad[:10]:
+        print(f"slurm: row {n} column {c}: merged {a!r}, local {b!r}", file=sys.stderr)
+    sys.exit(f"slurm: FAIL: {len(bad)} measured cells differ")
+if [r[0] for r in rm] != [str(i) for i in range(points)]:
+    sys.exit("slurm: FAIL: merged rows are not in point order")
+with open(mhist, "rb") as a, open(lhist, "rb") as b:
+    if a.read() != b.read():
+        sys.exit("slurm: FAIL: merged hist table differs from the local one")
+with open(mmeta, "rb") as f:
+    meta = tomllib.load(f)
+got = [s["shard"] for s in meta["shards"]]
+if got != [f"{k}/{shards}" for k in range(shards)]:
+    sys.exit(f"slurm: FAIL: merged metadata lists shards {got}")
+print(f"slurm: {len(keep)} measured columns of {len(hm)} compared byte for byte; hist table identical; "
+      f"merged meta lists {shards} shards on {sorted({s['host'] for s in meta['shards']})}")
+print(f"slurm: merged table identical to local run ({points} points)")
+EOF

@@ -1,0 +1,175 @@
+//! The Slurm scripts without a cluster (issue 4): `sweep.sbatch` run once per array task id and
+//! `merge.sbatch` after them, as Slurm would, give the table of one local run; `submit.sh` refuses
+//! bad arguments before submitting anything. The real cluster test is `scripts/slurm/ci_test.sh`
+//! (run by `.ci/run`).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use crate::common::{raycost, root};
+use crate::merge::{assert_same_measured, run_ok, sweep_spec};
+
+fn script(name: &str) -> PathBuf {
+    root().join("scripts/slurm").join(name)
+}
+
+fn bash(script: &Path) -> Command {
+    let mut c = Command::new("bash");
+    c.arg(script);
+    // Whatever Slurm environment the test itself runs in must not leak into the scripts.
+    for (k, _) in std::env::vars() {
+        if k.starts_with("SLURM_") || k.starts_with("SBATCH_") {
+            c.env_remove(k);
+        }
+    }
+    c
+}
+
+#[test]
+fn scripts_parse() {
+    for s in [
+        "cluster.sh",
+        "submit.sh",
+        "sweep.sbatch",
+        "merge.sbatch",
+        "ci_test.sh",
+    ] {
+        let out = Command::new("bash")
+            .arg("-n")
+            .arg(script(s))
+            .output()
+            .expect("bash");
+        assert!(
+            out.status.success(),
+            "{s}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
+#[test]
+fn the_slurm_spec_has_eight_points() {
+    let out = raycost().arg("check").arg(sweep_spec()).assert().success();
+    let text = String::from_utf8_lossy(&out.get_output().stdout).to_string();
+    assert!(text.contains(", 8 point(s),"), "{text}");
+}
+
+#[test]
+fn array_tasks_then_merge_job_give_the_local_table() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let out = tmp.path().join("cluster");
+    let bin = assert_cmd::cargo::cargo_bin("raycost");
+    for k in 0..4 {
+        let o = bash(&script("sweep.sbatch"))
+            .env("SPEC", sweep_spec())
+            .env("OUT", &out)
+            .env("SHARDS", "4")
+            .env("RAYCOST", &bin)
+            .env("SLURM_ARRAY_TASK_ID", k.to_string())
+            .env("SLURM_ARRAY_JOB_ID", "77")
+            .env("SLURM_CPUS_PER_TASK", "1")
+            .output()
+            .expect("bash sweep.sbatch");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "task {k}: {err}");
+        assert!(
+            err.contains(&format!("job=77_{k}"))
+                && err.contains(&format!("end shard={k}/4 exit=0")),
+            "task {k} log: {err}"
+        );
+    }
+    let o = bash(&script("merge.sbatch"))
+        .env("OUT", &out)
+        .env("NAME", "slurm-sweep")
+        .env("RAYCOST", &bin)
+        .output()
+        .expect("bash merge.sbatch");
+    assert!(
+        o.status.success(),
+        "merge: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(String::from_utf8_lossy(&o.stdout).contains("merged 4 shards, 8 points"));
+
+    let local = tmp.path().join("local");
+    run_ok(&sweep_spec(), &local, &[]);
+    let (m, l) = (out.join("slurm-sweep"), local.join("slurm-sweep"));
+    assert_eq!(
+        assert_same_measured(&m.join("slurm-sweep.csv"), &l.join("slurm-sweep.csv")),
+        8
+    );
+    assert_eq!(
+        std::fs::read(m.join("slurm-sweep.hist.csv")).expect("hist"),
+        std::fs::read(l.join("slurm-sweep.hist.csv")).expect("hist")
+    );
+    let meta = std::fs::read_to_string(m.join("slurm-sweep.shard-2-of-4.meta.toml")).expect("meta");
+    assert!(
+        meta.contains("threads = 1"),
+        "SLURM_CPUS_PER_TASK did not set --threads: {meta}"
+    );
+
+    // A task that fails (here: its shard exists already) fails the array task with raycost's code.
+    let o = bash(&script("sweep.sbatch"))
+        .env("SPEC", sweep_spec())
+        .env("OUT", &out)
+        .env("SHARDS", "4")
+        .env("RAYCOST", &bin)
+        .env("SLURM_ARRAY_TASK_ID", "1")
+        .output()
+        .expect("bash sweep.sbatch");
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("exit=2"));
+}
+
+#[test]
+fn submit_refuses_bad_arguments_before_submitting() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    for (args, needle) in [
+        (
+            vec![
+                sweep_spec().display().to_string(),
+                "0".into(),
+                tmp.path().display().to_string(),
+            ],
+            "SHARDS must be a positive integer",
+        ),
+        (
+            vec![
+                sweep_spec().display().to_string(),
+                "x".into(),
+                tmp.path().display().to_string(),
+            ],
+            "SHARDS must be a positive integer",
+        ),
+        (
+            vec![
+                tmp.path().join("nope.toml").display().to_string(),
+                "4".into(),
+                tmp.path().display().to_string(),
+            ],
+            "no such file",
+        ),
+        (vec!["only-one".into()], "usage"),
+    ] {
+        let o = bash(&script("submit.sh"))
+            .args(&args)
+            .output()
+            .expect("bash submit.sh");
+        assert_eq!(
+            o.status.code(),
+            Some(2),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains(needle),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+}
