@@ -408,3 +408,56 @@ fn lazy_infinite_scene_agrees_with_brute_force() {
     }
     assert!(checked > 100_000, "checked {checked}");
 }
+
+/// N_I, N_S and the distinct count N_I,mb (partly counted without the mailbox, for spheres that sit
+/// inside one cell) equal an independent recount along the same walk with a hash set.
+#[test]
+fn counts_equal_an_independent_recount() {
+    use raycost::grid::{CellLists, Dda};
+    use std::collections::HashSet;
+    let a = 0.5;
+    let f = frame(DVec3::splat(-10.0), a, 40);
+    let mut rng = stream(&[49]);
+    let spheres: Vec<Sphere> = (0..20_000)
+        .map(|id| Sphere {
+            c: DVec3::new(
+                rng.gen_range(-9.5..9.5),
+                rng.gen_range(-9.5..9.5),
+                rng.gen_range(-9.5..9.5),
+            ),
+            r: rng.gen_range(0.02..0.4),
+            id,
+        })
+        .collect();
+    let grid = FiniteGrid::build(f, &spheres);
+    let mut mb = Mailbox::default();
+    for i in 0..20_000 {
+        let ray = Ray::new(
+            DVec3::new(
+                rng.gen_range(-1.0..1.0),
+                rng.gen_range(-1.0..1.0),
+                rng.gen_range(-1.0..1.0),
+            ),
+            uniform_direction(&mut rng),
+        );
+        let mut lists = &grid;
+        let c = trace(&mut lists, &ray, &mut mb, i % 2 == 0, u32::MAX);
+        // Recount: walk the same cells up to the one where the walk stopped.
+        let (mut n_i, mut seen, mut cells) = (0u32, HashSet::new(), 0u32);
+        for (cell, _, _) in Dda::new(&f, &ray) {
+            cells += 1;
+            for s in lists.list(cell) {
+                n_i += 1;
+                seen.insert(s.id);
+            }
+            if cells == c.n_s + 1 {
+                break;
+            }
+        }
+        assert_eq!(
+            (c.n_i, c.n_i_mb, c.n_s),
+            (n_i, seen.len() as u32, cells - 1),
+            "ray {i}"
+        );
+    }
+}

@@ -38,22 +38,29 @@ impl Sphere {
     /// or the sphere contains the origin. Tangent rays (`Δ = 0`) count as hits: balls are closed.
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<f64> {
-        // Offset of the origin from the centre, and its squared norm minus r².
         let f = ray.o - self.c;
+        // b' = f·d (half of pbrt's b with a = 1). A hit needs the centre ahead of the origin.
+        let b = f.dot(ray.d);
+        if b >= 0.0 {
+            return None;
+        }
+        // Perpendicular offset v of the centre from the ray line.
+        let v = f - b * ray.d;
+        let vl2 = v.length_squared();
+        // Cheap, exact rejection of most misses without a square root: if |v|² > r²(1+8ε), the
+        // correctly rounded √|v|² exceeds r, so the discriminant below would be negative anyway.
+        // The function therefore returns exactly what it would without this test.
+        if vl2 > self.r * self.r * (1.0 + 8.0 * f64::EPSILON) {
+            return None;
+        }
         let fl = f.length();
         if fl <= self.r {
             return None;
         }
         // c = |f|² − r² as a product, free of cancellation when the origin is near the surface.
         let c = (fl - self.r) * (fl + self.r);
-        // b' = f·d (half of pbrt's b with a = 1). A hit needs the centre ahead of the origin.
-        let b = f.dot(ray.d);
-        if b >= 0.0 {
-            return None;
-        }
-        // Discriminant Δ/4 from the perpendicular offset v of the centre from the ray line.
-        let v = f - b * ray.d;
-        let vl = v.length();
+        // Discriminant Δ/4 = (r − |v|)(r + |v|): two well-conditioned factors.
+        let vl = vl2.sqrt();
         let disc = (self.r - vl) * (self.r + vl);
         if disc < 0.0 {
             return None;

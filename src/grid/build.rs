@@ -149,6 +149,11 @@ impl CellLists for FiniteGrid {
     }
 
     #[inline]
+    fn pad_magnitude(&self, _cell: Cell) -> f64 {
+        self.pad_magnitude
+    }
+
+    #[inline]
     fn list(&mut self, cell: Cell) -> &[Sphere] {
         let d = self.frame.dims.expect("finite");
         let i = ((cell[2] * d[1] + cell[1]) * d[0] + cell[0]) as usize;
@@ -161,6 +166,11 @@ impl CellLists for &FiniteGrid {
     #[inline]
     fn frame(&self) -> &GridFrame {
         &self.frame
+    }
+
+    #[inline]
+    fn pad_magnitude(&self, _cell: Cell) -> f64 {
+        self.pad_magnitude
     }
 
     #[inline]

@@ -26,4 +26,8 @@ pub trait CellLists {
     fn frame(&self) -> &GridFrame;
     /// Spheres listed in `cell` (which lies inside the frame).
     fn list(&mut self, cell: Cell) -> &[Sphere];
+    /// The coordinate magnitude from which the listing pad of `cell` was computed
+    /// (`GridFrame::pad(magnitude, r)`): lets the tracer tell, exactly as the lists were built,
+    /// that a sphere lies in this cell only.
+    fn pad_magnitude(&self, cell: Cell) -> f64;
 }

@@ -65,9 +65,15 @@ pub fn trace<L: CellLists + ?Sized>(
     for (cell, _t_enter, t_exit) in Dda::new(&frame, ray) {
         visited += 1;
         last_exit = t_exit;
+        let cb = frame.cell_box(cell);
+        let magnitude = lists.pad_magnitude(cell);
         for s in lists.list(cell) {
             counts.n_i += 1;
-            if mailbox.insert(s.id) {
+            // A sphere whose padded box lies strictly inside this cell is listed here only, so it
+            // cannot come again: count it as distinct without touching the mailbox.
+            let reach = s.r + frame.pad(magnitude, s.r);
+            let alone = (s.c - reach).cmpgt(cb.lo).all() && (s.c + reach).cmplt(cb.hi).all();
+            if alone || mailbox.insert(s.id) {
                 counts.n_i_mb += 1;
             } else if skip_repeats {
                 continue;

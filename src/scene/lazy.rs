@@ -190,7 +190,7 @@ impl LazyCells<'_> {
 
     fn build_list(&mut self, cell: Cell) -> (u32, u32) {
         let cb = self.frame.cell_box(cell);
-        let magnitude = cb.magnitude() + self.eye_magnitude;
+        let magnitude = self.pad_magnitude(cell);
         self.cache.scratch.clear();
         for class in 0..self.scene.classes.len() {
             let reach_r = self.scene.reach(class);
@@ -222,6 +222,11 @@ impl LazyCells<'_> {
 impl CellLists for LazyCells<'_> {
     fn frame(&self) -> &GridFrame {
         &self.frame
+    }
+
+    #[inline]
+    fn pad_magnitude(&self, cell: Cell) -> f64 {
+        self.frame.cell_box(cell).magnitude() + self.eye_magnitude
     }
 
     #[inline]

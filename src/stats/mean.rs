@@ -191,7 +191,9 @@ mod tests {
             merged.merge(&batch);
         }
         assert_eq!(merged.estimate(), one.estimate());
-        assert_eq!(merged.sample_variance().to_bits(), one.sample_variance().to_bits());
+        assert_eq!(
+            merged.sample_variance().to_bits(),
+            one.sample_variance().to_bits()
+        );
     }
-
 }
