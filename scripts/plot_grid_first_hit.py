@@ -123,8 +123,8 @@ def plot(args):
                 % (row.get("n_i_mb_mean", math.nan), rp.Z95 * (row.get("n_i_mb_se") or 0), row.get("n_i_mb_theory", math.nan)),
                 p_text("χ²", row.get("n_i_mb_chi2", math.nan), row["n_i_mb_chi2_p"], row.get("n_i_mb_chi2_dof")),
             ]
-            if isinstance(row.get("n_i_geometric_s"), float):
-                lines.append("cylinder radius s of the fit: %.3g" % row["n_i_geometric_s"])
+            if isinstance(row.get("n_i_cylinder_radius"), float):
+                lines.append("cylinder radius s of the fit: %.3g" % row["n_i_cylinder_radius"])
             rp.text_box(ax_n, "\n".join(lines), loc="lower left", fontsize=7.5)
             ax_n.legend(fontsize=7.5, loc="upper right")
         else:

@@ -85,7 +85,8 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
             force,
             resume: false,
         },
-    )?;
+    )?
+    .expect("a sink opened without --resume always exists");
 
     let costs = machine::measure();
     let classes = [RadiusClass {

@@ -124,6 +124,24 @@ fn array_tasks_then_merge_job_give_the_local_table() {
         String::from_utf8_lossy(&o.stderr)
     );
     assert!(String::from_utf8_lossy(&o.stderr).contains("exit=2"));
+    // Resubmitted with --resume (as after a time limit), a finished shard is left alone.
+    let before = std::fs::read(m.join("slurm-sweep.shard-1-of-4.csv")).expect("shard");
+    let o = bash(&script("sweep.sbatch"))
+        .env("SPEC", sweep_spec())
+        .env("OUT", &out)
+        .env("SHARDS", "4")
+        .env("NAME", "slurm-sweep")
+        .env("RAYCOST", &bin)
+        .env("RAYCOST_ARGS", "--resume")
+        .env("SLURM_ARRAY_TASK_ID", "1")
+        .output()
+        .expect("bash sweep.sbatch");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("finished already"));
+    assert_eq!(
+        before,
+        std::fs::read(m.join("slurm-sweep.shard-1-of-4.csv")).expect("shard")
+    );
 }
 
 #[test]

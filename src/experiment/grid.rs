@@ -20,6 +20,7 @@ use crate::grid::{
     brute_force, build::frame_around, mailbox::Mailbox, trace, FiniteGrid, GridFrame, TraceCounts,
 };
 use crate::sample::{directions::uniform_direction, rng::domain, rng::stream};
+use crate::scene::finite::FiniteScene;
 use crate::scene::lazy::{LazyCache, LazyScene};
 use crate::spec::{GridConfig, Kind, SceneModel};
 use crate::stats::{gof, ClusteredMean, Estimate, Histogram};
@@ -89,6 +90,35 @@ impl Acc {
         ] {
             m.end_batch();
         }
+    }
+
+    /// Adds all of `o` (closed batches) into the current open batch: used to make one cluster of a
+    /// whole replica.
+    fn absorb(&mut self, o: &Acc) {
+        for (m, x) in [
+            (&mut self.n_i, &o.n_i),
+            (&mut self.n_i_mb, &o.n_i_mb),
+            (&mut self.n_s, &o.n_s),
+            (&mut self.t_hit, &o.t_hit),
+            (&mut self.hit, &o.hit),
+            (&mut self.p_log, &o.p_log),
+            (&mut self.p_sqrt, &o.p_sqrt),
+        ] {
+            m.absorb(x);
+        }
+        let mut rest = o.clone();
+        for m in [
+            &mut rest.n_i,
+            &mut rest.n_i_mb,
+            &mut rest.n_s,
+            &mut rest.t_hit,
+            &mut rest.hit,
+            &mut rest.p_log,
+            &mut rest.p_sqrt,
+        ] {
+            *m = ClusteredMean::default();
+        }
+        self.merge(&rest);
     }
 
     fn merge(&mut self, o: &Acc) {
@@ -167,7 +197,28 @@ pub fn theory_input(cfg: &GridConfig) -> GridTheoryInput<'_> {
     }
 }
 
+/// Builds replica `replica` of a finite point's scene.
+fn build_finite(cfg: &GridConfig, fs: &FiniteScene, point: u64, replica: u64) -> Finite {
+    let start = Instant::now();
+    let spheres = fs.generate(&[domain::SCENE, cfg.seed, point, replica]);
+    let rmax = spheres.iter().map(|s| s.r).fold(fs.max_radius(), f64::max);
+    let b = fs.centre_box();
+    let bounds = Aabb::new(b.lo - DVec3::splat(rmax), b.hi + DVec3::splat(rmax));
+    let grid = FiniteGrid::build(frame_around(bounds, cfg.cell_width, fs.center), &spheres);
+    Finite {
+        spheres,
+        grid,
+        build_s: start.elapsed().as_secs_f64(),
+    }
+}
+
 /// Runs one point. `progress` is called with the number of rays finished, per chunk of batches.
+///
+/// Infinite scenes: every group of `rays_per_scene` rays has its own realisation, and the standard
+/// errors are clustered by batch. Finite scenes: `replicas` independent realisations share the rays;
+/// with two or more, the standard errors are clustered by replica and so include the variation from
+/// one configuration of spheres to the next (the paper's expectation is over configurations); with
+/// one, they are conditional on that one scene.
 pub fn run_point(
     cfg: &GridConfig,
     point: u64,
@@ -176,47 +227,74 @@ pub fn run_point(
 ) -> PointResult {
     let inp = theory_input(cfg);
     let mean_t = th::mean_first_hit(&inp);
-    let a = cfg.cell_width;
-
-    // Finite scenes are generated and built once per point.
-    let finite = match &cfg.scene {
-        SceneModel::Infinite => None,
-        SceneModel::Finite(fs) => {
-            let start = Instant::now();
-            let spheres = fs.generate(&[domain::SCENE, cfg.seed, point]);
-            let rmax = spheres.iter().map(|s| s.r).fold(fs.max_radius(), f64::max);
-            let b = fs.centre_box();
-            let bounds = Aabb::new(b.lo - DVec3::splat(rmax), b.hi + DVec3::splat(rmax));
-            let grid = FiniteGrid::build(frame_around(bounds, a, fs.center), &spheres);
-            Some(Finite {
-                spheres,
-                grid,
-                build_s: start.elapsed().as_secs_f64(),
-            })
-        }
+    let t_hi = cfg.t_max_mfp * mean_t;
+    let replicas = match &cfg.scene {
+        SceneModel::Infinite => 1,
+        SceneModel::Finite(_) => cfg.replicas,
     };
+    let mut total = Acc::new(t_hi, cfg.bins);
+    let mut report: Option<Finite> = None;
+    let (mut build_s, mut bf_time, mut wall) = (0.0, 0.0, 0.0);
+    for replica in 0..replicas {
+        // Rays of this replica: an even share, the first replicas taking the remainder.
+        let rays = cfg.rays / replicas + u64::from(replica < cfg.rays % replicas);
+        // Free the previous replica before building the next (peak memory of one scene).
+        drop(report.take());
+        let finite = match &cfg.scene {
+            SceneModel::Infinite => None,
+            SceneModel::Finite(fs) => Some(build_finite(cfg, fs, point, replica)),
+        };
+        build_s += finite.as_ref().map_or(0.0, |f| f.build_s);
+        let start = Instant::now();
+        let acc = run_replica(cfg, point, replica, rays, finite.as_ref(), t_hi, progress);
+        wall += start.elapsed().as_secs_f64();
+        bf_time += acc.bf_time;
+        if replicas > 1 {
+            // One cluster per replica: the replica's batches pooled into one open cluster.
+            let mut pooled = Acc::new(t_hi, cfg.bins);
+            pooled.absorb(&acc);
+            pooled.end_batch();
+            total.merge(&pooled);
+        } else {
+            total.merge(&acc);
+        }
+        report = finite;
+    }
+    if let Some(f) = report.as_mut() {
+        f.build_s = build_s / replicas as f64;
+    }
+    // Brute-force time is not tracing time.
+    let trace_s = (wall - bf_time / rayon::current_num_threads() as f64).max(1e-9);
+    make_result(cfg, &inp, &total, report.as_ref(), machine, trace_s, mean_t)
+}
+
+/// Traces `rays` rays of one replica (batches in parallel, merged in batch order).
+fn run_replica(
+    cfg: &GridConfig,
+    point: u64,
+    replica: u64,
+    rays: u64,
+    finite: Option<&Finite>,
+    t_hi: f64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Acc {
+    let a = cfg.cell_width;
     let anchor = match &cfg.scene {
         SceneModel::Infinite => DVec3::ZERO,
         SceneModel::Finite(fs) => fs.center,
     };
-    let n_spheres = finite.as_ref().map(|f| f.spheres.len() as u64);
-    let thresholds = n_spheres
-        .filter(|_| cfg.kind == Kind::GridScaling)
-        .map(|n| {
-            let n = (n.max(2)) as f64;
-            (cfg.concentration_c * n.ln(), cfg.concentration_c * n.sqrt())
-        });
-    let brute = finite
-        .as_ref()
-        .is_some_and(|f| f.spheres.len() as u64 <= cfg.brute_force_max_n)
-        && cfg.kind == Kind::GridScaling;
-
-    let t_hi = cfg.t_max_mfp * mean_t;
-    let batches = cfg.rays.div_ceil(BATCH);
+    let thresholds = finite.filter(|_| cfg.kind == Kind::GridScaling).map(|f| {
+        let n = (f.spheres.len().max(2)) as f64;
+        (cfg.concentration_c * n.ln(), cfg.concentration_c * n.sqrt())
+    });
+    let brute = replica == 0
+        && cfg.kind == Kind::GridScaling
+        && finite.is_some_and(|f| f.spheres.len() as u64 <= cfg.brute_force_max_n);
+    let max_steps = u32::try_from(cfg.max_steps).unwrap_or(u32::MAX);
     let run_batch = |cache: &mut LazyCache, b: u64| -> Acc {
         let mut acc = Acc::new(t_hi, cfg.bins);
-        let mut rng = stream(&[domain::RAYS, cfg.seed, point, b]);
-        let n_rays = BATCH.min(cfg.rays - b * BATCH);
+        let mut rng = stream(&[domain::RAYS, cfg.seed, point, replica, b]);
+        let n_rays = BATCH.min(rays - b * BATCH);
         let rays: Vec<Ray> = (0..n_rays)
             .map(|_| {
                 let d = uniform_direction(&mut rng);
@@ -228,9 +306,8 @@ pub fn run_point(
             })
             .collect();
         let mut mailbox = Mailbox::default();
-        let max_steps = u32::try_from(cfg.max_steps).unwrap_or(u32::MAX);
         let start = Instant::now();
-        let counts: Vec<TraceCounts> = match &finite {
+        let counts: Vec<TraceCounts> = match finite {
             Some(f) => {
                 let mut lists = &f.grid;
                 rays.iter()
@@ -264,14 +341,12 @@ pub fn run_point(
             acc.record(c, thresholds);
         }
         if brute {
-            let f = finite.as_ref().expect("brute force runs on finite scenes");
-            let first = b * BATCH;
-            let check = cfg.brute_force_rays.saturating_sub(first).min(n_rays) as usize;
+            let f = finite.expect("brute force runs on finite scenes");
+            let check = cfg.brute_force_rays.saturating_sub(b * BATCH).min(n_rays) as usize;
             let start = Instant::now();
             for (ray, c) in rays.iter().zip(&counts).take(check) {
-                let oracle = brute_force(&f.spheres, ray);
                 acc.bf_checked += 1;
-                if oracle.map(|h| h.id) != c.hit.map(|h| h.id) {
+                if brute_force(&f.spheres, ray).map(|h| h.id) != c.hit.map(|h| h.id) {
                     acc.bf_mismatches += 1;
                 }
             }
@@ -280,8 +355,7 @@ pub fn run_point(
         acc.end_batch();
         acc
     };
-
-    let start = Instant::now();
+    let batches = rays.div_ceil(BATCH);
     let mut total = Acc::new(t_hi, cfg.bins);
     let mut b0 = 0;
     while b0 < batches {
@@ -293,13 +367,10 @@ pub fn run_point(
         for p in &parts {
             total.merge(p);
         }
-        progress((b1 * BATCH).min(cfg.rays) - (b0 * BATCH).min(cfg.rays));
+        progress((b1 * BATCH).min(rays) - (b0 * BATCH).min(rays));
         b0 = b1;
     }
-    let wall = start.elapsed().as_secs_f64();
-    // Brute-force time is not tracing time.
-    let trace_s = (wall - total.bf_time / rayon::current_num_threads() as f64).max(1e-9);
-    make_result(cfg, &inp, &total, finite.as_ref(), machine, trace_s, mean_t)
+    total
 }
 
 fn make_result(
@@ -450,7 +521,7 @@ fn make_result(
     let chi_g = gof::chi_square(&g_obs, &g_exp, 1);
     let r0 = cfg.classes[0].radius.expect(|r| r);
     row.f("n_i_geometric_p", p)
-        .f("n_i_geometric_s", r0 * (1.0 / p.sqrt() - 1.0));
+        .f("n_i_cylinder_radius", r0 * (1.0 / p.sqrt() - 1.0));
     row.f("n_i_mb_chi2", chi_g.statistic)
         .u("n_i_mb_chi2_dof", u64::from(chi_g.dof))
         .f("n_i_mb_chi2_p", chi_g.p_value);

@@ -76,7 +76,7 @@ pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::Pat
     let name = &spec.base.experiment.name;
     let dir = opts.out.join(name);
     let stem = stem(name, opts.shard);
-    let mut sink = Sink::open(
+    let sink = Sink::open(
         &dir,
         &stem,
         &spec.hash,
@@ -85,7 +85,15 @@ pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::Pat
             resume: opts.resume,
         },
     )?;
-    let started = now_rfc3339();
+    let Some(mut sink) = sink else {
+        // --resume on a finished table: nothing to do, and nothing is touched.
+        let msg = format!(
+            "{}: finished already, nothing to resume\n",
+            dir.join(format!("{stem}.csv")).display()
+        );
+        return Ok((Vec::new(), msg));
+    };
+    let started = sink.started().to_string();
     let t0 = Instant::now();
     let mine: Vec<usize> = spec
         .points

@@ -34,6 +34,7 @@ pub struct Sink {
     csv_has_header: bool,
     hist_has_header: bool,
     done: BTreeSet<usize>,
+    started: String,
 }
 
 fn err(path: &Path, message: impl Into<String>) -> OutputError {
@@ -55,19 +56,35 @@ impl Sink {
 
     /// Opens (or, with `resume`, reopens) the files of run `stem` in `dir`. Refuses, before anything
     /// is written, to replace a finished result without `force` or to discard a partial one without
-    /// `resume` or `force`.
+    /// `resume` or `force`. With `resume`, a finished result is left alone and `None` comes back.
     pub fn open(
         dir: &Path,
         stem: &str,
         spec_hash: &str,
         opts: SinkOptions,
-    ) -> Result<Sink, OutputError> {
+    ) -> Result<Option<Sink>, OutputError> {
         fs::create_dir_all(dir)
             .map_err(|e| err(dir, format!("cannot create the results folder: {e}")))?;
         let probe = dir.join(format!(".{stem}.write-test"));
         File::create(&probe)
             .map_err(|e| err(dir, format!("the results folder is not writable: {e}")))?;
         let _ = fs::remove_file(&probe);
+        let csv_p = Self::partial(dir, stem, "csv");
+        let hist_p = Self::partial(dir, stem, "hist.csv");
+        let meta_p = Self::partial(dir, stem, "meta.toml");
+        let final_csv = Self::path(dir, stem, "csv");
+        if final_csv.exists() && opts.resume && !csv_p.exists() {
+            return Ok(None);
+        }
+        if opts.resume && csv_p.exists() {
+            // A run killed inside `finish` has renamed some files already: take them back.
+            for (suffix, partial) in [("hist.csv", &hist_p), ("meta.toml", &meta_p)] {
+                let done = Self::path(dir, stem, suffix);
+                if done.exists() && !partial.exists() {
+                    fs::rename(&done, partial).map_err(|e| err(&done, e.to_string()))?;
+                }
+            }
+        }
         for suffix in ["csv", "hist.csv", "meta.toml"] {
             let p = Self::path(dir, stem, suffix);
             if p.exists() && !opts.force {
@@ -77,13 +94,19 @@ impl Sink {
                 ));
             }
         }
-        let csv_p = Self::partial(dir, stem, "csv");
-        let hist_p = Self::partial(dir, stem, "hist.csv");
-        let meta_p = Self::partial(dir, stem, "meta.toml");
+        let started: Option<String>;
         let mut done = BTreeSet::new();
         let (mut csv_has_header, mut hist_has_header) = (false, false);
         if csv_p.exists() && opts.resume {
             let recorded = fs::read_to_string(&meta_p).unwrap_or_default();
+            started = recorded
+                .lines()
+                .find_map(|l| {
+                    l.trim()
+                        .strip_prefix("started = \"")
+                        .and_then(|r| r.strip_suffix('"'))
+                })
+                .map(str::to_string);
             let want = format!("spec_hash = \"{spec_hash}\"");
             if !recorded.contains(&want) {
                 return Err(err(&csv_p, "was written by a different spec (spec hash differs); it cannot be resumed. Move it away or pass --force without --resume to start over"));
@@ -129,12 +152,10 @@ impl Sink {
                 File::create(p).map_err(|e| err(p, e.to_string()))?;
             }
             let mut m = File::create(&meta_p).map_err(|e| err(&meta_p, e.to_string()))?;
-            writeln!(
-                m,
-                "spec_hash = \"{spec_hash}\"\nstarted = \"{}\"",
-                super::time::now_rfc3339()
-            )
-            .map_err(|e| err(&meta_p, e.to_string()))?;
+            let now = super::time::now_rfc3339();
+            writeln!(m, "spec_hash = \"{spec_hash}\"\nstarted = \"{now}\"")
+                .map_err(|e| err(&meta_p, e.to_string()))?;
+            started = Some(now);
         }
         let open = |p: &Path| {
             OpenOptions::new()
@@ -142,7 +163,7 @@ impl Sink {
                 .open(p)
                 .map_err(|e| err(p, e.to_string()))
         };
-        Ok(Sink {
+        Ok(Some(Sink {
             dir: dir.to_path_buf(),
             stem: stem.to_string(),
             csv: open(&csv_p)?,
@@ -150,7 +171,13 @@ impl Sink {
             csv_has_header,
             hist_has_header,
             done,
-        })
+            started: started.unwrap_or_else(super::time::now_rfc3339),
+        }))
+    }
+
+    /// When the run began: the first session's start, for a resumed run.
+    pub fn started(&self) -> &str {
+        &self.started
     }
 
     /// Points already finished (from a resumed partial run).

@@ -40,6 +40,8 @@ pub struct GridConfig {
     pub mailbox: bool,
     /// Eye placement.
     pub eye: Eye,
+    /// Independent finite-scene realisations per point (1 for infinite scenes).
+    pub replicas: u64,
     /// Rays sharing one infinite-scene realisation (divides nothing: the last group may be short).
     pub rays_per_scene: u64,
     /// Walk cut-off in infinite scenes.
@@ -140,6 +142,19 @@ impl GridConfig {
                 center,
             }),
         };
+        if s.replicas.is_some() && scene == SceneModel::Infinite {
+            return Err(e("scene.replicas", "only a finite scene has replicas (every batch of an infinite scene is a new realisation already)".into()));
+        }
+        if s.replicas.is_some_and(|r| r > raw.experiment.rays) {
+            return Err(e(
+                "scene.replicas",
+                format!(
+                    "got {}, more than experiment.rays = {}",
+                    s.replicas.unwrap_or(0),
+                    raw.experiment.rays
+                ),
+            ));
+        }
         let kind = raw.experiment.kind;
         if kind == Kind::GridScaling && scene == SceneModel::Infinite {
             return Err(e("scene.spheres", "kind grid-scaling needs a finite scene: set scene.spheres (or scene.extent to a side)".into()));
@@ -228,6 +243,7 @@ impl GridConfig {
                 super::raw::Eye::Uniform => Eye::Uniform,
             },
             rays_per_scene: g.rays_per_scene,
+            replicas: s.replicas.unwrap_or(1),
             max_steps: g.max_steps,
             bins: h.bins as usize,
             t_max_mfp: h.t_max_mfp,

@@ -94,6 +94,14 @@ pub struct RawScene {
         skip_serializing_if = "Option::is_none"
     )]
     pub spheres: Option<u64>,
+    /// Independent realisations of a finite scene per point (the rays are shared among them); with
+    /// two or more, standard errors include the scene-to-scene variation.
+    #[serde(
+        default,
+        deserialize_with = "opt_count",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub replicas: Option<u64>,
     /// Centre of a finite scene (where the eye is).
     #[serde(
         default,

@@ -83,6 +83,15 @@ impl ClusteredMean {
         self.n2 += other.n2;
     }
 
+    /// Pools everything `other` holds (closed batches only) into this accumulator's open batch, so
+    /// that many batches become one cluster (a replica of a finite scene).
+    pub fn absorb(&mut self, other: &Self) {
+        debug_assert!(other.cur_n == 0, "absorb closed batches only");
+        self.cur_n += other.n;
+        self.cur_s += other.sum;
+        self.cur_sq += other.sum_sq_samples;
+    }
+
     /// Number of samples in closed batches.
     pub fn n(&self) -> u64 {
         self.n
