@@ -17,9 +17,8 @@ use crate::experiment::grid::BATCH;
 use crate::experiment::machine;
 use crate::experiment::Row;
 use crate::geom::{Aabb, Ray, Sphere};
-use crate::grid::{
-    brute_force, build::frame_around, mailbox::Mailbox, trace, FiniteGrid, GridFrame, TraceCounts,
-};
+use crate::grid::fast::{FastGrid, FastTrace};
+use crate::grid::{brute_force, build::frame_around, mailbox::Mailbox, trace, GridFrame};
 use crate::output::sink::{Sink, SinkOptions};
 use crate::sample::{directions::uniform_direction, rng::stream};
 use crate::scene::finite::{FiniteScene, FiniteSize};
@@ -49,19 +48,12 @@ fn pool(threads: usize) -> anyhow::Result<rayon::ThreadPool> {
         .context("could not start a thread pool")
 }
 
-/// Traces `rays` through a finite grid on the current pool; returns counts and seconds.
-pub fn trace_finite(grid: &FiniteGrid, rays: &[Ray]) -> (Vec<TraceCounts>, f64) {
+/// Traces `rays` through the query-optimised grid on the current pool; returns results and seconds.
+pub fn trace_finite(grid: &FastGrid, rays: &[Ray]) -> (Vec<FastTrace>, f64) {
     let start = Instant::now();
-    let counts: Vec<TraceCounts> = rays
-        .par_chunks(4096)
-        .flat_map_iter(|chunk| {
-            let mut mb = Mailbox::default();
-            let mut lists = grid;
-            chunk
-                .iter()
-                .map(move |r| trace(&mut lists, r, &mut mb, true, u32::MAX))
-                .collect::<Vec<_>>()
-        })
+    let counts: Vec<FastTrace> = rays
+        .par_chunks(1024)
+        .flat_map_iter(|chunk| chunk.iter().map(|r| grid.trace(r)))
         .collect();
     (counts, start.elapsed().as_secs_f64())
 }
@@ -88,7 +80,6 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
     )?
     .expect("a sink opened without --resume always exists");
 
-    let costs = machine::measure();
     let classes = [RadiusClass {
         fraction: 1.0,
         radius: RadiusDist::Constant(R),
@@ -99,19 +90,21 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         draw: RadiusDraw::PerSphere,
         cell_width: 1.0,
     };
+    let costs = calibrate(&classes, if quick { 100_000 } else { 1_000_000 })?;
+    // The query grid tests every listing (no mailbox), so the model's N_I is the plain one.
     let a = th::best_cell_width(
         &probe,
         &QueryCost {
             t_i: costs.t_i,
             t_s: costs.t_s,
             eye: Eye::Uniform,
-            mailbox: true,
+            mailbox: false,
         },
         0.1,
         5.0,
     );
     println!(
-        "machine: T_I = {:.2} ns, T_S = {:.2} ns → cost-model cell width a = {a:.3}",
+        "cost model of the query grid, fitted on this machine: T_I = {:.2} ns, T_S = {:.2} ns → cell width a = {a:.3}",
         costs.t_i * 1e9,
         costs.t_s * 1e9
     );
@@ -152,7 +145,7 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         let start = Instant::now();
         let b = scene.centre_box();
         let bounds = Aabb::new(b.lo - DVec3::splat(R), b.hi + DVec3::splat(R));
-        let grid = FiniteGrid::build(frame_around(bounds, a, DVec3::ZERO), &spheres);
+        let grid = FastGrid::build(frame_around(bounds, a, DVec3::ZERO), &spheres);
         let build_s = start.elapsed().as_secs_f64();
         let peak = peak_rss_bytes();
         let rays: Vec<Ray> = dirs.iter().map(|&d| Ray::new(DVec3::ZERO, d)).collect();
@@ -188,7 +181,7 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
                 .u("grid_bytes", grid.bytes());
             row.u("checked", bf_n as u64)
                 .u("mismatches", mismatches as u64);
-            row.f("n_i_mean", mean(counts.iter().map(|c| f64::from(c.n_i_mb))))
+            row.f("n_i_mean", mean(counts.iter().map(|c| f64::from(c.n_i))))
                 .f("n_s_mean", mean(counts.iter().map(|c| f64::from(c.n_s))));
             emit(&mut sink, row)?;
             grid_ids = counts.iter().map(|c| c.hit.map(|h| h.id)).collect();
@@ -280,7 +273,7 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
                         let eye = DVec3::splat(0.5 * a);
                         chunk.iter().fold((0.0, 0.0), |acc, &d| {
                             let c = trace(&mut lists, &Ray::new(eye, d), &mut mb, true, 10_000_000);
-                            (acc.0 + f64::from(c.n_i_mb), acc.1 + f64::from(c.n_s))
+                            (acc.0 + f64::from(c.n_i), acc.1 + f64::from(c.n_s))
                         })
                     },
                 )
@@ -315,6 +308,47 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         println!("wrote {}", p.display());
     }
     Ok(())
+}
+
+/// T_I and T_S of the query grid on this machine: the grid is timed (one thread) at three cell
+/// widths on a calibration scene of `n` spheres, and t = N_I·T_I + N_S·T_S is fitted to the three
+/// (N_I, N_S, time per ray) triples by least squares. Unlike the microbenchmarks of
+/// `experiment::machine`, this includes the memory traffic of the real lists.
+fn calibrate(classes: &[RadiusClass], n: u64) -> anyhow::Result<machine::MachineCosts> {
+    let scene = FiniteScene {
+        intensity: RHO,
+        classes: classes.to_vec(),
+        draw: RadiusDraw::PerSphere,
+        size: FiniteSize::Count(n),
+        center: DVec3::ZERO,
+    };
+    let spheres = scene.generate(&[0x6361_6c69, n]);
+    let b = scene.centre_box();
+    let bounds = Aabb::new(b.lo - DVec3::splat(R), b.hi + DVec3::splat(R));
+    let mut rng = stream(&[0x6361_6c69, 1]);
+    let rays: Vec<Ray> = (0..100_000)
+        .map(|_| Ray::new(DVec3::ZERO, uniform_direction(&mut rng)))
+        .collect();
+    let (mut sii, mut sis, mut sss, mut sit, mut sst) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for a in [0.6, 1.2, 2.4] {
+        let grid = FastGrid::build(frame_around(bounds, a, DVec3::ZERO), &spheres);
+        let (counts, secs) = pool(1)?.install(|| trace_finite(&grid, &rays));
+        let t = secs / rays.len() as f64;
+        let ni = mean(counts.iter().map(|c| f64::from(c.n_i)));
+        let ns = mean(counts.iter().map(|c| f64::from(c.n_s)));
+        (sii, sis, sss, sit, sst) = (
+            sii + ni * ni,
+            sis + ni * ns,
+            sss + ns * ns,
+            sit + ni * t,
+            sst + ns * t,
+        );
+    }
+    // Normal equations of the two-parameter fit without intercept.
+    let det = sii * sss - sis * sis;
+    let t_i = ((sit * sss - sst * sis) / det).max(1e-12);
+    let t_s = ((sst * sii - sit * sis) / det).max(1e-12);
+    Ok(machine::MachineCosts { t_i, t_s })
 }
 
 fn mean(it: impl Iterator<Item = f64>) -> f64 {

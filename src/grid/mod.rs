@@ -6,6 +6,7 @@
 
 pub mod build;
 pub mod dda;
+pub mod fast;
 pub mod frame;
 pub mod mailbox;
 pub mod trace;
