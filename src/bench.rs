@@ -109,13 +109,27 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         costs.t_s * 1e9
     );
     println!(
-        "{:<14} {:>9} {:>7} {:>12} {:>9} {:>12} {:>10} {:>8} {:>8}",
-        "engine", "n", "threads", "rays/s", "build s", "peak MB", "mismatch", "N_I", "N_S"
+        "{:<14} {:>9} {:>7} {:>12} {:>9} {:>12} {:>9} {:>8} {:>8} {:>8}",
+        "engine",
+        "n",
+        "threads",
+        "rays/s",
+        "build s",
+        "peak MB",
+        "mismatch",
+        "f32 ties",
+        "N_I",
+        "N_S"
     );
-    let emit = |sink: &mut Sink, row: Row| -> anyhow::Result<()> {
+    let mut speeds: Vec<(String, u64, u64, f64)> = Vec::new();
+    let mut emit = |sink: &mut Sink, mut row: Row| -> anyhow::Result<()> {
+        // Columns only Embree fills (f32 near-ties and t differences), kept in every row.
+        if row.get("f32_ties").is_none() {
+            row.u("f32_ties", 0).f("t_rel_diff_max", f64::NAN);
+        }
         let g = |c: &str| row.get(c).and_then(|v| v.as_f64()).unwrap_or(f64::NAN);
         println!(
-            "{:<14} {:>9} {:>7} {:>12.4e} {:>9.3} {:>12.1} {:>10} {:>8.2} {:>8.2}",
+            "{:<14} {:>9} {:>7} {:>12.4e} {:>9.3} {:>12.1} {:>9} {:>8} {:>8.2} {:>8.2}",
             row.get("engine").map_or(String::new(), |v| v.render()),
             g("n"),
             g("threads"),
@@ -123,9 +137,16 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
             g("build_s"),
             g("peak_mem_bytes") / 1e6,
             g("mismatches"),
+            g("f32_ties"),
             g("n_i_mean"),
             g("n_s_mean")
         );
+        speeds.push((
+            row.get("engine").map_or(String::new(), |v| v.render()),
+            g("n") as u64,
+            g("threads") as u64,
+            g("rays_per_s"),
+        ));
         sink.append(&row, &[])
             .context("could not append to the bench table")?;
         Ok(())
@@ -161,7 +182,7 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         });
         let bf_s = bf_start.elapsed().as_secs_f64();
 
-        let mut grid_ids: Vec<Option<u64>> = Vec::new();
+        let mut grid_hits: Vec<Option<crate::grid::Hit>> = Vec::new();
         for threads in [1, all] {
             let (counts, secs) = pool(threads)?.install(|| trace_finite(&grid, &rays));
             let mismatches = counts[..bf_n]
@@ -184,7 +205,7 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
             row.f("n_i_mean", mean(counts.iter().map(|c| f64::from(c.n_i))))
                 .f("n_s_mean", mean(counts.iter().map(|c| f64::from(c.n_s))));
             emit(&mut sink, row)?;
-            grid_ids = counts.iter().map(|c| c.hit.map(|h| h.id)).collect();
+            grid_hits = counts.iter().map(|c| c.hit).collect();
         }
         let mut row = Row::default();
         row.s("engine", "brute-force")
@@ -219,9 +240,55 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
                         .for_each(|(h, r)| scene.first_hits(r, h))
                 });
                 let secs = start.elapsed().as_secs_f64();
-                let ids: Vec<Option<u64>> =
-                    hits.iter().map(|h| h.map(|(i, _)| spheres[i].id)).collect();
-                let mismatches = ids.iter().zip(&grid_ids).filter(|(e, g)| e != g).count();
+                // Embree intersects in f32: classify each disagreement by the exact f64 geometry.
+                let (mut mismatches, mut ties, mut t_rel_max) = (0u64, 0u64, 0.0f64);
+                for (k, (e, g)) in hits.iter().zip(&grid_hits).enumerate() {
+                    let ray = &rays[k];
+                    match (e, g) {
+                        (Some((ei, te)), Some(gh)) if spheres[*ei].id == gh.id => {
+                            t_rel_max = t_rel_max.max((te - gh.t).abs() / gh.t)
+                        }
+                        (None, None) => {}
+                        (e, g) => {
+                            let near_tie = |s: &Sphere, t_ref: f64| {
+                                s.intersect(ray)
+                                    .is_some_and(|t| (t - t_ref).abs() <= 1e-5 * t_ref)
+                            };
+                            // A graze f32 cannot resolve: Embree's quadratic forms |f|² − b² in f32, so
+                            // its discriminant carries an absolute error of a few ε₃₂·|f|².
+                            let grazed = |s: &Sphere| {
+                                let f = s.c - ray.o;
+                                let v = f - f.dot(ray.d) * ray.d;
+                                (v.length_squared() - s.r * s.r).abs()
+                                    <= 8.0 * f64::from(f32::EPSILON) * f.length_squared()
+                            };
+                            let explained = match (e, g) {
+                                (Some((ei, _)), Some(gh)) => {
+                                    near_tie(&spheres[*ei], gh.t)
+                                        || grazed(&spheres[*ei])
+                                        || grazed(&spheres[gh.id as usize])
+                                }
+                                (Some((ei, _)), None) => grazed(&spheres[*ei]),
+                                (None, Some(gh)) => grazed(&spheres[gh.id as usize]),
+                                (None, None) => true,
+                            };
+                            if explained {
+                                ties += 1;
+                            } else {
+                                mismatches += 1;
+                                let t64 = |i: usize| spheres[i].intersect(ray);
+                                eprintln!(
+                                    "embree mismatch: n = {n}, ray {k} o = {:?} d = {:?}: embree {:?} (f64 t {:?}), grid {:?}",
+                                    ray.o,
+                                    ray.d,
+                                    e,
+                                    e.and_then(|(i, _)| t64(i)),
+                                    g
+                                );
+                            }
+                        }
+                    }
+                }
                 let mut row = Row::default();
                 row.s("engine", "embree")
                     .u("n", n)
@@ -233,14 +300,15 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
                     .u("peak_mem_bytes", e_peak)
                     .u("grid_bytes", 0);
                 row.u("checked", rays.len() as u64)
-                    .u("mismatches", mismatches as u64)
+                    .u("mismatches", mismatches)
                     .f("n_i_mean", f64::NAN)
                     .f("n_s_mean", f64::NAN);
+                row.u("f32_ties", ties).f("t_rel_diff_max", t_rel_max);
                 emit(&mut sink, row)?;
             }
         }
         #[cfg(not(feature = "embree"))]
-        let _ = &grid_ids;
+        let _ = &grid_hits;
     }
 
     // The lazily generated infinite scene (no n: it has no boundary), same a, same directions.
@@ -296,6 +364,39 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
             .f("n_i_mean", n_i / dirs.len() as f64)
             .f("n_s_mean", n_s / dirs.len() as f64);
         emit(&mut sink, row)?;
+    }
+    // Ratios measured in this run, side by side.
+    for &n in sizes {
+        for threads in [1, all as u64] {
+            let rate = |e: &str| {
+                speeds
+                    .iter()
+                    .find(|s| s.0 == e && s.1 == n && s.2 == threads)
+                    .map(|s| s.3)
+            };
+            if let (Some(g), Some(e)) = (rate("grid"), rate("embree")) {
+                println!(
+                    "ratio grid/embree at n = {n:.0e}, {threads} thread(s): {:.2}",
+                    g / e
+                );
+            }
+        }
+    }
+    let rate = |e: &str, n: u64| {
+        speeds
+            .iter()
+            .find(|s| s.0 == e && s.1 == n && s.2 == all as u64)
+            .map(|s| s.3)
+    };
+    if let (Some(g), Some(i)) = (
+        rate("grid", *sizes.last().expect("sizes")),
+        rate("grid-infinite", 0),
+    ) {
+        println!(
+            "ratio grid (n = {:.0e}) / grid-infinite, {all} threads: {:.2}",
+            *sizes.last().expect("sizes") as f64,
+            g / i
+        );
     }
     let meta = format!(
         "[bench]\nquick = {quick}\nthreads = {all}\nhost = \"{}\"\nt_i_s = {:e}\nt_s_s = {:e}\ncell_width = {a}\nfinished = \"{}\"\n",

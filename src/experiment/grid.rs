@@ -386,8 +386,8 @@ fn make_result(
     let mut summary = Vec::new();
     let band = th::n_i_band(inp);
     let n_s_th = th::n_s_mean(inp, cfg.eye);
-    let n_i_th = th::n_i_predictor(inp, n_s_th);
-    let n_i_mb_th = th::n_i_mb_predictor(inp, n_s_th);
+    let n_i_th = th::n_i_predictor_for_eye(inp, cfg.eye);
+    let n_i_mb_th = th::n_i_mb_predictor_for_eye(inp, cfg.eye);
     let verdict = |e: &Estimate| {
         let h = e.half_width(0.95);
         if e.mean + h < band.lower {
