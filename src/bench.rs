@@ -155,17 +155,8 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
     let mut rng = stream(&[0x6265_6e63, 0]);
     let dirs: Vec<DVec3> = (0..n_rays).map(|_| uniform_direction(&mut rng)).collect();
     for &n in sizes {
-        let scene = FiniteScene {
-            intensity: RHO,
-            classes: classes.to_vec(),
-            draw: RadiusDraw::PerSphere,
-            size: FiniteSize::Count(n),
-            center: DVec3::ZERO,
-        };
-        let spheres: Vec<Sphere> = scene.generate(&[0x6265_6e63, n]);
+        let (spheres, bounds) = bench_scene(&classes, n, 0x6265_6e63);
         let start = Instant::now();
-        let b = scene.centre_box();
-        let bounds = Aabb::new(b.lo - DVec3::splat(R), b.hi + DVec3::splat(R));
         let grid = FastGrid::build(frame_around(bounds, a, DVec3::ZERO), &spheres);
         let build_s = start.elapsed().as_secs_f64();
         let peak = peak_rss_bytes();
@@ -416,16 +407,7 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
 /// (N_I, N_S, time per ray) triples by least squares. Unlike the microbenchmarks of
 /// `experiment::machine`, this includes the memory traffic of the real lists.
 fn calibrate(classes: &[RadiusClass], n: u64) -> anyhow::Result<machine::MachineCosts> {
-    let scene = FiniteScene {
-        intensity: RHO,
-        classes: classes.to_vec(),
-        draw: RadiusDraw::PerSphere,
-        size: FiniteSize::Count(n),
-        center: DVec3::ZERO,
-    };
-    let spheres = scene.generate(&[0x6361_6c69, n]);
-    let b = scene.centre_box();
-    let bounds = Aabb::new(b.lo - DVec3::splat(R), b.hi + DVec3::splat(R));
+    let (spheres, bounds) = bench_scene(classes, n, 0x6361_6c69);
     let mut rng = stream(&[0x6361_6c69, 1]);
     let rays: Vec<Ray> = (0..100_000)
         .map(|_| Ray::new(DVec3::ZERO, uniform_direction(&mut rng)))
@@ -450,6 +432,23 @@ fn calibrate(classes: &[RadiusClass], n: u64) -> anyhow::Result<machine::Machine
     let t_i = ((sit * sss - sst * sis) / det).max(1e-12);
     let t_s = ((sst * sii - sit * sis) / det).max(1e-12);
     Ok(machine::MachineCosts { t_i, t_s })
+}
+
+/// The bench scene: `n` centres uniform in a cube at ρ = 1 around the origin, and the box a grid
+/// over them must cover.
+fn bench_scene(classes: &[RadiusClass], n: u64, key: u64) -> (Vec<Sphere>, Aabb) {
+    let scene = FiniteScene {
+        intensity: RHO,
+        classes: classes.to_vec(),
+        draw: RadiusDraw::PerSphere,
+        size: FiniteSize::Count(n),
+        center: DVec3::ZERO,
+    };
+    let b = scene.centre_box();
+    (
+        scene.generate(&[key, n]),
+        Aabb::new(b.lo - DVec3::splat(R), b.hi + DVec3::splat(R)),
+    )
 }
 
 fn mean(it: impl Iterator<Item = f64>) -> f64 {

@@ -357,7 +357,7 @@ mod tests {
         let mut best: Option<(usize, f64)> = None;
         for (i, s) in spheres.iter().enumerate() {
             if let Some(t) = s.intersect(ray) {
-                if best.map_or(true, |(_, bt)| t < bt) {
+                if best.is_none_or(|(_, bt)| t < bt) {
                     best = Some((i, t));
                 }
             }

@@ -218,3 +218,71 @@ fn shipped_specs_check() {
         );
     }
 }
+
+#[test]
+fn resume_of_a_finished_run_changes_nothing() {
+    let tmp = tempfile::tempdir().expect("temp");
+    let spec = write_spec(tmp.path(), &SMALL.replace("rays = 3000", "rays = 300"));
+    let out = tmp.path().join("results");
+    raycost()
+        .arg("run")
+        .arg(&spec)
+        .arg("--out")
+        .arg(&out)
+        .arg("--quiet")
+        .assert()
+        .success();
+    let before: Vec<_> = files_below(&out)
+        .iter()
+        .map(|p| (p.clone(), std::fs::read(p).expect("read")))
+        .collect();
+    let o = raycost()
+        .arg("run")
+        .arg(&spec)
+        .arg("--out")
+        .arg(&out)
+        .arg("--resume")
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("finished already"));
+    let after: Vec<_> = files_below(&out)
+        .iter()
+        .map(|p| (p.clone(), std::fs::read(p).expect("read")))
+        .collect();
+    assert_eq!(before, after);
+}
+
+/// A run killed inside its final renames (histogram and metadata already in place, the main table
+/// still `.partial`) is completed by `--resume`, not refused.
+#[test]
+fn resume_recovers_a_run_killed_while_finishing() {
+    let tmp = tempfile::tempdir().expect("temp");
+    let spec = write_spec(tmp.path(), &SMALL.replace("rays = 3000", "rays = 300"));
+    let out = tmp.path().join("results");
+    raycost()
+        .arg("run")
+        .arg(&spec)
+        .arg("--out")
+        .arg(&out)
+        .arg("--quiet")
+        .assert()
+        .success();
+    let dir = out.join("small");
+    let want = measured_columns(&dir.join("small.csv"));
+    std::fs::rename(dir.join("small.csv"), dir.join("small.csv.partial")).expect("rename");
+    let o = raycost()
+        .arg("run")
+        .arg(&spec)
+        .arg("--out")
+        .arg(&out)
+        .args(["--resume", "--quiet"])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(measured_columns(&dir.join("small.csv")), want);
+    assert!(dir.join("small.hist.csv").exists() && dir.join("small.meta.toml").exists());
+    assert!(!files_below(&out)
+        .iter()
+        .any(|p| p.to_string_lossy().ends_with(".partial")));
+}

@@ -19,19 +19,7 @@ pub fn is_timing(col: &str) -> bool {
 
 /// Header and rows of a CSV, as text cells.
 pub fn cells(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
-    let mut r = csv::Reader::from_path(path)
-        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
-    let header = r
-        .headers()
-        .expect("a header")
-        .iter()
-        .map(str::to_string)
-        .collect();
-    let rows = r
-        .records()
-        .map(|rec| rec.expect("a record").iter().map(str::to_string).collect())
-        .collect();
-    (header, rows)
+    crate::common::read_csv(path)
 }
 
 /// Asserts that two tables have the same columns and, outside timing columns, the same cells,

@@ -49,70 +49,11 @@ impl FiniteGrid {
     /// Builds the cell lists of `spheres` in `frame` (a finite frame covering every sphere).
     pub fn build(frame: GridFrame, spheres: &[Sphere]) -> Self {
         let dims = frame.dims.expect("a finite grid needs dims");
+        let pad_magnitude = grid_magnitude(&frame);
         let n_cells = (dims[0] * dims[1] * dims[2]) as usize;
-        let grid_box = Aabb::new(
-            frame.origin,
-            frame.origin + DVec3::new(dims[0] as f64, dims[1] as f64, dims[2] as f64) * frame.width,
-        );
-        let pad_magnitude = grid_box.magnitude();
-        let linear = |c: Cell| ((c[2] * dims[1] + c[1]) * dims[0] + c[0]) as usize;
-
-        // Overlapped cells of one sphere, in a fixed order.
-        let overlaps = |s: &Sphere, out: &mut Vec<u32>| {
-            let reach = s.r + frame.pad(pad_magnitude, s.r);
-            let lo = frame.cell_of(s.c - DVec3::splat(reach));
-            let hi = frame.cell_of(s.c + DVec3::splat(reach));
-            for k in lo[2]..=hi[2] {
-                for j in lo[1]..=hi[1] {
-                    for i in lo[0]..=hi[0] {
-                        let cell = [i, j, k];
-                        if frame.cell_box(cell).distance_squared(s.c) <= reach * reach {
-                            out.push(linear(cell) as u32);
-                        }
-                    }
-                }
-            }
-        };
-
-        // Pairs (cell, sphere) in sphere order, produced in parallel chunks.
-        const CHUNK: usize = 1 << 14;
-        let pairs: Vec<Vec<(u32, u32)>> = spheres
-            .par_chunks(CHUNK)
-            .enumerate()
-            .map(|(ci, chunk)| {
-                let mut out = Vec::with_capacity(chunk.len() * 2);
-                let mut cells = Vec::with_capacity(27);
-                for (k, s) in chunk.iter().enumerate() {
-                    cells.clear();
-                    overlaps(s, &mut cells);
-                    let idx = (ci * CHUNK + k) as u32;
-                    out.extend(cells.iter().map(|&c| (c, idx)));
-                }
-                out
-            })
-            .collect();
-
-        // Counting sort by cell; within a cell, sphere order.
-        let mut offsets = vec![0u32; n_cells + 1];
-        for &(c, _) in pairs.iter().flatten() {
-            offsets[c as usize + 1] += 1;
-        }
-        for i in 0..n_cells {
-            offsets[i + 1] += offsets[i];
-        }
-        let total = offsets[n_cells] as usize;
-        let mut cursor = offsets.clone();
-        let placeholder = Sphere {
-            c: DVec3::ZERO,
-            r: 0.0,
-            id: u64::MAX,
-        };
-        let mut entries = vec![placeholder; total];
-        for &(c, s) in pairs.iter().flatten() {
-            let slot = &mut cursor[c as usize];
-            entries[*slot as usize] = spheres[s as usize];
-            *slot += 1;
-        }
+        let linear = |c: Cell| ((c[2] * dims[1] + c[1]) * dims[0] + c[0]) as u32;
+        let (offsets, order) = cell_lists(&frame, pad_magnitude, spheres, n_cells, linear);
+        let entries = order.iter().map(|&s| spheres[s as usize]).collect();
         Self {
             frame,
             offsets,
@@ -142,23 +83,65 @@ impl FiniteGrid {
     }
 }
 
-impl CellLists for FiniteGrid {
-    #[inline]
-    fn frame(&self) -> &GridFrame {
-        &self.frame
-    }
+/// The magnitude of a finite frame's coordinates, from which listing pads are computed.
+pub fn grid_magnitude(frame: &GridFrame) -> f64 {
+    let dims = frame.dims.expect("a finite grid needs dims");
+    let extent = DVec3::new(dims[0] as f64, dims[1] as f64, dims[2] as f64) * frame.width;
+    Aabb::new(frame.origin, frame.origin + extent).magnitude()
+}
 
-    #[inline]
-    fn pad_magnitude(&self, _cell: Cell) -> f64 {
-        self.pad_magnitude
+/// Compressed cell lists shared by both finite grids: `(offsets, order)` where the listings of the
+/// cell stored at `slot(cell)` are the sphere indices `order[offsets[slot]..offsets[slot + 1]]`.
+///
+/// Every sphere enumerates the cells its padded bounding box covers and keeps those its ball really
+/// overlaps (exact closed sphere–box test, see [`GridFrame::pad`]). Pairs are produced in parallel
+/// at per-sphere positions and placed by a counting sort, so the layout is the same for every
+/// thread count (within a cell, sphere order).
+pub fn cell_lists(
+    frame: &GridFrame,
+    pad_magnitude: f64,
+    spheres: &[Sphere],
+    n_slots: usize,
+    slot: impl Fn(Cell) -> u32 + Sync,
+) -> (Vec<u32>, Vec<u32>) {
+    const CHUNK: usize = 1 << 14;
+    let pairs: Vec<Vec<(u32, u32)>> = spheres
+        .par_chunks(CHUNK)
+        .enumerate()
+        .map(|(ci, chunk)| {
+            let mut out = Vec::with_capacity(chunk.len() * 2);
+            for (k, s) in chunk.iter().enumerate() {
+                let reach = s.r + frame.pad(pad_magnitude, s.r);
+                let lo = frame.cell_of(s.c - DVec3::splat(reach));
+                let hi = frame.cell_of(s.c + DVec3::splat(reach));
+                for z in lo[2]..=hi[2] {
+                    for y in lo[1]..=hi[1] {
+                        for x in lo[0]..=hi[0] {
+                            let cell = [x, y, z];
+                            if frame.cell_box(cell).distance_squared(s.c) <= reach * reach {
+                                out.push((slot(cell), (ci * CHUNK + k) as u32));
+                            }
+                        }
+                    }
+                }
+            }
+            out
+        })
+        .collect();
+    let mut offsets = vec![0u32; n_slots + 1];
+    for &(c, _) in pairs.iter().flatten() {
+        offsets[c as usize + 1] += 1;
     }
-
-    #[inline]
-    fn list(&mut self, cell: Cell) -> &[Sphere] {
-        let d = self.frame.dims.expect("finite");
-        let i = ((cell[2] * d[1] + cell[1]) * d[0] + cell[0]) as usize;
-        &self.entries[self.offsets[i] as usize..self.offsets[i + 1] as usize]
+    for i in 0..n_slots {
+        offsets[i + 1] += offsets[i];
     }
+    let mut cursor = offsets.clone();
+    let mut order = vec![0u32; offsets[n_slots] as usize];
+    for &(c, s) in pairs.iter().flatten() {
+        order[cursor[c as usize] as usize] = s;
+        cursor[c as usize] += 1;
+    }
+    (offsets, order)
 }
 
 /// A read-only finite grid can be shared by threads: wrap a reference.

@@ -21,10 +21,10 @@
 //! candidates, which the exact test then rejects.
 
 use glam::{DVec3, Vec3};
-use rayon::prelude::*;
 
+use super::build::{cell_lists, grid_magnitude};
 use super::{GridFrame, Hit};
-use crate::geom::{Aabb, Ray, Sphere};
+use crate::geom::{Ray, Sphere};
 
 /// Brick edge in cells.
 const B: i64 = 4;
@@ -63,61 +63,24 @@ impl FastGrid {
         let bricks = [0, 1, 2].map(|i| (dims[i] + B - 1) / B);
         let n_slots = (bricks[0] * bricks[1] * bricks[2] * B * B * B) as usize;
         let extent = DVec3::new(dims[0] as f64, dims[1] as f64, dims[2] as f64) * frame.width;
-        let grid_box = Aabb::new(frame.origin, frame.origin + extent);
-        let pad_magnitude = grid_box.magnitude();
-        let slot = |c: [i64; 3]| slot_of(c, bricks) as u32;
-
-        // (slot, sphere) pairs in sphere order, in parallel chunks; then a counting sort.
-        const CHUNK: usize = 1 << 14;
-        let pairs: Vec<Vec<(u32, u32)>> = spheres
-            .par_chunks(CHUNK)
-            .enumerate()
-            .map(|(ci, chunk)| {
-                let mut out = Vec::with_capacity(chunk.len() * 2);
-                for (k, s) in chunk.iter().enumerate() {
-                    let reach = s.r + frame.pad(pad_magnitude, s.r);
-                    let lo = frame.cell_of(s.c - DVec3::splat(reach));
-                    let hi = frame.cell_of(s.c + DVec3::splat(reach));
-                    for kz in lo[2]..=hi[2] {
-                        for ky in lo[1]..=hi[1] {
-                            for kx in lo[0]..=hi[0] {
-                                let c = [kx, ky, kz];
-                                if frame.cell_box(c).distance_squared(s.c) <= reach * reach {
-                                    out.push((slot(c), (ci * CHUNK + k) as u32));
-                                }
-                            }
-                        }
-                    }
-                }
-                out
-            })
-            .collect();
-        let mut offsets = vec![0u32; n_slots + 1];
-        for &(c, _) in pairs.iter().flatten() {
-            offsets[c as usize + 1] += 1;
-        }
-        for i in 0..n_slots {
-            offsets[i + 1] += offsets[i];
-        }
-        let total = offsets[n_slots] as usize;
+        let pad_magnitude = grid_magnitude(&frame);
+        let (offsets, order) = cell_lists(&frame, pad_magnitude, spheres, n_slots, |c| {
+            slot_of(c, bricks) as u32
+        });
+        let total = order.len();
         let mut occupied = vec![0u64; n_slots.div_ceil(64)];
         for c in 0..n_slots {
             if offsets[c + 1] > offsets[c] {
                 occupied[c / 64] |= 1 << (c % 64);
             }
         }
-        let mut cursor = offsets.clone();
         let mut rec = vec![[0f32; 4]; total];
-        let mut idx = vec![0u32; total];
-        for &(c, s) in pairs.iter().flatten() {
-            let k = cursor[c as usize] as usize;
-            cursor[c as usize] += 1;
+        for (k, &s) in order.iter().enumerate() {
             let sp = &spheres[s as usize];
             let rel = (sp.c - frame.origin).as_vec3();
             rec[k] = [rel.x, rel.y, rel.z, sp.r as f32];
-            idx[k] = s;
         }
-        drop(pairs);
+        let idx = order;
         let r_max = spheres.iter().map(|s| s.r).fold(0.0, f64::max);
         let m_bound = extent.max_element() + r_max;
         let margin = (64.0 * f64::from(f32::EPSILON) * m_bound) as f32;
