@@ -173,6 +173,9 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         });
         let bf_s = bf_start.elapsed().as_secs_f64();
 
+        // Untimed warm-up: fault in the freshly built arrays so the first timed run (1 thread) does
+        // not pay for it and inflate the 1 → 2 thread speed-up.
+        let _ = trace_finite(&grid, &rays[..rays.len().min(200_000)]);
         let mut grid_hits: Vec<Option<crate::grid::Hit>> = Vec::new();
         for threads in [1, all] {
             let (counts, secs) = pool(threads)?.install(|| trace_finite(&grid, &rays));
@@ -222,6 +225,8 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
             let scene = crate::embree::EmbreeScene::build(&spheres)?;
             let e_build = start.elapsed().as_secs_f64();
             let e_peak = peak_rss_bytes();
+            let mut warm = vec![None; rays.len().min(200_000)];
+            scene.first_hits(&rays[..warm.len()], &mut warm);
             for threads in [1, all] {
                 let mut hits = vec![None; rays.len()];
                 let start = Instant::now();

@@ -49,6 +49,8 @@ struct Acc {
     ni_mb_counts: Vec<u64>,
     t_samples: Vec<f64>,
     truncated: u64,
+    /// Σ N_I,mb over hitting rays (for the geometric fit's exact mean).
+    ni_mb_hit_sum: f64,
     bf_checked: u64,
     bf_mismatches: u64,
     bf_time: f64,
@@ -70,6 +72,7 @@ impl Acc {
             ni_mb_counts: vec![0; NI_BINS + 1],
             t_samples: Vec::new(),
             truncated: 0,
+            ni_mb_hit_sum: 0.0,
             bf_checked: 0,
             bf_mismatches: 0,
             bf_time: 0.0,
@@ -136,6 +139,7 @@ impl Acc {
         let room = KS_CAP.saturating_sub(self.t_samples.len());
         self.t_samples.extend(o.t_samples.iter().take(room));
         self.truncated += o.truncated;
+        self.ni_mb_hit_sum += o.ni_mb_hit_sum;
         self.bf_checked += o.bf_checked;
         self.bf_mismatches += o.bf_mismatches;
         self.bf_time += o.bf_time;
@@ -155,6 +159,7 @@ impl Acc {
                 self.hist_t.push(h.t);
                 self.t_samples.push(h.t);
                 self.ni_mb_counts[(c.n_i_mb as usize).min(NI_BINS)] += 1;
+                self.ni_mb_hit_sum += f64::from(c.n_i_mb);
             }
             None => self.hit.push(0.0),
         }
@@ -386,18 +391,11 @@ fn make_result(
     let mut summary = Vec::new();
     let band = th::n_i_band(inp);
     let n_s_th = th::n_s_mean(inp, cfg.eye);
-    let n_i_th = th::n_i_predictor_for_eye(inp, cfg.eye);
-    let n_i_mb_th = th::n_i_mb_predictor_for_eye(inp, cfg.eye);
-    let verdict = |e: &Estimate| {
-        let h = e.half_width(0.95);
-        if e.mean + h < band.lower {
-            "below"
-        } else if e.mean - h > band.upper {
-            "above"
-        } else {
-            "inside"
-        }
-    };
+    // Every hitting ray tests at least one sphere: a predictor below 1 is outside its expansion.
+    let at_least_one = |x: f64| if x >= 1.0 { x } else { f64::NAN };
+    let n_i_th = at_least_one(th::n_i_predictor_for_eye(inp, cfg.eye));
+    let n_i_mb_th = at_least_one(th::n_i_mb_predictor_for_eye(inp, cfg.eye));
+    let verdict = |e: &Estimate| band_verdict(e, band.lower, band.upper);
     let (n_i, n_i_mb, n_s) = (
         acc.n_i.estimate(),
         acc.n_i_mb.estimate(),
@@ -414,6 +412,20 @@ fn make_result(
         .f("n_i_mb_upper", band.upper)
         .s("n_i_mb_band", verdict(&n_i_mb));
     row.f("n_i_plain_theory", th::n_i_plain_predictor(inp, n_s_th));
+    // The sharper predictors are derived for r < a/2 (no overlap of non-adjacent cells' offsets).
+    let r_max = cfg
+        .classes
+        .iter()
+        .map(|c| c.radius.max())
+        .fold(0.0, f64::max);
+    row.s(
+        "predictor_regime",
+        if r_max < 0.5 * cfg.cell_width {
+            "r<a/2"
+        } else {
+            "r>=a/2"
+        },
+    );
     row.estimate("n_s", &n_s).f("n_s_theory", n_s_th);
     summary.push((
         "n_i".into(),
@@ -436,9 +448,10 @@ fn make_result(
 
     let t_hit = acc.t_hit.estimate();
     let hit = acc.hit.estimate();
-    let hit_th = match finite {
-        None => 1.0,
-        Some(_) => hit_probability_in_cube(cfg, inp),
+    // In a finite cube hits are cut off at the faces: condition the law on hitting inside.
+    let (hit_th, mean_t) = match finite {
+        None => (1.0, mean_t),
+        Some(_) => finite_hit_theory(cfg, inp),
     };
     row.estimate("t_hit", &t_hit).f("t_hit_theory", mean_t);
     row.estimate("hit", &hit).f("hit_theory", hit_th);
@@ -458,8 +471,21 @@ fn make_result(
     // Laws: exponential first-hit distance (KS and χ² on the histogram), geometric N_I.
     let mut sorted = acc.t_samples.clone();
     sorted.sort_by(f64::total_cmp);
-    let survival = |t: f64| th::first_hit_survival(inp, t);
-    let d = gof::ks_statistic(&sorted, |t| 1.0 - survival(t));
+    // The tests are against the infinite-scene law; in a finite cube that law does not hold
+    // (hits are cut off at the faces), so there they are NaN rather than a misleading rejection.
+    let infinite = finite.is_none();
+    let survival = |t: f64| {
+        if infinite {
+            th::first_hit_survival(inp, t)
+        } else {
+            f64::NAN
+        }
+    };
+    let d = if infinite {
+        gof::ks_statistic(&sorted, |t| 1.0 - survival(t))
+    } else {
+        f64::NAN
+    };
     row.f("t_hit_ks", d)
         .f("t_hit_ks_p", gof::ks_p_value(d, sorted.len()));
     let hits = acc.hist_t.total();
@@ -472,7 +498,15 @@ fn make_result(
         })
         .collect();
     exp.push(hits as f64 * survival(acc.hist_t.hi));
-    let chi_t = gof::chi_square(&obs, &exp, 0);
+    let chi_t = if infinite {
+        gof::chi_square(&obs, &exp, 0)
+    } else {
+        gof::ChiSquare {
+            statistic: f64::NAN,
+            dof: 0,
+            p_value: f64::NAN,
+        }
+    };
     row.f("t_hit_chi2", chi_t.statistic)
         .u("t_hit_chi2_dof", u64::from(chi_t.dof))
         .f("t_hit_chi2_p", chi_t.p_value);
@@ -498,13 +532,8 @@ fn make_result(
 
     // Geometric law of N_I (distinct tests, hitting rays), p fitted by the mean: p = 1/E[N_I].
     let n_hits: u64 = acc.ni_mb_counts.iter().sum();
-    let mean_hit_ni: f64 = acc
-        .ni_mb_counts
-        .iter()
-        .enumerate()
-        .map(|(k, &c)| k as f64 * c as f64)
-        .sum::<f64>()
-        / n_hits.max(1) as f64;
+    // Exact mean over hitting rays (the histogram clamps large N_I into its overflow bin).
+    let mean_hit_ni = acc.ni_mb_hit_sum / n_hits.max(1) as f64;
     let p = (1.0 / mean_hit_ni).clamp(1e-12, 1.0);
     let kmax = acc
         .ni_mb_counts
@@ -605,41 +634,140 @@ fn make_result(
     }
 }
 
-/// "ok" when the measurement is within the 99 % CI of a prediction, else how many SE away.
-fn z_verdict(e: &Estimate, theory: f64) -> String {
-    let z = (e.mean - theory) / e.se;
-    if !z.is_finite() {
-        return "-".into();
+/// Where a measured mean falls against a band `[lower, upper]`, judged by its 95 % CI: `below`,
+/// `inside` or `above`; `n/a` when the estimate has no standard error (a single cluster), because
+/// then nothing can be said about where the true mean lies.
+pub fn band_verdict(e: &Estimate, lower: f64, upper: f64) -> &'static str {
+    let h = e.half_width(0.95);
+    if !h.is_finite() || !e.mean.is_finite() {
+        "n/a"
+    } else if e.mean + h < lower {
+        "below"
+    } else if e.mean - h > upper {
+        "above"
+    } else {
+        "inside"
     }
-    if z.abs() <= crate::stats::z_for_level(0.99) {
+}
+
+/// "ok" when the measurement is within its 99 % CI (Student-t, clusters − 1 dof) of a prediction,
+/// else how many SE away; `n/a` without a standard error or a finite prediction.
+pub fn z_verdict(e: &Estimate, theory: f64) -> String {
+    if !theory.is_finite() || !e.mean.is_finite() {
+        return "n/a".into();
+    }
+    if e.se == 0.0 {
+        return if e.mean == theory {
+            "ok (exact)".into()
+        } else {
+            "differs (SE 0)".into()
+        };
+    }
+    let h = e.half_width(0.99);
+    if !h.is_finite() {
+        return "n/a".into();
+    }
+    let z = (e.mean - theory) / e.se;
+    if (e.mean - theory).abs() <= h {
         "ok (99% CI)".into()
     } else {
         format!("{z:+.1} SE")
     }
 }
 
-/// P(a ray from the centre of a finite cube hits a sphere before leaving the centre cube): the
-/// exponential law integrated over directions, E_d[1 − S(L/2 / max|d_i|)], by a fixed product rule
-/// over (z, φ) (deterministic, no sampling). Ignores the eye offset (< a) and spheres poking in
-/// from outside the centre cube (the grid box includes them, so measured hits can slightly exceed).
-fn hit_probability_in_cube(cfg: &GridConfig, inp: &GridTheoryInput) -> f64 {
+/// The exponential law restricted to a finite cube: `(P(hit), E[t* | hit])` for rays from the eye
+/// (at the centre, or uniform in its cell) to the faces of the cube holding the centres.
+///
+/// With L the distance to the cube along the ray, P(hit) = E[1 − S(L)] and
+/// E[t*·1{hit}] = E[∫₀^L S(t) dt − L·S(L)], where S is the infinite-scene survival function. Both
+/// expectations are over directions (a 100 × 200 midpoint rule in z and φ, uniform on the sphere)
+/// and over eye positions (the corner, or a 3 × 3 × 3 midpoint rule in the cell); the t integral
+/// uses 8-node Gauss–Legendre. An approximation: it ignores the layer of width r beyond the faces
+/// where spheres centred inside the cube can still be hit.
+fn finite_hit_theory(cfg: &GridConfig, inp: &GridTheoryInput) -> (f64, f64) {
     let SceneModel::Finite(fs) = &cfg.scene else {
-        return 1.0;
+        return (1.0, th::mean_first_hit(inp));
     };
-    let half = 0.5 * fs.side();
-    let (nz, nphi) = (200, 400);
-    let mut acc = 0.0;
+    let b = fs.centre_box();
+    let a = cfg.cell_width;
+    let eyes: Vec<DVec3> = match cfg.eye {
+        Eye::Corner => vec![fs.center],
+        Eye::Uniform => (0..27)
+            .map(|k| {
+                fs.center
+                    + DVec3::new(
+                        (k % 3) as f64 + 0.5,
+                        (k / 3 % 3) as f64 + 0.5,
+                        (k / 9) as f64 + 0.5,
+                    ) * (a / 3.0)
+            })
+            .collect(),
+    };
+    let (gx, gw) = crate::scene::radius::gauss_legendre(8);
+    let (nz, nphi) = (100, 200);
+    let (mut p_hit, mut t_hit) = (0.0, 0.0);
     for i in 0..nz {
         let z = -1.0 + (i as f64 + 0.5) * 2.0 / nz as f64;
         let s = (1.0 - z * z).sqrt();
         for j in 0..nphi {
             let phi = (j as f64 + 0.5) * std::f64::consts::TAU / nphi as f64;
-            let m = (s * phi.cos())
-                .abs()
-                .max((s * phi.sin()).abs())
-                .max(z.abs());
-            acc += 1.0 - th::first_hit_survival(inp, half / m);
+            let d = DVec3::new(s * phi.cos(), s * phi.sin(), z);
+            for e in &eyes {
+                // Distance to the cube's faces along d.
+                let l = (0..3)
+                    .map(|k| {
+                        let (dk, ek) = (d[k], e[k]);
+                        if dk > 0.0 {
+                            ((b.hi[k] - ek) / dk).max(0.0)
+                        } else if dk < 0.0 {
+                            ((b.lo[k] - ek) / dk).max(0.0)
+                        } else {
+                            f64::INFINITY
+                        }
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                let s_l = th::first_hit_survival(inp, l);
+                p_hit += 1.0 - s_l;
+                let integral: f64 = gx
+                    .iter()
+                    .zip(&gw)
+                    .map(|(x, w)| 0.5 * l * w * th::first_hit_survival(inp, 0.5 * l * (x + 1.0)))
+                    .sum();
+                t_hit += integral - l * s_l;
+            }
         }
     }
-    acc / (nz * nphi) as f64
+    (p_hit / (nz * nphi * eyes.len()) as f64, t_hit / p_hit)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn est(mean: f64, se: f64, clusters: u64) -> Estimate {
+        Estimate {
+            mean,
+            se,
+            n: 1000,
+            clusters,
+        }
+    }
+
+    #[test]
+    fn band_verdicts_use_the_confidence_interval_and_refuse_without_one() {
+        assert_eq!(band_verdict(&est(5.0, 0.1, 100), 1.0, 10.0), "inside");
+        assert_eq!(band_verdict(&est(10.1, 0.1, 100), 1.0, 10.0), "inside"); // CI reaches 10
+        assert_eq!(band_verdict(&est(11.0, 0.1, 100), 1.0, 10.0), "above");
+        assert_eq!(band_verdict(&est(0.5, 0.1, 100), 1.0, 10.0), "below");
+        assert_eq!(band_verdict(&est(4.5, f64::NAN, 1), 1.0, 2.7), "n/a");
+    }
+
+    #[test]
+    fn z_verdicts_widen_with_few_clusters() {
+        // 3 SE away: outside a 99 % normal CI, inside the t₃ one (5.84 SE).
+        assert_eq!(z_verdict(&est(3.0, 1.0, 1000), 0.0), "+3.0 SE");
+        assert_eq!(z_verdict(&est(3.0, 1.0, 4), 0.0), "ok (99% CI)");
+        assert_eq!(z_verdict(&est(1.0, 0.0, 10), 1.0), "ok (exact)");
+        assert_eq!(z_verdict(&est(1.0, f64::NAN, 1), 1.0), "n/a");
+    }
 }

@@ -189,9 +189,28 @@ pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::Pat
         timing_columns: timing,
         spec: spec_table,
     };
+    // The grid must agree with brute force on every checked ray; the table is kept as evidence.
+    let disagreements: Vec<String> = finished
+        .iter()
+        .filter_map(|(i, params, r, _)| {
+            let m = r
+                .row
+                .get("bf_mismatches")
+                .and_then(|v| v.as_f64())
+                .unwrap_or(0.0);
+            (m > 0.0).then(|| format!("point {i} ({params}): {m} rays"))
+        })
+        .collect();
     let written = sink
         .finish(&meta.render())
         .with_context(|| format!("could not finish the result files in {}", dir.display()))?;
+    if !disagreements.is_empty() {
+        anyhow::bail!(
+            "the grid disagreed with brute force on the first hit ({}); the table was written to {} for inspection",
+            disagreements.join("; "),
+            dir.display()
+        );
+    }
     Ok((written, summary::render(&finished)))
 }
 

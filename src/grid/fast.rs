@@ -15,10 +15,12 @@
 //! A listing passes if its centre lies within `r + m` of the ray line and not more than `m` behind
 //! the origin, computed in f32 from coordinates relative to the grid origin. Rounding the centre,
 //! origin and direction to f32 and the f32 arithmetic move the computed perpendicular distance and
-//! the along-ray offset by at most about 10·ε₃₂·(|c| + |o| + |c − o|) ≤ 40·ε₃₂·M, where M bounds the
-//! relative coordinates. With m = 64·ε₃₂·M (plus the f64 test's own few-ulp slack, far smaller),
-//! every sphere the exact test accepts passes the filter; the filter only admits a few extra
-//! candidates, which the exact test then rejects.
+//! the along-ray offset by at most about 10·ε₃₂·(|c| + |o| + |c − o|) ≤ 10·ε₃₂·(2M + 2|o|) with
+//! Euclidean norms bounded by √3 times the largest coordinate. With M bounding the listed centres'
+//! coordinates and |o| the ray origin's (both relative to the grid origin), the per-ray margin
+//! m = 64·ε₃₂·(M + |o|) covers it (plus the f64 test's own few-ulp slack, far smaller), so every
+//! sphere the exact test accepts passes the filter; the filter only admits a few extra candidates,
+//! which the exact test then rejects.
 
 use glam::{DVec3, Vec3};
 
@@ -41,7 +43,8 @@ pub struct FastGrid {
     rec: Vec<[f32; 4]>,
     idx: Vec<u32>,
     spheres: Vec<Sphere>,
-    margin: f32,
+    /// Bound M on the listed centres' relative coordinates (grid extent + largest radius).
+    m_bound: f32,
     pad_magnitude: f64,
 }
 
@@ -83,7 +86,7 @@ impl FastGrid {
         let idx = order;
         let r_max = spheres.iter().map(|s| s.r).fold(0.0, f64::max);
         let m_bound = extent.max_element() + r_max;
-        let margin = (64.0 * f64::from(f32::EPSILON) * m_bound) as f32;
+        let m_bound = m_bound as f32;
         Self {
             frame,
             dims,
@@ -93,7 +96,7 @@ impl FastGrid {
             rec,
             idx,
             spheres: spheres.to_vec(),
-            margin,
+            m_bound,
             pad_magnitude,
         }
     }
@@ -113,7 +116,12 @@ impl FastGrid {
         let mut out = FastTrace::default();
         let o_rel = (ray.o - frame.origin).as_vec3();
         let d32 = ray.d.as_vec3();
-        let m = self.margin;
+        debug_assert!(
+            (0..3).all(|i| ray.o[i] >= frame.origin[i]
+                && ray.o[i] <= frame.origin[i] + self.dims[i] as f64 * a),
+            "the query grid traces rays that start inside it"
+        );
+        let m = 64.0 * f32::EPSILON * (self.m_bound + o_rel.abs().max_element());
 
         // DDA state (as grid::Dda: start cell entered by the ray, boundaries from absolute
         // coordinates, ties to the lowest axis).

@@ -74,7 +74,12 @@ impl Sink {
         let meta_p = Self::partial(dir, stem, "meta.toml");
         let final_csv = Self::path(dir, stem, "csv");
         if final_csv.exists() && opts.resume && !csv_p.exists() {
-            return Ok(None);
+            // Finished already: a no-op, but only for the same spec.
+            let meta = fs::read_to_string(Self::path(dir, stem, "meta.toml")).unwrap_or_default();
+            if meta.contains(&format!("spec_hash = \"{spec_hash}\"")) {
+                return Ok(None);
+            }
+            return Err(err(&final_csv, "is a finished result of a different spec (spec hash differs); --resume cannot continue it. Pass --force without --resume to replace it"));
         }
         if opts.resume && csv_p.exists() {
             // A run killed inside `finish` has renamed some files already: take them back.
@@ -141,7 +146,11 @@ impl Sink {
                 }
             }
             hist_has_header = !hist_rows.is_empty();
-            fs::write(&hist_p, kept).map_err(|e| err(&hist_p, e.to_string()))?;
+            // Rewrite through a temporary file: a kill here must not lose finished points' rows.
+            let tmp = Self::partial(dir, stem, "hist.csv.tmp");
+            fs::write(&tmp, kept)
+                .and_then(|()| fs::rename(&tmp, &hist_p))
+                .map_err(|e| err(&hist_p, e.to_string()))?;
         } else if csv_p.exists() && !opts.force {
             return Err(err(
                 &csv_p,
@@ -221,6 +230,11 @@ impl Sink {
             written.push(Self::path(&dir, &stem, "hist.csv"));
         } else {
             fs::remove_file(&hist_p)?;
+            // A histogram of an earlier run (replaced with --force) must not sit beside this table.
+            let stale = Self::path(&dir, &stem, "hist.csv");
+            if stale.exists() {
+                fs::remove_file(stale)?;
+            }
         }
         fs::rename(&meta_p, Self::path(&dir, &stem, "meta.toml"))?;
         fs::rename(

@@ -155,6 +155,28 @@ impl GridConfig {
                 ),
             ));
         }
+        // Far from the origin, rounding (and so the listing pad, 64ε × coordinate magnitude) grows
+        // until it is no longer negligible against the spheres and cells: refuse that scene.
+        if let SceneModel::Finite(fs) = &scene {
+            let r_min = classes
+                .iter()
+                .map(|c| match c.radius {
+                    RadiusDist::Constant(r) => r,
+                    RadiusDist::Uniform { lo, .. } => lo,
+                    RadiusDist::LogNormal { median, sigma, max } => {
+                        (median * (-6.0 * sigma).exp()).min(max)
+                    }
+                })
+                .fold(f64::INFINITY, f64::min);
+            let magnitude = center.abs().max_element() + fs.side() + 2.0 * raw.grid.cell_width;
+            let pad = 64.0 * f64::EPSILON * magnitude;
+            if pad > 1e-6 * r_min.min(raw.grid.cell_width) {
+                return Err(e(
+                    "scene.center",
+                    format!("coordinates of magnitude {magnitude:.3e} make rounding (64ε·magnitude = {pad:.2e}) exceed 10⁻⁶ of the smallest radius or the cell width ({:.2e}); place the scene nearer the origin", r_min.min(raw.grid.cell_width)),
+                ));
+            }
+        }
         let kind = raw.experiment.kind;
         if kind == Kind::GridScaling && scene == SceneModel::Infinite {
             return Err(e("scene.spheres", "kind grid-scaling needs a finite scene: set scene.spheres (or scene.extent to a side)".into()));

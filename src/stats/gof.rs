@@ -40,10 +40,15 @@ pub fn chi_square(observed: &[u64], expected: &[f64], fitted: u32) -> ChiSquare 
         stat += (po - pe) * (po - pe) / pe;
         groups += 1;
     }
-    let dof = groups.saturating_sub(1 + fitted).max(1);
-    let p_value = ChiSquared::new(f64::from(dof))
-        .map(|d| 1.0 - d.cdf(stat))
-        .unwrap_or(f64::NAN);
+    // No degrees of freedom left (too few groups for the fitted parameters): no test.
+    let dof = groups.saturating_sub(1 + fitted);
+    let p_value = if dof == 0 {
+        f64::NAN
+    } else {
+        ChiSquared::new(f64::from(dof))
+            .map(|d| 1.0 - d.cdf(stat))
+            .unwrap_or(f64::NAN)
+    };
     ChiSquare {
         statistic: stat,
         dof,
@@ -69,8 +74,17 @@ pub fn ks_statistic(sorted: &[f64], cdf: impl Fn(f64) -> f64) -> f64 {
 pub fn ks_p_value(d: f64, n: usize) -> f64 {
     let sn = (n as f64).sqrt();
     let lambda = (sn + 0.12 + 0.11 / sn) * d;
-    if lambda < 1e-3 {
+    if lambda <= 0.0 {
         return 1.0;
+    }
+    if lambda < 1.18 {
+        // Small λ: the alternating series converges too slowly; use the dual (Jacobi theta) form
+        // K(λ) = √(2π)/λ · Σ exp(−(2k−1)²π²/(8λ²)), p = 1 − K(λ).
+        let pi2 = std::f64::consts::PI * std::f64::consts::PI;
+        let k: f64 = (1..=20)
+            .map(|k| (-(((2 * k - 1) * (2 * k - 1)) as f64) * pi2 / (8.0 * lambda * lambda)).exp())
+            .sum();
+        return (1.0 - (2.0 * std::f64::consts::PI).sqrt() / lambda * k).clamp(0.0, 1.0);
     }
     let mut sum = 0.0;
     for k in 1..=100 {
@@ -107,6 +121,27 @@ mod tests {
         assert!((r.statistic - 10.0).abs() < 1e-12);
         assert_eq!(r.dof, 2);
         assert!((r.p_value - (-5.0f64).exp()).abs() < 1e-9); // χ²₂ tail = e^(−x/2)
+    }
+
+    #[test]
+    fn ks_p_value_is_continuous_and_right_for_small_and_large_lambda() {
+        // Kolmogorov CDF K(λ): K(0.5) = 0.036055, K(1.0) = 0.730000, K(1.18) ≈ 0.876 (tables).
+        let p = |lambda: f64| ks_p_value(lambda, 1_000_000_000_000); // √n large: λ ≈ √n·d
+        let d = |lambda: f64| lambda / 1e6;
+        assert!((p(d(0.5) * 1.0) - (1.0 - 0.036055)).abs() < 1e-4);
+        assert!((p(d(1.0)) - (1.0 - 0.730000)).abs() < 1e-4);
+        assert!((p(d(0.01)) - 1.0).abs() < 1e-12);
+        assert!(
+            (p(d(1.179_99)) - p(d(1.180_01))).abs() < 1e-4,
+            "the two series meet"
+        );
+    }
+
+    #[test]
+    fn chi_square_without_degrees_of_freedom_is_not_a_test() {
+        let r = chi_square(&[10, 10], &[10.0, 10.0], 1);
+        assert_eq!(r.dof, 0);
+        assert!(r.p_value.is_nan());
     }
 
     #[test]

@@ -18,12 +18,17 @@ pub struct Estimate {
     pub se: f64,
     /// Number of samples.
     pub n: u64,
+    /// Number of independent clusters behind `se` (batches or replicas).
+    pub clusters: u64,
 }
 
 impl Estimate {
-    /// Half-width of the two-sided confidence interval at `level` (e.g. 0.95).
+    /// Half-width of the two-sided confidence interval at `level` (e.g. 0.95): Student-t with
+    /// clusters − 1 degrees of freedom, since the clustered variance is estimated from that many
+    /// independent cluster totals (with 4 replicas the 99 % factor is 5.84, not 2.58). NaN when
+    /// there is no standard error.
     pub fn half_width(&self, level: f64) -> f64 {
-        super::z_for_level(level) * self.se
+        super::t_for_level(level, self.clusters.saturating_sub(1)) * self.se
     }
 }
 
@@ -113,6 +118,7 @@ impl ClusteredMean {
                 mean: f64::NAN,
                 se: f64::NAN,
                 n: 0,
+                clusters: self.clusters,
             };
         }
         let nn = self.n as f64;
@@ -128,6 +134,7 @@ impl ClusteredMean {
             mean: m,
             se,
             n: self.n,
+            clusters: self.clusters,
         }
     }
 }

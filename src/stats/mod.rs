@@ -9,10 +9,33 @@ pub mod mean;
 pub use histogram::Histogram;
 pub use mean::{ClusteredMean, Estimate};
 
+/// Two-sided Student-t quantile with `dof` degrees of freedom (normal beyond 10⁴; NaN for 0).
+pub fn t_for_level(level: f64, dof: u64) -> f64 {
+    use statrs::distribution::{ContinuousCDF, StudentsT};
+    match dof {
+        0 => f64::NAN,
+        d if d > 10_000 => z_for_level(level),
+        d => StudentsT::new(0.0, 1.0, d as f64)
+            .expect("dof > 0")
+            .inverse_cdf(0.5 + 0.5 * level),
+    }
+}
+
 /// Two-sided standard-normal quantile for a confidence level (0.95 → 1.959964…).
 pub fn z_for_level(level: f64) -> f64 {
     use statrs::distribution::{ContinuousCDF, Normal};
     Normal::new(0.0, 1.0)
         .expect("standard normal")
         .inverse_cdf(0.5 + 0.5 * level)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn t_quantiles_match_tables() {
+        assert!((super::t_for_level(0.99, 3) - 5.8409).abs() < 1e-3);
+        assert!((super::t_for_level(0.95, 10) - 2.2281).abs() < 1e-3);
+        assert!((super::t_for_level(0.95, 1_000_000) - 1.95996).abs() < 1e-4);
+        assert!(super::t_for_level(0.95, 0).is_nan());
+    }
 }
