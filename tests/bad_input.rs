@@ -1,7 +1,7 @@
 //! Every spec under `tests/specs/bad/` must be refused with exit code 2, one clear message naming
 //! the file, line, column and key (each spec's first line says what to expect), and no output.
 
-use crate::common::{files_below, raycost, root};
+use crate::common::{files_below, raycost, root, run_quiet};
 
 #[test]
 fn every_bad_spec_is_refused_with_its_location_and_nothing_is_written() {
@@ -140,14 +140,7 @@ fn an_unwritable_output_directory_is_refused_before_any_work() {
     let blocker = tmp.path().join("results");
     std::fs::write(&blocker, "not a folder").expect("write");
     let spec = root().join("experiments/quickstart.toml");
-    let o = raycost()
-        .arg("run")
-        .arg(&spec)
-        .arg("--out")
-        .arg(&blocker)
-        .arg("--quiet")
-        .output()
-        .expect("runs");
+    let o = run_quiet(&spec, &blocker).output().expect("runs");
     assert_eq!(
         o.status.code(),
         Some(2),

@@ -1,7 +1,7 @@
 //! The CLI end to end: results land where the contract says, existing results are never lost,
 //! and measured columns do not depend on the thread count.
 
-use crate::common::{files_below, measured_columns, raycost, read_csv, root};
+use crate::common::{files_below, measured_columns, raycost, read_csv, root, run_quiet};
 
 const SMALL: &str = r#"
 [experiment]
@@ -94,39 +94,17 @@ fn existing_results_are_never_replaced_without_force() {
     let tmp = tempfile::tempdir().expect("temp");
     let spec = write_spec(tmp.path(), &SMALL.replace("rays = 3000", "rays = 500"));
     let out = tmp.path().join("results");
-    raycost()
-        .arg("run")
-        .arg(&spec)
-        .arg("--out")
-        .arg(&out)
-        .arg("--quiet")
-        .assert()
-        .success();
+    run_quiet(&spec, &out).assert().success();
     let csv = out.join("small/small.csv");
     std::fs::write(&csv, "my precious edits\n").expect("edit");
-    let o = raycost()
-        .arg("run")
-        .arg(&spec)
-        .arg("--out")
-        .arg(&out)
-        .arg("--quiet")
-        .output()
-        .expect("runs");
+    let o = run_quiet(&spec, &out).output().expect("runs");
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--force"));
     assert_eq!(
         std::fs::read_to_string(&csv).expect("kept"),
         "my precious edits\n"
     );
-    raycost()
-        .arg("run")
-        .arg(&spec)
-        .arg("--out")
-        .arg(&out)
-        .arg("--quiet")
-        .arg("--force")
-        .assert()
-        .success();
+    run_quiet(&spec, &out).arg("--force").assert().success();
     assert!(std::fs::read_to_string(&csv)
         .expect("replaced")
         .starts_with("point,"));
@@ -224,14 +202,7 @@ fn resume_of_a_finished_run_changes_nothing() {
     let tmp = tempfile::tempdir().expect("temp");
     let spec = write_spec(tmp.path(), &SMALL.replace("rays = 3000", "rays = 300"));
     let out = tmp.path().join("results");
-    raycost()
-        .arg("run")
-        .arg(&spec)
-        .arg("--out")
-        .arg(&out)
-        .arg("--quiet")
-        .assert()
-        .success();
+    run_quiet(&spec, &out).assert().success();
     let before: Vec<_> = files_below(&out)
         .iter()
         .map(|p| (p.clone(), std::fs::read(p).expect("read")))
@@ -260,14 +231,7 @@ fn resume_recovers_a_run_killed_while_finishing() {
     let tmp = tempfile::tempdir().expect("temp");
     let spec = write_spec(tmp.path(), &SMALL.replace("rays = 3000", "rays = 300"));
     let out = tmp.path().join("results");
-    raycost()
-        .arg("run")
-        .arg(&spec)
-        .arg("--out")
-        .arg(&out)
-        .arg("--quiet")
-        .assert()
-        .success();
+    run_quiet(&spec, &out).assert().success();
     let dir = out.join("small");
     let want = measured_columns(&dir.join("small.csv"));
     std::fs::rename(dir.join("small.csv"), dir.join("small.csv.partial")).expect("rename");

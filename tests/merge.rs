@@ -5,7 +5,7 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use crate::common::{files_below, raycost, root};
+use crate::common::{files_below, raycost, root, run_quiet};
 
 /// The small 8-point sweep shared with the Slurm tests.
 pub fn sweep_spec() -> PathBuf {
@@ -62,15 +62,7 @@ pub fn assert_same_measured(a: &Path, b: &Path) -> usize {
 
 /// `raycost run SPEC --out OUT --quiet ARGS...`, which must succeed.
 pub fn run_ok(spec: &Path, out: &Path, args: &[&str]) {
-    raycost()
-        .arg("run")
-        .arg(spec)
-        .arg("--out")
-        .arg(out)
-        .arg("--quiet")
-        .args(args)
-        .assert()
-        .success();
+    run_quiet(spec, out).args(args).assert().success();
 }
 
 fn bytes(p: &Path) -> Vec<u8> {

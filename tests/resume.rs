@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use predicates::prelude::PredicateBooleanExt;
 
-use crate::common::{files_below, raycost};
+use crate::common::{files_below, raycost, run_quiet};
 use crate::merge::{assert_same_measured, run_ok};
 
 /// 16 points of a few tenths of a second each: long enough to be interrupted mid-way.
@@ -254,12 +254,7 @@ fn a_partial_run_is_not_replaced_without_resume_or_force() {
     let spec = write_spec(tmp.path(), SPEC);
     let out = tmp.path().join("out");
     let before = fake_partial(&out, "abc");
-    raycost()
-        .arg("run")
-        .arg(&spec)
-        .arg("--out")
-        .arg(&out)
-        .arg("--quiet")
+    run_quiet(&spec, &out)
         .assert()
         .code(2)
         .stderr(predicates::str::contains("--resume").and(predicates::str::contains("--force")));

@@ -7,6 +7,13 @@ pub fn raycost() -> assert_cmd::Command {
     assert_cmd::Command::cargo_bin("raycost").expect("the raycost binary is built")
 }
 
+/// `raycost run SPEC --out OUT --quiet`, ready for more arguments.
+pub fn run_quiet(spec: &Path, out: &Path) -> assert_cmd::Command {
+    let mut c = raycost();
+    c.arg("run").arg(spec).arg("--out").arg(out).arg("--quiet");
+    c
+}
+
 /// The repository root (where `experiments/` and `tests/specs/` live).
 pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
