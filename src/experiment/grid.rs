@@ -9,8 +9,8 @@
 
 use std::time::Instant;
 
+use crate::sample::directions::uniform_unit_cube;
 use glam::DVec3;
-use rand::Rng;
 use rayon::prelude::*;
 
 use super::machine::MachineCosts;
@@ -305,7 +305,7 @@ fn run_replica(
                 let d = uniform_direction(&mut rng);
                 let eye = match cfg.eye {
                     Eye::Corner => anchor,
-                    Eye::Uniform => anchor + DVec3::new(rng.gen(), rng.gen(), rng.gen()) * a,
+                    Eye::Uniform => anchor + uniform_unit_cube(&mut rng) * a,
                 };
                 Ray::new(eye, d)
             })

@@ -4,6 +4,7 @@
 //! independent Poisson processes of intensity α_i·ρ) or an exact count n (side (n/ρ)^⅓, each sphere's
 //! class drawn with probability α_i): the n of the paper's E[t(n)].
 
+use crate::sample::directions::uniform_unit_cube;
 use glam::DVec3;
 use rand::Rng;
 use rayon::prelude::*;
@@ -126,7 +127,7 @@ impl FiniteScene {
                 (lo..hi)
                     .map(move |idx| {
                         let class = class_of(idx);
-                        let u = DVec3::new(rng.gen(), rng.gen(), rng.gen());
+                        let u = uniform_unit_cube(&mut rng);
                         let r = match self.draw {
                             RadiusDraw::PerScene => per_scene[class],
                             RadiusDraw::PerSphere => self.classes[class].radius.sample(&mut rng),

@@ -9,6 +9,7 @@
 //! one scene realisation; the caches are dropped with the batch, so memory grows with what one batch
 //! traces, never with the universe.
 
+use crate::sample::directions::uniform_unit_cube;
 use glam::DVec3;
 use rand::Rng;
 use rustc_hash::FxHashMap;
@@ -85,7 +86,7 @@ impl LazyScene {
         let n = crate::sample::poisson(&mut rng, mu);
         let lo = DVec3::new(b[0] as f64, b[1] as f64, b[2] as f64) * g;
         for k in 0..n {
-            let u = DVec3::new(rng.gen(), rng.gen(), rng.gen());
+            let u = uniform_unit_cube(&mut rng);
             let r = match self.draw {
                 RadiusDraw::PerScene => self.per_scene[class],
                 RadiusDraw::PerSphere => self.classes[class].radius.sample(&mut rng),
@@ -169,11 +170,6 @@ impl LazyCells<'_> {
     /// Number of spheres generated so far (the memory this batch holds).
     pub fn generated(&self) -> usize {
         self.cache.block_arena.len()
-    }
-
-    /// Number of cell lists built so far.
-    pub fn cells_built(&self) -> usize {
-        self.cache.cells.len()
     }
 
     fn block(&mut self, class: usize, b: Cell) -> (u32, u32) {
