@@ -37,11 +37,13 @@ pub struct Sink {
     started: String,
 }
 
-fn err(path: &Path, message: impl Into<String>) -> OutputError {
+/// A refusal about `path`: an [`OutputError`] (exit code 2, nothing written).
+fn err(path: &Path, message: impl Into<String>) -> anyhow::Error {
     OutputError {
         path: path.display().to_string(),
         message: message.into(),
     }
+    .into()
 }
 
 impl Sink {
@@ -57,12 +59,14 @@ impl Sink {
     /// Opens (or, with `resume`, reopens) the files of run `stem` in `dir`. Refuses, before anything
     /// is written, to replace a finished result without `force` or to discard a partial one without
     /// `resume` or `force`. With `resume`, a finished result is left alone and `None` comes back.
+    /// Refusals are [`OutputError`]s (exit 2, nothing written); failures after files were touched
+    /// (recovering a half-finished run) are plain errors (exit 1).
     pub fn open(
         dir: &Path,
         stem: &str,
         spec_hash: &str,
         opts: SinkOptions,
-    ) -> Result<Option<Sink>, OutputError> {
+    ) -> anyhow::Result<Option<Sink>> {
         fs::create_dir_all(dir)
             .map_err(|e| err(dir, format!("cannot create the results folder: {e}")))?;
         let probe = dir.join(format!(".{stem}.write-test"));
@@ -86,7 +90,10 @@ impl Sink {
             for (suffix, partial) in [("hist.csv", &hist_p), ("meta.toml", &meta_p)] {
                 let done = Self::path(dir, stem, suffix);
                 if done.exists() && !partial.exists() {
-                    fs::rename(&done, partial).map_err(|e| err(&done, e.to_string()))?;
+                    // Files are being changed now: a failure here is not "nothing written" (exit 1).
+                    fs::rename(&done, partial).map_err(|e| {
+                        anyhow::anyhow!("could not recover {}: {e}", done.display())
+                    })?;
                 }
             }
         }
@@ -150,7 +157,7 @@ impl Sink {
             let tmp = Self::partial(dir, stem, "hist.csv.tmp");
             fs::write(&tmp, kept)
                 .and_then(|()| fs::rename(&tmp, &hist_p))
-                .map_err(|e| err(&hist_p, e.to_string()))?;
+                .map_err(|e| anyhow::anyhow!("could not rewrite {}: {e}", hist_p.display()))?;
         } else if csv_p.exists() && !opts.force {
             return Err(err(
                 &csv_p,
