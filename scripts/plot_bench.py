@@ -9,7 +9,6 @@ Engines without an n (DETP rows such as sphere-cache, incremental) are left out.
 """
 
 import math
-import sys
 
 import raycost_plot as rp
 
@@ -87,13 +86,8 @@ def plot(args):
         if finite_n:
             rp.pad_log_limits(a, finite_n, factor=1.6)
     fig.suptitle("raycost bench: speed figures", fontsize=11, y=1.0)
-    fig.tight_layout()
-    rp.save(fig, args.output, args.dpi)
-
-
-def main(argv=None):
-    plot(rp.parse_args(__doc__, NAME, argv=argv))
+    rp.finish(fig, args)
 
 
 if __name__ == "__main__":
-    rp.run(lambda: main(sys.argv[1:]))
+    rp.script(plot, __doc__, NAME)

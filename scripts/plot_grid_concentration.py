@@ -8,7 +8,6 @@ downward triangle at the axis floor (below 1/rays). Right: the thresholds c·H(n
 against the measured mean E[N_I] — the probabilities can only fall once the threshold passes the mean.
 """
 
-import sys
 
 import raycost_plot as rp
 
@@ -82,13 +81,8 @@ def plot(args):
         ax.set_xlabel("n  (scene.spheres)")
         rp.pad_log_limits(ax, rp.col(rows, n), factor=1.5)
     fig.suptitle("%s: Proposition 4.1 — P(N_I ≥ c·H(n)) → 0 as n grows" % NAME, fontsize=11, y=1.0)
-    fig.tight_layout()
-    rp.save(fig, args.output, args.dpi)
-
-
-def main(argv=None):
-    plot(rp.parse_args(__doc__, NAME, argv=argv))
+    rp.finish(fig, args)
 
 
 if __name__ == "__main__":
-    rp.run(lambda: main(sys.argv[1:]))
+    rp.script(plot, __doc__, NAME)

@@ -9,7 +9,6 @@ Right: the measured counts E[N_I] (mailbox) and E[N_S] against their theory, whi
 """
 
 import math
-import sys
 
 import numpy as np
 
@@ -99,13 +98,8 @@ def plot(args):
         a.grid(True, which="major", alpha=0.3)
         rp.pad_log_limits(a, xs, factor=1.2)
     fig.suptitle("%s: t = N_I·T_I + N_S·T_S against the timed query" % NAME, fontsize=11, y=1.0)
-    fig.tight_layout()
-    rp.save(fig, args.output, args.dpi)
-
-
-def main(argv=None):
-    plot(rp.parse_args(__doc__, NAME, argv=argv))
+    rp.finish(fig, args)
 
 
 if __name__ == "__main__":
-    rp.run(lambda: main(sys.argv[1:]))
+    rp.script(plot, __doc__, NAME)

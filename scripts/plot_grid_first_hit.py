@@ -10,7 +10,6 @@ Reads NAME.hist.csv (columns point, metric, bin_lo, bin_hi, count, expected) bes
 """
 
 import math
-import sys
 
 import raycost_plot as rp
 
@@ -133,14 +132,8 @@ def plot(args):
 
     fig.suptitle("%s: t* ~ Exponential(ρπr²) (eq. 4) and N_I ~ geometric (cylinder model, eq. 9)"
                  % NAME, fontsize=11, y=1.0)
-    fig.tight_layout()
-    rp.save(fig, args.output, args.dpi)
-
-
-def main(argv=None):
-    args = rp.parse_args(__doc__, NAME, extra=extra, argv=argv)
-    plot(args)
+    rp.finish(fig, args)
 
 
 if __name__ == "__main__":
-    rp.run(lambda: main(sys.argv[1:]))
+    rp.script(plot, __doc__, NAME, extra=extra)

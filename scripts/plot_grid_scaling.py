@@ -11,7 +11,6 @@ build time and grid memory against n (log-log) with a slope-1 reference line.
 """
 
 import math
-import sys
 
 import raycost_plot as rp
 
@@ -114,23 +113,18 @@ def plot(args):
     ax_r.set_title("throughput: grid vs brute force", fontsize=10)
     ax_r.legend(fontsize=8, loc="upper right")
 
-    # build time
-    build = rp.col(rows, "build_s")
-    ax_b.plot(xs, build, "o-", color="C0", label="build_s")
-    slope_one(ax_b, xs, build)
-    rp.log_scale(ax_b, x=True, y=True)
-    ax_b.set_ylabel("grid build time [s]")
-    ax_b.set_title("build time vs n", fontsize=10)
-    ax_b.legend(fontsize=8, loc="upper left")
-
-    # memory
-    mem = rp.col(rows, "grid_bytes")
-    ax_m.plot(xs, mem, "o-", color="C0", label="grid_bytes")
-    slope_one(ax_m, xs, mem)
-    rp.log_scale(ax_m, x=True, y=True)
-    ax_m.set_ylabel("grid memory [bytes]")
-    ax_m.set_title("grid memory vs n", fontsize=10)
-    ax_m.legend(fontsize=8, loc="upper left")
+    # build time and memory, each against a slope-1 reference
+    for ax, column, ylabel, title in (
+        (ax_b, "build_s", "grid build time [s]", "build time vs n"),
+        (ax_m, "grid_bytes", "grid memory [bytes]", "grid memory vs n"),
+    ):
+        ys_c = rp.col(rows, column)
+        ax.plot(xs, ys_c, "o-", color="C0", label=column)
+        slope_one(ax, xs, ys_c)
+        rp.log_scale(ax, x=True, y=True)
+        ax.set_ylabel(ylabel)
+        ax.set_title(title, fontsize=10)
+        ax.legend(fontsize=8, loc="upper left")
 
     for ax in axes.flat:
         ax.grid(True, which="major", alpha=0.3)
@@ -141,13 +135,8 @@ def plot(args):
         ax.set_xlabel("n  (scene.spheres)")
     fig.suptitle("%s: cost per ray against the number of spheres n at fixed intensity" % NAME,
                  fontsize=11, y=1.0)
-    fig.tight_layout()
-    rp.save(fig, args.output, args.dpi)
-
-
-def main(argv=None):
-    plot(rp.parse_args(__doc__, NAME, argv=argv))
+    rp.finish(fig, args)
 
 
 if __name__ == "__main__":
-    rp.run(lambda: main(sys.argv[1:]))
+    rp.script(plot, __doc__, NAME)

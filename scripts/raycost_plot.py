@@ -366,6 +366,17 @@ def subplots(nrows, ncols, panel_w=5.0, panel_h=3.8, **kw):
     return fig, axes
 
 
+def finish(fig, args):
+    """Lay out the figure and write it where the command line says."""
+    fig.tight_layout()
+    save(fig, args.output, args.dpi)
+
+
+def script(plot, doc, name, extra=None):
+    """Entry point of a plot script: parse this process's arguments and draw, with `run`'s errors."""
+    run(lambda: plot(parse_args(doc, name, extra=extra, argv=sys.argv[1:])))
+
+
 def save(fig, path, dpi=130):
     """Write the PNG (creating its directory) and close the figure."""
     d = os.path.dirname(path)

@@ -1,7 +1,9 @@
 //! The CLI end to end: results land where the contract says, existing results are never lost,
 //! and measured columns do not depend on the thread count.
 
-use crate::common::{files_below, measured_columns, raycost, read_csv, root, run_quiet};
+use crate::common::{
+    files_below, measured_columns, raycost, read_csv, root, run_quiet, write_spec,
+};
 
 const SMALL: &str = r#"
 [experiment]
@@ -22,16 +24,10 @@ cell_width = 0.5
 "grid.eye" = ["corner", "uniform"]
 "#;
 
-fn write_spec(dir: &std::path::Path, text: &str) -> std::path::PathBuf {
-    let p = dir.join("small.toml");
-    std::fs::write(&p, text).expect("write spec");
-    p
-}
-
 #[test]
 fn run_writes_csv_meta_and_histograms_with_contract_columns() {
     let tmp = tempfile::tempdir().expect("temp");
-    let spec = write_spec(tmp.path(), SMALL);
+    let spec = write_spec(tmp.path(), "small", SMALL);
     let out = tmp.path().join("results");
     let o = raycost()
         .arg("run")
@@ -92,7 +88,11 @@ fn run_writes_csv_meta_and_histograms_with_contract_columns() {
 #[test]
 fn existing_results_are_never_replaced_without_force() {
     let tmp = tempfile::tempdir().expect("temp");
-    let spec = write_spec(tmp.path(), &SMALL.replace("rays = 3000", "rays = 500"));
+    let spec = write_spec(
+        tmp.path(),
+        "small",
+        &SMALL.replace("rays = 3000", "rays = 500"),
+    );
     let out = tmp.path().join("results");
     run_quiet(&spec, &out).assert().success();
     let csv = out.join("small/small.csv");
@@ -115,7 +115,7 @@ fn measured_columns_are_identical_for_one_and_two_threads() {
     let tmp = tempfile::tempdir().expect("temp");
     let finite = SMALL.replace("radius = 0.2", "radius = 0.2\nspheres = 20000");
     for (name, text) in [("infinite", SMALL.to_string()), ("finite", finite)] {
-        let spec = write_spec(tmp.path(), &text);
+        let spec = write_spec(tmp.path(), "small", &text);
         let mut tables = Vec::new();
         for threads in ["1", "2"] {
             let out = tmp.path().join(format!("{name}-{threads}"));
@@ -142,7 +142,7 @@ fn measured_columns_are_identical_for_one_and_two_threads() {
 #[test]
 fn check_prints_points_and_runs_nothing() {
     let tmp = tempfile::tempdir().expect("temp");
-    let spec = write_spec(tmp.path(), SMALL);
+    let spec = write_spec(tmp.path(), "small", SMALL);
     let o = raycost()
         .arg("check")
         .arg(&spec)
@@ -200,7 +200,11 @@ fn shipped_specs_check() {
 #[test]
 fn resume_of_a_finished_run_changes_nothing() {
     let tmp = tempfile::tempdir().expect("temp");
-    let spec = write_spec(tmp.path(), &SMALL.replace("rays = 3000", "rays = 300"));
+    let spec = write_spec(
+        tmp.path(),
+        "small",
+        &SMALL.replace("rays = 3000", "rays = 300"),
+    );
     let out = tmp.path().join("results");
     run_quiet(&spec, &out).assert().success();
     let before: Vec<_> = files_below(&out)
@@ -229,7 +233,11 @@ fn resume_of_a_finished_run_changes_nothing() {
 #[test]
 fn resume_recovers_a_run_killed_while_finishing() {
     let tmp = tempfile::tempdir().expect("temp");
-    let spec = write_spec(tmp.path(), &SMALL.replace("rays = 3000", "rays = 300"));
+    let spec = write_spec(
+        tmp.path(),
+        "small",
+        &SMALL.replace("rays = 3000", "rays = 300"),
+    );
     let out = tmp.path().join("results");
     run_quiet(&spec, &out).assert().success();
     let dir = out.join("small");

@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use predicates::prelude::PredicateBooleanExt;
 
-use crate::common::{files_below, raycost, run_quiet};
+use crate::common::{files_below, run_quiet, write_spec};
 use crate::merge::{assert_same_measured, run_ok};
 
 /// 16 points of a few tenths of a second each: long enough to be interrupted mid-way.
@@ -35,12 +35,6 @@ eye = "uniform"
 "scene.intensity" = [1.0, 4.0]
 "grid.cell_width" = [0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 4.0]
 "#;
-
-fn write_spec(dir: &Path, text: &str) -> PathBuf {
-    let p = dir.join("resume-me.toml");
-    fs::write(&p, text).expect("write spec");
-    p
-}
 
 fn data_rows(p: &Path) -> usize {
     fs::read(p).map_or(0, |b| {
@@ -98,7 +92,7 @@ fn interrupt(spec: &Path, out: &Path, signal: &str) -> usize {
 
 fn resume_matches_uninterrupted(signal: &str, tear: bool) {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let spec = write_spec(tmp.path(), SPEC);
+    let spec = write_spec(tmp.path(), "resume-me", SPEC);
     let whole = tmp.path().join("whole");
     run_ok(&spec, &whole, &[]);
     let out = tmp.path().join("killed");
@@ -192,19 +186,14 @@ fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
 #[test]
 fn resume_with_a_changed_spec_is_refused() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let spec = write_spec(tmp.path(), SPEC);
+    let spec = write_spec(tmp.path(), "resume-me", SPEC);
     let out = tmp.path().join("out");
     let before = fake_partial(
         &out,
         "0000000000000000000000000000000000000000000000000000000000000000",
     );
-    raycost()
-        .arg("run")
-        .arg(&spec)
-        .arg("--out")
-        .arg(&out)
+    run_quiet(&spec, &out)
         .arg("--resume")
-        .arg("--quiet")
         .assert()
         .code(2)
         .stderr(
@@ -222,7 +211,7 @@ fn resume_with_a_changed_spec_is_refused() {
 fn resume_after_editing_the_spec_is_refused() {
     // A real partial run (first shard of 8 finished, as from a killed job), then the spec edited.
     let tmp = tempfile::tempdir().expect("tempdir");
-    let spec = write_spec(tmp.path(), SPEC);
+    let spec = write_spec(tmp.path(), "resume-me", SPEC);
     let out = tmp.path().join("out");
     fs::create_dir_all(&out).expect("mkdir");
     let real = tmp.path().join("real");
@@ -234,14 +223,13 @@ fn resume_after_editing_the_spec_is_refused() {
             .expect("TOML");
     let hash = hash["run"]["spec_hash"].as_str().expect("hash").to_string();
     let before = fake_partial(&out, &hash);
-    write_spec(tmp.path(), &SPEC.replace("rays = 10_000", "rays = 12_000"));
-    raycost()
-        .arg("run")
-        .arg(&spec)
-        .arg("--out")
-        .arg(&out)
+    write_spec(
+        tmp.path(),
+        "resume-me",
+        &SPEC.replace("rays = 10_000", "rays = 12_000"),
+    );
+    run_quiet(&spec, &out)
         .arg("--resume")
-        .arg("--quiet")
         .assert()
         .code(2)
         .stderr(predicates::str::contains("spec hash differs"));
@@ -251,7 +239,7 @@ fn resume_after_editing_the_spec_is_refused() {
 #[test]
 fn a_partial_run_is_not_replaced_without_resume_or_force() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let spec = write_spec(tmp.path(), SPEC);
+    let spec = write_spec(tmp.path(), "resume-me", SPEC);
     let out = tmp.path().join("out");
     let before = fake_partial(&out, "abc");
     run_quiet(&spec, &out)

@@ -7,6 +7,13 @@ pub fn raycost() -> assert_cmd::Command {
     assert_cmd::Command::cargo_bin("raycost").expect("the raycost binary is built")
 }
 
+/// Writes spec text to `DIR/NAME.toml` and returns its path.
+pub fn write_spec(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(format!("{name}.toml"));
+    std::fs::write(&p, text).expect("write spec");
+    p
+}
+
 /// `raycost run SPEC --out OUT --quiet`, ready for more arguments.
 pub fn run_quiet(spec: &Path, out: &Path) -> assert_cmd::Command {
     let mut c = raycost();
