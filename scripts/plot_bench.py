@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
-"""Speed figures side by side (results/bench/bench.csv, written by `raycost bench`).
+"""Speed figures of `raycost bench` (results/bench/bench.csv and bench.rounds.csv).
 
-Left: rays per second against the number of spheres n (log-log), one line per (engine, threads); an
-engine measured without a finite n (n = 0, e.g. grid-infinite, the lazily generated infinite scene) is
-drawn as a horizontal line. Rows with mismatches > 0 (first hit differs from brute force) are circled
-in red. Right: build time against n (log-log), with a slope-1 reference.
-Engines without an n (DETP rows such as sphere-cache, incremental) are left out.
+Top left: rays per second against the number of spheres n (log-log), one line per (engine, threads)
+-- the picture of the grid's O(1) query against the BVH's O(log n); the lazily generated infinite
+scene (n = 0) is a horizontal line. Rows with mismatches > 0 are circled in red.
+Top right: how many times faster the grid is than Embree, per n: the median of the per-round paired
+ratios (every round traces the same fresh rays with both engines), with their range as error bars.
+Bottom left: the grid's time per visited cell and its cells per ray against n: rays/s can only be
+flat in n if both are. Bottom right: build time and peak memory against n.
 """
 
 import math
@@ -13,8 +15,24 @@ import math
 import raycost_plot as rp
 
 NAME = "bench"
-REQUIRED = ["engine", "n", "threads", "rays_per_s", "build_s"]
+REQUIRED = ["engine", "n", "threads", "rays_per_s", "build_s", "peak_mem_bytes", "mismatches"]
 STYLES = {"grid": ("o", "-"), "grid-infinite": ("", "--"), "brute-force": ("s", "-"), "embree": ("D", "-")}
+
+
+def paired_ratios(rounds, n, threads):
+    """Per-round grid/Embree speed ratios at (n, threads) from bench.rounds.csv."""
+    def secs(engine):
+        rs = [r for r in rounds if r["engine"] == engine and r["n"] == n and r["threads"] == threads]
+        return {r["round"]: r["round_s"] / r["rays"] for r in rs}
+
+    g, e = secs("grid"), secs("embree")
+    return [e[k] / g[k] for k in sorted(g) if k in e]
+
+
+def median(xs):
+    xs = sorted(xs)
+    m = len(xs)
+    return math.nan if m == 0 else (xs[m // 2] if m % 2 else 0.5 * (xs[m // 2 - 1] + xs[m // 2]))
 
 
 def plot(args):
@@ -22,70 +40,130 @@ def plot(args):
     rows = [r for r in rows if isinstance(r.get("n"), (int, float)) and r["n"] == r["n"]]
     if not rows:
         raise rp.PlotError("%s: no rows with a number of spheres n" % args.input)
-    finite_n = [r["n"] for r in rows if r["n"] > 0]
-    keys, groups = rp.group_by(rows, "engine", "threads")
+    finite_n = sorted({r["n"] for r in rows if r["n"] > 0})
+    _, groups = rp.group_by(rows, "engine", "threads")
     engines = []
     for e, _ in groups:
         if e not in engines:
             engines.append(e)
+    color_of = {e: "C%d" % (i % 10) for i, e in enumerate(engines)}
 
-    fig, axes = rp.subplots(1, 2, panel_w=6.2, panel_h=4.6)
-    ax, ax_b = axes[0]
+    fig, axes = rp.subplots(2, 2, panel_w=6.2, panel_h=4.4)
+    ax, ax_r = axes[0]
+    ax_c, ax_b = axes[1]
+
+    # Throughput.
     bad = []
     for (engine, threads), grp in groups.items():
-        grp = rp.sort_by(grp, "n")
-        color = "C%d" % (engines.index(engine) % 10)
         marker, ls = STYLES.get(engine, ("^", "-"))
         if threads not in (None, 1):
             ls = ":" if ls == "-" else "-."
         label = "%s, %s thread%s" % (engine, threads, "" if threads == 1 else "s")
         if all(r["n"] <= 0 for r in grp):
-            # no finite n: a horizontal line across the plot
-            y = grp[0]["rays_per_s"]
-            ax.axhline(y, color=color, ls=ls, lw=1.4, label=label + " (infinite scene)")
+            ax.axhline(grp[0]["rays_per_s"], color=color_of[engine], ls=ls, lw=1.4,
+                       label=label + " (infinite scene)")
         else:
-            grp = [r for r in grp if r["n"] > 0]
+            grp = rp.sort_by([r for r in grp if r["n"] > 0], "n")
             ax.plot(rp.col(grp, "n"), rp.col(grp, "rays_per_s"), marker=marker or "o", ls=ls,
-                    color=color, label=label, ms=5)
-            if threads in (None, 1) or not any(
-                    t in (None, 1) for (e, t) in groups if e == engine):
-                builds = [(r["n"], r["build_s"]) for r in grp if r["build_s"] == r["build_s"] and r["build_s"] > 0]
-                if builds:
-                    ax_b.plot([b[0] for b in builds], [b[1] for b in builds], marker=marker or "o",
-                              color=color, label=engine, ms=5)
+                    color=color_of[engine], label=label, ms=5)
         bad += [r for r in grp if (r.get("mismatches") or 0) > 0]
     for r in bad:
         ax.plot([r["n"] if r["n"] > 0 else max(finite_n or [1])], [r["rays_per_s"]], "o", ms=14,
                 mfc="none", mec="red", mew=1.5)
     rp.log_scale(ax, x=True, y=True)
     ax.set_xlabel("n  (spheres)")
-    ax.set_ylabel("rays per second")
+    ax.set_ylabel("rays per second (median over rounds)")
     ax.set_title("throughput (higher is better)", fontsize=10)
-    ax.legend(fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
+    ax.legend(fontsize=7, loc="lower left", ncol=2)
     checked = sum((r.get("checked") or 0) for r in rows)
     mism = sum((r.get("mismatches") or 0) for r in rows)
-    rp.text_box(ax, "mismatches vs brute force: %d in %d checked rays%s"
-                % (mism, checked, "" if mism == 0 else "  ← must be 0"), loc="upper right", fontsize=7.5)
-    lo, hi = ax.get_ylim()
-    ax.set_ylim(lo, hi * 3)
+    rp.text_box(ax, "mismatches: %d in %d checked answers%s"
+                % (mism, checked, "" if mism == 0 else "  <- must be 0"), loc="upper right", fontsize=7.5)
 
-    pts = [(x, y) for line in ax_b.get_lines() for x, y in zip(*line.get_data())]
-    if pts:
-        x0, y0 = max(pts)
-        lo = min(p[0] for p in pts)
-        ax_b.plot([lo, x0], [y0 * lo / x0, y0], ls="--", color="0.5", lw=1, label="slope 1 (∝ n)")
-        rp.log_scale(ax_b, x=True, y=True)
-        ax_b.legend(fontsize=8, loc="upper left")
+    # Paired ratios grid / Embree.
+    try:
+        rounds = rp.read_csv(rp.sibling_csv(args.input, "rounds"),
+                             ["engine", "n", "threads", "round", "rays", "round_s"])
+    except rp.PlotError:
+        rounds = []
+    drawn = False
+    for k, threads in enumerate(sorted({r["threads"] for r in rounds if r["engine"] == "embree"})):
+        pts = []
+        for n in finite_n:
+            ratios = paired_ratios(rounds, n, threads)
+            if ratios:
+                pts.append((n, median(ratios), min(ratios), max(ratios)))
+        if not pts:
+            continue
+        xs = [p[0] * (1.0 + 0.06 * k) for p in pts]
+        ys = [p[1] for p in pts]
+        ax_r.errorbar(xs, ys, yerr=[[p[1] - p[2] for p in pts], [p[3] - p[1] for p in pts]],
+                      fmt="o-", capsize=3, ms=5,
+                      label="grid / Embree, %d thread%s" % (threads, "" if threads == 1 else "s"))
+        for x, y in zip(xs, ys):
+            ax_r.annotate("%.2f" % y, (x, y), textcoords="offset points", xytext=(6, 4), fontsize=7)
+        drawn = True
+    if drawn:
+        ax_r.axhline(1.0, color="0.5", lw=0.8)
+        rp.log_scale(ax_r, x=True)
+        ax_r.set_ylim(bottom=0)
+        ax_r.legend(fontsize=7.5, loc="upper left")
     else:
-        ax_b.text(0.5, 0.5, "no build times > 0", ha="center", transform=ax_b.transAxes)
+        ax_r.text(0.5, 0.5, "no Embree rows (build with --features embree)", ha="center",
+                  transform=ax_r.transAxes, fontsize=8)
+    ax_r.set_xlabel("n  (spheres)")
+    ax_r.set_ylabel("speed ratio (median of paired rounds, range)")
+    ax_r.set_title("how many times faster the grid is", fontsize=10)
+
+    # Cost per cell and cells per ray.
+    grid_rows = [r for r in rows if r["engine"] == "grid" and r["n"] > 0 and rp.has([r], "cell_s")]
+    if grid_rows:
+        ax_s = ax_c.twinx()
+        for threads in sorted({r["threads"] for r in grid_rows}):
+            grp = rp.sort_by([r for r in grid_rows if r["threads"] == threads], "n")
+            ax_c.plot(rp.col(grp, "n"), [r["cell_s"] * 1e9 for r in grp], "o-", ms=5,
+                      label="ns per cell, %d thread%s" % (threads, "" if threads == 1 else "s"))
+        grp = rp.sort_by([r for r in grid_rows if r["threads"] == grid_rows[0]["threads"]], "n")
+        ax_s.plot(rp.col(grp, "n"), [r["n_s_mean"] + 1 for r in grp], "s--", color="0.4", ms=4,
+                  label="cells per ray (N_S + 1)")
+        ax_s.set_ylabel("cells per ray")
+        ax_s.set_ylim(bottom=0)
+        rp.log_scale(ax_c, x=True)
+        ax_c.set_ylim(bottom=0)
+        h1, l1 = ax_c.get_legend_handles_labels()
+        h2, l2 = ax_s.get_legend_handles_labels()
+        ax_c.legend(h1 + h2, l1 + l2, fontsize=7.5, loc="lower right")
+    ax_c.set_xlabel("n  (spheres)")
+    ax_c.set_ylabel("grid: ns per visited cell (median round)")
+    ax_c.set_title("grid cost per unit of work", fontsize=10)
+
+    # Build time and peak memory.
+    ax_m = ax_b.twinx()
+    for engine in ("grid", "embree"):
+        grp = rp.sort_by([r for r in rows if r["engine"] == engine and r["n"] > 0 and r["build_s"] > 0
+                          and r["threads"] == min(x["threads"] for x in rows if x["engine"] == engine)], "n")
+        if not grp:
+            continue
+        ax_b.plot(rp.col(grp, "n"), rp.col(grp, "build_s"), "o-", color=color_of[engine], ms=5,
+                  label="%s build" % engine)
+        mem = [r for r in grp if r["peak_mem_bytes"] > 0]
+        ax_m.plot(rp.col(mem, "n"), [r["peak_mem_bytes"] / 1e9 for r in mem], "^:",
+                  color=color_of[engine], ms=5, label="%s peak memory" % engine)
+    rp.log_scale(ax_b, x=True, y=True)
+    rp.log_scale(ax_m, y=True)
     ax_b.set_xlabel("n  (spheres)")
     ax_b.set_ylabel("build time [s]")
-    ax_b.set_title("build time", fontsize=10)
-    for a in axes[0]:
+    ax_m.set_ylabel("peak memory, scene included [GB]")
+    ax_b.set_title("build time and memory", fontsize=10)
+    h1, l1 = ax_b.get_legend_handles_labels()
+    h2, l2 = ax_m.get_legend_handles_labels()
+    ax_b.legend(h1 + h2, l1 + l2, fontsize=7.5, loc="upper left")
+
+    for a in (ax, ax_r, ax_c, ax_b):
         a.grid(True, which="major", alpha=0.3)
         if finite_n:
             rp.pad_log_limits(a, finite_n, factor=1.6)
-    fig.suptitle("raycost bench: speed figures", fontsize=11, y=1.0)
+    fig.suptitle("raycost bench: the grid and Embree on the same spheres and rays", fontsize=11, y=1.0)
     rp.finish(fig, args)
 
 

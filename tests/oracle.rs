@@ -9,29 +9,39 @@ use glam::DVec3;
 use rand::Rng;
 use raycost::geom::{Aabb, Ray, Sphere};
 use raycost::grid::{
-    brute_force, exit_distance, fast::FastGrid, mailbox::Mailbox, trace, FiniteGrid, GridFrame,
+    brute_force, exit_distance,
+    fast::{FastGrid, Walk},
+    mailbox::Mailbox,
+    trace, FiniteGrid, GridFrame,
 };
 use raycost::sample::{directions::uniform_direction, rng::stream};
 
 /// Traces every ray through the grid and brute force; panics with a rerun hint on the first mismatch.
 fn check(label: &str, frame: GridFrame, spheres: &[Sphere], rays: &[Ray]) -> usize {
     let grid = FiniteGrid::build(frame, spheres);
-    let fast = FastGrid::build(frame, spheres);
+    let mut fast = FastGrid::build(frame, spheres);
+    let mut portable = FastGrid::build(frame, spheres);
+    portable.set_walk(Walk::Portable);
+    fast.set_walk(Walk::Avx2);
     let mut mb = Mailbox::default();
     let mut hits = 0;
     for (i, ray) in rays.iter().enumerate() {
         let mut lists = &grid;
         let counted = trace(&mut lists, ray, &mut mb, i % 2 == 0, u32::MAX);
         let got = counted.hit;
-        // The query-optimised grid: same hit bit for bit, same N_I (listings) and N_S.
-        let q = fast.trace(ray);
-        assert_eq!(
-            (q.hit.map(|h| (h.id, h.t.to_bits())), q.n_i, q.n_s),
-            (got.map(|h| (h.id, h.t.to_bits())), counted.n_i, counted.n_s),
-            "{label}: ray {i} o = {:?} d = {:?}: fast grid disagrees",
-            ray.o,
-            ray.d
-        );
+        // The query-optimised grid, on both walks (the AVX2 one where the CPU has it): same hit bit
+        // for bit, same N_I (listings) and N_S.
+        for g in [&fast, &portable] {
+            let q = g.trace(ray);
+            assert_eq!(
+                (q.hit.map(|h| (h.id, h.t.to_bits())), q.n_i, q.n_s),
+                (got.map(|h| (h.id, h.t.to_bits())), counted.n_i, counted.n_s),
+                "{label}: ray {i} o = {:?} d = {:?}: fast grid ({:?} walk) disagrees",
+                ray.o,
+                ray.d,
+                g.walk()
+            );
+        }
         // The oracle: every sphere, restricted to hits inside the grid (where the DDA leaves it).
         let t_out = exit_distance(&frame, ray);
         let want = brute_force(spheres, ray).filter(|h| h.t <= t_out);

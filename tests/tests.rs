@@ -1,6 +1,7 @@
 //! One integration binary (ripgrep/xsv style): CLI end to end, brute-force oracles, bad input.
 
 mod bad_input;
+mod bench;
 mod cli;
 mod common;
 mod merge;

@@ -83,6 +83,7 @@ pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::Pat
         SinkOptions {
             force: opts.force,
             resume: opts.resume,
+            table: None,
         },
     )?;
     let Some(mut sink) = sink else {

@@ -52,7 +52,8 @@ impl FiniteGrid {
         let pad_magnitude = grid_magnitude(&frame);
         let n_cells = (dims[0] * dims[1] * dims[2]) as usize;
         let linear = |c: Cell| ((c[2] * dims[1] + c[1]) * dims[0] + c[0]) as u32;
-        let (offsets, order) = cell_lists(&frame, pad_magnitude, spheres, n_cells, linear);
+        let (offsets, order) =
+            cell_lists(&frame, pad_magnitude, spheres, n_cells, linear, |_, s| s);
         let entries = order.iter().map(|&s| spheres[s as usize]).collect();
         Self {
             frame,
@@ -91,21 +92,23 @@ pub fn grid_magnitude(frame: &GridFrame) -> f64 {
 }
 
 /// Compressed cell lists shared by both finite grids: `(offsets, order)` where the listings of the
-/// cell stored at `slot(cell)` are the sphere indices `order[offsets[slot]..offsets[slot + 1]]`.
+/// cell stored at `slot(cell)` are `order[offsets[slot]..offsets[slot + 1]]`, each the
+/// `payload(cell, sphere index)` of one listed sphere (the index itself for [`FiniteGrid`]).
 ///
 /// Every sphere enumerates the cells its padded bounding box covers and keeps those its ball really
 /// overlaps (exact closed sphere–box test, see [`GridFrame::pad`]). Pairs are produced in parallel
 /// at per-sphere positions and placed by a counting sort, so the layout is the same for every
 /// thread count (within a cell, sphere order).
-pub fn cell_lists(
+pub fn cell_lists<P: Copy + Default + Send>(
     frame: &GridFrame,
     pad_magnitude: f64,
     spheres: &[Sphere],
     n_slots: usize,
     slot: impl Fn(Cell) -> u32 + Sync,
-) -> (Vec<u32>, Vec<u32>) {
+    payload: impl Fn(Cell, u32) -> P + Sync,
+) -> (Vec<u32>, Vec<P>) {
     const CHUNK: usize = 1 << 14;
-    let pairs: Vec<Vec<(u32, u32)>> = spheres
+    let pairs: Vec<Vec<(u32, P)>> = spheres
         .par_chunks(CHUNK)
         .enumerate()
         .map(|(ci, chunk)| {
@@ -119,7 +122,8 @@ pub fn cell_lists(
                         for x in lo[0]..=hi[0] {
                             let cell = [x, y, z];
                             if frame.cell_box(cell).distance_squared(s.c) <= reach * reach {
-                                out.push((slot(cell), (ci * CHUNK + k) as u32));
+                                let s = (ci * CHUNK + k) as u32;
+                                out.push((slot(cell), payload(cell, s)));
                             }
                         }
                     }
@@ -136,7 +140,7 @@ pub fn cell_lists(
         offsets[i + 1] += offsets[i];
     }
     let mut cursor = offsets.clone();
-    let mut order = vec![0u32; offsets[n_slots] as usize];
+    let mut order = vec![P::default(); offsets[n_slots] as usize];
     for &(c, s) in pairs.iter().flatten() {
         order[cursor[c as usize] as usize] = s;
         cursor[c as usize] += 1;

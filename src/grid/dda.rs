@@ -30,23 +30,8 @@ impl Dda {
     /// grid's box (it is clamped to the nearest cell if it sits on the boundary).
     pub fn new(frame: &GridFrame, ray: &Ray) -> Self {
         let d = ray.d.to_array();
-        // The start cell is the one the ray enters: an origin exactly on a face, moving towards
-        // −axis, starts in the lower cell. Otherwise an eye at a cell corner would visit up to three
-        // cells for zero length and count steps the geometry does not have (the floor effect of
-        // THEORY.md's E[N_S] for a corner eye assumes crossings at t = k·a/|d_x|, k ≥ 1).
-        let q = ((ray.o - frame.origin) / frame.width).to_array();
-        let mut cell = [0i64; 3];
-        for i in 0..3 {
-            let f = q[i].floor();
-            cell[i] = f as i64 - i64::from(f == q[i] && d[i] < 0.0);
-        }
-        if let Some(dims) = frame.dims {
-            for i in 0..3 {
-                cell[i] = cell[i].clamp(0, dims[i] - 1);
-            }
-        }
         let mut dda = Self {
-            cell,
+            cell: start_cell(frame, ray),
             step: [0; 3],
             inv_d: [0.0; 3],
             o: ray.o.to_array(),
@@ -88,6 +73,27 @@ impl Dda {
             }
         }
     }
+}
+
+/// The cell a ray starts in: the one it enters. An origin exactly on a face, moving towards −axis,
+/// starts in the lower cell; otherwise an eye at a cell corner would visit up to three cells for zero
+/// length and count steps the geometry does not have (the floor effect of THEORY.md's E[N_S] for a
+/// corner eye assumes crossings at t = k·a/|d_x|, k ≥ 1). Clamped into a finite grid.
+#[inline(always)]
+pub fn start_cell(frame: &GridFrame, ray: &Ray) -> Cell {
+    let d = ray.d.to_array();
+    let q = ((ray.o - frame.origin) / frame.width).to_array();
+    let mut cell = [0i64; 3];
+    for i in 0..3 {
+        let f = q[i].floor();
+        cell[i] = f as i64 - i64::from(f == q[i] && d[i] < 0.0);
+    }
+    if let Some(dims) = frame.dims {
+        for i in 0..3 {
+            cell[i] = cell[i].clamp(0, dims[i] - 1);
+        }
+    }
+    cell
 }
 
 impl Iterator for Dda {

@@ -8,6 +8,7 @@ pub mod build;
 pub mod dda;
 pub mod fast;
 pub mod frame;
+pub mod huge;
 pub mod mailbox;
 pub mod trace;
 

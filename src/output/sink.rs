@@ -22,6 +22,8 @@ pub struct SinkOptions {
     pub force: bool,
     /// Continue a partial run.
     pub resume: bool,
+    /// Name of the second table, `STEM.TABLE.csv` (default `hist`: histograms of the grid study).
+    pub table: Option<&'static str>,
 }
 
 /// Open result files of a run in progress.
@@ -31,6 +33,8 @@ pub struct Sink {
     stem: String,
     csv: File,
     hist: File,
+    /// Suffix of the second table's file, `TABLE.csv`.
+    table: String,
     csv_has_header: bool,
     hist_has_header: bool,
     done: BTreeSet<usize>,
@@ -73,8 +77,9 @@ impl Sink {
         File::create(&probe)
             .map_err(|e| err(dir, format!("the results folder is not writable: {e}")))?;
         let _ = fs::remove_file(&probe);
+        let table = format!("{}.csv", opts.table.unwrap_or("hist"));
         let csv_p = Self::partial(dir, stem, "csv");
-        let hist_p = Self::partial(dir, stem, "hist.csv");
+        let hist_p = Self::partial(dir, stem, &table);
         let meta_p = Self::partial(dir, stem, "meta.toml");
         let final_csv = Self::path(dir, stem, "csv");
         if final_csv.exists() && opts.resume && !csv_p.exists() {
@@ -87,7 +92,7 @@ impl Sink {
         }
         if opts.resume && csv_p.exists() {
             // A run killed inside `finish` has renamed some files already: take them back.
-            for (suffix, partial) in [("hist.csv", &hist_p), ("meta.toml", &meta_p)] {
+            for (suffix, partial) in [(table.as_str(), &hist_p), ("meta.toml", &meta_p)] {
                 let done = Self::path(dir, stem, suffix);
                 if done.exists() && !partial.exists() {
                     // Files are being changed now: a failure here is not "nothing written" (exit 1).
@@ -97,7 +102,7 @@ impl Sink {
                 }
             }
         }
-        for suffix in ["csv", "hist.csv", "meta.toml"] {
+        for suffix in ["csv", table.as_str(), "meta.toml"] {
             let p = Self::path(dir, stem, suffix);
             if p.exists() && !opts.force {
                 return Err(err(
@@ -154,7 +159,7 @@ impl Sink {
             }
             hist_has_header = !hist_rows.is_empty();
             // Rewrite through a temporary file: a kill here must not lose finished points' rows.
-            let tmp = Self::partial(dir, stem, "hist.csv.tmp");
+            let tmp = Self::partial(dir, stem, &format!("{table}.tmp"));
             fs::write(&tmp, kept)
                 .and_then(|()| fs::rename(&tmp, &hist_p))
                 .map_err(|e| anyhow::anyhow!("could not rewrite {}: {e}", hist_p.display()))?;
@@ -182,6 +187,7 @@ impl Sink {
         Ok(Some(Sink {
             dir: dir.to_path_buf(),
             stem: stem.to_string(),
+            table,
             csv: open(&csv_p)?,
             hist: open(&hist_p)?,
             csv_has_header,
@@ -201,7 +207,8 @@ impl Sink {
         &self.done
     }
 
-    /// Appends one point: its histogram rows first, then its main row, each flushed to disk.
+    /// Appends one point: its rows of the second table (histograms) first, then its main row, each
+    /// flushed to disk.
     pub fn append(&mut self, row: &Row, hist: &[Row]) -> std::io::Result<()> {
         let mut h = Vec::new();
         if !hist.is_empty() && !self.hist_has_header {
@@ -225,20 +232,20 @@ impl Sink {
 
     /// Writes the metadata and renames the partial files into place.
     pub fn finish(self, meta: &str) -> std::io::Result<Vec<PathBuf>> {
-        let (dir, stem) = (self.dir, self.stem);
+        let (dir, stem, table) = (self.dir, self.stem, self.table);
         drop(self.csv);
         drop(self.hist);
         let meta_p = Self::partial(&dir, &stem, "meta.toml");
         fs::write(&meta_p, meta)?;
         let mut written = Vec::new();
-        let hist_p = Self::partial(&dir, &stem, "hist.csv");
+        let hist_p = Self::partial(&dir, &stem, &table);
         if fs::metadata(&hist_p)?.len() > 0 {
-            fs::rename(&hist_p, Self::path(&dir, &stem, "hist.csv"))?;
-            written.push(Self::path(&dir, &stem, "hist.csv"));
+            fs::rename(&hist_p, Self::path(&dir, &stem, &table))?;
+            written.push(Self::path(&dir, &stem, &table));
         } else {
             fs::remove_file(&hist_p)?;
-            // A histogram of an earlier run (replaced with --force) must not sit beside this table.
-            let stale = Self::path(&dir, &stem, "hist.csv");
+            // A second table of an earlier run (replaced with --force) must not sit beside this one.
+            let stale = Self::path(&dir, &stem, &table);
             if stale.exists() {
                 fs::remove_file(stale)?;
             }

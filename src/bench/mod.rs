@@ -1,0 +1,629 @@
+//! `raycost bench`: the speed of every engine on identical scenes, side by side in one run.
+//!
+//! Scene: n centres uniform in a cube at ρ = 1 (side n^⅓), r = 0.1; rays from the cube's centre in
+//! uniform directions, first hit only (PERFORMANCE.md's setting). Engines:
+//! - `grid`: the query-optimised grid ([`FastGrid`]), cell width chosen by the cost model with T_I
+//!   and T_S fitted on this machine ([`calibrate`]);
+//! - `embree` (feature `embree`): Intel Embree 3's BVH over the same spheres;
+//! - `brute-force`: every sphere, on a subset of the rays (the oracle);
+//! - `grid-infinite`: the lazily generated infinite scene (no n), the study's counting tracer.
+//!
+//! The grid and Embree are timed in alternating rounds on 1 thread and on all threads
+//! ([`rounds`]): each round traces a fresh slice of the rays with every engine, so the per-round
+//! ratio compares engines under the same machine conditions. Every ray's answer is checked: the
+//! grid against brute force (exactly, on a subset), against itself across thread counts, and
+//! Embree against the grid (by sphere, [`agreement`]).
+//!
+//! Output: `OUT/bench/bench.csv` (one row per engine, n and thread count; `rays_per_s` is the
+//! median over rounds), `bench.rounds.csv` (every round's seconds, from which the paired ratios
+//! are computed) and `bench.meta.toml` (machine, calibration).
+
+mod agreement;
+mod calibrate;
+pub mod memory;
+mod rounds;
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::Context;
+use glam::DVec3;
+use rayon::prelude::*;
+
+use self::agreement::Agreement;
+use self::rounds::{alternate, median, paired_ratios, RoundTimes};
+use crate::experiment::grid::BATCH;
+use crate::experiment::Row;
+use crate::geom::{Aabb, Ray, Sphere};
+use crate::grid::fast::{FastGrid, FastTrace};
+use crate::grid::{build::frame_around, mailbox::Mailbox, trace, GridFrame, Hit};
+use crate::output::sink::{Sink, SinkOptions};
+use crate::sample::{directions::uniform_direction, rng::stream};
+use crate::scene::finite::{FiniteScene, FiniteSize};
+use crate::scene::lazy::LazyScene;
+use crate::scene::{RadiusClass, RadiusDist, RadiusDraw};
+
+const RHO: f64 = 1.0;
+const R: f64 = 0.1;
+/// Stream key of the bench's scenes and rays.
+const KEY: u64 = 0x6265_6e63;
+
+/// How much the bench measures.
+struct Plan {
+    sizes: &'static [u64],
+    rounds: usize,
+    rays_per_round: usize,
+    /// Rays checked against brute force per n.
+    brute_force_rays: usize,
+    /// Spheres and rays of the calibration scene, and its rounds.
+    calibration: (u64, usize, usize),
+    /// Rays traced through the infinite scene.
+    lazy_rays: usize,
+}
+
+impl Plan {
+    fn new(quick: bool) -> Self {
+        if quick {
+            Self {
+                sizes: &[10_000, 100_000],
+                rounds: 3,
+                rays_per_round: 50_000,
+                brute_force_rays: 2_000,
+                calibration: (100_000, 20_000, 3),
+                lazy_rays: 20_000,
+            }
+        } else {
+            Self {
+                sizes: &[10_000, 100_000, 1_000_000, 10_000_000],
+                rounds: 7,
+                rays_per_round: 300_000,
+                brute_force_rays: 500,
+                calibration: (1_000_000, 100_000, 5),
+                lazy_rays: 200_000,
+            }
+        }
+    }
+}
+
+/// One engine at one n and thread count: everything its row reports.
+struct Measured {
+    engine: &'static str,
+    n: u64,
+    threads: usize,
+    cell_width: f64,
+    /// Seconds of each round, `rays_per_round` rays each.
+    secs: Vec<f64>,
+    rays_per_round: usize,
+    build_s: f64,
+    peak_mem_bytes: u64,
+    structure_bytes: u64,
+    agreement: Agreement,
+    /// Mean N_I, N_S and cells visited (N_S + 1) per ray; NaN where the engine does not count.
+    n_i: f64,
+    n_s: f64,
+}
+
+impl Measured {
+    fn rays_per_s(&self) -> f64 {
+        self.rays_per_round as f64 / median(&self.secs)
+    }
+
+    /// Seconds per cell visited (median round), the grid's cost per unit of work.
+    fn cell_s(&self) -> f64 {
+        median(&self.secs) / (self.rays_per_round as f64 * (self.n_s + 1.0))
+    }
+
+    fn row(&self) -> Row {
+        let mut row = Row::default();
+        row.s("engine", self.engine)
+            .u("n", self.n)
+            .u("threads", self.threads as u64)
+            .f("cell_width", self.cell_width)
+            .u("rays", (self.rays_per_round * self.secs.len()) as u64)
+            .u("rounds", self.secs.len() as u64);
+        row.f("rays_per_s", self.rays_per_s())
+            .f(
+                "round_min_s",
+                self.secs.iter().copied().fold(f64::INFINITY, f64::min),
+            )
+            .f("round_median_s", median(&self.secs))
+            .f("round_max_s", self.secs.iter().copied().fold(0.0, f64::max))
+            .f("cell_s", self.cell_s())
+            .f("build_s", self.build_s)
+            .u("peak_mem_bytes", self.peak_mem_bytes)
+            .u("structure_bytes", self.structure_bytes);
+        row.u("checked", self.agreement.checked)
+            .u("mismatches", self.agreement.mismatches)
+            .u("f32_ties", self.agreement.f32_ties)
+            .f("t_rel_diff_max", self.agreement.t_rel_diff_max)
+            .f("n_i_mean", self.n_i)
+            .f("n_s_mean", self.n_s);
+        row
+    }
+
+    fn round_rows(&self) -> Vec<Row> {
+        self.secs
+            .iter()
+            .enumerate()
+            .map(|(r, &s)| {
+                let mut row = Row::default();
+                row.s("engine", self.engine)
+                    .u("n", self.n)
+                    .u("threads", self.threads as u64)
+                    .u("round", r as u64)
+                    .u("rays", self.rays_per_round as u64)
+                    .f("round_s", s);
+                row
+            })
+            .collect()
+    }
+}
+
+fn pool(threads: usize) -> anyhow::Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .context("could not start a thread pool")
+}
+
+/// Traces `rays` through the query grid into `out` on the current pool.
+fn trace_into(grid: &FastGrid, rays: &[Ray], out: &mut [FastTrace]) {
+    out.par_chunks_mut(1024)
+        .zip(rays.par_chunks(1024))
+        .for_each(|(o, r)| o.iter_mut().zip(r).for_each(|(o, r)| *o = grid.trace(r)));
+}
+
+/// Runs the benchmark and writes `OUT/bench/bench.csv`, `bench.rounds.csv`, `bench.meta.toml`.
+pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
+    let plan = Plan::new(quick);
+    let all = rayon::current_num_threads();
+    // Open (and so refuse to overwrite) the results before spending minutes measuring.
+    let mut sink = Sink::open(
+        &out.join("bench"),
+        "bench",
+        "bench",
+        SinkOptions {
+            force,
+            resume: false,
+            table: Some("rounds"),
+        },
+    )?
+    .expect("a sink opened without --resume always exists");
+    let classes = [RadiusClass {
+        fraction: 1.0,
+        radius: RadiusDist::Constant(R),
+    }];
+
+    let (cal_n, cal_rays, cal_rounds) = plan.calibration;
+    let (cal_spheres, cal_bounds) = bench_scene(&classes, cal_n, KEY ^ 1);
+    let cal = calibrate::calibrate(
+        &cal_spheres,
+        cal_bounds,
+        &directions(cal_rays, KEY ^ 2)
+            .into_iter()
+            .map(|d| Ray::new(DVec3::ZERO, d))
+            .collect::<Vec<_>>(),
+        cal_rounds,
+        RHO,
+        &classes,
+    )?;
+    drop(cal_spheres);
+    let a = cal.cell_width;
+    println!(
+        "cost model of the query grid, fitted on this machine (n = {cal_n}): T_I = {:.2} ns, T_S = {:.2} ns → cell width a = {a:.3}",
+        cal.costs.t_i * 1e9,
+        cal.costs.t_s * 1e9
+    );
+    for &(w, ni, ns, t) in &cal.points {
+        println!(
+            "  a = {w:.2}: N_I {ni:6.1}, N_S {ns:5.1}, measured {:6.0} ns/ray, model {:6.0} ns/ray",
+            t * 1e9,
+            (ni * cal.costs.t_i + ns * cal.costs.t_s) * 1e9
+        );
+    }
+
+    let total = plan.rounds * plan.rays_per_round;
+    let rays: Vec<Ray> = directions(total, KEY)
+        .into_iter()
+        .map(|d| Ray::new(DVec3::ZERO, d))
+        .collect();
+    let mut measured: Vec<Measured> = Vec::new();
+    for &n in plan.sizes {
+        measured.extend(bench_size(n, a, &plan, &classes, &rays, all)?);
+    }
+    measured.extend(bench_lazy(a, &plan, &classes, all)?);
+
+    print_summary(&measured, plan.sizes, all);
+    for m in &measured {
+        sink.append(&m.row(), &m.round_rows())
+            .context("could not append to the bench table")?;
+    }
+    let points: Vec<String> = cal
+        .points
+        .iter()
+        .map(|(w, ni, ns, t)| format!("[{w}, {ni}, {ns}, {t:e}]"))
+        .collect();
+    let meta = format!(
+        "[bench]\nquick = {quick}\nthreads = {all}\nhost = \"{}\"\ncpu = \"{}\"\ntransparent_hugepages = \"{}\"\nrounds = {}\nrays_per_round = {}\nwalk = \"{:?}\"\ncommit = \"{}\"\n\n[bench.calibration]\nspheres = {cal_n}\nt_i_s = {:e}\nt_s_s = {:e}\ncell_width = {a}\n# [cell width, N_I, N_S, median seconds per ray]\npoints = [{}]\nfinished = \"{}\"\n",
+        crate::output::meta::host_name(),
+        cpu_model(),
+        transparent_hugepages(),
+        plan.rounds,
+        plan.rays_per_round,
+        crate::grid::fast::Walk::detect(),
+        env!("RAYCOST_GIT_COMMIT"),
+        cal.costs.t_i,
+        cal.costs.t_s,
+        points.join(", "),
+        crate::output::time::now_rfc3339()
+    );
+    for p in sink.finish(&meta)? {
+        println!("wrote {}", p.display());
+    }
+    Ok(())
+}
+
+/// The grid, Embree and brute force on the n-sphere scene.
+fn bench_size(
+    n: u64,
+    a: f64,
+    plan: &Plan,
+    classes: &[RadiusClass],
+    rays: &[Ray],
+    all: usize,
+) -> anyhow::Result<Vec<Measured>> {
+    let per = plan.rays_per_round;
+    let rss_before_scene = memory::rss_bytes();
+    let (spheres, bounds) = bench_scene(classes, n, KEY ^ n);
+    // What a process holding just the scene uses; each engine's peak adds its own increment.
+    let scene_bytes = memory::rss_bytes().saturating_sub(rss_before_scene);
+    let mut grid_all = vec![FastTrace::default(); rays.len()];
+    let mut grid_one = vec![FastTrace::default(); rays.len()];
+    let ((grid, grid_build), grid_peak) = memory::peak_increment(|| {
+        let start = Instant::now();
+        let g = FastGrid::build(frame_around(bounds, a, DVec3::ZERO), &spheres);
+        (g, start.elapsed().as_secs_f64())
+    });
+    #[cfg(feature = "embree")]
+    let ((embree, embree_build), embree_peak) = memory::peak_increment(|| {
+        let start = Instant::now();
+        let e = crate::embree::EmbreeScene::build(&spheres);
+        (e, start.elapsed().as_secs_f64())
+    });
+    #[cfg(feature = "embree")]
+    let embree = embree?;
+    #[cfg(feature = "embree")]
+    let mut embree_all: Vec<Option<(usize, f64)>> = vec![None; rays.len()];
+    #[cfg(feature = "embree")]
+    let mut embree_one: Vec<Option<(usize, f64)>> = vec![None; rays.len()];
+
+    let (one, many) = (pool(1)?, pool(all)?);
+    // Untimed warm-up: fault in the freshly built structures, train nothing in particular.
+    let warm = &rays[..per.min(rays.len())];
+    many.install(|| trace_into(&grid, warm, &mut grid_all[..warm.len()]));
+    #[cfg(feature = "embree")]
+    many.install(|| {
+        embree_all[..warm.len()]
+            .par_chunks_mut(1024)
+            .zip(warm.par_chunks(1024))
+            .for_each(|(h, r)| embree.first_hits(r, h))
+    });
+
+    // Contestants, in round order: grid on 1 thread, Embree on 1, grid on all, Embree on all.
+    let contestants = if cfg!(feature = "embree") { 4 } else { 2 };
+    let embree_on = cfg!(feature = "embree");
+    // Contestant c: (is it the grid, does it use all threads)?
+    let who = |c: usize| {
+        if embree_on {
+            (c % 2 == 0, c >= 2)
+        } else {
+            (true, c == 1)
+        }
+    };
+    let times: RoundTimes = alternate(contestants, plan.rounds, |c, r| {
+        let span = r * per..(r + 1) * per;
+        let slice = &rays[span.clone()];
+        let (is_grid, all_threads) = who(c);
+        let p = if all_threads { &many } else { &one };
+        if is_grid {
+            let out = if all_threads {
+                &mut grid_all[span]
+            } else {
+                &mut grid_one[span]
+            };
+            p.install(|| trace_into(&grid, slice, out));
+        } else {
+            #[cfg(feature = "embree")]
+            {
+                let out = if all_threads {
+                    &mut embree_all[span]
+                } else {
+                    &mut embree_one[span]
+                };
+                p.install(|| {
+                    out.par_chunks_mut(1024)
+                        .zip(slice.par_chunks(1024))
+                        .for_each(|(h, r)| embree.first_hits(r, h))
+                });
+            }
+        }
+    });
+    let secs_of = |is_grid: bool, all_threads: bool| -> Vec<f64> {
+        let c = (0..contestants)
+            .find(|&c| who(c) == (is_grid, all_threads))
+            .expect("every engine and thread count is a contestant");
+        times.secs[c].clone()
+    };
+    let structure = grid.bytes();
+    drop(grid);
+
+    // Answers: the grid's on every ray, against itself across thread counts and against brute
+    // force on a subset.
+    let hits: Vec<Option<Hit>> = grid_all.iter().map(|q| q.hit).collect();
+    let thread_diffs = grid_all
+        .iter()
+        .zip(&grid_one)
+        .filter(|(x, y)| x != y)
+        .count() as u64;
+    if thread_diffs > 0 {
+        eprintln!("grid: {thread_diffs} rays answered differently on 1 and {all} threads");
+    }
+    let bf_n = plan.brute_force_rays.min(rays.len());
+    let bf_start = Instant::now();
+    let mut grid_check =
+        many.install(|| agreement::grid_vs_brute_force(&spheres, &rays[..bf_n], &hits[..bf_n]));
+    let bf_s = bf_start.elapsed().as_secs_f64();
+    grid_check.mismatches += thread_diffs;
+    let mean = |f: fn(&FastTrace) -> u32| {
+        grid_all.iter().map(|q| f64::from(f(q))).sum::<f64>() / grid_all.len() as f64
+    };
+    let (n_i, n_s) = (mean(|q| q.n_i), mean(|q| q.n_s));
+    let mut out = Vec::new();
+    for threads_all in [false, true] {
+        out.push(Measured {
+            engine: "grid",
+            n,
+            threads: if threads_all { all } else { 1 },
+            cell_width: a,
+            secs: secs_of(true, threads_all),
+            rays_per_round: per,
+            build_s: grid_build,
+            peak_mem_bytes: scene_bytes + grid_peak,
+            structure_bytes: structure,
+            agreement: grid_check,
+            n_i,
+            n_s,
+        });
+    }
+    out.push(Measured {
+        engine: "brute-force",
+        n,
+        threads: all,
+        cell_width: f64::NAN,
+        secs: vec![bf_s],
+        rays_per_round: bf_n,
+        build_s: 0.0,
+        peak_mem_bytes: scene_bytes,
+        structure_bytes: 0,
+        agreement: Agreement {
+            checked: bf_n as u64,
+            ..Agreement::default()
+        },
+        n_i: n as f64,
+        n_s: 0.0,
+    });
+    #[cfg(feature = "embree")]
+    {
+        // Embree against the grid on every ray, on both thread counts.
+        let mut check = agreement::embree_vs_grid(&spheres, rays, &embree_all, &hits);
+        let diffs = embree_all
+            .iter()
+            .zip(&embree_one)
+            .filter(|(x, y)| x.map(|h| h.0) != y.map(|h| h.0))
+            .count() as u64;
+        check.mismatches += diffs;
+        for threads_all in [false, true] {
+            out.push(Measured {
+                engine: "embree",
+                n,
+                threads: if threads_all { all } else { 1 },
+                cell_width: f64::NAN,
+                secs: secs_of(false, threads_all),
+                rays_per_round: per,
+                build_s: embree_build,
+                peak_mem_bytes: scene_bytes + embree_peak,
+                structure_bytes: 0,
+                agreement: check,
+                n_i: f64::NAN,
+                n_s: f64::NAN,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// The lazily generated infinite scene (no n: it has no boundary), same cell width and directions,
+/// traced with the study's counting tracer; one timed run per thread count.
+fn bench_lazy(
+    a: f64,
+    plan: &Plan,
+    classes: &[RadiusClass],
+    all: usize,
+) -> anyhow::Result<Vec<Measured>> {
+    let dirs = directions(plan.lazy_rays, KEY);
+    let mut out = Vec::new();
+    for threads in [1, all] {
+        let start = Instant::now();
+        let (n_i, n_s) = pool(threads)?.install(|| {
+            dirs.par_chunks(BATCH as usize)
+                .enumerate()
+                .map_init(
+                    crate::scene::lazy::LazyCache::default,
+                    |cache, (b, chunk)| {
+                        let scene = LazyScene::new(
+                            RHO,
+                            classes,
+                            RadiusDraw::PerSphere,
+                            a,
+                            &[KEY, 1, b as u64],
+                        );
+                        let frame = GridFrame {
+                            origin: DVec3::ZERO,
+                            width: a,
+                            dims: None,
+                        };
+                        let mut lists = scene.cells(frame, 2.0 * a, cache);
+                        let mut mb = Mailbox::default();
+                        let eye = DVec3::splat(0.5 * a);
+                        chunk.iter().fold((0.0, 0.0), |acc, &d| {
+                            let c = trace(&mut lists, &Ray::new(eye, d), &mut mb, true, 10_000_000);
+                            (acc.0 + f64::from(c.n_i), acc.1 + f64::from(c.n_s))
+                        })
+                    },
+                )
+                .reduce(|| (0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1))
+        });
+        let rays = dirs.len() as f64;
+        out.push(Measured {
+            engine: "grid-infinite",
+            n: 0,
+            threads,
+            cell_width: a,
+            secs: vec![start.elapsed().as_secs_f64()],
+            rays_per_round: dirs.len(),
+            build_s: 0.0,
+            peak_mem_bytes: memory::peak_rss_bytes(),
+            structure_bytes: 0,
+            agreement: Agreement::default(),
+            n_i: n_i / rays,
+            n_s: n_s / rays,
+        });
+    }
+    Ok(out)
+}
+
+/// The table, the ratios measured in this run, and the flatness and thread scaling of the grid.
+fn print_summary(measured: &[Measured], sizes: &[u64], all: usize) {
+    println!(
+        "{:<14} {:>9} {:>4} {:>11} {:>19} {:>8} {:>8} {:>8} {:>6} {:>7} {:>7} {:>6}",
+        "engine",
+        "n",
+        "thr",
+        "rays/s",
+        "round range",
+        "build s",
+        "peak MB",
+        "mismatch",
+        "ties",
+        "N_I",
+        "N_S",
+        "ns/cell"
+    );
+    for m in measured {
+        let (lo, hi) = (
+            m.rays_per_round as f64 / m.secs.iter().copied().fold(0.0, f64::max),
+            m.rays_per_round as f64 / m.secs.iter().copied().fold(f64::INFINITY, f64::min),
+        );
+        println!(
+            "{:<14} {:>9} {:>4} {:>11.4e} {:>9.3e}–{:<9.3e} {:>8.3} {:>8.0} {:>8} {:>6} {:>7.1} {:>7.1} {:>6.1}",
+            m.engine,
+            m.n,
+            m.threads,
+            m.rays_per_s(),
+            lo,
+            hi,
+            m.build_s,
+            m.peak_mem_bytes as f64 / 1e6,
+            m.agreement.mismatches,
+            m.agreement.f32_ties,
+            m.n_i,
+            m.n_s,
+            m.cell_s() * 1e9
+        );
+    }
+    let find = |engine: &str, n: u64, threads: usize| {
+        measured
+            .iter()
+            .find(|m| m.engine == engine && m.n == n && m.threads == threads)
+    };
+    for &n in sizes {
+        for threads in [1, all] {
+            if let (Some(g), Some(e)) = (find("grid", n, threads), find("embree", n, threads)) {
+                let times = RoundTimes {
+                    secs: vec![g.secs.clone(), e.secs.clone()],
+                };
+                let ratios = paired_ratios(&times, 0, 1);
+                let (lo, hi) = ratios
+                    .iter()
+                    .fold((f64::INFINITY, 0.0f64), |(l, h), &x| (l.min(x), h.max(x)));
+                println!(
+                    "grid/embree at n = {n:.0e}, {threads} thread(s): {:.2} (median of {} paired rounds, range {lo:.2}–{hi:.2}); build {:.2} s vs {:.2} s",
+                    median(&ratios),
+                    ratios.len(),
+                    g.build_s,
+                    e.build_s
+                );
+            }
+        }
+        if let (Some(one), Some(many)) = (find("grid", n, 1), find("grid", n, all)) {
+            println!(
+                "grid 1 → {all} threads at n = {n:.0e}: {:.2}×",
+                many.rays_per_s() / one.rays_per_s()
+            );
+        }
+    }
+    if let (Some(&big), Some(&prev)) = (sizes.last(), sizes.iter().rev().nth(1)) {
+        if let (Some(b), Some(p)) = (find("grid", big, all), find("grid", prev, all)) {
+            println!(
+                "grid flatness, n = {prev:.0e} → {big:.0e} ({all} threads): rays/s × {:.3}, ns per cell × {:.3}, cells per ray × {:.3}",
+                b.rays_per_s() / p.rays_per_s(),
+                b.cell_s() / p.cell_s(),
+                (b.n_s + 1.0) / (p.n_s + 1.0)
+            );
+        }
+    }
+}
+
+/// `n` uniform directions from stream `key`.
+fn directions(n: usize, key: u64) -> Vec<DVec3> {
+    let mut rng = stream(&[key, 0]);
+    (0..n).map(|_| uniform_direction(&mut rng)).collect()
+}
+
+/// The bench scene: `n` centres uniform in a cube at ρ = 1 around the origin, and the box a grid
+/// over them must cover.
+fn bench_scene(classes: &[RadiusClass], n: u64, key: u64) -> (Vec<Sphere>, Aabb) {
+    let scene = FiniteScene {
+        intensity: RHO,
+        classes: classes.to_vec(),
+        draw: RadiusDraw::PerSphere,
+        size: FiniteSize::Count(n),
+        center: DVec3::ZERO,
+    };
+    let b = scene.centre_box();
+    (
+        scene.generate(&[key, n]),
+        Aabb::new(b.lo - DVec3::splat(R), b.hi + DVec3::splat(R)),
+    )
+}
+
+/// The CPU model (Linux `/proc/cpuinfo`), for the metadata.
+fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown".into())
+}
+
+/// The transparent huge page mode (Linux), for the metadata: the grid asks for huge pages with
+/// `madvise`, which works in modes `always` and `madvise`.
+fn transparent_hugepages() -> String {
+    std::fs::read_to_string("/sys/kernel/mm/transparent_hugepage/enabled")
+        .map(|s| s.trim().to_string())
+        .unwrap_or_else(|_| "unavailable".into())
+}
