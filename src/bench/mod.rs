@@ -549,27 +549,22 @@ fn print_summary(measured: &[Measured], sizes: &[u64], all: usize) {
     for &n in sizes {
         for threads in [1, all] {
             if let (Some(g), Some(e)) = (find("grid", n, threads), find("embree", n, threads)) {
-                let times = RoundTimes {
-                    secs: vec![g.secs.clone(), e.secs.clone()],
-                };
-                let ratios = paired_ratios(&times, 0, 1);
-                let (lo, hi) = ratios
-                    .iter()
-                    .fold((f64::INFINITY, 0.0f64), |(l, h), &x| (l.min(x), h.max(x)));
+                let (mid, lo, hi, k) = paired(g, e);
                 println!(
-                    "grid/embree at n = {n:.0e}, {threads} thread(s): {:.2} (median of {} paired rounds, range {lo:.2}–{hi:.2}); build {:.2} s vs {:.2} s",
-                    median(&ratios),
-                    ratios.len(),
-                    g.build_s,
-                    e.build_s
+                    "grid/embree at n = {n:.0e}, {threads} thread(s): {mid:.2} (median of {k} paired rounds, range {lo:.2}–{hi:.2}); build {:.2} s vs {:.2} s",
+                    g.build_s, e.build_s
                 );
             }
         }
-        if let (Some(one), Some(many)) = (find("grid", n, 1), find("grid", n, all)) {
-            println!(
-                "grid 1 → {all} threads at n = {n:.0e}: {:.2}×",
-                many.rays_per_s() / one.rays_per_s()
-            );
+        for engine in ["grid", "embree"] {
+            if let (Some(one), Some(many)) = (find(engine, n, 1), find(engine, n, all)) {
+                if all > 1 {
+                    let (mid, lo, hi, _) = paired(many, one);
+                    println!(
+                        "{engine} 1 → {all} threads at n = {n:.0e}: {mid:.2}× (median of paired rounds, range {lo:.2}–{hi:.2})"
+                    );
+                }
+            }
         }
     }
     if let (Some(&big), Some(&prev)) = (sizes.last(), sizes.iter().rev().nth(1)) {
@@ -582,6 +577,21 @@ fn print_summary(measured: &[Measured], sizes: &[u64], all: usize) {
             );
         }
     }
+}
+
+/// How many times faster `a` ran than `b`, round by round: (median, min, max, rounds).
+fn paired(a: &Measured, b: &Measured) -> (f64, f64, f64, usize) {
+    let ratios = paired_ratios(
+        &RoundTimes {
+            secs: vec![a.secs.clone(), b.secs.clone()],
+        },
+        0,
+        1,
+    );
+    let (lo, hi) = ratios
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(l, h), &x| (l.min(x), h.max(x)));
+    (median(&ratios), lo, hi, ratios.len())
 }
 
 /// `n` uniform directions from stream `key`.
