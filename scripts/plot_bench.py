@@ -146,7 +146,8 @@ def plot(args):
             continue
         ax_b.plot(rp.col(grp, "n"), rp.col(grp, "build_s"), "o-", color=color_of[engine], ms=5,
                   label="%s build" % engine)
-        mem = [r for r in grp if r["peak_mem_bytes"] > 0]
+        # Below a megabyte the resident-set readings are page-granular noise.
+        mem = [r for r in grp if r["peak_mem_bytes"] >= 1e6]
         ax_m.plot(rp.col(mem, "n"), [r["peak_mem_bytes"] / 1e9 for r in mem], "^:",
                   color=color_of[engine], ms=5, label="%s peak memory" % engine)
     rp.log_scale(ax_b, x=True, y=True)

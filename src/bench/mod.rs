@@ -244,7 +244,7 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         .map(|(w, ni, ns, t)| format!("[{w}, {ni}, {ns}, {t:e}]"))
         .collect();
     let meta = format!(
-        "[bench]\nquick = {quick}\nthreads = {all}\nhost = \"{}\"\ncpu = \"{}\"\ntransparent_hugepages = \"{}\"\nrounds = {}\nrays_per_round = {}\nwalk = \"{:?}\"\ncommit = \"{}\"\n\n[bench.calibration]\nspheres = {cal_n}\nt_i_s = {:e}\nt_s_s = {:e}\ncell_width = {a}\n# [cell width, N_I, N_S, median seconds per ray]\npoints = [{}]\nfinished = \"{}\"\n",
+        "[bench]\nquick = {quick}\nthreads = {all}\nhost = \"{}\"\ncpu = \"{}\"\ntransparent_hugepages = \"{}\"\nrounds = {}\nrays_per_round = {}\nwalk = \"{:?}\"\ncommit = \"{}\"\nfinished = \"{}\"\n\n[bench.calibration]\nspheres = {cal_n}\nt_i_s = {:e}\nt_s_s = {:e}\ncell_width = {a}\n# [cell width, N_I, N_S, median seconds per ray]\npoints = [{}]\n",
         crate::output::meta::host_name(),
         cpu_model(),
         transparent_hugepages(),
@@ -252,10 +252,10 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         plan.rays_per_round,
         crate::grid::fast::Walk::detect(),
         env!("RAYCOST_GIT_COMMIT"),
+        crate::output::time::now_rfc3339(),
         cal.costs.t_i,
         cal.costs.t_s,
         points.join(", "),
-        crate::output::time::now_rfc3339()
     );
     for p in sink.finish(&meta)? {
         println!("wrote {}", p.display());
