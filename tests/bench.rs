@@ -79,10 +79,13 @@ fn quick_bench_writes_every_engine_with_zero_mismatches_and_refuses_to_overwrite
     );
 
     // A second run without --force refuses (exit 2) and leaves every file as it was.
-    let before: Vec<_> = files_below(&out)
-        .into_iter()
-        .map(|p| (p.clone(), std::fs::read(&p).expect("read")))
-        .collect();
+    let snapshot = || -> Vec<_> {
+        files_below(&out)
+            .into_iter()
+            .map(|p| (p.clone(), std::fs::read(&p).expect("read")))
+            .collect()
+    };
+    let before = snapshot();
     let again = raycost()
         .args(["bench", "--quick", "--out"])
         .arg(&out)
@@ -94,9 +97,5 @@ fn quick_bench_writes_every_engine_with_zero_mismatches_and_refuses_to_overwrite
         stderr.contains("bench.csv") && stderr.contains("--force"),
         "{stderr}"
     );
-    let after: Vec<_> = files_below(&out)
-        .into_iter()
-        .map(|p| (p.clone(), std::fs::read(&p).expect("read")))
-        .collect();
-    assert_eq!(before, after, "a refused bench changed the results");
+    assert_eq!(before, snapshot(), "a refused bench changed the results");
 }
