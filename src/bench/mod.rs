@@ -453,46 +453,52 @@ fn bench_lazy(
     let dirs = directions(plan.lazy_rays, KEY);
     let mut out = Vec::new();
     for threads in [1, all] {
+        let pool = pool(threads)?;
         let start = Instant::now();
-        let (n_i, n_s) = pool(threads)?.install(|| {
-            dirs.par_chunks(BATCH as usize)
-                .enumerate()
-                .map_init(
-                    crate::scene::lazy::LazyCache::default,
-                    |cache, (b, chunk)| {
-                        let scene = LazyScene::new(
-                            RHO,
-                            classes,
-                            RadiusDraw::PerSphere,
-                            a,
-                            &[KEY, 1, b as u64],
-                        );
-                        let frame = GridFrame {
-                            origin: DVec3::ZERO,
-                            width: a,
-                            dims: None,
-                        };
-                        let mut lists = scene.cells(frame, 2.0 * a, cache);
-                        let mut mb = Mailbox::default();
-                        let eye = DVec3::splat(0.5 * a);
-                        chunk.iter().fold((0.0, 0.0), |acc, &d| {
-                            let c = trace(&mut lists, &Ray::new(eye, d), &mut mb, true, 10_000_000);
-                            (acc.0 + f64::from(c.n_i), acc.1 + f64::from(c.n_s))
-                        })
-                    },
-                )
-                .reduce(|| (0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1))
+        // The lazy scene's own memory: the per-batch caches of generated cells.
+        let ((n_i, n_s), grew) = memory::peak_increment(|| {
+            pool.install(|| {
+                dirs.par_chunks(BATCH as usize)
+                    .enumerate()
+                    .map_init(
+                        crate::scene::lazy::LazyCache::default,
+                        |cache, (b, chunk)| {
+                            let scene = LazyScene::new(
+                                RHO,
+                                classes,
+                                RadiusDraw::PerSphere,
+                                a,
+                                &[KEY, 1, b as u64],
+                            );
+                            let frame = GridFrame {
+                                origin: DVec3::ZERO,
+                                width: a,
+                                dims: None,
+                            };
+                            let mut lists = scene.cells(frame, 2.0 * a, cache);
+                            let mut mb = Mailbox::default();
+                            let eye = DVec3::splat(0.5 * a);
+                            chunk.iter().fold((0.0, 0.0), |acc, &d| {
+                                let c =
+                                    trace(&mut lists, &Ray::new(eye, d), &mut mb, true, 10_000_000);
+                                (acc.0 + f64::from(c.n_i), acc.1 + f64::from(c.n_s))
+                            })
+                        },
+                    )
+                    .reduce(|| (0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1))
+            })
         });
+        let secs = start.elapsed().as_secs_f64();
         let rays = dirs.len() as f64;
         out.push(Measured {
             engine: "grid-infinite",
             n: 0,
             threads,
             cell_width: a,
-            secs: vec![start.elapsed().as_secs_f64()],
+            secs: vec![secs],
             rays_per_round: dirs.len(),
             build_s: 0.0,
-            peak_mem_bytes: memory::peak_rss_bytes(),
+            peak_mem_bytes: grew,
             structure_bytes: 0,
             agreement: Agreement::default(),
             n_i: n_i / rays,
