@@ -298,7 +298,8 @@ fn bench_size(
     let mut embree_one: Vec<Option<(usize, f64)>> = vec![None; rays.len()];
 
     let (one, many) = (pool(1)?, pool(all)?);
-    // Untimed warm-up: fault in the freshly built structures, train nothing in particular.
+    // Untimed warm-up, so that the first timed contestant does not pay for faulting in the freshly
+    // built structures.
     let warm = &rays[..per.min(rays.len())];
     many.install(|| trace_into(&grid, warm, &mut grid_all[..warm.len()]));
     #[cfg(feature = "embree")]
@@ -310,8 +311,8 @@ fn bench_size(
     });
 
     // Contestants, in round order: grid on 1 thread, Embree on 1, grid on all, Embree on all.
-    let contestants = if cfg!(feature = "embree") { 4 } else { 2 };
     let embree_on = cfg!(feature = "embree");
+    let contestants = if embree_on { 4 } else { 2 };
     // Contestant c: (is it the grid, does it use all threads)?
     let who = |c: usize| {
         if embree_on {

@@ -20,8 +20,6 @@ pub unsafe trait Zeroable: Copy + Send + Sync + 'static {}
 unsafe impl Zeroable for u32 {}
 // SAFETY: as above.
 unsafe impl Zeroable for u64 {}
-// SAFETY: as above.
-unsafe impl Zeroable for f64 {}
 // SAFETY: arrays of floats are valid as zeros.
 unsafe impl Zeroable for [f64; 4] {}
 

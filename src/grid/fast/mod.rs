@@ -91,7 +91,6 @@ pub struct FastGrid {
     filter_r2: f32,
     /// Margin m_b of the along-ray test, quantisation units.
     margin_b: f32,
-    pad_magnitude: f64,
     use_avx2: bool,
     /// Cells ahead of the one tested at which the AVX2 walk computes a cell (and prefetches its
     /// offsets), and at which it prefetches the cell's records.
@@ -204,7 +203,6 @@ impl FastGrid {
             qstep,
             filter_r2: (filter_r * filter_r) as f32,
             margin_b: margin_b as f32,
-            pad_magnitude,
             use_avx2: avx2_available(),
             lookahead: (6, 3),
         }
@@ -218,16 +216,6 @@ impl FastGrid {
             + self.ids.allocated_bytes()) as u64
     }
 
-    /// Total number of listings (Σ over cells of the list length).
-    pub fn listings(&self) -> usize {
-        self.ids.len()
-    }
-
-    /// The padding magnitude used for listing (same rule as `FiniteGrid`).
-    pub fn pad_magnitude(&self) -> f64 {
-        self.pad_magnitude
-    }
-
     /// The walk [`trace`](Self::trace) uses on this machine.
     pub fn walk(&self) -> Walk {
         if self.use_avx2 {
@@ -238,7 +226,7 @@ impl FastGrid {
     }
 
     /// Forces a walk (for tests and comparisons); [`Walk::Avx2`] falls back to the portable walk
-    /// where the CPU lacks AVX2 or FMA.
+    /// where the CPU lacks AVX2, FMA or BMI2.
     pub fn set_walk(&mut self, walk: Walk) {
         self.use_avx2 = walk == Walk::Avx2 && avx2_available();
     }
