@@ -12,6 +12,7 @@
 pub mod app;
 pub mod bench;
 pub mod cli;
+pub mod detp;
 #[cfg(feature = "embree")]
 pub mod embree;
 pub mod experiment;
