@@ -33,10 +33,10 @@ use rayon::prelude::*;
 use self::agreement::Agreement;
 use self::rounds::{alternate, median, paired_ratios, RoundTimes};
 use crate::experiment::grid::BATCH;
-use crate::experiment::Row;
 use crate::geom::{Aabb, Ray, Sphere};
 use crate::grid::fast::{FastGrid, FastTrace};
 use crate::grid::{build::frame_around, mailbox::Mailbox, trace, GridFrame, Hit};
+use crate::output::row::Row;
 use crate::output::sink::{Sink, SinkOptions};
 use crate::sample::{directions::uniform_direction, rng::stream};
 use crate::scene::finite::{FiniteScene, FiniteSize};
@@ -185,7 +185,7 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         SinkOptions {
             force,
             resume: false,
-            table: Some("rounds"),
+            tables: &["rounds"],
         },
     )?
     .expect("a sink opened without --resume always exists");
@@ -235,7 +235,7 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
 
     print_summary(&measured, plan.sizes, all);
     for m in &measured {
-        sink.append(&m.row(), &m.round_rows())
+        sink.append(&m.row(), &[("rounds", m.round_rows())])
             .context("could not append to the bench table")?;
     }
     let points: Vec<String> = cal

@@ -14,7 +14,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::machine::MachineCosts;
-use super::row::Row;
+use super::{PointResult, Row};
 use crate::geom::{Aabb, Ray, Sphere};
 use crate::grid::{
     brute_force, build::frame_around, mailbox::Mailbox, trace, FiniteGrid, GridFrame, TraceCounts,
@@ -177,19 +177,6 @@ struct Finite {
     spheres: Vec<Sphere>,
     grid: FiniteGrid,
     build_s: f64,
-}
-
-/// One point's results: the main row and the histogram rows (`NAME.hist.csv`).
-#[derive(Clone, Debug)]
-pub struct PointResult {
-    /// The point's row (without the `point` and parameter columns, which the runner prepends).
-    pub row: Row,
-    /// Histogram rows: metric, bin edges, observed and expected counts.
-    pub hist: Vec<Row>,
-    /// Human summary: (metric, measured, theory text, verdict).
-    pub summary: Vec<(String, Estimate, String, String)>,
-    /// Rays per second while tracing.
-    pub rays_per_s: f64,
 }
 
 /// The theory input of a config.
@@ -628,7 +615,7 @@ fn make_result(
     }
     PointResult {
         row,
-        hist,
+        tables: vec![("hist", hist)],
         summary,
         rays_per_s,
     }

@@ -5,15 +5,15 @@ use std::time::Instant;
 
 use anyhow::Context;
 
-use super::grid::{run_point, PointResult};
 use super::machine::{self, MachineCosts};
-use super::row::{is_timing_column, Row, Value};
+use super::{run_point, side_tables, PointResult};
 use crate::output::meta::{host_name, Build, MachineInfo, Meta, RunInfo};
 use crate::output::progress::progress;
+use crate::output::row::{is_timing_column, Row, Value};
 use crate::output::sink::{Sink, SinkOptions};
 use crate::output::summary;
 use crate::output::time::now_rfc3339;
-use crate::spec::{Kind, Spec};
+use crate::spec::{Kind, PointConfig, Spec};
 
 /// A `--shard K/N` selection: points with index ≡ K (mod N). Round robin, because neighbouring points
 /// of a sweep tend to cost alike (the last key varies fastest), so blocks would balance worse.
@@ -83,7 +83,7 @@ pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::Pat
         SinkOptions {
             force: opts.force,
             resume: opts.resume,
-            table: None,
+            tables: side_tables(spec.base.experiment.kind),
         },
     )?;
     let Some(mut sink) = sink else {
@@ -115,7 +115,7 @@ pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::Pat
 
     let machine: Option<MachineCosts> =
         (spec.base.experiment.kind == Kind::GridCostModel).then(machine::measure);
-    let total_rays: u64 = todo.iter().map(|&i| spec.points[i].config.rays).sum();
+    let total_rays: u64 = todo.iter().map(|&i| spec.points[i].config.work()).sum();
     let bar = progress(total_rays, todo.len(), opts.quiet);
     let mut finished = Vec::new();
     let mut walls = Vec::new();
@@ -124,13 +124,17 @@ pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::Pat
         bar.point(n, todo.len());
         let p = &spec.points[i];
         let start = Instant::now();
-        let result: PointResult = run_point(&p.config, i as u64, machine, &|k| bar.inc(k));
+        let result: PointResult = run_point(&p.config, i as u64, machine, &|k| bar.inc(k))
+            .with_context(|| format!("point {i}"))?;
         let wall = start.elapsed().as_secs_f64();
         let row = with_point_columns(i, &p.params, &result.row);
-        let hist: Vec<Row> = result
-            .hist
+        let side: Vec<(&'static str, Vec<Row>)> = result
+            .tables
             .iter()
-            .map(|h| with_point_columns(i, &[], h))
+            .map(|(name, rows)| {
+                let rows = rows.iter().map(|r| with_point_columns(i, &[], r)).collect();
+                (*name, rows)
+            })
             .collect();
         if timing.is_empty() {
             timing = row
@@ -140,7 +144,7 @@ pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::Pat
                 .filter(|c| is_timing_column(c))
                 .collect();
         }
-        sink.append(&row, &hist)
+        sink.append(&row, &side)
             .with_context(|| format!("could not append point {i} to {}", dir.display()))?;
         let params = p
             .params
@@ -190,16 +194,16 @@ pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::Pat
         timing_columns: timing,
         spec: spec_table,
     };
-    // The grid must agree with brute force on every checked ray; the table is kept as evidence.
+    // Every engine must agree with brute force on everything checked (the grid on first hits, the
+    // DETP engines on disc sums); the table is kept as evidence.
     let disagreements: Vec<String> = finished
         .iter()
         .filter_map(|(i, params, r, _)| {
-            let m = r
-                .row
-                .get("bf_mismatches")
-                .and_then(|v| v.as_f64())
-                .unwrap_or(0.0);
-            (m > 0.0).then(|| format!("point {i} ({params}): {m} rays"))
+            let m = ["bf_mismatches", "mismatches"]
+                .iter()
+                .filter_map(|c| r.row.get(c).and_then(|v| v.as_f64()))
+                .sum::<f64>();
+            (m > 0.0).then(|| format!("point {i} ({params}): {m} disagreements"))
         })
         .collect();
     let written = sink
@@ -207,7 +211,7 @@ pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::Pat
         .with_context(|| format!("could not finish the result files in {}", dir.display()))?;
     if !disagreements.is_empty() {
         anyhow::bail!(
-            "the grid disagreed with brute force on the first hit ({}); the table was written to {} for inspection",
+            "an engine disagreed with brute force ({}); the table was written to {} for inspection",
             disagreements.join("; "),
             dir.display()
         );
@@ -252,19 +256,24 @@ pub fn describe(spec: &Spec) -> String {
             .map(|(k, v)| format!("{k} = {v}"))
             .collect::<Vec<_>>()
             .join(", ");
-        let scene = match &p.config.scene {
-            crate::spec::SceneModel::Infinite => "infinite scene".to_string(),
-            crate::spec::SceneModel::Finite(f) => format!(
-                "finite scene, ~{:.0} spheres, side {:.4}",
-                f.expected_count(),
-                f.side()
-            ),
+        let what = match &p.config {
+            PointConfig::Grid(g) => {
+                let scene = match &g.scene {
+                    crate::spec::SceneModel::Infinite => "infinite scene".to_string(),
+                    crate::spec::SceneModel::Finite(f) => format!(
+                        "finite scene, ~{:.0} spheres, side {:.4}",
+                        f.expected_count(),
+                        f.side()
+                    ),
+                };
+                format!("{scene}, {} rays", g.rays)
+            }
+            PointConfig::Detp(d) => super::detp::describe(d),
         };
         s.push_str(&format!(
-            "  point {:>4}: {params}{}{scene}, {} rays\n",
+            "  point {:>4}: {params}{}{what}\n",
             p.index,
             if params.is_empty() { "" } else { "; " },
-            p.config.rays
         ));
     }
     s

@@ -1,6 +1,6 @@
 //! CSV serialisation, pure: rows in, bytes out (file I/O lives in `sink`).
 
-use crate::experiment::Row;
+use super::row::Row;
 
 /// The header line of rows shaped like `row`.
 pub fn header(row: &Row) -> Vec<u8> {

@@ -9,6 +9,7 @@ pub mod csv;
 pub mod merge;
 pub mod meta;
 pub mod progress;
+pub mod row;
 pub mod sink;
 pub mod summary;
 pub mod time;

@@ -1,7 +1,8 @@
-//! The result files of one run: `DIR/NAME/STEM.csv`, `STEM.hist.csv`, `STEM.meta.toml`, with
-//! `STEM = NAME` or `NAME.shard-K-of-N`.
+//! The result files of one run: `DIR/NAME/STEM.csv`, its side tables `STEM.TABLE.csv` (the kind
+//! declares them: `hist` for the grid study, `levels` and `points` for DETP) and `STEM.meta.toml`,
+//! with `STEM = NAME` or `NAME.shard-K-of-N`.
 //!
-//! While a run goes, rows are appended to `STEM.csv.partial` (and `.hist.csv.partial`) and flushed
+//! While a run goes, rows are appended to `STEM.csv.partial` (and `.TABLE.csv.partial`) and flushed
 //! after every point, so a killed run keeps every finished point; `--resume` reads them back (after
 //! checking the spec hash recorded in `STEM.meta.toml.partial`), drops a torn last line, and goes on.
 //! Only a finished run renames the partial files into place.
@@ -12,8 +13,8 @@ use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use super::csv::{header, record};
+use super::row::Row;
 use super::OutputError;
-use crate::experiment::Row;
 
 /// How a run treats existing files.
 #[derive(Clone, Copy, Debug, Default)]
@@ -22,8 +23,19 @@ pub struct SinkOptions {
     pub force: bool,
     /// Continue a partial run.
     pub resume: bool,
-    /// Name of the second table, `STEM.TABLE.csv` (default `hist`: histograms of the grid study).
-    pub table: Option<&'static str>,
+    /// Names of the side tables, `STEM.TABLE.csv` (a table no point writes to is not kept).
+    pub tables: &'static [&'static str],
+}
+
+/// One open side table.
+#[derive(Debug)]
+struct SideTable {
+    /// Its name, as in `STEM.NAME.csv`.
+    name: &'static str,
+    /// File suffix `NAME.csv`.
+    suffix: String,
+    file: File,
+    has_header: bool,
 }
 
 /// Open result files of a run in progress.
@@ -32,11 +44,8 @@ pub struct Sink {
     dir: PathBuf,
     stem: String,
     csv: File,
-    hist: File,
-    /// Suffix of the second table's file, `TABLE.csv`.
-    table: String,
+    tables: Vec<SideTable>,
     csv_has_header: bool,
-    hist_has_header: bool,
     done: BTreeSet<usize>,
     started: String,
 }
@@ -51,7 +60,7 @@ fn err(path: &Path, message: impl Into<String>) -> anyhow::Error {
 }
 
 impl Sink {
-    /// Path of a file of this run: `suffix` is `csv`, `hist.csv` or `meta.toml`.
+    /// Path of a file of this run: `suffix` is `csv`, `TABLE.csv` or `meta.toml`.
     pub fn path(dir: &Path, stem: &str, suffix: &str) -> PathBuf {
         dir.join(format!("{stem}.{suffix}"))
     }
@@ -77,9 +86,8 @@ impl Sink {
         File::create(&probe)
             .map_err(|e| err(dir, format!("the results folder is not writable: {e}")))?;
         let _ = fs::remove_file(&probe);
-        let table = format!("{}.csv", opts.table.unwrap_or("hist"));
+        let suffixes: Vec<String> = opts.tables.iter().map(|t| format!("{t}.csv")).collect();
         let csv_p = Self::partial(dir, stem, "csv");
-        let hist_p = Self::partial(dir, stem, &table);
         let meta_p = Self::partial(dir, stem, "meta.toml");
         let final_csv = Self::path(dir, stem, "csv");
         if final_csv.exists() && opts.resume && !csv_p.exists() {
@@ -92,7 +100,8 @@ impl Sink {
         }
         if opts.resume && csv_p.exists() {
             // A run killed inside `finish` has renamed some files already: take them back.
-            for (suffix, partial) in [(table.as_str(), &hist_p), ("meta.toml", &meta_p)] {
+            for suffix in suffixes.iter().map(String::as_str).chain(["meta.toml"]) {
+                let partial = &Self::partial(dir, stem, suffix);
                 let done = Self::path(dir, stem, suffix);
                 if done.exists() && !partial.exists() {
                     // Files are being changed now: a failure here is not "nothing written" (exit 1).
@@ -102,7 +111,10 @@ impl Sink {
                 }
             }
         }
-        for suffix in ["csv", table.as_str(), "meta.toml"] {
+        for suffix in ["csv", "meta.toml"]
+            .into_iter()
+            .chain(suffixes.iter().map(String::as_str))
+        {
             let p = Self::path(dir, stem, suffix);
             if p.exists() && !opts.force {
                 return Err(err(
@@ -113,7 +125,8 @@ impl Sink {
         }
         let started: Option<String>;
         let mut done = BTreeSet::new();
-        let (mut csv_has_header, mut hist_has_header) = (false, false);
+        let mut csv_has_header = false;
+        let mut table_has_header = vec![false; suffixes.len()];
         if csv_p.exists() && opts.resume {
             let recorded = fs::read_to_string(&meta_p).unwrap_or_default();
             started = recorded
@@ -138,39 +151,46 @@ impl Sink {
                     .ok_or_else(|| err(&csv_p, format!("unreadable row: {line}")))?;
                 done.insert(point);
             }
-            // Keep histogram rows only of points whose main row was written.
-            let hist_rows = if hist_p.exists() {
-                read_complete(&hist_p).map_err(|e| err(&hist_p, e))?
-            } else {
-                Vec::new()
-            };
-            let mut kept = String::new();
-            for (i, line) in hist_rows.iter().enumerate() {
-                let keep = i == 0
-                    || line
-                        .split(',')
-                        .next()
-                        .and_then(|p| p.parse::<usize>().ok())
-                        .is_some_and(|p| done.contains(&p));
-                if keep {
-                    kept.push_str(line);
-                    kept.push('\n');
+            // Keep side-table rows only of points whose main row was written.
+            for (suffix, has_header) in suffixes.iter().zip(table_has_header.iter_mut()) {
+                let table_p = Self::partial(dir, stem, suffix);
+                let rows = if table_p.exists() {
+                    read_complete(&table_p).map_err(|e| err(&table_p, e))?
+                } else {
+                    Vec::new()
+                };
+                let mut kept = String::new();
+                for (i, line) in rows.iter().enumerate() {
+                    let keep = i == 0
+                        || line
+                            .split(',')
+                            .next()
+                            .and_then(|p| p.parse::<usize>().ok())
+                            .is_some_and(|p| done.contains(&p));
+                    if keep {
+                        kept.push_str(line);
+                        kept.push('\n');
+                    }
                 }
+                *has_header = !rows.is_empty();
+                // Rewrite through a temporary file: a kill here must not lose finished points' rows.
+                let tmp = Self::partial(dir, stem, &format!("{suffix}.tmp"));
+                fs::write(&tmp, kept)
+                    .and_then(|()| fs::rename(&tmp, &table_p))
+                    .map_err(|e| anyhow::anyhow!("could not rewrite {}: {e}", table_p.display()))?;
             }
-            hist_has_header = !hist_rows.is_empty();
-            // Rewrite through a temporary file: a kill here must not lose finished points' rows.
-            let tmp = Self::partial(dir, stem, &format!("{table}.tmp"));
-            fs::write(&tmp, kept)
-                .and_then(|()| fs::rename(&tmp, &hist_p))
-                .map_err(|e| anyhow::anyhow!("could not rewrite {}: {e}", hist_p.display()))?;
         } else if csv_p.exists() && !opts.force {
             return Err(err(
                 &csv_p,
                 "a partial run exists: pass --resume to continue it, or --force to start over",
             ));
         } else {
-            for p in [&csv_p, &hist_p] {
-                File::create(p).map_err(|e| err(p, e.to_string()))?;
+            for suffix in ["csv"]
+                .into_iter()
+                .chain(suffixes.iter().map(String::as_str))
+            {
+                let p = Self::partial(dir, stem, suffix);
+                File::create(&p).map_err(|e| err(&p, e.to_string()))?;
             }
             let mut m = File::create(&meta_p).map_err(|e| err(&meta_p, e.to_string()))?;
             let now = super::time::now_rfc3339();
@@ -184,14 +204,21 @@ impl Sink {
                 .open(p)
                 .map_err(|e| err(p, e.to_string()))
         };
+        let mut tables = Vec::with_capacity(suffixes.len());
+        for ((name, suffix), has_header) in opts.tables.iter().zip(suffixes).zip(table_has_header) {
+            tables.push(SideTable {
+                name,
+                file: open(&Self::partial(dir, stem, &suffix))?,
+                suffix,
+                has_header,
+            });
+        }
         Ok(Some(Sink {
             dir: dir.to_path_buf(),
             stem: stem.to_string(),
-            table,
             csv: open(&csv_p)?,
-            hist: open(&hist_p)?,
+            tables,
             csv_has_header,
-            hist_has_header,
             done,
             started: started.unwrap_or_else(super::time::now_rfc3339),
         }))
@@ -207,19 +234,27 @@ impl Sink {
         &self.done
     }
 
-    /// Appends one point: its rows of the second table (histograms) first, then its main row, each
-    /// flushed to disk.
-    pub fn append(&mut self, row: &Row, hist: &[Row]) -> std::io::Result<()> {
-        let mut h = Vec::new();
-        if !hist.is_empty() && !self.hist_has_header {
-            h.extend(header(&hist[0]));
-            self.hist_has_header = true;
+    /// Appends one point: its rows of each side table first, then its main row, each flushed to
+    /// disk (so a point whose main row is on disk has all its side rows there too). Rows for a table
+    /// the sink was not opened with are a programming error.
+    pub fn append(&mut self, row: &Row, side: &[(&'static str, Vec<Row>)]) -> std::io::Result<()> {
+        for (name, rows) in side {
+            let t = self
+                .tables
+                .iter_mut()
+                .find(|t| t.name == *name)
+                .unwrap_or_else(|| panic!("side table '{name}' was not declared for this kind"));
+            let mut h = Vec::new();
+            if !rows.is_empty() && !t.has_header {
+                h.extend(header(&rows[0]));
+                t.has_header = true;
+            }
+            for r in rows {
+                h.extend(record(r));
+            }
+            t.file.write_all(&h)?;
+            t.file.sync_data()?;
         }
-        for r in hist {
-            h.extend(record(r));
-        }
-        self.hist.write_all(&h)?;
-        self.hist.sync_data()?;
         let mut m = Vec::new();
         if !self.csv_has_header {
             m.extend(header(row));
@@ -232,22 +267,24 @@ impl Sink {
 
     /// Writes the metadata and renames the partial files into place.
     pub fn finish(self, meta: &str) -> std::io::Result<Vec<PathBuf>> {
-        let (dir, stem, table) = (self.dir, self.stem, self.table);
+        let (dir, stem) = (self.dir, self.stem);
         drop(self.csv);
-        drop(self.hist);
         let meta_p = Self::partial(&dir, &stem, "meta.toml");
         fs::write(&meta_p, meta)?;
         let mut written = Vec::new();
-        let hist_p = Self::partial(&dir, &stem, &table);
-        if fs::metadata(&hist_p)?.len() > 0 {
-            fs::rename(&hist_p, Self::path(&dir, &stem, &table))?;
-            written.push(Self::path(&dir, &stem, &table));
-        } else {
-            fs::remove_file(&hist_p)?;
-            // A second table of an earlier run (replaced with --force) must not sit beside this one.
-            let stale = Self::path(&dir, &stem, &table);
-            if stale.exists() {
-                fs::remove_file(stale)?;
+        for t in self.tables {
+            drop(t.file);
+            let table_p = Self::partial(&dir, &stem, &t.suffix);
+            if fs::metadata(&table_p)?.len() > 0 {
+                fs::rename(&table_p, Self::path(&dir, &stem, &t.suffix))?;
+                written.push(Self::path(&dir, &stem, &t.suffix));
+            } else {
+                fs::remove_file(&table_p)?;
+                // A side table of an earlier run (replaced with --force) must not sit beside this one.
+                let stale = Self::path(&dir, &stem, &t.suffix);
+                if stale.exists() {
+                    fs::remove_file(stale)?;
+                }
             }
         }
         fs::rename(&meta_p, Self::path(&dir, &stem, "meta.toml"))?;

@@ -2,7 +2,7 @@
 
 use std::fmt::Write;
 
-use crate::experiment::grid::PointResult;
+use crate::experiment::PointResult;
 use crate::stats::Estimate;
 
 /// Formats the summary table of the finished points.

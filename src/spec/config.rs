@@ -2,6 +2,7 @@
 
 use glam::DVec3;
 
+use super::detp::DetpConfig;
 use super::raw::{Extent, Kind, RawDist, RawDraw, RawRadius, RawSpec};
 use crate::grid::build::estimated_bytes;
 use crate::scene::finite::{FiniteScene, FiniteSize};
@@ -61,11 +62,92 @@ pub struct GridConfig {
 /// A failed cross-key check: (dotted key to blame, message).
 pub type ConfigError = (String, String);
 
+/// What the engines of one point see: a grid study or a DETP run.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PointConfig {
+    /// Kinds `grid`, `grid-scaling`, `grid-cost-model`.
+    Grid(GridConfig),
+    /// Kind `detp`.
+    Detp(DetpConfig),
+}
+
+impl PointConfig {
+    /// Validates a raw point spec for its kind; `base_dir` is the spec's folder (paths in it are
+    /// relative to it).
+    pub fn from_raw(raw: &RawSpec, base_dir: &std::path::Path) -> Result<Self, ConfigError> {
+        let e = |k: &str, m: String| (k.to_string(), m);
+        let kind = raw.experiment.kind;
+        let foreign = |table: &str, present: bool| -> Result<(), ConfigError> {
+            if present {
+                Err(e(
+                    table,
+                    format!(
+                        "the [{table}] table does not belong to kind {}",
+                        kind.as_str()
+                    ),
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        match kind {
+            Kind::Detp => {
+                foreign("scene", raw.scene.is_some())?;
+                foreign("grid", raw.grid.is_some())?;
+                foreign("histogram", raw.histogram.is_some())?;
+                foreign("scaling", raw.scaling.is_some())?;
+                if raw.experiment.rays.is_some() {
+                    return Err(e(
+                        "experiment.rays",
+                        "kind detp counts its rays in detp.photons".into(),
+                    ));
+                }
+                let d = raw
+                    .detp
+                    .as_ref()
+                    .ok_or_else(|| e("detp", "missing: kind detp needs a [detp] table".into()))?;
+                DetpConfig::from_raw(raw.experiment.seed, d, base_dir).map(PointConfig::Detp)
+            }
+            Kind::Grid | Kind::GridScaling | Kind::GridCostModel => {
+                foreign("detp", raw.detp.is_some())?;
+                GridConfig::from_raw(raw).map(PointConfig::Grid)
+            }
+        }
+    }
+
+    /// The grid config, for grid kinds.
+    pub fn grid(&self) -> Option<&GridConfig> {
+        match self {
+            PointConfig::Grid(g) => Some(g),
+            PointConfig::Detp(_) => None,
+        }
+    }
+
+    /// Units of work for progress: rays (grid) or rays × replicas (DETP).
+    pub fn work(&self) -> u64 {
+        match self {
+            PointConfig::Grid(g) => g.rays,
+            PointConfig::Detp(d) => d.photons * d.replicas,
+        }
+    }
+}
+
 impl GridConfig {
-    /// Validates the cross-key rules of a raw point spec.
+    /// Validates the cross-key rules of a raw point spec of a grid kind.
     pub fn from_raw(raw: &RawSpec) -> Result<Self, ConfigError> {
         let e = |k: &str, m: String| (k.to_string(), m);
-        let s = &raw.scene;
+        let missing = |k: &str| {
+            e(
+                k,
+                format!("missing: kind {} needs it", raw.experiment.kind.as_str()),
+            )
+        };
+        let s = raw.scene.as_ref().ok_or_else(|| missing("scene"))?;
+        let g = raw.grid.as_ref().ok_or_else(|| missing("grid"))?;
+        let rays = raw
+            .experiment
+            .rays
+            .ok_or_else(|| missing("experiment.rays"))?;
         let classes = match (s.radius, s.class.is_empty()) {
             (Some(r), true) => vec![RadiusClass {
                 fraction: 1.0,
@@ -145,13 +227,13 @@ impl GridConfig {
         if s.replicas.is_some() && scene == SceneModel::Infinite {
             return Err(e("scene.replicas", "only a finite scene has replicas (every batch of an infinite scene is a new realisation already)".into()));
         }
-        if s.replicas.is_some_and(|r| r > raw.experiment.rays) {
+        if s.replicas.is_some_and(|r| r > rays) {
             return Err(e(
                 "scene.replicas",
                 format!(
                     "got {}, more than experiment.rays = {}",
                     s.replicas.unwrap_or(0),
-                    raw.experiment.rays
+                    rays
                 ),
             ));
         }
@@ -168,12 +250,12 @@ impl GridConfig {
                     }
                 })
                 .fold(f64::INFINITY, f64::min);
-            let magnitude = center.abs().max_element() + fs.side() + 2.0 * raw.grid.cell_width;
+            let magnitude = center.abs().max_element() + fs.side() + 2.0 * g.cell_width;
             let pad = 64.0 * f64::EPSILON * magnitude;
-            if pad > 1e-6 * r_min.min(raw.grid.cell_width) {
+            if pad > 1e-6 * r_min.min(g.cell_width) {
                 return Err(e(
                     "scene.center",
-                    format!("coordinates of magnitude {magnitude:.3e} make rounding (64ε·magnitude = {pad:.2e}) exceed 10⁻⁶ of the smallest radius or the cell width ({:.2e}); place the scene nearer the origin", r_min.min(raw.grid.cell_width)),
+                    format!("coordinates of magnitude {magnitude:.3e} make rounding (64ε·magnitude = {pad:.2e}) exceed 10⁻⁶ of the smallest radius or the cell width ({:.2e}); place the scene nearer the origin", r_min.min(g.cell_width)),
                 ));
             }
         }
@@ -190,7 +272,6 @@ impl GridConfig {
                 ),
             ));
         }
-        let g = &raw.grid;
         let a = g.cell_width;
         // Memory of a finite grid, estimated before anything is allocated.
         if let SceneModel::Finite(fs) = &scene {
@@ -226,11 +307,8 @@ impl GridConfig {
                 ));
             }
         }
-        if raw.experiment.rays > 10_000_000_000 {
-            return Err(e(
-                "experiment.rays",
-                format!("got {}, at most 10¹⁰", raw.experiment.rays),
-            ));
+        if rays > 10_000_000_000 {
+            return Err(e("experiment.rays", format!("got {rays}, at most 10¹⁰")));
         }
         if g.rays_per_scene > crate::experiment::grid::BATCH {
             return Err(e(
@@ -253,7 +331,7 @@ impl GridConfig {
         Ok(Self {
             kind,
             seed: raw.experiment.seed,
-            rays: raw.experiment.rays,
+            rays,
             intensity: s.intensity,
             classes,
             draw,

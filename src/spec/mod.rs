@@ -7,11 +7,13 @@
 //! memory a finite grid would need) come last and name the key they blame.
 
 pub mod config;
+pub mod detp;
 pub mod error;
 pub mod raw;
 pub mod sweep;
 
-pub use config::{GridConfig, SceneModel};
+pub use config::{GridConfig, PointConfig, SceneModel};
+pub use detp::DetpConfig;
 pub use error::SpecError;
 pub use raw::{Kind, RawSpec};
 pub use sweep::{Point, Spec};

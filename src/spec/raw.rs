@@ -9,10 +9,15 @@ use serde::{de::Error as _, Deserialize, Deserializer, Serialize};
 pub struct RawSpec {
     /// `[experiment]`: what to run.
     pub experiment: RawExperiment,
-    /// `[scene]`: what is traced.
-    pub scene: RawScene,
-    /// `[grid]`: the acceleration structure.
-    pub grid: RawGrid,
+    /// `[scene]`: the Poisson sphere scene (grid kinds).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scene: Option<RawScene>,
+    /// `[grid]`: the acceleration structure (grid kinds).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grid: Option<RawGrid>,
+    /// `[detp]`: rays, points, discs and engines (kind `detp`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub detp: Option<super::detp::RawDetp>,
     /// `[histogram]`: binning of the t* and N_I distributions.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub histogram: Option<RawHistogram>,
@@ -31,14 +36,18 @@ pub struct RawExperiment {
     /// Result folder and file stem: letters, digits, `-` and `_`.
     #[serde(deserialize_with = "name")]
     pub name: String,
-    /// `grid`, `grid-scaling` or `grid-cost-model`.
+    /// `grid`, `grid-scaling`, `grid-cost-model` or `detp`.
     pub kind: Kind,
     /// Master seed of every random stream.
     #[serde(default = "default_seed")]
     pub seed: u64,
-    /// Rays per sweep point.
-    #[serde(deserialize_with = "count")]
-    pub rays: u64,
+    /// Rays per sweep point (grid kinds; DETP counts its rays in `detp.photons`).
+    #[serde(
+        default,
+        deserialize_with = "opt_count",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub rays: Option<u64>,
     /// Free text copied into the metadata.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub description: Option<String>,
@@ -54,6 +63,9 @@ pub enum Kind {
     GridScaling,
     /// Machine costs T_I and T_S, the model t = N_I·T_I + N_S·T_S, and timed query cost.
     GridCostModel,
+    /// DETP: a ray store (uniform lines or photons), discs on sample points, and the engines that
+    /// gather the segments crossing each disc (sphere cache, disc index, brute force, photon map).
+    Detp,
 }
 
 impl Kind {
@@ -63,6 +75,7 @@ impl Kind {
             Kind::Grid => "grid",
             Kind::GridScaling => "grid-scaling",
             Kind::GridCostModel => "grid-cost-model",
+            Kind::Detp => "detp",
         }
     }
 }
@@ -363,7 +376,7 @@ fn default_bf_rays() -> u64 {
     2_000
 }
 
-fn check_positive(x: f64) -> Result<f64, String> {
+pub(super) fn check_positive(x: f64) -> Result<f64, String> {
     if x.is_finite() && x > 0.0 {
         Ok(x)
     } else {
@@ -371,7 +384,7 @@ fn check_positive(x: f64) -> Result<f64, String> {
     }
 }
 
-fn number<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+pub(super) fn number<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     match toml::Value::deserialize(d)? {
         toml::Value::Float(x) => Ok(x),
         toml::Value::Integer(i) => Ok(i as f64),
@@ -379,11 +392,11 @@ fn number<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     }
 }
 
-fn positive<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+pub(super) fn positive<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     check_positive(number(d)?).map_err(D::Error::custom)
 }
 
-fn opt_positive<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+pub(super) fn opt_positive<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
     positive(d).map(Some)
 }
 
@@ -398,7 +411,7 @@ fn fraction<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     }
 }
 
-fn count<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
+pub(super) fn count<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
     match toml::Value::deserialize(d)? {
         toml::Value::Integer(i) if i >= 1 => Ok(i as u64),
         toml::Value::Float(x) if x.is_finite() && x >= 1.0 && x.fract() == 0.0 && x < 9.0e18 => {
@@ -410,7 +423,7 @@ fn count<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
     }
 }
 
-fn opt_count<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
+pub(super) fn opt_count<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
     count(d).map(Some)
 }
 

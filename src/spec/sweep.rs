@@ -8,7 +8,7 @@ use std::path::Path;
 
 use sha2::{Digest, Sha256};
 
-use super::config::GridConfig;
+use super::config::PointConfig;
 use super::error::{find_key, line_col, SpecError};
 use super::raw::RawSpec;
 
@@ -25,7 +25,7 @@ pub struct Point {
     /// The point's full spec after expansion.
     pub raw: RawSpec,
     /// What the engines see.
-    pub config: GridConfig,
+    pub config: PointConfig,
 }
 
 /// A loaded, validated spec and its points.
@@ -110,7 +110,14 @@ impl Spec {
                 return Err(at(
                     find_key(text, key),
                     Some(format!("sweep.{key}")),
-                    "only scene, grid, histogram and scaling keys can be swept".into(),
+                    "only scene, grid, histogram, scaling and detp keys can be swept".into(),
+                ));
+            }
+            if key == "detp.engines" {
+                return Err(at(
+                    find_key(text, key),
+                    Some(format!("sweep.{key}")),
+                    "cannot be swept: the engines decide the table's columns, which must be the same for every point".into(),
                 ));
             }
         }
@@ -212,7 +219,8 @@ impl Spec {
                     None => at(find_key(text, &k), Some(k), m),
                 }
             })?;
-            let config = GridConfig::from_raw(&raw).map_err(|(k, m)| {
+            let base_dir = Path::new(name).parent().unwrap_or(Path::new(""));
+            let config = PointConfig::from_raw(&raw, base_dir).map_err(|(k, m)| {
                 let swept = sweep.iter().find(|(s, _)| *s == k).map(|(s, _)| s.clone());
                 if let Some(i) = set_keys.iter().position(|s| *s == k) {
                     return SpecError {
@@ -404,14 +412,17 @@ cell_width = 0.5
         assert_eq!(s.points.len(), 6);
         assert_eq!(s.points[1].params[0].1.as_float(), Some(0.25));
         assert_eq!(s.points[1].params[1].1.as_float(), Some(2.0));
-        assert_eq!(s.points[5].config.cell_width, 1.0);
+        assert_eq!(s.points[5].config.grid().unwrap().cell_width, 1.0);
     }
 
     #[test]
     fn set_overrides_and_unsweeps() {
         let s = Spec::from_text("t.toml", BASE, &["grid.cell_width=0.7".into()]).expect("valid");
         assert_eq!(s.points.len(), 2);
-        assert!(s.points.iter().all(|p| p.config.cell_width == 0.7));
+        assert!(s
+            .points
+            .iter()
+            .all(|p| p.config.grid().unwrap().cell_width == 0.7));
         assert_eq!(
             s.points[0].params.last().map(|p| p.0.as_str()),
             Some("grid.cell_width")

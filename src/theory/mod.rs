@@ -9,4 +9,5 @@
 //! Note on layering: the theory reads the radius laws of [`crate::scene::radius`] (a plain data type
 //! with its own quadrature), so that theory and scene integrate exactly the same truncated law.
 
+pub mod detp;
 pub mod grid;
