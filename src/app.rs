@@ -96,12 +96,102 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 write!(std::io::stdout().lock(), "{}", grid_theory_table(&inp, eye))?;
                 Ok(())
             }
+            TheoryCommand::Detp(d) => {
+                let ok = |name: &str, v: f64, good: bool, want: &str| {
+                    if good {
+                        Ok(())
+                    } else {
+                        Err(UsageError(format!("{name}: got {v}, expected {want}")))
+                    }
+                };
+                ok(
+                    "--rays",
+                    d.rays,
+                    d.rays.is_finite() && d.rays >= 1.0,
+                    "a count ≥ 1",
+                )?;
+                ok(
+                    "--points",
+                    d.points,
+                    d.points.is_finite() && d.points >= 1.0,
+                    "a count ≥ 1",
+                )?;
+                ok("--q", d.q, d.q > 0.0 && d.q < 1.0, "a ratio in (0, 1)")?;
+                ok(
+                    "--ratio",
+                    d.ratio,
+                    d.ratio > 0.0 && d.ratio <= 1.0,
+                    "r_D/r_0 in (0, 1]",
+                )?;
+                ok(
+                    "--threshold",
+                    d.threshold,
+                    d.threshold.is_finite() && d.threshold >= 1.0,
+                    "a count ≥ 1",
+                )?;
+                write!(std::io::stdout().lock(), "{}", detp_theory_table(&d))?;
+                Ok(())
+            }
         },
         Command::Bench(b) => crate::bench::run(b.quick, &b.out, b.force),
         Command::Merge(m) => {
             crate::output::merge::run(&m.inputs, m.out.as_deref(), m.force, m.quiet)
         }
     }
+}
+
+/// The closed forms of `theory::detp` for one parameter set, as a table (costs in tests, t = u = 1).
+pub fn detp_theory_table(d: &crate::cli::DetpTheoryArgs) -> String {
+    use crate::theory::detp as td;
+    let (n_r, n_p, q) = (d.rays, d.points, d.q);
+    let (t_r, t_i) = td::sphere_cache_cost(1.0, 1.0, n_r, n_p, q);
+    let f_r = td::retraced_rays(n_r, d.ratio);
+    let (st_sc, st_di) = td::static_points_cost(f_r, n_p, q);
+    let (dy_sc, dy_di) = td::dynamic_points_cost(n_r, d.ratio, n_p, q);
+    let rows = [
+        ("sphere cache T_R = t·n_R/Q²·(∛n_P − 1)/(1 − Q)", t_r),
+        ("sphere cache T_I = (4/3)·u·n_R·∛n_P", t_i),
+        ("sphere cache T = T_R + T_I (Theorem 1)", t_r + t_i),
+        (
+            "disc indexing T = u·n_R·∛n_P (Theorem 1)",
+            td::disc_index_cost(1.0, n_r, n_p),
+        ),
+        (
+            "1/(Q²(1 − Q)) (Proposition 1: 6.75 at Q = 2/3)",
+            td::rebuild_factor(q),
+        ),
+        ("optimal Q (Proposition 1)", td::OPTIMAL_Q),
+        ("f_R = n_R·(r_D/r_0)² re-traced rays (eq. 11)", f_r),
+        ("static points, sphere cache (eq. 13)", st_sc),
+        ("static points, disc indexing 2·f_R·∛n (eq. 14)", st_di),
+        ("dynamic points, sphere cache (eq. 15)", dy_sc),
+        ("dynamic points, disc indexing n_R·∛n", dy_di),
+        (
+            "crossover r_D/r_0, n → ∞ (Theorem 2: 0.35)",
+            td::crossover_ratio(q, f64::INFINITY),
+        ),
+        ("crossover r_D/r_0 at this n_P", td::crossover_ratio(q, n_p)),
+    ];
+    let mut s = format!(
+        "DETP theory: n_R = {n_r}, n_P = {n_p}, Q = {q}, r_D/r_0 = {}; costs in tests (t = u = 1)\n",
+        d.ratio
+    );
+    for (k, v) in rows {
+        s.push_str(&format!("  {k:<52} {v:>16.6e}\n"));
+    }
+    s.push_str(&format!(
+        "  rays per level n_R·Q^(2i), subdivided while ≥ {} rays:\n",
+        d.threshold
+    ));
+    let deepest = td::deepest_level(n_r, q, d.threshold, 1.0, 0.0);
+    for i in 0..=deepest.min(200) {
+        s.push_str(&format!(
+            "    level {i:>3}  r_i/r_0 = {:<12.6e} rays {:>14.3}\n",
+            q.powi(i as i32),
+            td::rays_per_level(n_r, q, i)
+        ));
+    }
+    s
 }
 
 /// The closed forms of `theory::grid` for one parameter set, as a table.

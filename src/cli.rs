@@ -98,6 +98,28 @@ pub struct TheoryArgs {
 pub enum TheoryCommand {
     /// Regular grid over Poisson spheres (Márton & Szirmay-Kalos).
     Grid(GridTheoryArgs),
+    /// DETP: sphere cache vs disc indexing, rays per level, quasi-static crossover.
+    Detp(DetpTheoryArgs),
+}
+
+/// `raycost theory detp`.
+#[derive(Debug, Args)]
+pub struct DetpTheoryArgs {
+    /// n_R, rays (photon segments or lines).
+    #[arg(long)]
+    pub rays: f64,
+    /// n_P, irradiance points.
+    #[arg(long)]
+    pub points: f64,
+    /// Q, ratio of consecutive sphere radii.
+    #[arg(long, default_value_t = 2.0 / 3.0)]
+    pub q: f64,
+    /// r_D/r_0, the dynamic object's bounding radius over the root sphere's.
+    #[arg(long, default_value_t = 0.1)]
+    pub ratio: f64,
+    /// Subdivision threshold (rays).
+    #[arg(long, default_value_t = 100.0)]
+    pub threshold: f64,
 }
 
 /// `raycost theory grid`.
