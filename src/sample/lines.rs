@@ -26,6 +26,20 @@ pub fn uniform_line<R: Rng + ?Sized>(rng: &mut R) -> (DVec3, DVec3) {
     }
 }
 
+/// A point uniform in the unit ball (rejection from the cube [−1, 1]³: acceptance π/6).
+pub fn uniform_in_ball<R: Rng + ?Sized>(rng: &mut R) -> DVec3 {
+    loop {
+        let p = DVec3::new(
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+        );
+        if p.length_squared() <= 1.0 {
+            return p;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -48,5 +62,23 @@ mod tests {
         let f = f64::from(hits) / f64::from(n);
         let se = (q * q * (1.0 - q * q) / f64::from(n)).sqrt();
         assert!((f - q * q).abs() < 5.0 * se, "fraction {f} vs {}", q * q);
+    }
+
+    /// Uniform in the ball: P(|p| ≤ s) = s³, and the mean point is the centre.
+    #[test]
+    fn ball_points_fill_the_volume_uniformly() {
+        let mut rng = stream(&[12]);
+        let n = 200_000;
+        let (mut inner, mut mean) = (0u32, DVec3::ZERO);
+        for _ in 0..n {
+            let p = uniform_in_ball(&mut rng);
+            assert!(p.length() <= 1.0);
+            inner += u32::from(p.length() <= 0.5);
+            mean += p;
+        }
+        let f = f64::from(inner) / f64::from(n);
+        let se = (0.125 * 0.875 / f64::from(n)).sqrt();
+        assert!((f - 0.125).abs() < 5.0 * se, "{f}");
+        assert!((mean / f64::from(n)).abs().max_element() < 5.0 * (0.2 / f64::from(n)).sqrt());
     }
 }

@@ -53,6 +53,12 @@ pub mod domain {
     pub const SCENE: u64 = 0x7363_656e;
     /// One block of a lazily generated Poisson scene: `[BLOCK, scene seed, class, x, y, z]`.
     pub const BLOCK: u64 = 0x626c_6f63;
+    /// A batch of μ-random lines of a DETP point: `[LINES, seed, point, replica, batch]`.
+    pub const LINES: u64 = 0x6c69_6e65;
+    /// A batch of DETP sample points: `[POINTS, seed, point, batch]`.
+    pub const POINTS: u64 = 0x706f_696e;
+    /// The subset of points checked by brute force: `[CHECK, seed, point]`.
+    pub const CHECK: u64 = 0x6368_6563;
 }
 
 #[cfg(test)]

@@ -46,9 +46,9 @@ pub struct RawDetp {
         skip_serializing_if = "Option::is_none"
     )]
     pub point_spacing: Option<f64>,
-    /// d: disc radius.
-    #[serde(deserialize_with = "positive")]
-    pub disc_radius: f64,
+    /// d: a disc radius, or `"spacing"`: the points' mean spacing (uniform in the ball:
+    /// (4π/3 / n_P)^(1/3); on surfaces: `point_spacing`), the paper's d for Theorem 1.
+    pub disc_radius: DiscRadius,
     /// Q ∈ (0, 1): ratio of consecutive sphere radii.
     #[serde(default = "two_thirds", deserialize_with = "open_unit")]
     pub q: f64,
@@ -173,6 +173,41 @@ impl EngineChoice {
             EngineChoice::DiscIndex => "disc_index",
             EngineChoice::BruteForce => "brute_force",
             EngineChoice::PhotonMap => "photon_map",
+        }
+    }
+}
+
+/// `detp.disc_radius`: a number > 0 or `"spacing"`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DiscRadius {
+    /// This radius.
+    Value(f64),
+    /// The mean spacing of the points.
+    Spacing,
+}
+
+impl<'de> Deserialize<'de> for DiscRadius {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        match toml::Value::deserialize(d)? {
+            toml::Value::String(s) if s == "spacing" => Ok(DiscRadius::Spacing),
+            toml::Value::Float(x) => super::raw::check_positive(x)
+                .map(DiscRadius::Value)
+                .map_err(D::Error::custom),
+            toml::Value::Integer(i) => super::raw::check_positive(i as f64)
+                .map(DiscRadius::Value)
+                .map_err(D::Error::custom),
+            other => Err(D::Error::custom(format!(
+                "got {other}, expected a radius > 0 or \"spacing\""
+            ))),
+        }
+    }
+}
+
+impl Serialize for DiscRadius {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            DiscRadius::Value(x) => s.serialize_f64(*x),
+            DiscRadius::Spacing => s.serialize_str("spacing"),
         }
     }
 }
@@ -338,32 +373,41 @@ impl DetpConfig {
             Rays::Lines => PointSourceKind::Ball,
             Rays::Scene(_) => PointSourceKind::Surface,
         });
-        let points = match kind {
-            PointSourceKind::Ball => Points::Ball(d.points.ok_or_else(|| {
-                e(
-                    "detp.points",
-                    "missing: points uniform in the ball need a count".into(),
-                )
-            })?),
-            PointSourceKind::Surface => {
-                if matches!(rays, Rays::Lines) {
-                    return Err(e(
-                        "detp.point_source",
-                        "\"surface\" needs a scene (detp.source = \"scene\")".into(),
-                    ));
-                }
-                Points::Surface(d.point_spacing.unwrap_or(2.0 * d.disc_radius))
-            }
-            PointSourceKind::File => Points::File(resolve(
-                "detp.points_file",
-                d.points_file.as_deref().ok_or_else(|| {
+        let points =
+            match kind {
+                PointSourceKind::Ball => Points::Ball(d.points.ok_or_else(|| {
                     e(
-                        "detp.points_file",
-                        "missing: point_source = \"file\" needs a CSV".into(),
+                        "detp.points",
+                        "missing: points uniform in the ball need a count".into(),
                     )
-                })?,
-            )?),
-        };
+                })?),
+                PointSourceKind::Surface => {
+                    if matches!(rays, Rays::Lines) {
+                        return Err(e(
+                            "detp.point_source",
+                            "\"surface\" needs a scene (detp.source = \"scene\")".into(),
+                        ));
+                    }
+                    Points::Surface(match (d.point_spacing, d.disc_radius) {
+                        (Some(s), _) => s,
+                        (None, DiscRadius::Value(r)) => 2.0 * r,
+                        (None, DiscRadius::Spacing) => return Err(e(
+                            "detp.point_spacing",
+                            "missing: with disc_radius = \"spacing\" surface points need a spacing"
+                                .into(),
+                        )),
+                    })
+                }
+                PointSourceKind::File => Points::File(resolve(
+                    "detp.points_file",
+                    d.points_file.as_deref().ok_or_else(|| {
+                        e(
+                            "detp.points_file",
+                            "missing: point_source = \"file\" needs a CSV".into(),
+                        )
+                    })?,
+                )?),
+            };
         if d.points.is_some() && kind != PointSourceKind::Ball {
             return Err(e(
                 "detp.points",
@@ -422,12 +466,25 @@ impl DetpConfig {
                 ),
             ));
         }
+        let disc_radius = match (d.disc_radius, &points) {
+            (DiscRadius::Value(r), _) => r,
+            (DiscRadius::Spacing, Points::Ball(n)) => {
+                crate::theory::detp::ball_spacing(1.0, *n as f64)
+            }
+            (DiscRadius::Spacing, Points::Surface(s)) => *s,
+            (DiscRadius::Spacing, Points::File(_)) => {
+                return Err(e(
+                    "detp.disc_radius",
+                    "\"spacing\" is unknown for points from a file: give a radius".into(),
+                ))
+            }
+        };
         Ok(Self {
             seed,
             rays,
             photons: d.photons,
             points,
-            disc_radius: d.disc_radius,
+            disc_radius,
             q: d.q,
             threshold: d.threshold,
             order: d.order,
@@ -436,7 +493,7 @@ impl DetpConfig {
             chunk_points: d.chunk_points,
             engines: d.engines.clone(),
             index: d.index,
-            index_cell_width: d.index_cell_width.unwrap_or(2.0 * d.disc_radius),
+            index_cell_width: d.index_cell_width.unwrap_or(2.0 * disc_radius),
             octree_leaf: d.octree_leaf,
             brute_force_points: d.brute_force_points,
             photon_map_k: d.photon_map_k,

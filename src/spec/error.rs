@@ -41,18 +41,18 @@ pub fn line_col(text: &str, at: usize) -> (usize, usize) {
 /// the line `leaf =` inside its table. Used for errors found after expansion, where serde has no span.
 pub fn find_key(text: &str, key: &str) -> Option<(usize, usize)> {
     let quoted = format!("\"{key}\"");
-    if let Some(i) = text.find(&quoted) {
+    if let Some(i) = find_line_start(text, &quoted) {
         return Some(line_col(text, i));
     }
     let Some((table, leaf)) = key.rsplit_once('.') else {
         // A whole table: its header line.
         return [format!("[[{key}]]"), format!("[{key}]")]
             .iter()
-            .find_map(|h| text.find(h.as_str()))
+            .find_map(|h| find_line_start(text, h))
             .map(|i| line_col(text, i));
     };
     let header = format!("[{table}]");
-    let Some(start) = text.find(&header) else {
+    let Some(start) = find_line_start(text, &header) else {
         return find_key(text, table);
     };
     let mut offset = start;
@@ -76,6 +76,20 @@ pub fn find_key(text: &str, key: &str) -> Option<(usize, usize)> {
     Some(line_col(text, start))
 }
 
+/// Byte offset of the first line that starts (after indentation) with `needle`: a key or header as
+/// written, never a mention of it in a comment or a string.
+fn find_line_start(text: &str, needle: &str) -> Option<usize> {
+    let mut offset = 0;
+    for line in text.split_inclusive('\n') {
+        let trimmed = line.trim_start();
+        if trimmed.starts_with(needle) {
+            return Some(offset + line.len() - trimmed.len());
+        }
+        offset += line.len();
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -90,6 +104,13 @@ mod tests {
             find_key("[sweep]\n\"grid.cell_width\" = [1]\n", "grid.cell_width"),
             Some((2, 1))
         );
+    }
+
+    #[test]
+    fn comments_that_mention_a_key_are_not_its_location() {
+        let t = "# the [grid] table and \"grid.cell_width\"\n[grid]\ncell_width = 2\n";
+        assert_eq!(find_key(t, "grid"), Some((2, 1)));
+        assert_eq!(find_key(t, "grid.cell_width"), Some((3, 1)));
     }
 
     #[test]

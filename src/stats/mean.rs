@@ -72,6 +72,16 @@ impl ClusteredMean {
         self.cur_sq = 0.0;
     }
 
+    /// Adds one whole cluster from its aggregates: `n` samples summing to `sum`, whose squares sum to
+    /// `sum_sq` (for engines that count per level and report only totals, one cluster per replica).
+    pub fn push_cluster(&mut self, n: u64, sum: f64, sum_sq: f64) {
+        debug_assert!(self.cur_n == 0, "push_cluster between batches only");
+        self.cur_n = n;
+        self.cur_s = sum;
+        self.cur_sq = sum_sq;
+        self.end_batch();
+    }
+
     /// Merges closed batches of `other` after those of `self` (call in batch order for bit-identical
     /// sums whatever the thread count).
     pub fn merge(&mut self, other: &Self) {
