@@ -385,3 +385,19 @@ def save(fig, path, dpi=130):
     fig.savefig(path, dpi=dpi, bbox_inches="tight")
     plt.close(fig)
     print("wrote %s" % path)
+
+
+# --------------------------------------------------------------------------------------------------
+# DETP side tables
+
+
+def with_params(csv_path, table, required=()):
+    """Rows of the side table NAME.TABLE.csv, each extended with its point's parameter columns (the
+    swept or set keys, which only the main table carries). Returns (main rows, joined rows)."""
+    main = read_csv(csv_path)
+    side = read_csv(sibling_csv(csv_path, table), required)
+    params = [c for c in main[0].keys() if "." in c]
+    by_point = {r["point"]: {k: r[k] for k in params} for r in main}
+    for r in side:
+        r.update(by_point.get(r["point"], {}))
+    return main, side
