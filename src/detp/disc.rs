@@ -111,6 +111,8 @@ impl Discs {
 }
 
 /// The exact crossing test of a segment (o, v, t ∈ (0, t_end]) with the disc (c, n, d).
+// The negated comparisons are deliberate: they reject NaN along with the failing values.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 #[inline]
 pub fn crosses(o: DVec3, v: DVec3, t_end: f64, c: DVec3, n: DVec3, d: f64) -> bool {
     let denom = v.dot(n);

@@ -1,1 +1,183 @@
-//! (to be built: see detp/mod.rs)
+//! Disc indexing (the paper's alternative to the sphere cache): the discs go into a spatial index
+//! once, and every segment traverses it, adding (`sign = 1`) or removing (`sign = −1`) its power to
+//! the discs it crosses. Removing old segments and adding new ones is how quasi-static frames are
+//! updated; sums are integers, so the result equals accumulating the surviving segments directly.
+//!
+//! Two indexes share the traversal driver here: a regular grid ([`grid::GridIndex`], reusing the
+//! project's frame, cell-list builder and 3D-DDA) and an octree ([`octree::Octree`], the hierarchy
+//! the paper's cost model assumes). Each hands the driver the candidate discs of a segment, each
+//! disc once (mailboxed); the driver decides every pair with [`Discs::crossed_by`].
+//!
+//! # Why the culling is conservative
+//! Let `B` be the box around all discs ([`Discs::bounds_all`], which holds every disc with a pad),
+//! `M = |B|_∞ + diag(B)` its coordinate scale and `P = 2⁻³⁰·M` the *index pad*: every box the
+//! indexes test (cells, octree nodes, the clip box) is enlarged by at least `P`. For a segment whose
+//! origin lies within `R = 2¹⁰·M` of B's centre, every quantity a traversal computes (a slab
+//! parameter, a clipped entry point, a DDA boundary) is a handful of f64 operations on magnitudes
+//! ≤ 4R, so it is off by at most ~100ε·4R = 400·2⁻⁵³·2¹⁰·M < 2⁻³³·M, eight times below P. A crossing
+//! that [`crate::detp::disc::crosses`] accepts happens at a point x of the segment inside the disc,
+//! hence inside B and inside the box of every cell or node that lists the disc and contains x; the
+//! computed traversal passes within 2⁻³³·M of x, so it tests that box, enlarged by P, and reaches
+//! the disc. Segments starting farther than R (none in the scenes studied: photons start on the
+//! scene's surfaces) are tested against every disc, which is trivially conservative.
+
+pub mod grid;
+pub mod octree;
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::disc::Discs;
+use super::fixed::{add, Acc};
+use super::store::{Segment, SegmentStore};
+use crate::geom::Aabb;
+use crate::grid::mailbox::Mailbox;
+
+pub use grid::GridIndex;
+pub use octree::Octree;
+
+/// Counters of one traversal run, exact integers (the same for any thread count).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct IndexStats {
+    /// Grid cells or octree nodes the segments entered (far-origin segments enter none).
+    pub nodes_visited: u64,
+    /// Segment–disc tests, each distinct (segment, disc) pair once.
+    pub ray_disc_tests: u64,
+}
+
+impl IndexStats {
+    fn merge(mut self, o: Self) -> Self {
+        self.nodes_visited += o.nodes_visited;
+        self.ray_disc_tests += o.ray_disc_tests;
+        self
+    }
+}
+
+/// A spatial index over discs that segments traverse.
+pub trait DiscIndex: Sync {
+    /// The indexed discs.
+    fn discs(&self) -> &Discs;
+
+    /// The index's reach (see the module doc): pad, centre and the origin radius R.
+    fn reach(&self) -> &Reach;
+
+    /// Calls `f` with every candidate disc of `seg` (each once, thanks to `mailbox`, which is
+    /// cleared here) and returns the cells or nodes entered. Only for segments within the reach.
+    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, f: &mut dyn FnMut(u32)) -> u64;
+
+    /// Bytes held by the index (discs included).
+    fn bytes(&self) -> usize;
+
+    /// Adds `sign ×` the power of each segment (all, or those listed in `segments`) to every disc
+    /// it crosses. Parallel over segments; integer sums make the result order-free.
+    fn accumulate(
+        &self,
+        store: &SegmentStore,
+        segments: Option<&[u32]>,
+        sign: i8,
+        acc: &mut [Acc],
+    ) -> IndexStats {
+        let discs = self.discs();
+        assert!(acc.len() >= discs.len(), "one accumulator per disc");
+        let n = segments.map_or(store.len(), <[u32]>::len);
+        let seg_at = |k: usize| &store.segments[segments.map_or(k, |s| s[k] as usize)];
+        let (sums, stats) = (0..n)
+            .into_par_iter()
+            .with_min_len(1 << 12)
+            .fold(
+                || {
+                    (
+                        vec![0 as Acc; discs.len()],
+                        Mailbox::default(),
+                        IndexStats::default(),
+                    )
+                },
+                |(mut sums, mut mb, mut st), k| {
+                    let s = seg_at(k);
+                    let mut test = |i: u32| {
+                        st.ray_disc_tests += 1;
+                        if discs.crossed_by(s, i as usize) {
+                            add(&mut sums[i as usize], s.power, sign);
+                        }
+                    };
+                    if self.reach().holds(s.o()) {
+                        st.nodes_visited += self.candidates(s, &mut mb, &mut test);
+                    } else {
+                        (0..discs.len() as u32).for_each(test);
+                    }
+                    (sums, mb, st)
+                },
+            )
+            .map(|(sums, _, st)| (sums, st))
+            .reduce(
+                || (vec![0; discs.len()], IndexStats::default()),
+                |(mut a, sa), (b, sb)| {
+                    a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+                    (a, sa.merge(sb))
+                },
+            );
+        acc.iter_mut().zip(sums).for_each(|(a, s)| *a += s);
+        stats
+    }
+}
+
+/// Where an index's traversal is provably conservative (see the module doc).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reach {
+    /// Box around all discs.
+    pub bounds: Aabb,
+    /// The pad P every tested box is enlarged by.
+    pub pad: f64,
+    center: DVec3,
+    radius: f64,
+}
+
+impl Reach {
+    /// The reach of an index over `discs` (which must not be empty).
+    pub fn new(discs: &Discs) -> Self {
+        assert!(!discs.is_empty(), "an index needs at least one disc");
+        let bounds = discs.bounds_all();
+        let m = bounds.magnitude() + (bounds.hi - bounds.lo).length();
+        Self {
+            bounds,
+            pad: m * (-30f64).exp2(),
+            center: (bounds.lo + bounds.hi) * 0.5,
+            radius: m * 1024.0,
+        }
+    }
+
+    /// Is a segment starting at `o` within the reach?
+    #[inline]
+    pub fn holds(&self, o: DVec3) -> bool {
+        (o - self.center).length() <= self.radius
+    }
+
+    /// The box `b` enlarged by the pad.
+    #[inline]
+    pub fn padded(&self, b: &Aabb) -> Aabb {
+        Aabb::new(b.lo - DVec3::splat(self.pad), b.hi + DVec3::splat(self.pad))
+    }
+}
+
+/// The parameter range in which the line o + v·t, t ∈ [t0, t1], lies in the closed box `b`
+/// (slab test; a zero direction component keeps the range iff o lies in that slab).
+#[inline]
+pub fn clip(o: DVec3, v: DVec3, b: &Aabb, mut t0: f64, mut t1: f64) -> Option<(f64, f64)> {
+    for k in 0..3 {
+        let (ok, vk, lo, hi) = (o[k], v[k], b.lo[k], b.hi[k]);
+        if vk == 0.0 {
+            if ok < lo || ok > hi {
+                return None;
+            }
+            continue;
+        }
+        let inv = 1.0 / vk;
+        let (a, c) = ((lo - ok) * inv, (hi - ok) * inv);
+        t0 = t0.max(a.min(c));
+        t1 = t1.min(a.max(c));
+    }
+    (t0 <= t1).then_some((t0, t1))
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,127 @@
+//! Discs in a regular grid: the project's [`GridFrame`], cell-list builder and 3D-DDA, with each disc
+//! listed as its bounding ball (radius d plus the index pad) in every cell the ball meets.
+//!
+//! A segment is clipped to the (padded) grid box over t ∈ [0, t_end], then walked cell by cell from
+//! its entry point; a disc listed in several cells is tested once per segment (mailbox).
+
+use glam::DVec3;
+
+use super::{clip, DiscIndex, Reach};
+use crate::detp::disc::Discs;
+use crate::detp::store::Segment;
+use crate::geom::{Aabb, Ray, Sphere};
+use crate::grid::build::{cell_lists, frame_around, grid_magnitude};
+use crate::grid::mailbox::Mailbox;
+use crate::grid::{Cell, Dda, GridFrame};
+
+/// A regular grid of disc lists.
+#[derive(Debug)]
+pub struct GridIndex {
+    discs: Discs,
+    reach: Reach,
+    frame: GridFrame,
+    dims: [i64; 3],
+    /// Discs of cell slot s are `items[offsets[s]..offsets[s + 1]]`.
+    offsets: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl GridIndex {
+    /// Builds a grid of cell width `cell_width` over the discs' bounds.
+    ///
+    /// # Panics
+    /// On no discs, a non-positive width, or 2³¹ cells or more.
+    pub fn build(discs: &Discs, cell_width: f64) -> Self {
+        assert!(cell_width > 0.0, "cell width must be positive");
+        let reach = Reach::new(discs);
+        let b = reach.padded(&reach.bounds);
+        let frame = frame_around(b, cell_width, b.lo);
+        let dims = frame.dims.expect("finite frame");
+        let cells = dims.iter().product::<i64>();
+        assert!(cells < 1 << 31, "grid of {cells} cells is too large");
+        let balls: Vec<Sphere> = discs
+            .centers
+            .iter()
+            .enumerate()
+            .map(|(i, &c)| Sphere {
+                c,
+                r: discs.radius + reach.pad,
+                id: i as u64,
+            })
+            .collect();
+        let slot = |c: Cell| ((c[2] * dims[1] + c[1]) * dims[0] + c[0]) as u32;
+        let (offsets, items) = cell_lists(
+            &frame,
+            grid_magnitude(&frame),
+            &balls,
+            cells as usize,
+            slot,
+            |_, s| s,
+        );
+        Self {
+            discs: discs.clone(),
+            reach,
+            frame,
+            dims,
+            offsets,
+            items,
+        }
+    }
+
+    /// The grid's frame.
+    pub fn frame(&self) -> &GridFrame {
+        &self.frame
+    }
+
+    fn grid_box(&self) -> Aabb {
+        let ext = DVec3::new(
+            self.dims[0] as f64,
+            self.dims[1] as f64,
+            self.dims[2] as f64,
+        ) * self.frame.width;
+        self.reach
+            .padded(&Aabb::new(self.frame.origin, self.frame.origin + ext))
+    }
+}
+
+impl DiscIndex for GridIndex {
+    fn discs(&self) -> &Discs {
+        &self.discs
+    }
+
+    fn reach(&self) -> &Reach {
+        &self.reach
+    }
+
+    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, f: &mut dyn FnMut(u32)) -> u64 {
+        mailbox.clear();
+        let v = seg.d();
+        let len = v.length();
+        let dir = v / len;
+        let o = seg.o();
+        // In units of distance along `dir`.
+        let Some((t0, t1)) = clip(o, dir, &self.grid_box(), 0.0, seg.t_end() * len) else {
+            return 0;
+        };
+        let ray = Ray::new(o + dir * t0, dir);
+        let stop = t1 - t0 + self.reach.pad;
+        let mut visited = 0;
+        for (cell, t_enter, _) in Dda::new(&self.frame, &ray) {
+            if t_enter > stop {
+                break;
+            }
+            visited += 1;
+            let s = ((cell[2] * self.dims[1] + cell[1]) * self.dims[0] + cell[0]) as usize;
+            for &i in &self.items[self.offsets[s] as usize..self.offsets[s + 1] as usize] {
+                if mailbox.insert(u64::from(i)) {
+                    f(i);
+                }
+            }
+        }
+        visited
+    }
+
+    fn bytes(&self) -> usize {
+        self.offsets.len() * 4 + self.items.len() * 4 + self.discs.len() * 48
+    }
+}

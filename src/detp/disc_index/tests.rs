@@ -1,0 +1,147 @@
+//! Both indexes against the oracle, add-then-remove, thread-count independence, the slab clip.
+
+use glam::DVec3;
+use rand::Rng;
+
+use super::*;
+use crate::detp::brute;
+use crate::detp::fixed::PowerScale;
+use crate::sample::{lines::uniform_line, lines::uniform_on_sphere, rng::stream};
+
+fn scene(n_seg: u32, n_disc: usize, d: f64, seed: u64) -> (SegmentStore, Discs) {
+    let mut rng = stream(&[0xd1, seed]);
+    let segs = (0..n_seg)
+        .map(|k| {
+            let (p, dir) = uniform_line(&mut rng);
+            let t_end = if k % 2 == 0 {
+                f64::INFINITY
+            } else {
+                -2.0 * p.dot(dir)
+            };
+            Segment::new(p, dir, 0.0, t_end, rng.gen_range(1..1000), k)
+        })
+        .collect();
+    let mut c = Vec::new();
+    let mut n = Vec::new();
+    while c.len() < n_disc {
+        let p = DVec3::new(
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+        );
+        if p.length_squared() <= 1.0 {
+            c.push(p);
+            n.push(uniform_on_sphere(&mut rng));
+        }
+    }
+    (
+        SegmentStore::new(segs, PowerScale::for_max_power(1.0)),
+        Discs::new(c, n, d).unwrap(),
+    )
+}
+
+fn indexes(discs: &Discs) -> Vec<(&'static str, Box<dyn Run>)> {
+    vec![
+        ("grid", Box::new(GridIndex::build(discs, 0.1))),
+        ("octree", Box::new(Octree::build(discs, 8, 0.02))),
+    ]
+}
+
+/// Object-safe view of [`DiscIndex::accumulate`] for looping over both indexes.
+trait Run: Sync {
+    fn run(&self, s: &SegmentStore, seg: Option<&[u32]>, sign: i8, acc: &mut [Acc]) -> IndexStats;
+}
+
+impl<T: DiscIndex> Run for T {
+    fn run(&self, s: &SegmentStore, seg: Option<&[u32]>, sign: i8, acc: &mut [Acc]) -> IndexStats {
+        self.accumulate(s, seg, sign, acc)
+    }
+}
+
+#[test]
+fn both_indexes_equal_brute_force_and_add_then_remove_equals_the_complement() {
+    let (store, discs) = scene(20_000, 2_000, 0.06, 1);
+    let mut want = vec![0; discs.len()];
+    brute::accumulate(&store, &discs, None, 1, &mut want);
+    assert!(want.iter().filter(|&&a| a != 0).count() > 1000);
+    let removed: Vec<u32> = (0..store.len() as u32).filter(|k| k % 3 == 1).collect();
+    let kept: Vec<u32> = (0..store.len() as u32).filter(|k| k % 3 != 1).collect();
+    let only_kept = {
+        let st = SegmentStore::new(
+            kept.iter().map(|&k| store.segments[k as usize]).collect(),
+            store.scale,
+        );
+        let mut a = vec![0; discs.len()];
+        brute::accumulate(&st, &discs, None, 1, &mut a);
+        a
+    };
+    for (name, ix) in indexes(&discs) {
+        let mut acc = vec![0; discs.len()];
+        let s = ix.run(&store, None, 1, &mut acc);
+        assert_eq!(acc, want, "{name}");
+        assert!(
+            s.ray_disc_tests < store.len() as u64 * discs.len() as u64 / 10,
+            "{name} culls"
+        );
+        ix.run(&store, Some(&removed), -1, &mut acc);
+        assert_eq!(acc, only_kept, "{name}: add all, remove a third");
+    }
+}
+
+#[test]
+fn counters_do_not_depend_on_the_thread_count() {
+    let (store, discs) = scene(8_000, 500, 0.05, 2);
+    for (name, ix) in indexes(&discs) {
+        let on = |k: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(k)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let mut acc = vec![0; discs.len()];
+                let s = ix.run(&store, None, 1, &mut acc);
+                (acc, s)
+            })
+        };
+        assert_eq!(on(1), on(2), "{name}");
+    }
+}
+
+#[test]
+fn far_origins_fall_back_to_every_disc() {
+    let (mut store, discs) = scene(200, 50, 0.1, 3);
+    // Move one segment's origin 10⁷ away along its line, keeping the line.
+    let s = store.segments[0];
+    let back = 1e7;
+    store.segments[0] = Segment::new(s.o() - s.d() * back, s.d(), 0.0, f64::INFINITY, 5, 0);
+    let mut want = vec![0; discs.len()];
+    brute::accumulate(&store, &discs, None, 1, &mut want);
+    for (name, ix) in indexes(&discs) {
+        let mut acc = vec![0; discs.len()];
+        let st = ix.run(&store, None, 1, &mut acc);
+        assert_eq!(acc, want, "{name}");
+        assert!(st.ray_disc_tests >= discs.len() as u64, "{name}");
+    }
+}
+
+#[test]
+fn clip_handles_axis_parallel_segments_and_ranges() {
+    let b = Aabb::new(DVec3::ZERO, DVec3::ONE);
+    assert_eq!(
+        clip(DVec3::new(-1.0, 0.5, 0.5), DVec3::X, &b, 0.0, 10.0),
+        Some((1.0, 2.0))
+    );
+    assert_eq!(
+        clip(DVec3::new(-1.0, 1.5, 0.5), DVec3::X, &b, 0.0, 10.0),
+        None
+    );
+    // On the face: the closed box keeps it.
+    assert_eq!(
+        clip(DVec3::new(-1.0, 1.0, 0.5), DVec3::X, &b, 0.0, 10.0),
+        Some((1.0, 2.0))
+    );
+    assert_eq!(
+        clip(DVec3::new(-1.0, 0.5, 0.5), DVec3::X, &b, 0.0, 0.5),
+        None
+    );
+}

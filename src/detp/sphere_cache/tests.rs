@@ -1,0 +1,226 @@
+//! Sphere cache against the brute-force oracle, its counters across thread counts, and the
+//! rays-per-level law of integral geometry.
+
+use glam::DVec3;
+use rand::Rng;
+
+use super::filter::FilterPath;
+use super::*;
+use crate::detp::brute;
+use crate::detp::fixed::PowerScale;
+use crate::detp::order::{permutation, Order};
+use crate::detp::store::Segment;
+use crate::sample::{lines::uniform_line, lines::uniform_on_sphere, rng::stream};
+
+/// `n` μ-random lines through the unit ball as segments from their first point on the sphere:
+/// t_end = +∞ for even k, the chord (to the second point) for odd k; powers 1..1000.
+fn lines(n: u32, seed: u64) -> SegmentStore {
+    let mut rng = stream(&[0x5c, seed]);
+    let segs = (0..n)
+        .map(|k| {
+            let (p, d) = uniform_line(&mut rng);
+            let t_end = if k % 2 == 0 {
+                f64::INFINITY
+            } else {
+                -2.0 * p.dot(d)
+            };
+            Segment::new(p, d, 0.0, t_end, rng.gen_range(1..1000), k)
+        })
+        .collect();
+    SegmentStore::new(segs, PowerScale::for_max_power(1.0))
+}
+
+/// `n` points uniform in the ball of radius `rad`, uniform normals, disc radius `d`.
+fn ball_points(n: usize, rad: f64, d: f64, seed: u64) -> Discs {
+    let mut rng = stream(&[0xba, seed]);
+    let mut c = Vec::new();
+    let mut nn = Vec::new();
+    while c.len() < n {
+        let p = DVec3::new(
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+        );
+        if p.length_squared() <= 1.0 {
+            c.push(p * rad);
+            nn.push(uniform_on_sphere(&mut rng));
+        }
+    }
+    Discs::new(c, nn, d).unwrap()
+}
+
+fn oracle(store: &SegmentStore, discs: &Discs) -> Vec<Acc> {
+    let mut acc = vec![0; discs.len()];
+    brute::accumulate(store, discs, None, 1, &mut acc);
+    acc
+}
+
+const UNIT: (DVec3, f64) = (DVec3::ZERO, 1.0);
+
+#[test]
+fn both_list_modes_every_order_and_filter_path_equal_brute_force() {
+    let store = lines(20_000, 1);
+    let discs = ball_points(600, 1.0, 0.05, 2);
+    let want = oracle(&store, &discs);
+    assert!(
+        want.iter().filter(|&&a| a != 0).count() > 300,
+        "a test that could not fail"
+    );
+    for (q, threshold, chunk) in [(2.0 / 3.0, 100, 128), (0.5, 20, 1000), (0.9, 300, 7)] {
+        for mode in [ListMode::Exact, ListMode::Inherited] {
+            for order in [Order::None, Order::Morton, Order::Hilbert] {
+                let perm = permutation(&discs.centers, order, 10);
+                let params = SphereCacheParams {
+                    q,
+                    threshold,
+                    list_mode: mode,
+                    chunk_points: chunk,
+                };
+                for path in FilterPath::all_available() {
+                    let mut acc = vec![0; discs.len()];
+                    let s = run_with(&store, &discs, &perm, UNIT, &params, &mut acc, path);
+                    assert_eq!(acc, want, "Q {q} {mode:?} {order:?} {path:?}");
+                    assert!(
+                        s.levels.len() > 3,
+                        "the cache must go deep: {:?}",
+                        s.levels.len()
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn counters_do_not_depend_on_the_thread_count() {
+    let store = lines(10_000, 3);
+    let discs = ball_points(800, 1.0, 0.04, 4);
+    let perm = permutation(&discs.centers, Order::Hilbert, 10);
+    let params = SphereCacheParams {
+        chunk_points: 100,
+        ..Default::default()
+    };
+    let run_on = |k: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(k)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut acc = vec![0; discs.len()];
+            let s = run(&store, &discs, &perm, UNIT, &params, &mut acc);
+            (acc, s)
+        })
+    };
+    let (a1, s1) = run_on(1);
+    let (a2, s2) = run_on(2);
+    assert_eq!(a1, a2);
+    assert_eq!(s1, s2);
+    assert_eq!(a1, oracle(&store, &discs));
+    // Eight chunks, so the levels below the root are built at least 8 times cold.
+    assert!(s1.levels[1].builds >= 8 && s1.levels[1].builds - s1.levels[1].misses == 8);
+    let by_level: u64 = s1.levels.iter().map(|l| l.ray_sphere_tests).sum();
+    assert_eq!(by_level, s1.ray_sphere_tests);
+}
+
+#[test]
+fn a_disc_outside_the_root_is_tested_against_every_segment() {
+    let store = lines(5_000, 5);
+    let discs = ball_points(50, 1.0, 0.1, 6);
+    let perm = permutation(&discs.centers, Order::Hilbert, 10);
+    let mut acc = vec![0; discs.len()];
+    // A root that holds only the inner part of the scene.
+    let s = run(
+        &store,
+        &discs,
+        &perm,
+        (DVec3::ZERO, 0.5),
+        &Default::default(),
+        &mut acc,
+    );
+    assert_eq!(acc, oracle(&store, &discs));
+    let outside = discs
+        .centers
+        .iter()
+        .filter(|c| c.length() + 0.1 > 0.5)
+        .count() as u64;
+    assert!(outside > 0 && s.ray_disc_tests >= outside * 5_000);
+}
+
+/// Integral geometry: a μ-random line meeting the unit ball meets a concentric ball of radius r_i
+/// with probability (r_i/r_0)² = Q^(2i), so an exact list at level i is Binomial(n_R, Q^(2i)).
+#[test]
+fn exact_lists_follow_the_area_law_for_concentric_spheres() {
+    let n_r = 1u32 << 16;
+    let store = lines(n_r, 7);
+    let discs = Discs::new(vec![DVec3::ZERO], vec![DVec3::Z], 1e-3).unwrap();
+    let params = SphereCacheParams {
+        threshold: 1,
+        ..Default::default()
+    };
+    let mut acc = vec![0; 1];
+    let s = run(&store, &discs, &[0], UNIT, &params, &mut acc);
+    let mut checked = 0;
+    for (i, l) in s.levels.iter().enumerate() {
+        let p = params.q.powi(2 * i as i32);
+        let mean = f64::from(n_r) * p;
+        if mean < 20.0 {
+            continue;
+        }
+        let sd = (mean * (1.0 - p)).sqrt();
+        assert_eq!(l.builds, 1);
+        assert!(
+            (l.rays_held as f64 - mean).abs() <= 4.5 * sd.max(1e-9),
+            "level {i}: {} rays, theory {mean:.1} ± {sd:.1}",
+            l.rays_held
+        );
+        checked += 1;
+    }
+    assert!(checked >= 8, "only {checked} levels checked");
+}
+
+/// Off-centre spheres inside the unit ball obey the same law in Exact mode; the paper's inherited
+/// lists fall short where children stick out of their parents (THEORY.md §2, pitfall 2).
+#[test]
+fn exact_lists_follow_the_area_law_off_centre_and_inherited_lists_fall_short() {
+    let n_r = 1u32 << 17;
+    let store = lines(n_r, 8);
+    let discs = ball_points(3000, 0.3, 2e-3, 9);
+    let perm = permutation(&discs.centers, Order::Hilbert, 10);
+    let stats = |mode| {
+        let params = SphereCacheParams {
+            q: 0.7,
+            list_mode: mode,
+            ..Default::default()
+        };
+        let mut acc = vec![0; discs.len()];
+        run(&store, &discs, &perm, UNIT, &params, &mut acc)
+    };
+    let exact = stats(ListMode::Exact);
+    let inherited = stats(ListMode::Inherited);
+    let mut checked = 0;
+    let mut short = 0;
+    for (i, l) in exact.levels.iter().enumerate().skip(1) {
+        // Spheres centred within 0.3 of the centre lie inside the unit ball while r_i ≤ 0.7.
+        let theory = f64::from(n_r) * 0.7f64.powi(2 * i as i32);
+        if l.radius > 0.7 || theory < 200.0 || l.builds < 30 {
+            continue;
+        }
+        let (mean, _) = l.mean_rays().unwrap();
+        assert!(
+            (mean / theory - 1.0).abs() < 0.03,
+            "level {i}: exact mean {mean:.1} vs theory {theory:.1}"
+        );
+        let (inh, _) = inherited.levels[i].mean_rays().unwrap();
+        assert!(
+            inh <= mean * 1.01,
+            "level {i}: inherited {inh:.1} > exact {mean:.1}"
+        );
+        if inh < 0.97 * theory {
+            short += 1;
+        }
+        checked += 1;
+    }
+    assert!(checked >= 4, "only {checked} levels checked");
+    assert!(short >= 1, "inherited lists never fell short");
+    assert!(inherited.ray_sphere_tests < exact.ray_sphere_tests);
+}
