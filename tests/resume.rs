@@ -42,9 +42,10 @@ fn data_rows(p: &Path) -> usize {
     })
 }
 
-/// Starts `raycost run`, waits until its partial CSV holds at least 2 finished points, sends
-/// `signal` with kill(1), and returns the number of points finished before the signal.
-fn interrupt(spec: &Path, out: &Path, signal: &str) -> usize {
+/// Starts `raycost run` on a 16-point spec named `resume-me`, waits until its partial CSV holds at
+/// least 2 finished points, sends `signal` with kill(1), and returns the number of points finished
+/// before the signal.
+pub fn interrupt(spec: &Path, out: &Path, signal: &str) -> usize {
     let bin = assert_cmd::cargo::cargo_bin("raycost");
     let mut child = Command::new(bin)
         .arg("run")

@@ -57,4 +57,3 @@ pub(super) fn exact(n_r: u64, c: DVec3, d: f64) -> f64 {
         f64::NAN
     }
 }
-

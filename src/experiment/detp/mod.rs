@@ -31,16 +31,14 @@ mod lines;
 mod scene;
 
 use super::{PointResult, Row};
-use crate::detp::disc_index::DiscIndex;
 use crate::detp::disc::Discs;
+use crate::detp::disc_index::DiscIndex;
 use crate::detp::fixed::{Acc, PowerScale};
 use crate::detp::store::SegmentStore;
 use crate::detp::{brute, disc_index, order, sphere_cache};
 use crate::sample::lines::uniform_in_ball;
 use crate::sample::rng::{domain, stream};
-use crate::spec::detp::{
-    EngineChoice, IndexChoice, ListModeChoice, OrderChoice, Points, Rays,
-};
+use crate::spec::detp::{EngineChoice, IndexChoice, ListModeChoice, OrderChoice, Points, Rays};
 use crate::spec::DetpConfig;
 use crate::stats::{ClusteredMean, Estimate};
 use crate::theory::detp as th;
@@ -206,8 +204,7 @@ fn run_engines(
             }
             EngineChoice::BruteForce => {
                 let mut acc = vec![0; n];
-                let (tests, s) =
-                    timed(|| brute::accumulate(&rays.store, discs, None, 1, &mut acc));
+                let (tests, s) = timed(|| brute::accumulate(&rays.store, discs, None, 1, &mut acc));
                 out.brute_tests = tests;
                 out.brute_s = s;
                 sums.push(acc);
@@ -387,7 +384,12 @@ pub fn run_point(
         .u("bf_checked", total(&|o| o.bf_checked));
     let errs: Vec<(f64, f64)> = irr.iter().map(|e| errors(e, &pts.exact)).collect();
     let exact_mean = {
-        let v: Vec<f64> = pts.exact.iter().copied().filter(|x| x.is_finite()).collect();
+        let v: Vec<f64> = pts
+            .exact
+            .iter()
+            .copied()
+            .filter(|x| x.is_finite())
+            .collect();
         if v.is_empty() {
             f64::NAN
         } else {
@@ -397,7 +399,10 @@ pub fn run_point(
     let rmse = per_replica(&errs.iter().map(|e| e.0).collect::<Vec<_>>());
     let bias = per_replica(&errs.iter().map(|e| e.1).collect::<Vec<_>>());
     // The mean over the discs that have an exact value (all of them where none has).
-    let judged: Vec<usize> = match (0..discs.len()).filter(|&i| pts.exact[i].is_finite()).collect::<Vec<_>>() {
+    let judged: Vec<usize> = match (0..discs.len())
+        .filter(|&i| pts.exact[i].is_finite())
+        .collect::<Vec<_>>()
+    {
         v if v.is_empty() => (0..discs.len()).collect(),
         v => v,
     };
@@ -481,7 +486,12 @@ pub fn run_point(
             clusters: outs.len() as u64,
         },
         "0 (engines = brute force)".into(),
-        if mismatches == 0 { "ok (exact)" } else { "FAIL" }.into(),
+        if mismatches == 0 {
+            "ok (exact)"
+        } else {
+            "FAIL"
+        }
+        .into(),
     ));
 
     // Points table: mean over replicas, SE across them (or, with one replica, the Poisson SE of a sum
