@@ -4,6 +4,7 @@ mod bad_input;
 mod bench;
 mod cli;
 mod common;
+mod detp_engines;
 mod merge;
 mod oracle;
 mod resume;
