@@ -315,27 +315,18 @@ fn add_then_remove_equals_the_complement() {
     let mut want = vec![0; discs.len()];
     brute::accumulate(&store(kept), &discs, None, 1, &mut want);
     assert!(want.iter().filter(|&&a| a != 0).count() > 200);
-    let indexes: Vec<(
-        &str,
-        Box<dyn Fn(&SegmentStore, Option<&[u32]>, i8, &mut [Acc])>,
-    )> = vec![
-        ("grid", {
-            let g = GridIndex::build(&discs, 0.1);
-            Box::new(move |s, k, sg, a| {
-                g.accumulate(s, k, sg, a);
-            })
-        }),
-        ("octree", {
-            let o = Octree::build(&discs, 8, 0.05);
-            Box::new(move |s, k, sg, a| {
-                o.accumulate(s, k, sg, a);
-            })
-        }),
-    ];
-    for (name, acc_fn) in &indexes {
-        let mut acc = vec![0; discs.len()];
-        acc_fn(&st, None, 1, &mut acc);
-        acc_fn(&st, Some(&removed), -1, &mut acc);
-        assert_eq!(acc, want, "{name}");
+    fn add_remove<I: DiscIndex>(ix: &I, st: &SegmentStore, removed: &[u32], n: usize) -> Vec<Acc> {
+        let mut acc = vec![0; n];
+        ix.accumulate(st, None, 1, &mut acc);
+        ix.accumulate(st, Some(removed), -1, &mut acc);
+        acc
     }
+    let grid = GridIndex::build(&discs, 0.1);
+    assert_eq!(add_remove(&grid, &st, &removed, discs.len()), want, "grid");
+    let octree = Octree::build(&discs, 8, 0.05);
+    assert_eq!(
+        add_remove(&octree, &st, &removed, discs.len()),
+        want,
+        "octree"
+    );
 }
