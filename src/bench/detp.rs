@@ -6,8 +6,9 @@
 //! their first point on the sphere, t_end = +∞), n_P points uniform in the unit ball with uniform
 //! normals, Hilbert order at 10 bits per axis. The disc radius is half the mean point spacing:
 //! d = r_0·(4π/3 / n_P)^(1/3) / 2 with r_0 = 1 (0.0172 for n_P = 10⁵), so discs about touch, as
-//! in the paper's cost model (points spaced ≈ d). Sphere cache: Q = 2/3, threshold 100, exact lists,
-//! chunks of 4096 points. Grid index: cells of width 2d (one point per cell on average). Octree:
+//! in the paper's cost model (points spaced ≈ d). Sphere cache: root sphere of radius 1 + d about the
+//! origin (the smallest that holds every disc), Q = 2/3, threshold 100, exact lists, chunks of 4096
+//! points. Grid index: cells of width 2d (one point per cell on average). Octree:
 //! leaves of at most 8 discs, no side below 2d.
 //!
 //! Full run: n_R = 1024·1024, n_P = 10⁵, brute force on 256 points; quick: 2¹⁶ lines, 10⁴ points.
@@ -144,6 +145,9 @@ fn run_plan(plan: Plan) -> Vec<DetpBenchRow> {
     let mut oracle: Option<Vec<Acc>> = None;
     let params = SphereCacheParams::default();
     let d = discs.radius;
+    // The unit sphere grown by d (and a hair for rounding) holds every disc; with r_0 = 1 a disc
+    // near the rim would stick out of the root and be tested against every segment.
+    let root = (DVec3::ZERO, 1.0 + d * (1.0 + 1e-9));
     for threads in [1, 2] {
         let p = pool(threads);
         // Brute force first: its sums are the reference for every other engine.
@@ -176,8 +180,7 @@ fn run_plan(plan: Plan) -> Vec<DetpBenchRow> {
                 let build_s = t.elapsed().as_secs_f64();
                 let mut acc = vec![0; n];
                 let t = Instant::now();
-                let s =
-                    sphere_cache::run(&store, &discs, &perm, (DVec3::ZERO, 1.0), &params, &mut acc);
+                let s = sphere_cache::run(&store, &discs, &perm, root, &params, &mut acc);
                 Measured {
                     wall_s: t.elapsed().as_secs_f64(),
                     acc,
@@ -322,6 +325,40 @@ mod tests {
         }
         for r in run(true) {
             println!("{r:?}");
+        }
+        let plan = Plan {
+            rays: 1 << 16,
+            points: 10_000,
+            brute_points: 1,
+        };
+        let (store, discs) = scene(plan);
+        let perm = permutation(&discs.centers, Order::Hilbert, 10);
+        let root = (DVec3::ZERO, 1.0 + discs.radius * (1.0 + 1e-9));
+        for mode in [
+            sphere_cache::ListMode::Exact,
+            sphere_cache::ListMode::Inherited,
+        ] {
+            let params = SphereCacheParams {
+                list_mode: mode,
+                ..Default::default()
+            };
+            let mut acc = vec![0; discs.len()];
+            let s = sphere_cache::run(&store, &discs, &perm, root, &params, &mut acc);
+            println!(
+                "{mode:?}: sphere tests {} disc tests {}",
+                s.ray_sphere_tests, s.ray_disc_tests
+            );
+            for (i, l) in s.levels.iter().enumerate() {
+                let theory = f64::from(plan.rays) * l.radius * l.radius;
+                println!(
+                    "  level {i} r {:.4} builds {} misses {} mean rays {:.1} (n_R r² {theory:.1}) tests {}",
+                    l.radius,
+                    l.builds,
+                    l.misses,
+                    l.mean_rays().map_or(0.0, |m| m.0),
+                    l.ray_sphere_tests
+                );
+            }
         }
     }
 }
