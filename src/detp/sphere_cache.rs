@@ -121,14 +121,17 @@ pub struct CacheStats {
 }
 
 impl CacheStats {
-    /// Adds `other`'s counts to these (levels aligned by index; radii agree by construction).
+    /// Adds `other`'s counts to these (levels aligned by index; a level's radius is the same
+    /// wherever it was built, and unset where it never was).
     pub fn merge(&mut self, other: &CacheStats) {
         if self.levels.len() < other.levels.len() {
             self.levels
                 .resize(other.levels.len(), LevelStats::default());
         }
         for (a, b) in self.levels.iter_mut().zip(&other.levels) {
-            a.radius = b.radius;
+            if b.builds > 0 {
+                a.radius = b.radius;
+            }
             a.builds += b.builds;
             a.misses += b.misses;
             a.rays_held += b.rays_held;

@@ -44,9 +44,11 @@ impl Octree {
     /// Builds the octree over the discs' bounds (see the module doc for the split rule).
     ///
     /// # Panics
-    /// On no discs or `max_leaf == 0`.
+    /// On no discs, `max_leaf == 0` or `min_side ≤ 0` (overlapping discs are never separated, so
+    /// without a smallest side their common region would be split down to [`MAX_DEPTH`]).
     pub fn build(discs: &Discs, max_leaf: usize, min_side: f64) -> Self {
         assert!(max_leaf > 0, "max_leaf must be positive");
+        assert!(min_side > 0.0, "min_side must be positive");
         let reach = Reach::new(discs);
         let boxes: Vec<Aabb> = (0..discs.len()).map(|i| discs.bounds(i)).collect();
         let mut t = Self {

@@ -309,7 +309,8 @@ pub fn filter(
     out: &mut RayList,
 ) {
     out.clear();
-    out.reserve(src.len());
+    // 16 lanes of slack: the AVX-512 path stores whole vectors past the last kept lane.
+    out.reserve(src.len() + 16);
     match path {
         FilterPath::Portable => portable(src, 0, probe, segments, out),
         #[cfg(target_arch = "x86_64")]
@@ -318,13 +319,15 @@ pub fn filter(
                 FilterPath::all_available().contains(&path),
                 "no AVX-512 here"
             );
-            // SAFETY: the CPU has AVX-512 F and VL (checked above); `out` has room for src.len().
+            // SAFETY: the CPU has AVX-512 F and VL (checked above); `out` is empty with room for
+            // src.len() + 16 lanes.
             unsafe { x86::avx512(src, probe, segments, out) }
         }
         #[cfg(target_arch = "x86_64")]
         FilterPath::Avx2 => {
             assert!(FilterPath::all_available().contains(&path), "no AVX2 here");
-            // SAFETY: the CPU has AVX2 and FMA (checked above).
+            // SAFETY: the CPU has AVX2 and FMA (checked above); `out` is empty with room for
+            // src.len() + 16 lanes.
             unsafe { x86::avx2(src, probe, segments, out) }
         }
         #[cfg(not(target_arch = "x86_64"))]

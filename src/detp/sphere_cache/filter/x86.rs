@@ -10,12 +10,12 @@ use crate::detp::store::Segment;
 /// 16 lanes at a time; the tail uses masked loads. Passing lanes are compress-stored into `out`.
 ///
 /// # Safety
-/// The CPU must have AVX-512 F and VL, and `out` must have capacity for `src.len()` lanes and be
-/// empty.
+/// The CPU must have AVX-512 F and VL, and `out` must be empty with capacity for `src.len() + 16`
+/// lanes in every column.
 #[target_feature(enable = "avx512f,avx512vl")]
 pub unsafe fn avx512(src: &RayList, probe: &Probe, segments: &[Segment], out: &mut RayList) {
     let n = src.len();
-    debug_assert!(out.is_empty() && out.idx.capacity() >= n);
+    debug_assert!(out.is_empty() && out.idx.capacity() >= n + 16);
     let sx = _mm512_set1_ps(probe.s[0]);
     let sy = _mm512_set1_ps(probe.s[1]);
     let sz = _mm512_set1_ps(probe.s[2]);
@@ -78,11 +78,14 @@ pub unsafe fn avx512(src: &RayList, probe: &Probe, segments: &[Segment], out: &m
             }
         }
         if keep != 0 {
+            // Compress in registers, then a full 16-lane store: the memory form of vcompressps is
+            // microcoded and ~10× slower on AMD Zen 4. The lanes past `kept` are scratch that the
+            // next store or `set_len` disregards (hence 16 lanes of slack in the capacity).
             for (k, &o) in outs.iter().enumerate() {
-                _mm512_mask_compressstoreu_ps(o.add(kept), keep, v[k]);
+                _mm512_storeu_ps(o.add(kept), _mm512_maskz_compress_ps(keep, v[k]));
             }
             let ix = _mm512_maskz_loadu_epi32(lanes, src.idx.as_ptr().add(i).cast());
-            _mm512_mask_compressstoreu_epi32(oidx.add(kept).cast(), keep, ix);
+            _mm512_storeu_si512(oidx.add(kept).cast(), _mm512_maskz_compress_epi32(keep, ix));
             kept += keep.count_ones() as usize;
         }
         i += 16;
@@ -90,44 +93,105 @@ pub unsafe fn avx512(src: &RayList, probe: &Probe, segments: &[Segment], out: &m
     set_len(out, kept);
 }
 
-/// 8 lanes at a time; passing lanes are copied one by one, the tail goes through the portable lane.
+/// For each 8-bit mask, the lane indices of its set bits first (AVX2 has no compress: a
+/// `vpermps` by this table left-packs the kept lanes).
+const PACK: [[u32; 8]; 256] = {
+    let mut t = [[0u32; 8]; 256];
+    let mut m = 0;
+    while m < 256 {
+        let mut k = 0;
+        let mut l = 0;
+        while l < 8 {
+            if m & (1 << l) != 0 {
+                t[m][k] = l as u32;
+                k += 1;
+            }
+            l += 1;
+        }
+        m += 1;
+    }
+    t
+};
+
+/// 8 lanes at a time, kept lanes left-packed by [`PACK`] and stored as whole vectors; the tail
+/// goes through the portable lane.
 ///
 /// # Safety
-/// The CPU must have AVX2 and FMA.
+/// The CPU must have AVX2 and FMA, and `out` must be empty with capacity for `src.len() + 16`
+/// lanes in every column.
 #[target_feature(enable = "avx2,fma")]
 pub unsafe fn avx2(src: &RayList, probe: &Probe, segments: &[Segment], out: &mut RayList) {
     let n = src.len();
+    debug_assert!(out.is_empty() && out.idx.capacity() >= n + 16);
     let sx = _mm256_set1_ps(probe.s[0]);
     let sy = _mm256_set1_ps(probe.s[1]);
     let sz = _mm256_set1_ps(probe.s[2]);
     let sure2 = _mm256_set1_ps(probe.sure2);
     let maybe2 = _mm256_set1_ps(probe.maybe2);
     let zero = _mm256_setzero_ps();
+    let outs = [
+        out.ox.as_mut_ptr(),
+        out.oy.as_mut_ptr(),
+        out.oz.as_mut_ptr(),
+        out.dx.as_mut_ptr(),
+        out.dy.as_mut_ptr(),
+        out.dz.as_mut_ptr(),
+        out.te.as_mut_ptr(),
+    ];
+    let oidx = out.idx.as_mut_ptr();
+    let ins = [
+        src.ox.as_ptr(),
+        src.oy.as_ptr(),
+        src.oz.as_ptr(),
+        src.dx.as_ptr(),
+        src.dy.as_ptr(),
+        src.dz.as_ptr(),
+        src.te.as_ptr(),
+    ];
+    let mut kept = 0usize;
     let mut i = 0usize;
     while i + 8 <= n {
-        let ld = |v: &Vec<f32>| _mm256_loadu_ps(v.as_ptr().add(i));
-        let (dx, dy, dz) = (ld(&src.dx), ld(&src.dy), ld(&src.dz));
-        let wx = _mm256_sub_ps(sx, ld(&src.ox));
-        let wy = _mm256_sub_ps(sy, ld(&src.oy));
-        let wz = _mm256_sub_ps(sz, ld(&src.oz));
-        let b = _mm256_fmadd_ps(wz, dz, _mm256_fmadd_ps(wy, dy, _mm256_mul_ps(wx, dx)));
-        let t = _mm256_min_ps(_mm256_max_ps(b, zero), ld(&src.te));
-        let px = _mm256_fmsub_ps(dx, t, wx);
-        let py = _mm256_fmsub_ps(dy, t, wy);
-        let pz = _mm256_fmsub_ps(dz, t, wz);
+        let ld = |p: *const f32| _mm256_loadu_ps(p.add(i));
+        let v = [
+            ld(ins[0]),
+            ld(ins[1]),
+            ld(ins[2]),
+            ld(ins[3]),
+            ld(ins[4]),
+            ld(ins[5]),
+            ld(ins[6]),
+        ];
+        let wx = _mm256_sub_ps(sx, v[0]);
+        let wy = _mm256_sub_ps(sy, v[1]);
+        let wz = _mm256_sub_ps(sz, v[2]);
+        let b = _mm256_fmadd_ps(wz, v[5], _mm256_fmadd_ps(wy, v[4], _mm256_mul_ps(wx, v[3])));
+        let t = _mm256_min_ps(_mm256_max_ps(b, zero), v[6]);
+        let px = _mm256_fmsub_ps(v[3], t, wx);
+        let py = _mm256_fmsub_ps(v[4], t, wy);
+        let pz = _mm256_fmsub_ps(v[5], t, wz);
         let q = _mm256_fmadd_ps(pz, pz, _mm256_fmadd_ps(py, py, _mm256_mul_ps(px, px)));
-        let sure = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(q, sure2)) as u32;
+        let mut keep = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(q, sure2)) as u32;
         let maybe = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(q, maybe2)) as u32;
-        let mut m = maybe;
-        while m != 0 {
-            let l = m.trailing_zeros() as usize;
-            m &= m - 1;
-            if sure & (1 << l) != 0 || probe.exact(&segments[src.idx[i + l] as usize]) {
-                out.copy_lane(src, i + l);
+        let mut band = maybe & !keep;
+        while band != 0 {
+            let l = band.trailing_zeros() as usize;
+            band &= band - 1;
+            if probe.exact(&segments[src.idx[i + l] as usize]) {
+                keep |= 1 << l;
             }
+        }
+        if keep != 0 {
+            let perm = _mm256_loadu_si256(PACK[keep as usize].as_ptr().cast());
+            for (k, &o) in outs.iter().enumerate() {
+                _mm256_storeu_ps(o.add(kept), _mm256_permutevar8x32_ps(v[k], perm));
+            }
+            let ix = _mm256_loadu_si256(src.idx.as_ptr().add(i).cast());
+            _mm256_storeu_si256(oidx.add(kept).cast(), _mm256_permutevar8x32_epi32(ix, perm));
+            kept += keep.count_ones() as usize;
         }
         i += 8;
     }
+    set_len(out, kept);
     portable(src, i, probe, segments, out);
 }
 
