@@ -272,18 +272,25 @@ impl FilterPath {
 
     /// Every path this CPU can run, fastest first.
     pub fn all_available() -> Vec<Self> {
-        let mut v = Vec::new();
-        #[cfg(target_arch = "x86_64")]
-        {
-            if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl") {
-                v.push(Self::Avx512);
+        [Self::Avx512, Self::Avx2, Self::Portable]
+            .into_iter()
+            .filter(|p| p.is_available())
+            .collect()
+    }
+
+    /// Can this CPU run the path? (Feature detection is cached by std: cheap to ask per call.)
+    pub fn is_available(self) -> bool {
+        match self {
+            Self::Portable => true,
+            #[cfg(target_arch = "x86_64")]
+            Self::Avx512 => {
+                is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl")
             }
-            if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
-                v.push(Self::Avx2);
-            }
+            #[cfg(target_arch = "x86_64")]
+            Self::Avx2 => is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma"),
+            #[cfg(not(target_arch = "x86_64"))]
+            _ => false,
         }
-        v.push(Self::Portable);
-        v
     }
 
     /// Name for reports.
@@ -325,7 +332,7 @@ pub fn filter(
         }
         #[cfg(target_arch = "x86_64")]
         FilterPath::Avx2 => {
-            assert!(FilterPath::all_available().contains(&path), "no AVX2 here");
+            assert!(path.is_available(), "no AVX2 here");
             // SAFETY: the CPU has AVX2 and FMA (checked above); `out` is empty with room for
             // src.len() + 16 lanes.
             unsafe { x86::avx2(src, probe, segments, out) }
