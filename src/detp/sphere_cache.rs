@@ -189,10 +189,7 @@ pub fn run_with(
     assert!(params.q > 0.0 && params.q < 1.0, "Q must lie in (0, 1)");
     assert!(params.chunk_points > 0, "chunk_points must be positive");
     assert!(acc.len() >= discs.len(), "one accumulator per disc");
-    assert!(
-        FilterPath::all_available().contains(&path),
-        "filter path {path:?} not available"
-    );
+    assert!(path.is_available(), "filter path {path:?} not available");
     let (center, r0) = root;
     let all = RayList::from_segments(&store.segments, center);
     let origin_bound = all.origin_bound();

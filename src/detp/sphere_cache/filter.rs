@@ -272,18 +272,25 @@ impl FilterPath {
 
     /// Every path this CPU can run, fastest first.
     pub fn all_available() -> Vec<Self> {
-        let mut v = Vec::new();
-        #[cfg(target_arch = "x86_64")]
-        {
-            if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl") {
-                v.push(Self::Avx512);
+        [Self::Avx512, Self::Avx2, Self::Portable]
+            .into_iter()
+            .filter(|p| p.is_available())
+            .collect()
+    }
+
+    /// Can this CPU run the path? (Feature detection is cached by std: cheap to ask per call.)
+    pub fn is_available(self) -> bool {
+        match self {
+            Self::Portable => true,
+            #[cfg(target_arch = "x86_64")]
+            Self::Avx512 => {
+                is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl")
             }
-            if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
-                v.push(Self::Avx2);
-            }
+            #[cfg(target_arch = "x86_64")]
+            Self::Avx2 => is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma"),
+            #[cfg(not(target_arch = "x86_64"))]
+            _ => false,
         }
-        v.push(Self::Portable);
-        v
     }
 
     /// Name for reports.
@@ -325,7 +332,7 @@ pub fn filter(
         }
         #[cfg(target_arch = "x86_64")]
         FilterPath::Avx2 => {
-            assert!(FilterPath::all_available().contains(&path), "no AVX2 here");
+            assert!(path.is_available(), "no AVX2 here");
             // SAFETY: the CPU has AVX2 and FMA (checked above); `out` is empty with room for
             // src.len() + 16 lanes.
             unsafe { x86::avx2(src, probe, segments, out) }
@@ -396,12 +403,8 @@ mod tests {
             (DVec3::ZERO, 1e-3, DVec3::ZERO),
         ] {
             let st = store(center, r);
-            let src = RayList::from_segments(&st.segments, reference);
-            let probe = Probe::new(reference, src.origin_bound(), center, r, kappa(3));
-            let want: Vec<u32> = (0..st.len() as u32)
-                .filter(|&i| meets(&st.segments[i as usize], center, r, kappa(3)))
-                .collect();
-            assert!(!want.is_empty() && want.len() < st.len());
+            let all = RayList::from_segments(&st.segments, reference);
+            let probe = Probe::new(reference, all.origin_bound(), center, r, kappa(3));
             let paths = FilterPath::all_available();
             #[cfg(target_arch = "x86_64")]
             if std::is_x86_feature_detected!("avx512f") {
@@ -410,13 +413,25 @@ mod tests {
                     "this CPU's paths: {paths:?}"
                 );
             }
-            for path in paths {
-                let mut out = RayList::default();
-                filter(path, &src, &probe, &st.segments, &mut out);
-                assert_eq!(out.indices(), &want[..], "{path:?} at r = {r}");
-                // The copied lanes are the source lanes.
-                for (k, &i) in out.indices().iter().enumerate() {
-                    assert_eq!(out.te[k], st.segments[i as usize].t_end);
+            // Every tail length of the 8- and 16-lane loops.
+            for len in (st.len() - 17..=st.len()).chain(0..20) {
+                let src = RayList::from_segments(&st.segments[..len], reference);
+                let want: Vec<u32> = (0..len as u32)
+                    .filter(|&i| meets(&st.segments[i as usize], center, r, kappa(3)))
+                    .collect();
+                if len == st.len() {
+                    assert!(!want.is_empty() && want.len() < len);
+                }
+                for &path in &paths {
+                    let mut out = RayList::default();
+                    filter(path, &src, &probe, &st.segments, &mut out);
+                    assert_eq!(out.indices(), &want[..], "{path:?} at r = {r}, {len} lanes");
+                    // The copied lanes are the source lanes.
+                    for (k, &i) in out.indices().iter().enumerate() {
+                        let seg = &st.segments[i as usize];
+                        assert_eq!((out.te[k], out.dx[k]), (seg.t_end, seg.dir[0]));
+                        assert_eq!(out.ox[k], all.ox[i as usize]);
+                    }
                 }
             }
         }

@@ -224,3 +224,33 @@ fn exact_lists_follow_the_area_law_off_centre_and_inherited_lists_fall_short() {
     assert!(short >= 1, "inherited lists never fell short");
     assert!(inherited.ray_sphere_tests < exact.ray_sphere_tests);
 }
+
+/// Sorting the points along a curve is what keeps spheres in use: Hilbert and Morton orders
+/// rebuild far less often than the input (random) order.
+#[test]
+fn curve_orders_cut_the_misses() {
+    let store = lines(8_000, 10);
+    let discs = ball_points(3_000, 1.0, 0.02, 11);
+    let misses = |order| {
+        let perm = permutation(&discs.centers, order, 10);
+        let mut acc = vec![0; discs.len()];
+        let s = run(
+            &store,
+            &discs,
+            &perm,
+            (DVec3::ZERO, 1.03),
+            &Default::default(),
+            &mut acc,
+        );
+        s.levels.iter().map(|l| l.misses).sum::<u64>()
+    };
+    let (none, morton, hilbert) = (
+        misses(Order::None),
+        misses(Order::Morton),
+        misses(Order::Hilbert),
+    );
+    assert!(
+        hilbert * 2 < none && morton * 2 < none,
+        "none {none} morton {morton} hilbert {hilbert}"
+    );
+}
