@@ -29,3 +29,27 @@ if [ ! -s "$PNG" ]; then
     exit 1
 fi
 echo "ok: $PNG"
+
+# Every DETP plot script on a small fresh run of its own spec (fewer rays and points: the shape of
+# the figure, not its statistics). detp-engines-cost keeps two of its sizes per axis.
+for name in lines-rays-per-level lines-cache-misses sphere-cache-q detp-engines-cost; do
+    case "$name" in
+        lines-rays-per-level) args=(--set detp.points=2000 --set detp.replicas=2) ;;
+        lines-cache-misses) args=(--set detp.points=5000 --set detp.chunk_points=5000) ;;
+        sphere-cache-q) args=(--set detp.points=2000 --set detp.replicas=1) ;;
+        detp-engines-cost) args=() ;;
+    esac
+    spec="experiments/$name.toml"
+    if [ "$name" = detp-engines-cost ]; then
+        # A smaller sweep of the same shape: two sizes per axis.
+        sed -e 's/^"detp.photons" = .*/"detp.photons" = [8192, 16384]/' \
+            -e 's/^"detp.points" = .*/"detp.points" = [500, 2000]/' "$spec" > "$TMP/$name.toml"
+        spec="$TMP/$name.toml"
+    else
+        args+=(--set detp.photons=16384)
+    fi
+    "$RAYCOST" run "$spec" --out "$TMP" --quiet "${args[@]}"
+    MPLBACKEND=Agg "$PYTHON" "scripts/plot_${name//-/_}.py" --input "$TMP/$name/$name.csv"
+    test -s "$TMP/$name/$name.png" || { echo "error: $name.png was not written" >&2; exit 1; }
+    echo "ok: $name.png"
+done

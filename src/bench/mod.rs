@@ -20,8 +20,10 @@
 
 mod agreement;
 mod calibrate;
+pub mod detp;
 pub mod memory;
 mod rounds;
+mod table;
 
 use std::path::Path;
 use std::time::Instant;
@@ -234,8 +236,20 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
     measured.extend(bench_lazy(a, &plan, &classes, all)?);
 
     print_summary(&measured, plan.sizes, all);
-    for m in &measured {
-        sink.append(&m.row(), &[("rounds", m.round_rows())])
+    println!("\nDETP engines (uniform lines through the unit sphere, points in the ball):");
+    let detp_rows = detp::run(quick);
+    print_detp(&detp_rows);
+    let rows: Vec<Row> = measured
+        .iter()
+        .map(Measured::row)
+        .chain(detp_rows.iter().map(table::detp_row))
+        .collect();
+    let rounds = measured
+        .iter()
+        .map(Measured::round_rows)
+        .chain(detp_rows.iter().map(|_| Vec::new()));
+    for (row, rounds) in table::union_columns(&rows).iter().zip(rounds) {
+        sink.append(row, &[("rounds", rounds)])
             .context("could not append to the bench table")?;
     }
     let points: Vec<String> = cal
@@ -510,6 +524,40 @@ fn bench_lazy(
 }
 
 /// The table, the ratios measured in this run, and the flatness and thread scaling of the grid.
+/// The DETP rows, one line each.
+fn print_detp(rows: &[detp::DetpBenchRow]) {
+    println!(
+        "{:<18} {:>7} {:>8} {:>4} {:>9} {:>8} {:>14} {:>14} {:>9} {:>5} {:>9}",
+        "engine",
+        "points",
+        "rays",
+        "thr",
+        "wall s",
+        "build s",
+        "sphere tests/s",
+        "disc tests/s",
+        "peak MB",
+        "mism",
+        "filter"
+    );
+    for r in rows {
+        println!(
+            "{:<18} {:>7} {:>8} {:>4} {:>9.3} {:>8.3} {:>14.3e} {:>14.3e} {:>9.1} {:>5} {:>9}",
+            r.engine,
+            r.points,
+            r.rays,
+            r.threads,
+            r.wall_s,
+            r.build_s,
+            r.ray_sphere_tests_per_s,
+            r.ray_disc_tests_per_s,
+            r.peak_mem_bytes as f64 / 1e6,
+            r.mismatches,
+            r.filter_path
+        );
+    }
+}
+
 fn print_summary(measured: &[Measured], sizes: &[u64], all: usize) {
     println!(
         "{:<14} {:>9} {:>4} {:>11} {:>19} {:>8} {:>8} {:>8} {:>6} {:>7} {:>7} {:>6}",
