@@ -14,6 +14,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::machine::MachineCosts;
+use super::metric::{Metric, Theory};
 use super::{PointResult, Row};
 use crate::geom::{Aabb, Ray, Sphere};
 use crate::grid::{
@@ -23,7 +24,7 @@ use crate::sample::{directions::uniform_direction, rng::domain, rng::stream};
 use crate::scene::finite::FiniteScene;
 use crate::scene::lazy::{LazyCache, LazyScene};
 use crate::spec::{GridConfig, Kind, SceneModel};
-use crate::stats::{gof, ClusteredMean, Estimate, Histogram};
+use crate::stats::{gof, ClusteredMean, Histogram};
 use crate::theory::grid::{self as th, Eye, GridTheoryInput};
 
 /// Rays per batch (fixed: it must not depend on the thread count).
@@ -382,22 +383,18 @@ fn make_result(
     let at_least_one = |x: f64| if x >= 1.0 { x } else { f64::NAN };
     let n_i_th = at_least_one(th::n_i_predictor_for_eye(inp, cfg.eye));
     let n_i_mb_th = at_least_one(th::n_i_mb_predictor_for_eye(inp, cfg.eye));
-    let verdict = |e: &Estimate| band_verdict(e, band.lower, band.upper);
     let (n_i, n_i_mb, n_s) = (
         acc.n_i.estimate(),
         acc.n_i_mb.estimate(),
         acc.n_s.estimate(),
     );
-    row.estimate("n_i", &n_i)
-        .f("n_i_theory", n_i_th)
-        .f("n_i_lower", band.lower)
-        .f("n_i_upper", band.upper)
-        .s("n_i_band", verdict(&n_i));
-    row.estimate("n_i_mb", &n_i_mb)
-        .f("n_i_mb_theory", n_i_mb_th)
-        .f("n_i_mb_lower", band.lower)
-        .f("n_i_mb_upper", band.upper)
-        .s("n_i_mb_band", verdict(&n_i_mb));
+    let in_band = |theory| Theory::Band {
+        prediction: theory,
+        lower: band.lower,
+        upper: band.upper,
+    };
+    Metric::new("n_i", n_i, in_band(n_i_th)).write(&mut row, &mut summary);
+    Metric::new("n_i_mb", n_i_mb, in_band(n_i_mb_th)).write(&mut row, &mut summary);
     row.f("n_i_plain_theory", th::n_i_plain_predictor(inp, n_s_th));
     // The sharper predictors are derived for r < a/2 (no overlap of non-adjacent cells' offsets).
     let r_max = cfg
@@ -413,25 +410,7 @@ fn make_result(
             "r>=a/2"
         },
     );
-    row.estimate("n_s", &n_s).f("n_s_theory", n_s_th);
-    summary.push((
-        "n_i".into(),
-        n_i,
-        format!("{n_i_th:.3} [{:.3}, {:.3}]", band.lower, band.upper),
-        verdict(&n_i).into(),
-    ));
-    summary.push((
-        "n_i_mb".into(),
-        n_i_mb,
-        format!("{n_i_mb_th:.3} [{:.3}, {:.3}]", band.lower, band.upper),
-        verdict(&n_i_mb).into(),
-    ));
-    summary.push((
-        "n_s".into(),
-        n_s,
-        format!("{n_s_th:.3}"),
-        z_verdict(&n_s, n_s_th),
-    ));
+    Metric::new("n_s", n_s, Theory::Prediction(n_s_th)).write(&mut row, &mut summary);
 
     let t_hit = acc.t_hit.estimate();
     let hit = acc.hit.estimate();
@@ -440,20 +419,8 @@ fn make_result(
         None => (1.0, mean_t),
         Some(_) => finite_hit_theory(cfg, inp),
     };
-    row.estimate("t_hit", &t_hit).f("t_hit_theory", mean_t);
-    row.estimate("hit", &hit).f("hit_theory", hit_th);
-    summary.push((
-        "t_hit".into(),
-        t_hit,
-        format!("{mean_t:.4}"),
-        z_verdict(&t_hit, mean_t),
-    ));
-    summary.push((
-        "hit".into(),
-        hit,
-        format!("{hit_th:.4}"),
-        z_verdict(&hit, hit_th),
-    ));
+    Metric::new("t_hit", t_hit, Theory::Prediction(mean_t)).write(&mut row, &mut summary);
+    Metric::new("hit", hit, Theory::Prediction(hit_th)).write(&mut row, &mut summary);
 
     // Laws: exponential first-hit distance (KS and χ² on the histogram), geometric N_I.
     let mut sorted = acc.t_samples.clone();
@@ -621,47 +588,6 @@ fn make_result(
     }
 }
 
-/// Where a measured mean falls against a band `[lower, upper]`, judged by its 95 % CI: `below`,
-/// `inside` or `above`; `n/a` when the estimate has no standard error (a single cluster), because
-/// then nothing can be said about where the true mean lies.
-pub fn band_verdict(e: &Estimate, lower: f64, upper: f64) -> &'static str {
-    let h = e.half_width(0.95);
-    if !h.is_finite() || !e.mean.is_finite() {
-        "n/a"
-    } else if e.mean + h < lower {
-        "below"
-    } else if e.mean - h > upper {
-        "above"
-    } else {
-        "inside"
-    }
-}
-
-/// "ok" when the measurement is within its 99 % CI (Student-t, clusters − 1 dof) of a prediction,
-/// else how many SE away; `n/a` without a standard error or a finite prediction.
-pub fn z_verdict(e: &Estimate, theory: f64) -> String {
-    if !theory.is_finite() || !e.mean.is_finite() {
-        return "n/a".into();
-    }
-    if e.se == 0.0 {
-        return if e.mean == theory {
-            "ok (exact)".into()
-        } else {
-            "differs (SE 0)".into()
-        };
-    }
-    let h = e.half_width(0.99);
-    if !h.is_finite() {
-        return "n/a".into();
-    }
-    let z = (e.mean - theory) / e.se;
-    if (e.mean - theory).abs() <= h {
-        "ok (99% CI)".into()
-    } else {
-        format!("{z:+.1} SE")
-    }
-}
-
 /// The exponential law restricted to a finite cube: `(P(hit), E[t* | hit])` for rays from the eye
 /// (at the centre, or uniform in its cell) to the faces of the cube holding the centres.
 ///
@@ -725,36 +651,4 @@ fn finite_hit_theory(cfg: &GridConfig, inp: &GridTheoryInput) -> (f64, f64) {
         }
     }
     (p_hit / (nz * nphi * eyes.len()) as f64, t_hit / p_hit)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn est(mean: f64, se: f64, clusters: u64) -> Estimate {
-        Estimate {
-            mean,
-            se,
-            n: 1000,
-            clusters,
-        }
-    }
-
-    #[test]
-    fn band_verdicts_use_the_confidence_interval_and_refuse_without_one() {
-        assert_eq!(band_verdict(&est(5.0, 0.1, 100), 1.0, 10.0), "inside");
-        assert_eq!(band_verdict(&est(10.1, 0.1, 100), 1.0, 10.0), "inside"); // CI reaches 10
-        assert_eq!(band_verdict(&est(11.0, 0.1, 100), 1.0, 10.0), "above");
-        assert_eq!(band_verdict(&est(0.5, 0.1, 100), 1.0, 10.0), "below");
-        assert_eq!(band_verdict(&est(4.5, f64::NAN, 1), 1.0, 2.7), "n/a");
-    }
-
-    #[test]
-    fn z_verdicts_widen_with_few_clusters() {
-        // 3 SE away: outside a 99 % normal CI, inside the t₃ one (5.84 SE).
-        assert_eq!(z_verdict(&est(3.0, 1.0, 1000), 0.0), "+3.0 SE");
-        assert_eq!(z_verdict(&est(3.0, 1.0, 4), 0.0), "ok (99% CI)");
-        assert_eq!(z_verdict(&est(1.0, 0.0, 10), 1.0), "ok (exact)");
-        assert_eq!(z_verdict(&est(1.0, f64::NAN, 1), 1.0), "n/a");
-    }
 }

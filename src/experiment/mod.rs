@@ -4,10 +4,10 @@
 pub mod detp;
 pub mod grid;
 pub mod machine;
+pub mod metric;
 pub mod runner;
 
 pub use crate::output::row::{Row, Value};
-use crate::stats::Estimate;
 
 /// One point's results: the main row, its rows of each side table (`NAME.TABLE.csv`, e.g. `hist`,
 /// `levels`, `points`), and what the terminal summary shows.
@@ -18,7 +18,7 @@ pub struct PointResult {
     /// Side tables: (table name, rows), names from [`side_tables`] of the point's kind.
     pub tables: Vec<(&'static str, Vec<Row>)>,
     /// Human summary: (metric, measured, theory text, verdict).
-    pub summary: Vec<(String, Estimate, String, String)>,
+    pub summary: Vec<metric::SummaryLine>,
     /// Rays per second while tracing.
     pub rays_per_s: f64,
 }

@@ -466,7 +466,7 @@ pub fn run_point(
                 format!("rays L{i}"),
                 e,
                 format!("{theory:.4} (n_R·(r_i/r_law)²)"),
-                super::grid::z_verdict(&e, theory),
+                super::metric::z_verdict(&e, theory),
             ));
         }
     }
@@ -474,7 +474,7 @@ pub fn run_point(
         "irradiance".into(),
         mean_irr,
         format!("{exact_mean:.6e}"),
-        super::grid::z_verdict(&mean_irr, exact_mean),
+        super::metric::z_verdict(&mean_irr, exact_mean),
     ));
     let mismatches = total(&|o| o.mismatches);
     summary.push((
