@@ -30,6 +30,7 @@ use rayon::prelude::*;
 mod lines;
 mod scene;
 
+use super::metric::{Metric, Theory};
 use super::{PointResult, Row};
 use crate::detp::disc::Discs;
 use crate::detp::disc_index::DiscIndex;
@@ -411,9 +412,10 @@ pub fn run_point(
             .map(|e| judged.iter().map(|&i| e[i]).sum::<f64>() / judged.len().max(1) as f64)
             .collect::<Vec<_>>(),
     );
-    row.estimate("irradiance", &mean_irr)
-        .f("irradiance_theory", exact_mean)
-        .estimate("irradiance_rmse", &rmse)
+    let mut summary = Vec::new();
+    Metric::new("irradiance", mean_irr, Theory::Prediction(exact_mean))
+        .write(&mut row, &mut summary);
+    row.estimate("irradiance_rmse", &rmse)
         .estimate("irradiance_bias", &bias)
         .f(
             "rays_per_s",
@@ -422,7 +424,7 @@ pub fn run_point(
 
     // Levels table.
     let mut levels = Vec::new();
-    let mut summary = Vec::new();
+    let mut level_lines = Vec::new();
     let depth = outs
         .iter()
         .filter_map(|o| o.cache.as_ref().map(|c| c.levels.len()))
@@ -462,7 +464,7 @@ pub fn run_point(
             .u("ray_sphere_tests_level", tests);
         levels.push(r);
         if e.n > 0 {
-            summary.push((
+            level_lines.push((
                 format!("rays L{i}"),
                 e,
                 format!("{theory:.4} (n_R·(r_i/r_law)²)"),
@@ -470,12 +472,9 @@ pub fn run_point(
             ));
         }
     }
-    summary.push((
-        "irradiance".into(),
-        mean_irr,
-        format!("{exact_mean:.6e}"),
-        super::metric::z_verdict(&mean_irr, exact_mean),
-    ));
+    // Levels first, then the point's own metrics.
+    level_lines.append(&mut summary);
+    let mut summary = level_lines;
     let mismatches = total(&|o| o.mismatches);
     summary.push((
         "mismatch".into(),
