@@ -265,8 +265,7 @@ impl<'a> Ctx<'a> {
             radius: self.r0,
             list: Cow::Borrowed(self.root),
         }];
-        // Lists of dropped levels, reused for new ones (no allocation once warm).
-        let mut pool: Vec<RayList> = Vec::new();
+        let mut scratch = RayList::default();
         for (k, (&p, sum)) in points.iter().zip(&mut sums).enumerate() {
             let p = p as usize;
             let c = self.discs.centers[p];
@@ -283,11 +282,7 @@ impl<'a> Ctx<'a> {
                 .iter()
                 .position(|l| !l.contains(c, d))
                 .unwrap_or(stack.len() - 1);
-            for l in stack.drain(keep..) {
-                if let Cow::Owned(list) = l.list {
-                    pool.push(list);
-                }
-            }
+            stack.truncate(keep);
             while stack.last().map_or(0, |l| l.list.len()) >= self.params.threshold
                 && stack.len() <= MAX_LEVEL
             {
@@ -304,8 +299,11 @@ impl<'a> Ctx<'a> {
                         .unwrap_or(0),
                 };
                 let probe = Probe::new(self.center, self.origin_bound, c, r, kappa(i));
-                let mut list = pool.pop().unwrap_or_default();
-                filter(self.path, &stack[src].list, &probe, segs, &mut list);
+                // Filter into a warm scratch list with room for the whole source, then keep an
+                // exact-size copy: reusing dropped lists instead kept every level at the root's
+                // size (5× the memory at n_R = 2²⁰), and fresh source-size lists cost page faults.
+                filter(self.path, &stack[src].list, &probe, segs, &mut scratch);
+                let list = scratch.clone();
                 let tested = stack[src].list.len() as u64;
                 let held = list.len() as u64;
                 let l = stats.level(i, r);
