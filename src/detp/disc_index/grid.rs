@@ -6,12 +6,11 @@
 
 use glam::DVec3;
 
-use super::{clip, DiscIndex, Reach};
+use super::{clip, DiscIndex, Mailbox, Reach};
 use crate::detp::disc::Discs;
 use crate::detp::store::Segment;
 use crate::geom::{Aabb, Ray, Sphere};
 use crate::grid::build::{cell_lists, frame_around, grid_magnitude};
-use crate::grid::mailbox::Mailbox;
 use crate::grid::{Cell, Dda, GridFrame};
 
 /// A regular grid of disc lists.
@@ -113,7 +112,7 @@ impl DiscIndex for GridIndex {
             visited += 1;
             let s = ((cell[2] * self.dims[1] + cell[1]) * self.dims[0] + cell[0]) as usize;
             for &i in &self.items[self.offsets[s] as usize..self.offsets[s + 1] as usize] {
-                if mailbox.insert(u64::from(i)) {
+                if mailbox.insert(i) {
                     f(i);
                 }
             }

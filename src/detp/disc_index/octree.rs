@@ -10,11 +10,10 @@
 
 use glam::DVec3;
 
-use super::{clip, DiscIndex, Reach};
+use super::{clip, DiscIndex, Mailbox, Reach};
 use crate::detp::disc::Discs;
 use crate::detp::store::Segment;
 use crate::geom::Aabb;
-use crate::grid::mailbox::Mailbox;
 
 /// Deepest level (a safety stop for discs that straddle every split).
 const MAX_DEPTH: u32 = 24;
@@ -164,7 +163,7 @@ impl DiscIndex for Octree {
                 }
             } else {
                 for &i in &self.items[n.first as usize..(n.first + n.count) as usize] {
-                    if mailbox.insert(u64::from(i)) {
+                    if mailbox.insert(i) {
                         f(i);
                     }
                 }
