@@ -145,3 +145,20 @@ fn clip_handles_axis_parallel_segments_and_ranges() {
         None
     );
 }
+
+#[test]
+fn mailbox_forgets_on_clear_and_survives_stamp_wraparound() {
+    let mut m = Mailbox::new(4);
+    m.clear();
+    assert!(m.insert(2) && !m.insert(2) && m.insert(3));
+    m.clear();
+    assert!(m.insert(2));
+    m.stamp = u32::MAX;
+    m.seen[1] = 1;
+    m.clear();
+    assert_eq!(m.stamp, 1);
+    assert!(
+        m.insert(1),
+        "a stale stamp equal to the restarted one must have been reset"
+    );
+}
