@@ -61,7 +61,8 @@ pub trait DiscIndex: Sync {
     fn reach(&self) -> &Reach;
 
     /// Calls `f` with every candidate disc of `seg` (each once, thanks to `mailbox`, which is
-    /// started afresh here) and returns the cells or nodes entered. Only for segments within the reach.
+    /// started afresh here) and returns the cells or nodes entered. Only for segments within the
+    /// reach.
     fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, f: &mut dyn FnMut(u32)) -> u64;
 
     /// Bytes held by the index (discs included).
