@@ -29,6 +29,14 @@
 //! the same for any thread count. The root list (level 0) is built once and shared: level 0 counts
 //! one build and one test per segment. A level's `misses` are its builds except those made for a
 //! chunk's first point (cold starts). Level numbering starts at 0 with the root, r_i = r_0·Q^i.
+//!
+//! # The paper's §4.2 numbers, with this convention
+//! 2²⁰ uniform lines, 10⁵ points uniform in the unit ball (d = 0.002, root radius 1 + d), Morton
+//! order, Q = 0.6, threshold 100, exact lists: level 9 holds 106.7 rays on average (SE 0.03;
+//! n_R·(r_9/1)² = 106.9), not the paper's 94.6; inherited lists hold 103.9. Misses rise with the
+//! level up to level 9 (98 222 of 10⁵ points) and drop at level 10 (75 313), which is built only
+//! when level 9 holds ≥ 100 rays. Spheres smaller than the point spacing (0.035 here) are rebuilt
+//! for nearly every point, so m_i saturates at n_P instead of growing as Q^(−3i).
 
 pub mod filter;
 
