@@ -50,11 +50,15 @@ fn indexes(discs: &Discs) -> Vec<(&'static str, Box<dyn Run>)> {
 /// Object-safe view of [`DiscIndex::accumulate`] for looping over both indexes.
 trait Run: Sync {
     fn run(&self, s: &SegmentStore, seg: Option<&[u32]>, sign: i8, acc: &mut [Acc]) -> IndexStats;
+    fn size(&self) -> usize;
 }
 
 impl<T: DiscIndex> Run for T {
     fn run(&self, s: &SegmentStore, seg: Option<&[u32]>, sign: i8, acc: &mut [Acc]) -> IndexStats {
         self.accumulate(s, seg, sign, acc)
+    }
+    fn size(&self) -> usize {
+        self.bytes()
     }
 }
 
@@ -84,6 +88,8 @@ fn both_indexes_equal_brute_force_and_add_then_remove_equals_the_complement() {
             "{name} culls"
         );
         ix.run(&store, Some(&removed), -1, &mut acc);
+        // Discs (48 B each) plus at least one listing (4 B) per disc.
+        assert!(ix.size() >= discs.len() * 52, "{name}: {} bytes", ix.size());
         assert_eq!(acc, only_kept, "{name}: add all, remove a third");
     }
 }
