@@ -6,18 +6,17 @@
 
 use glam::DVec3;
 
-use super::{clip, DiscIndex, Reach};
+use super::{clip, DiscIndex, LocalDiscs, Mailbox, Reach};
 use crate::detp::disc::Discs;
 use crate::detp::store::Segment;
 use crate::geom::{Aabb, Ray, Sphere};
 use crate::grid::build::{cell_lists, frame_around, grid_magnitude};
-use crate::grid::mailbox::Mailbox;
 use crate::grid::{Cell, Dda, GridFrame};
 
 /// A regular grid of disc lists.
 #[derive(Debug)]
 pub struct GridIndex {
-    discs: Discs,
+    discs: LocalDiscs,
     reach: Reach,
     frame: GridFrame,
     dims: [i64; 3],
@@ -33,6 +32,8 @@ impl GridIndex {
     /// On no discs, a non-positive width, or 2³¹ cells or more.
     pub fn build(discs: &Discs, cell_width: f64) -> Self {
         assert!(cell_width > 0.0, "cell width must be positive");
+        let local = LocalDiscs::new(discs);
+        let discs = &local.discs;
         let reach = Reach::new(discs);
         let b = reach.padded(&reach.bounds);
         let frame = frame_around(b, cell_width, b.lo);
@@ -59,7 +60,7 @@ impl GridIndex {
             |_, s| s,
         );
         Self {
-            discs: discs.clone(),
+            discs: local,
             reach,
             frame,
             dims,
@@ -85,7 +86,7 @@ impl GridIndex {
 }
 
 impl DiscIndex for GridIndex {
-    fn discs(&self) -> &Discs {
+    fn discs(&self) -> &LocalDiscs {
         &self.discs
     }
 
@@ -113,7 +114,7 @@ impl DiscIndex for GridIndex {
             visited += 1;
             let s = ((cell[2] * self.dims[1] + cell[1]) * self.dims[0] + cell[0]) as usize;
             for &i in &self.items[self.offsets[s] as usize..self.offsets[s + 1] as usize] {
-                if mailbox.insert(u64::from(i)) {
+                if mailbox.insert(i) {
                     f(i);
                 }
             }
@@ -122,6 +123,6 @@ impl DiscIndex for GridIndex {
     }
 
     fn bytes(&self) -> usize {
-        self.offsets.len() * 4 + self.items.len() * 4 + self.discs.len() * 48
+        self.offsets.len() * 4 + self.items.len() * 4 + self.discs.bytes()
     }
 }

@@ -27,11 +27,11 @@ pub mod octree;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::disc::Discs;
+use super::disc::{crosses, Discs};
 use super::fixed::{add, Acc};
+use super::order::{permutation, Order};
 use super::store::{Segment, SegmentStore};
 use crate::geom::Aabb;
-use crate::grid::mailbox::Mailbox;
 
 pub use grid::GridIndex;
 pub use octree::Octree;
@@ -55,14 +55,15 @@ impl IndexStats {
 
 /// A spatial index over discs that segments traverse.
 pub trait DiscIndex: Sync {
-    /// The indexed discs.
-    fn discs(&self) -> &Discs;
+    /// The indexed discs, in the index's own order.
+    fn discs(&self) -> &LocalDiscs;
 
     /// The index's reach (see the module doc): pad, centre and the origin radius R.
     fn reach(&self) -> &Reach;
 
     /// Calls `f` with every candidate disc of `seg` (each once, thanks to `mailbox`, which is
-    /// cleared here) and returns the cells or nodes entered. Only for segments within the reach.
+    /// started afresh here) and returns the cells or nodes entered. Only for segments within the
+    /// reach.
     fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, f: &mut dyn FnMut(u32)) -> u64;
 
     /// Bytes held by the index (discs included).
@@ -79,6 +80,7 @@ pub trait DiscIndex: Sync {
     ) -> IndexStats {
         let discs = self.discs();
         assert!(acc.len() >= discs.len(), "one accumulator per disc");
+        let d = discs.discs.radius;
         let n = segments.map_or(store.len(), <[u32]>::len);
         let seg_at = |k: usize| &store.segments[segments.map_or(k, |s| s[k] as usize)];
         let (sums, stats) = (0..n)
@@ -88,7 +90,7 @@ pub trait DiscIndex: Sync {
                 || {
                     (
                         vec![0 as Acc; discs.len()],
-                        Mailbox::default(),
+                        Mailbox::new(discs.len()),
                         IndexStats::default(),
                     )
                 },
@@ -96,7 +98,9 @@ pub trait DiscIndex: Sync {
                     let s = seg_at(k);
                     let mut test = |i: u32| {
                         st.ray_disc_tests += 1;
-                        if discs.crossed_by(s, i as usize) {
+                        let [c, n] = discs.packed[i as usize];
+                        // The very call `Discs::crossed_by` makes, on exact copies of the values.
+                        if crosses(s.o(), s.d(), s.t_end(), c, n, d) {
                             add(&mut sums[i as usize], s.power, sign);
                         }
                     };
@@ -116,8 +120,101 @@ pub trait DiscIndex: Sync {
                     (a, sa.merge(sb))
                 },
             );
-        acc.iter_mut().zip(sums).for_each(|(a, s)| *a += s);
+        for (&i, s) in discs.original.iter().zip(sums) {
+            acc[i as usize] += s;
+        }
         stats
+    }
+}
+
+/// The discs of an index, renumbered along a Hilbert curve through their centres and packed
+/// centre-with-normal: a segment's candidates in neighbouring cells or leaves then sit in
+/// neighbouring memory, and a test reads one record instead of two arrays (the walks were bound by
+/// these loads; 1.3–1.4× faster at 10⁵ discs). The values are exact copies, so every decision is the
+/// one [`Discs::crossed_by`] makes on the caller's discs.
+#[derive(Clone, Debug)]
+pub struct LocalDiscs {
+    /// The discs in index order.
+    pub discs: Discs,
+    packed: Vec<[DVec3; 2]>,
+    /// `original[k]`: the caller's index of local disc k.
+    original: Vec<u32>,
+}
+
+impl LocalDiscs {
+    /// The discs of `discs`, in Hilbert order.
+    pub fn new(discs: &Discs) -> Self {
+        let original = permutation(&discs.centers, Order::Hilbert, 10);
+        let pick = |v: &[DVec3]| original.iter().map(|&i| v[i as usize]).collect::<Vec<_>>();
+        let (centers, normals) = (pick(&discs.centers), pick(&discs.normals));
+        let packed = centers
+            .iter()
+            .zip(&normals)
+            .map(|(&c, &n)| [c, n])
+            .collect();
+        Self {
+            // Not `Discs::new`: it would re-normalise the normals and could change their bits.
+            discs: Discs {
+                centers,
+                normals,
+                radius: discs.radius,
+            },
+            packed,
+            original,
+        }
+    }
+
+    /// Number of discs.
+    pub fn len(&self) -> usize {
+        self.original.len()
+    }
+
+    /// No discs?
+    pub fn is_empty(&self) -> bool {
+        self.original.is_empty()
+    }
+
+    /// Bytes held.
+    pub fn bytes(&self) -> usize {
+        self.len() * (48 + 48 + 4)
+    }
+}
+
+/// The discs already tested for the current segment: one stamp per disc, direct-mapped (a disc
+/// index knows its discs, so this beats the grid's hashed [`crate::grid::mailbox::Mailbox`], which
+/// serves unbounded lazily generated scenes: 10–20 % faster walks at 10⁴ discs).
+#[derive(Clone, Debug)]
+pub struct Mailbox {
+    seen: Vec<u32>,
+    stamp: u32,
+}
+
+impl Mailbox {
+    /// A mailbox for discs `0..n`.
+    pub fn new(n: usize) -> Self {
+        Self {
+            seen: vec![0; n],
+            stamp: 0,
+        }
+    }
+
+    /// Starts a new segment: every disc is untested again.
+    #[inline]
+    pub fn clear(&mut self) {
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            self.seen.iter_mut().for_each(|s| *s = 0);
+            self.stamp = 1;
+        }
+    }
+
+    /// Marks disc `i`; true if it was not yet tested for this segment.
+    #[inline]
+    pub fn insert(&mut self, i: u32) -> bool {
+        let s = &mut self.seen[i as usize];
+        let new = *s != self.stamp;
+        *s = self.stamp;
+        new
     }
 }
 

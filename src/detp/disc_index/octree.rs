@@ -10,11 +10,10 @@
 
 use glam::DVec3;
 
-use super::{clip, DiscIndex, Reach};
+use super::{clip, DiscIndex, LocalDiscs, Mailbox, Reach};
 use crate::detp::disc::Discs;
 use crate::detp::store::Segment;
 use crate::geom::Aabb;
-use crate::grid::mailbox::Mailbox;
 
 /// Deepest level (a safety stop for discs that straddle every split).
 const MAX_DEPTH: u32 = 24;
@@ -34,7 +33,7 @@ const INNER: u32 = u32::MAX;
 /// An octree of disc lists.
 #[derive(Debug)]
 pub struct Octree {
-    discs: Discs,
+    discs: LocalDiscs,
     reach: Reach,
     nodes: Vec<Node>,
     items: Vec<u32>,
@@ -49,10 +48,13 @@ impl Octree {
     pub fn build(discs: &Discs, max_leaf: usize, min_side: f64) -> Self {
         assert!(max_leaf > 0, "max_leaf must be positive");
         assert!(min_side > 0.0, "min_side must be positive");
+        let local = LocalDiscs::new(discs);
+        let discs = &local.discs;
         let reach = Reach::new(discs);
         let boxes: Vec<Aabb> = (0..discs.len()).map(|i| discs.bounds(i)).collect();
+        let all: Vec<u32> = (0..discs.len() as u32).collect();
         let mut t = Self {
-            discs: discs.clone(),
+            discs: local,
             reach,
             nodes: Vec::new(),
             items: Vec::new(),
@@ -64,7 +66,6 @@ impl Octree {
             first: 0,
             count: 0,
         });
-        let all: Vec<u32> = (0..discs.len() as u32).collect();
         t.split(0, root, all, &boxes, max_leaf, min_side, 0);
         for n in &mut t.nodes {
             let p = reach.padded(&Aabb::new(n.lo, n.hi));
@@ -136,7 +137,7 @@ impl Octree {
 }
 
 impl DiscIndex for Octree {
-    fn discs(&self) -> &Discs {
+    fn discs(&self) -> &LocalDiscs {
         &self.discs
     }
 
@@ -164,7 +165,7 @@ impl DiscIndex for Octree {
                 }
             } else {
                 for &i in &self.items[n.first as usize..(n.first + n.count) as usize] {
-                    if mailbox.insert(u64::from(i)) {
+                    if mailbox.insert(i) {
                         f(i);
                     }
                 }
@@ -174,8 +175,6 @@ impl DiscIndex for Octree {
     }
 
     fn bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<Node>()
-            + self.items.len() * 4
-            + self.discs.len() * 48
+        self.nodes.len() * std::mem::size_of::<Node>() + self.items.len() * 4 + self.discs.bytes()
     }
 }

@@ -50,11 +50,15 @@ fn indexes(discs: &Discs) -> Vec<(&'static str, Box<dyn Run>)> {
 /// Object-safe view of [`DiscIndex::accumulate`] for looping over both indexes.
 trait Run: Sync {
     fn run(&self, s: &SegmentStore, seg: Option<&[u32]>, sign: i8, acc: &mut [Acc]) -> IndexStats;
+    fn size(&self) -> usize;
 }
 
 impl<T: DiscIndex> Run for T {
     fn run(&self, s: &SegmentStore, seg: Option<&[u32]>, sign: i8, acc: &mut [Acc]) -> IndexStats {
         self.accumulate(s, seg, sign, acc)
+    }
+    fn size(&self) -> usize {
+        self.bytes()
     }
 }
 
@@ -84,6 +88,8 @@ fn both_indexes_equal_brute_force_and_add_then_remove_equals_the_complement() {
             "{name} culls"
         );
         ix.run(&store, Some(&removed), -1, &mut acc);
+        // Discs (48 B each) plus at least one listing (4 B) per disc.
+        assert!(ix.size() >= discs.len() * 52, "{name}: {} bytes", ix.size());
         assert_eq!(acc, only_kept, "{name}: add all, remove a third");
     }
 }
@@ -143,5 +149,22 @@ fn clip_handles_axis_parallel_segments_and_ranges() {
     assert_eq!(
         clip(DVec3::new(-1.0, 0.5, 0.5), DVec3::X, &b, 0.0, 0.5),
         None
+    );
+}
+
+#[test]
+fn mailbox_forgets_on_clear_and_survives_stamp_wraparound() {
+    let mut m = Mailbox::new(4);
+    m.clear();
+    assert!(m.insert(2) && !m.insert(2) && m.insert(3));
+    m.clear();
+    assert!(m.insert(2));
+    m.stamp = u32::MAX;
+    m.seen[1] = 1;
+    m.clear();
+    assert_eq!(m.stamp, 1);
+    assert!(
+        m.insert(1),
+        "a stale stamp equal to the restarted one must have been reset"
     );
 }

@@ -87,9 +87,6 @@ pub struct RayList {
     idx: Vec<u32>,
 }
 
-/// Bytes one lane occupies.
-pub const LANE_BYTES: usize = 32;
-
 impl RayList {
     /// Every segment of `segments`, origins relative to `reference`.
     pub fn from_segments(segments: &[Segment], reference: DVec3) -> Self {
@@ -123,11 +120,6 @@ impl RayList {
     #[inline]
     pub fn indices(&self) -> &[u32] {
         &self.idx
-    }
-
-    /// Bytes held (capacity).
-    pub fn bytes(&self) -> usize {
-        self.idx.capacity() * LANE_BYTES
     }
 
     /// Largest |origin| (relative to the reference) over the lanes, rounded up.
