@@ -180,12 +180,37 @@ fn theory_prints_the_closed_forms() {
     assert!(s.contains("31.830989") && s.contains("95.492966"), "{s}");
 }
 
+#[test]
+fn theory_detp_prints_theorem_1_and_the_crossover() {
+    let o = raycost()
+        .args([
+            "theory", "detp", "--rays", "1048576", "--points", "1000000", "--q", "0.6",
+        ])
+        .output()
+        .expect("runs");
+    assert!(o.status.success());
+    let s = String::from_utf8_lossy(&o.stdout);
+    // Level 9 at Q = 0.6: 2²⁰·0.6¹⁸ = 106.493; 1/(Q²(1−Q)) = 6.944444; disc indexing n_R·∛n_P.
+    assert!(s.contains("106.493"), "{s}");
+    assert!(s.contains("6.944444e0"), "{s}");
+    assert!(s.contains("1.048576e8"), "{s}");
+    let o = raycost()
+        .args([
+            "theory", "detp", "--rays", "1000", "--points", "1000", "--q", "1.5",
+        ])
+        .output()
+        .expect("runs");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--q: got 1.5"));
+}
+
 /// The shipped quickstart spec is valid and every shipped experiment spec checks.
 #[test]
 fn shipped_specs_check() {
     for e in std::fs::read_dir(root().join("experiments"))
         .expect("experiments/")
         .flatten()
+        .filter(|e| e.path().extension().is_some_and(|x| x == "toml"))
     {
         let o = raycost().arg("check").arg(e.path()).output().expect("runs");
         assert!(

@@ -71,6 +71,10 @@ pub struct SphereCacheParams {
     pub list_mode: ListMode,
     /// Points per independent cache (the unit of parallel work).
     pub chunk_points: usize,
+    /// The ball the rays are μ-random in, when they are (centre, radius): builds of spheres that lie
+    /// inside it are counted apart (`inside_*`), since for them integral geometry gives the
+    /// expected list length exactly, n_R·(r/R)², whatever their position.
+    pub law_ball: Option<(DVec3, f64)>,
 }
 
 impl Default for SphereCacheParams {
@@ -80,6 +84,7 @@ impl Default for SphereCacheParams {
             threshold: 100,
             list_mode: ListMode::Exact,
             chunk_points: 4096,
+            law_ball: None,
         }
     }
 }
@@ -97,6 +102,12 @@ pub struct LevelStats {
     pub rays_held: u64,
     /// Σ (list length)² over builds, for a standard error.
     pub rays_held_sq: u128,
+    /// Builds of spheres inside the law ball (see [`SphereCacheParams::law_ball`]).
+    pub inside_builds: u64,
+    /// Σ list length over those builds.
+    pub inside_rays_held: u64,
+    /// Σ (list length)² over those builds.
+    pub inside_rays_held_sq: u128,
     /// Segments tested against spheres of this level while building them.
     pub ray_sphere_tests: u64,
 }
@@ -144,6 +155,9 @@ impl CacheStats {
             a.misses += b.misses;
             a.rays_held += b.rays_held;
             a.rays_held_sq += b.rays_held_sq;
+            a.inside_builds += b.inside_builds;
+            a.inside_rays_held += b.inside_rays_held;
+            a.inside_rays_held_sq += b.inside_rays_held_sq;
             a.ray_sphere_tests += b.ray_sphere_tests;
         }
         self.ray_disc_tests += other.ray_disc_tests;
@@ -319,6 +333,13 @@ impl<'a> Ctx<'a> {
                 l.misses += u64::from(k != 0);
                 l.rays_held += held;
                 l.rays_held_sq += u128::from(held) * u128::from(held);
+                if let Some((lc, lr)) = self.params.law_ball {
+                    if (c - lc).length() + r <= lr {
+                        l.inside_builds += 1;
+                        l.inside_rays_held += held;
+                        l.inside_rays_held_sq += u128::from(held) * u128::from(held);
+                    }
+                }
                 l.ray_sphere_tests += tested;
                 stats.ray_sphere_tests += tested;
                 stack.push(Level {

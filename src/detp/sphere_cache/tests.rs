@@ -75,6 +75,7 @@ fn both_list_modes_every_order_and_filter_path_equal_brute_force() {
                     threshold,
                     list_mode: mode,
                     chunk_points: chunk,
+                    law_ball: Some((DVec3::ZERO, 1.0)),
                 };
                 for path in FilterPath::all_available() {
                     let mut acc = vec![0; discs.len()];
@@ -188,6 +189,7 @@ fn exact_lists_follow_the_area_law_off_centre_and_inherited_lists_fall_short() {
     let perm = permutation(&discs.centers, Order::Hilbert, 10);
     let stats = |mode| {
         let params = SphereCacheParams {
+            law_ball: None,
             q: 0.7,
             list_mode: mode,
             ..Default::default()
@@ -223,6 +225,48 @@ fn exact_lists_follow_the_area_law_off_centre_and_inherited_lists_fall_short() {
     assert!(checked >= 4, "only {checked} levels checked");
     assert!(short >= 1, "inherited lists never fell short");
     assert!(inherited.ray_sphere_tests < exact.ray_sphere_tests);
+}
+
+/// With the law ball given, the builds of spheres that lie inside it are counted apart, and they
+/// follow n_R·(r_i/R)² wherever they sit — also at the top levels, where most spheres built around
+/// points of the whole ball stick out of it and hold fewer rays.
+#[test]
+fn spheres_inside_the_law_ball_follow_the_area_law_at_every_level() {
+    let n_r = 1u32 << 17;
+    let store = lines(n_r, 12);
+    let discs = ball_points(4000, 1.0, 2e-3, 13);
+    let perm = permutation(&discs.centers, Order::Hilbert, 10);
+    let params = SphereCacheParams {
+        q: 0.7,
+        law_ball: Some(UNIT),
+        ..Default::default()
+    };
+    let mut acc = vec![0; discs.len()];
+    let st = run(&store, &discs, &perm, UNIT, &params, &mut acc);
+    let mut checked = 0;
+    let mut sticking_out = 0;
+    for (i, l) in st.levels.iter().enumerate().skip(1) {
+        assert!(l.inside_builds <= l.builds);
+        let theory = f64::from(n_r) * 0.7f64.powi(2 * i as i32);
+        if l.inside_builds < 30 || theory < 200.0 {
+            continue;
+        }
+        let inside = l.inside_rays_held as f64 / l.inside_builds as f64;
+        assert!(
+            (inside / theory - 1.0).abs() < 0.03,
+            "level {i}: inside mean {inside:.1} vs theory {theory:.1}"
+        );
+        let all = l.rays_held as f64 / l.builds as f64;
+        if l.inside_builds < l.builds && all < 0.97 * theory {
+            sticking_out += 1;
+        }
+        checked += 1;
+    }
+    assert!(checked >= 4, "only {checked} levels checked");
+    assert!(
+        sticking_out >= 1,
+        "no level showed the deficit of spheres sticking out"
+    );
 }
 
 /// Sorting the points along a curve is what keeps spheres in use: Hilbert and Morton orders

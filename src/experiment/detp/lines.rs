@@ -42,6 +42,7 @@ pub(super) fn lines(cfg: &DetpConfig, point: u64, replica: u64) -> RaySet {
         // falls back to all segments; the lines stay μ-random in the unit ball, the law's sphere.
         root: (DVec3::ZERO, 1.0 + cfg.disc_radius),
         law_radius: 1.0,
+        law_ball: Some((DVec3::ZERO, 1.0)),
         rays_in_root: n,
         trace_s: start.elapsed().as_secs_f64(),
     }

@@ -56,6 +56,8 @@ pub(crate) struct RaySet {
     /// Radius of the ball the rays are μ-random in (n_R of them meet it): a sphere of radius r
     /// inside it holds n_R·(r / law_radius)² of them. The unit ball for lines; the root for scenes.
     pub(crate) law_radius: f64,
+    /// The ball the rays are μ-random in, if they are (lines: the unit ball).
+    pub(crate) law_ball: Option<(DVec3, f64)>,
     /// Segments meeting the law's ball: the n_R of the rays-per-level law.
     pub(crate) rays_in_root: u64,
     /// Seconds to generate or trace them.
@@ -166,6 +168,7 @@ fn run_engines(
                         ListModeChoice::Inherited => sphere_cache::ListMode::Inherited,
                     },
                     chunk_points: cfg.chunk_points as usize,
+                    law_ball: rays.law_ball,
                 };
                 let mut acc = vec![0; n];
                 let (stats, s) = timed(|| {
@@ -433,11 +436,17 @@ pub fn run_point(
     for i in 0..depth {
         let level = |o: &ReplicaOut| o.cache.as_ref().and_then(|c| c.levels.get(i).cloned());
         let mut m = ClusteredMean::default();
+        let mut inside = ClusteredMean::default();
         let (mut builds, mut misses, mut tests) = (0u64, 0u64, 0u64);
         let mut radius = f64::NAN;
         for o in &outs {
             let l = level(o).unwrap_or_default();
             m.push_cluster(l.builds, l.rays_held as f64, l.rays_held_sq as f64);
+            inside.push_cluster(
+                l.inside_builds,
+                l.inside_rays_held as f64,
+                l.inside_rays_held_sq as f64,
+            );
             builds += l.builds;
             misses += l.misses;
             tests += l.ray_sphere_tests;
@@ -450,6 +459,8 @@ pub fn run_point(
         let ri = r0 * cfg.q.powi(i as i32);
         let theory = n_r * (ri / law_radius).min(1.0).powi(2);
         let clipped = match cfg.rays {
+            // The root is concentric with the ball and holds it: every line.
+            Rays::Lines if i == 0 => n_r,
             Rays::Lines => th::rays_per_level_uniform_centres(n_r, law_radius, ri.min(law_radius)),
             Rays::Scene(_) => f64::NAN,
         };
@@ -460,6 +471,7 @@ pub fn run_point(
             .estimate("rays_level", &e)
             .f("rays_level_theory", theory)
             .f("rays_level_theory_clipped", clipped)
+            .estimate("rays_level_inside", &inside.estimate())
             .u("misses_level", misses)
             .u("ray_sphere_tests_level", tests);
         levels.push(r);
