@@ -18,6 +18,7 @@ pub mod embree;
 pub mod experiment;
 pub mod geom;
 pub mod grid;
+pub mod lt;
 pub mod output;
 pub mod sample;
 pub mod scene;

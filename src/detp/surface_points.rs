@@ -1,1 +1,108 @@
-//! (to be built: see detp/mod.rs)
+//! Sample points with normals: on a scene's surfaces at a chosen spacing, or read from a user's CSV
+//! (to compare with another renderer at chosen spots).
+//!
+//! Triangles are split into m² congruent sub-triangles (m = ⌈longest edge / spacing⌉) and get a point
+//! at each sub-triangle's centroid, so points cover the surface evenly whatever the triangle's shape
+//! class; spheres get a Fibonacci lattice of ≈ area / spacing² points. Normals are the light-receiving
+//! side's. Emitting surfaces get no points.
+
+use std::f64::consts::PI;
+use std::path::Path;
+
+use glam::DVec3;
+
+use crate::lt::Scene;
+
+/// Points and unit normals on every non-emitting surface, at spacing ≈ `spacing`. `seed` is kept
+/// for a jittered variant; the lattice itself is deterministic.
+pub fn surface_points(scene: &Scene, spacing: f64, _seed: u64) -> (Vec<DVec3>, Vec<DVec3>) {
+    let (mut pts, mut nrm) = (Vec::new(), Vec::new());
+    for t in &scene.triangles {
+        if scene.surfaces[t.surface as usize].emission > 0.0 {
+            continue;
+        }
+        let longest = (0..3)
+            .map(|k| (t.v[(k + 1) % 3] - t.v[k]).length())
+            .fold(0.0, f64::max);
+        let m = (longest / spacing).ceil().max(1.0) as usize;
+        let (a, e1, e2) = (
+            t.v[0],
+            (t.v[1] - t.v[0]) / m as f64,
+            (t.v[2] - t.v[0]) / m as f64,
+        );
+        let n = t.normal();
+        for i in 0..m {
+            for j in 0..m - i {
+                // Upward sub-triangle (i, j), and the downward one beside it.
+                pts.push(a + e1 * (i as f64 + 1.0 / 3.0) + e2 * (j as f64 + 1.0 / 3.0));
+                nrm.push(n);
+                if i + j + 1 < m {
+                    pts.push(a + e1 * (i as f64 + 2.0 / 3.0) + e2 * (j as f64 + 2.0 / 3.0));
+                    nrm.push(n);
+                }
+            }
+        }
+    }
+    for b in &scene.balls {
+        if scene.surfaces[b.surface as usize].emission > 0.0 && !b.inside {
+            continue;
+        }
+        let count = (b.area() / (spacing * spacing)).round().max(1.0) as usize;
+        let golden = PI * (3.0 - 5f64.sqrt());
+        for k in 0..count {
+            let z = 1.0 - (2.0 * k as f64 + 1.0) / count as f64;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = golden * k as f64;
+            let p = b.center + DVec3::new(r * phi.cos(), r * phi.sin(), z) * b.radius;
+            pts.push(p);
+            nrm.push(b.normal_at(p));
+        }
+    }
+    (pts, nrm)
+}
+
+/// Reads `x, y, z, nx, ny, nz` rows (a header line naming those columns). Errors name the file and
+/// line: a missing column, a value that is not a finite number, a zero normal.
+pub fn read_points_csv(path: &Path) -> Result<(Vec<DVec3>, Vec<DVec3>), String> {
+    let name = path.display();
+    let mut r = csv::Reader::from_path(path).map_err(|e| format!("{name}: {e}"))?;
+    let header = r.headers().map_err(|e| format!("{name}: {e}"))?.clone();
+    let cols: Vec<usize> = ["x", "y", "z", "nx", "ny", "nz"]
+        .iter()
+        .map(|c| {
+            header
+                .iter()
+                .position(|h| h.trim() == *c)
+                .ok_or_else(|| format!("{name}:1: missing column {c} (need x, y, z, nx, ny, nz)"))
+        })
+        .collect::<Result<_, _>>()?;
+    let (mut pts, mut nrm) = (Vec::new(), Vec::new());
+    for (i, rec) in r.records().enumerate() {
+        let line = i + 2;
+        let rec = rec.map_err(|e| format!("{name}:{line}: {e}"))?;
+        let mut v = [0.0; 6];
+        for (k, &c) in cols.iter().enumerate() {
+            let cell = rec.get(c).unwrap_or("").trim();
+            v[k] = cell
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| {
+                    format!(
+                        "{name}:{line}: {}: got {cell:?}, expected a finite number",
+                        header.get(c).unwrap_or("?")
+                    )
+                })?;
+        }
+        let n = DVec3::new(v[3], v[4], v[5]);
+        if n.length_squared() == 0.0 {
+            return Err(format!("{name}:{line}: the normal is zero"));
+        }
+        pts.push(DVec3::new(v[0], v[1], v[2]));
+        nrm.push(n.normalize());
+    }
+    if pts.is_empty() {
+        return Err(format!("{name}: no points"));
+    }
+    Ok((pts, nrm))
+}

@@ -57,6 +57,8 @@ pub mod domain {
     pub const LINES: u64 = 0x6c69_6e65;
     /// A batch of DETP sample points: `[POINTS, seed, point, batch]`.
     pub const POINTS: u64 = 0x706f_696e;
+    /// One photon's path: `[PHOTON, seed, photon id]` (re-traceable alone).
+    pub const PHOTON: u64 = 0x7068_6f74;
     /// The subset of points checked by brute force: `[CHECK, seed, point]`.
     pub const CHECK: u64 = 0x6368_6563;
 }

@@ -361,7 +361,12 @@ impl DetpConfig {
                     "a scene file needs detp.source = \"scene\" (lines need none)".into(),
                 ))
             }
-            (RaySource::Scene, Some(p)) => Rays::Scene(resolve("detp.scene", p)?),
+            (RaySource::Scene, Some(p)) => {
+                let path = resolve("detp.scene", p)?;
+                // Read it now: a bad scene is bad input, refused before anything is written.
+                crate::lt::Scene::load(&path).map_err(|err| e("detp.scene", err.to_string()))?;
+                Rays::Scene(path)
+            }
             (RaySource::Scene, None) => {
                 return Err(e(
                     "detp.scene",
@@ -373,6 +378,12 @@ impl DetpConfig {
             Rays::Lines => PointSourceKind::Ball,
             Rays::Scene(_) => PointSourceKind::Surface,
         });
+        if kind == PointSourceKind::Ball && matches!(rays, Rays::Scene(_)) {
+            return Err(e(
+                "detp.point_source",
+                "points uniform in the unit ball go with lines; a scene takes \"surface\" or \"file\"".into(),
+            ));
+        }
         let points =
             match kind {
                 PointSourceKind::Ball => Points::Ball(d.points.ok_or_else(|| {

@@ -90,7 +90,7 @@ fn points(cfg: &DetpConfig, point: u64) -> anyhow::Result<PointSet> {
             pairs.into_iter().unzip()
         }
         Points::Surface(_) | Points::File(_) => {
-            return scene::points(cfg, point);
+            anyhow::bail!("surface and file points come with a scene (see scene::points)")
         }
     };
     let discs = Discs::new(centers, normals, cfg.disc_radius).map_err(anyhow::Error::msg)?;
@@ -215,7 +215,7 @@ fn run_engines(
             }
             EngineChoice::PhotonMap => {
                 let (e, s) = timed(|| scene::photon_map(cfg, &rays.store, discs));
-                out.photon_map = Some(e?);
+                out.photon_map = Some(e);
                 out.photon_map_s = s;
             }
         }
@@ -282,7 +282,11 @@ pub fn run_point(
     point: u64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> anyhow::Result<PointResult> {
-    let pts = points(cfg, point)?;
+    let scene = scene::load(cfg)?;
+    let pts = match &scene {
+        None => points(cfg, point)?,
+        Some(s) => scene::points(cfg, point, s)?,
+    };
     let discs = &pts.discs;
     let d = cfg.disc_radius;
     let area = std::f64::consts::PI * d * d;
@@ -292,9 +296,9 @@ pub fn run_point(
     let mut root_radius = 1.0;
     let mut mean_segment_watts = 0.0;
     for replica in 0..cfg.replicas {
-        let rays = match &cfg.rays {
-            Rays::Lines => lines::lines(cfg, point, replica),
-            Rays::Scene(_) => scene::photons(cfg, point, replica)?,
+        let rays = match &scene {
+            None => lines::lines(cfg, point, replica),
+            Some(s) => scene::photons(cfg, point, replica, s, &pts.discs),
         };
         scale = rays.store.scale;
         law_radius = rays.law_radius;

@@ -1,0 +1,221 @@
+//! The TOML scene format: what a user writes. Every table denies unknown keys and every number is
+//! checked where it is read, so an error names the file, line, column and key (as specs do).
+//!
+//! ```toml
+//! [[surface]]              # one per surface: kind = "triangle" | "quad" | "sphere" | "obj"
+//! kind = "quad"
+//! vertices = [[0, 0, 0], [1, 0, 0], [1, 0, 1], [0, 0, 1]]   # wound so the normal faces the light
+//! albedo = 0.7             # diffuse reflectance in [0, 1)
+//! # emission = 1.0         # radiance L_e > 0: an area light of power π·L_e·area
+//! # sphere: center = [x, y, z], radius = r, inside = true | false;  obj: path = "mesh.obj"
+//!
+//! [[light]]                # kind = "point" | "spot"
+//! kind = "point"
+//! position = [0, 1, 0]
+//! power = 100.0
+//! # spot: direction = [0, -1, 0], cone_deg = 30 (uniform inside the cone)
+//!
+//! [camera]                 # eye, look_at, up, fov_deg, width, height
+//! [analytic]               # kind = "point-over-plane" | "closed-sphere": the exact irradiance
+//! ```
+
+use serde::{de::Error as _, Deserialize, Deserializer};
+
+/// A whole scene file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawScene {
+    /// Surfaces.
+    #[serde(default)]
+    pub surface: Vec<RawSurface>,
+    /// Point and spot lights.
+    #[serde(default)]
+    pub light: Vec<RawLight>,
+    /// The camera.
+    pub camera: Option<RawCamera>,
+    /// A closed form for the irradiance.
+    pub analytic: Option<RawAnalytic>,
+}
+
+/// Surface kinds.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum SurfaceKind {
+    /// Three vertices.
+    Triangle,
+    /// Four vertices, split into two triangles.
+    Quad,
+    /// Center and radius.
+    Sphere,
+    /// A Wavefront OBJ mesh.
+    Obj,
+}
+
+/// `[[surface]]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawSurface {
+    /// Kind.
+    pub kind: SurfaceKind,
+    /// A label for messages.
+    pub name: Option<String>,
+    /// Triangle or quad vertices.
+    #[serde(default, deserialize_with = "points")]
+    pub vertices: Vec<[f64; 3]>,
+    /// Sphere centre.
+    #[serde(default, deserialize_with = "opt_point")]
+    pub center: Option<[f64; 3]>,
+    /// Sphere radius.
+    #[serde(default, deserialize_with = "opt_positive")]
+    pub radius: Option<f64>,
+    /// Sphere seen from inside.
+    #[serde(default)]
+    pub inside: bool,
+    /// OBJ path, relative to the scene file.
+    pub path: Option<String>,
+    /// Diffuse albedo in [0, 1).
+    #[serde(deserialize_with = "albedo")]
+    pub albedo: f64,
+    /// Emitted radiance L_e (> 0 makes it an area light).
+    #[serde(default, deserialize_with = "opt_positive")]
+    pub emission: Option<f64>,
+}
+
+/// Light kinds.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum LightKind {
+    /// Isotropic point light.
+    Point,
+    /// Point light emitting uniformly inside a cone.
+    Spot,
+}
+
+/// `[[light]]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawLight {
+    /// Kind.
+    pub kind: LightKind,
+    /// Position.
+    #[serde(deserialize_with = "point")]
+    pub position: [f64; 3],
+    /// Emitted power (> 0).
+    #[serde(deserialize_with = "positive")]
+    pub power: f64,
+    /// Spot axis.
+    #[serde(default, deserialize_with = "opt_point")]
+    pub direction: Option<[f64; 3]>,
+    /// Spot half-angle, degrees in (0, 180].
+    #[serde(default, deserialize_with = "opt_positive")]
+    pub cone_deg: Option<f64>,
+}
+
+/// `[camera]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawCamera {
+    /// Eye.
+    #[serde(deserialize_with = "point")]
+    pub eye: [f64; 3],
+    /// Point looked at.
+    #[serde(deserialize_with = "point")]
+    pub look_at: [f64; 3],
+    /// Up vector.
+    #[serde(deserialize_with = "point")]
+    pub up: [f64; 3],
+    /// Vertical field of view, degrees.
+    #[serde(deserialize_with = "positive")]
+    pub fov_deg: f64,
+    /// Image width, pixels.
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+}
+
+/// `[analytic]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawAnalytic {
+    /// `point-over-plane` (direct light of the first point light, nothing else lit) or
+    /// `closed-sphere` (the inside of an emitting sphere: E = πL_e/(1 − α)).
+    pub kind: AnalyticKind,
+}
+
+/// Closed forms a scene can declare.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum AnalyticKind {
+    /// E(x) = Φ·max(0, n·(p − x)) / (4π|p − x|³) from the first point light.
+    PointOverPlane,
+    /// E = π·L_e / (1 − α) on the inside of the one emitting sphere.
+    ClosedSphere,
+}
+
+fn finite(x: &toml::Value) -> Option<f64> {
+    let v = x.as_float().or_else(|| x.as_integer().map(|i| i as f64))?;
+    v.is_finite().then_some(v)
+}
+
+fn point<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
+    let v: Vec<toml::Value> = Vec::deserialize(d)?;
+    let xs: Vec<f64> = v.iter().filter_map(finite).collect();
+    if v.len() != 3 || xs.len() != 3 {
+        return Err(D::Error::custom("expected three finite numbers [x, y, z]"));
+    }
+    Ok([xs[0], xs[1], xs[2]])
+}
+
+fn opt_point<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f64; 3]>, D::Error> {
+    point(d).map(Some)
+}
+
+fn points<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<[f64; 3]>, D::Error> {
+    let v: Vec<Vec<toml::Value>> = Vec::deserialize(d)?;
+    v.iter()
+        .map(|p| {
+            let xs: Vec<f64> = p.iter().filter_map(finite).collect();
+            if p.len() == 3 && xs.len() == 3 {
+                Ok([xs[0], xs[1], xs[2]])
+            } else {
+                Err(D::Error::custom(
+                    "expected vertices of three finite numbers [x, y, z]",
+                ))
+            }
+        })
+        .collect()
+}
+
+fn number<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    match toml::Value::deserialize(d)? {
+        toml::Value::Float(x) => Ok(x),
+        toml::Value::Integer(i) => Ok(i as f64),
+        other => Err(D::Error::custom(format!("got {other}, expected a number"))),
+    }
+}
+
+fn positive<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    let x = number(d)?;
+    if x.is_finite() && x > 0.0 {
+        Ok(x)
+    } else {
+        Err(D::Error::custom(format!(
+            "got {x}, expected a finite number > 0"
+        )))
+    }
+}
+
+fn opt_positive<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    positive(d).map(Some)
+}
+
+fn albedo<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    let x = number(d)?;
+    if x.is_finite() && (0.0..1.0).contains(&x) {
+        Ok(x)
+    } else {
+        Err(D::Error::custom(format!(
+            "got {x}, expected an albedo in [0, 1) (1 would never absorb: photon paths without end)"
+        )))
+    }
+}

@@ -1,0 +1,516 @@
+//! Light-transport scenes: what DETP's photons are traced through. Triangles (quads are two, OBJ
+//! meshes many), spheres seen from outside or inside, one grey diffuse albedo per surface, point,
+//! spot and area lights with their power, a pinhole camera, and — for validation scenes — the
+//! closed form of the irradiance. Only what DETP reads is modelled: no textures, no specular
+//! materials.
+//!
+//! Ray casting answers the nearest hit *and* the second intersection along the same line (a
+//! [`bvh::Bvh`] over triangles; spheres, which scenes have few of, are tested directly).
+
+pub mod bvh;
+pub mod format;
+pub mod shapes;
+
+use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+
+use self::bvh::{Bvh, TwoNearest};
+use self::format::{AnalyticKind, LightKind, RawScene, SurfaceKind};
+use self::shapes::{Ball, Triangle};
+use crate::geom::Aabb;
+use crate::spec::error::line_col;
+
+/// A scene file that cannot be used: where and why (exit code 2 for the CLI).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub struct SceneError {
+    /// The file at fault (the scene or an OBJ it names).
+    pub path: String,
+    /// 1-based line and column, where known.
+    pub line: Option<(usize, usize)>,
+    /// Dotted key, where known.
+    pub key: Option<String>,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl std::fmt::Display for SceneError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.path)?;
+        if let Some((l, c)) = self.line {
+            write!(f, ":{l}:{c}")?;
+        }
+        if let Some(k) = &self.key {
+            write!(f, ": {k}")?;
+        }
+        write!(f, ": {}", self.message)
+    }
+}
+
+/// Material and emission of one surface.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Surface {
+    /// Label.
+    pub name: String,
+    /// Diffuse albedo in [0, 1).
+    pub albedo: f64,
+    /// Emitted radiance (0: not a light).
+    pub emission: f64,
+}
+
+/// A light source.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Light {
+    /// Isotropic point light.
+    Point {
+        /// Position.
+        position: DVec3,
+        /// Power.
+        power: f64,
+    },
+    /// Point light emitting uniformly into a cone.
+    Spot {
+        /// Position.
+        position: DVec3,
+        /// Unit axis.
+        axis: DVec3,
+        /// cos of the half-angle.
+        cos_cone: f64,
+        /// Power.
+        power: f64,
+    },
+    /// The emitting primitives of one surface (Lambertian, power π·L_e·area).
+    Area {
+        /// Surface index.
+        surface: u32,
+        /// Triangles of the surface (empty for a sphere).
+        triangles: Vec<u32>,
+        /// The sphere, if the surface is one.
+        ball: Option<u32>,
+        /// Power.
+        power: f64,
+    },
+}
+
+impl Light {
+    /// Its power.
+    pub fn power(&self) -> f64 {
+        match self {
+            Light::Point { power, .. } | Light::Spot { power, .. } | Light::Area { power, .. } => {
+                *power
+            }
+        }
+    }
+}
+
+/// A pinhole camera.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    /// Eye.
+    pub eye: DVec3,
+    /// Point looked at.
+    pub look_at: DVec3,
+    /// Up.
+    pub up: DVec3,
+    /// Vertical field of view, degrees.
+    pub fov_deg: f64,
+    /// Pixels.
+    pub width: u32,
+    /// Pixels.
+    pub height: u32,
+}
+
+/// The primitive a ray hit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Prim {
+    /// A triangle (index).
+    Triangle(u32),
+    /// A sphere (index).
+    Ball(u32),
+}
+
+/// The nearest hit of a ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter.
+    pub t: f64,
+    /// What was hit.
+    pub prim: Prim,
+    /// Surface index.
+    pub surface: u32,
+}
+
+/// A loaded scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Triangles.
+    pub triangles: Vec<Triangle>,
+    /// Spheres.
+    pub balls: Vec<Ball>,
+    /// Surfaces.
+    pub surfaces: Vec<Surface>,
+    /// Lights (point, spot, area).
+    pub lights: Vec<Light>,
+    /// Camera, if the file has one.
+    pub camera: Option<Camera>,
+    /// Closed form, if declared.
+    pub analytic: Option<AnalyticKind>,
+    /// Things skipped with a warning (degenerate triangles).
+    pub warnings: Vec<String>,
+    bvh: Bvh,
+    bounds: Aabb,
+}
+
+impl Scene {
+    /// Reads a scene file (OBJ paths are relative to it).
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+            path: name.clone(),
+            line: None,
+            key: None,
+            message: format!("cannot read the scene file: {e}"),
+        })?;
+        let de = toml::Deserializer::new(&text);
+        let raw: RawScene = serde_path_to_error::deserialize(de).map_err(|e| {
+            let key = e.path().to_string();
+            let inner = e.into_inner();
+            SceneError {
+                path: name.clone(),
+                line: inner.span().map(|s| line_col(&text, s.start)),
+                key: (!key.is_empty() && key != ".").then_some(key),
+                message: inner.message().trim().to_string(),
+            }
+        })?;
+        Self::from_raw(raw, path, &text)
+    }
+
+    fn from_raw(raw: RawScene, path: &Path, text: &str) -> Result<Scene, SceneError> {
+        let name = path.display().to_string();
+        let err = |key: String, message: String| SceneError {
+            path: name.clone(),
+            line: crate::spec::error::find_key(text, &key).filter(|_| !key.is_empty()),
+            key: Some(key),
+            message,
+        };
+        let dir = path.parent().unwrap_or(Path::new(""));
+        let (mut triangles, mut balls, mut surfaces) = (Vec::new(), Vec::new(), Vec::new());
+        let mut warnings = Vec::new();
+        let mut lights = Vec::new();
+        for (si, s) in raw.surface.iter().enumerate() {
+            let key = |k: &str| format!("surface[{si}].{k}");
+            let id = si as u32;
+            let first = triangles.len();
+            let label = s.name.clone().unwrap_or_else(|| format!("surface {si}"));
+            let v: Vec<DVec3> = s.vertices.iter().map(|&p| DVec3::from_array(p)).collect();
+            let need = |n: usize| {
+                if v.len() == n {
+                    Ok(())
+                } else {
+                    Err(err(
+                        key("vertices"),
+                        format!("a {:?} needs {n} vertices, got {}", s.kind, v.len())
+                            .to_lowercase(),
+                    ))
+                }
+            };
+            match s.kind {
+                SurfaceKind::Triangle => {
+                    need(3)?;
+                    triangles.push(Triangle {
+                        v: [v[0], v[1], v[2]],
+                        surface: id,
+                    });
+                }
+                SurfaceKind::Quad => {
+                    need(4)?;
+                    triangles.push(Triangle {
+                        v: [v[0], v[1], v[2]],
+                        surface: id,
+                    });
+                    triangles.push(Triangle {
+                        v: [v[0], v[2], v[3]],
+                        surface: id,
+                    });
+                }
+                SurfaceKind::Sphere => {
+                    let (Some(c), Some(r)) = (s.center, s.radius) else {
+                        return Err(err(
+                            key("radius"),
+                            "a sphere needs center and radius".into(),
+                        ));
+                    };
+                    balls.push(Ball {
+                        center: DVec3::from_array(c),
+                        radius: r,
+                        inside: s.inside,
+                        surface: id,
+                    });
+                }
+                SurfaceKind::Obj => {
+                    let Some(p) = &s.path else {
+                        return Err(err(key("path"), "an obj surface needs a path".into()));
+                    };
+                    let file: PathBuf = dir.join(p);
+                    let (models, _) = tobj::load_obj(
+                        &file,
+                        &tobj::LoadOptions {
+                            triangulate: true,
+                            single_index: true,
+                            ..Default::default()
+                        },
+                    )
+                    .map_err(|e| SceneError {
+                        path: file.display().to_string(),
+                        line: None,
+                        key: None,
+                        message: format!(
+                            "cannot read this OBJ (named by {name}, {}): {e}",
+                            key("path")
+                        ),
+                    })?;
+                    for m in models {
+                        let p = &m.mesh.positions;
+                        let vert = |i: u32| {
+                            let i = i as usize * 3;
+                            DVec3::new(f64::from(p[i]), f64::from(p[i + 1]), f64::from(p[i + 2]))
+                        };
+                        for f in m.mesh.indices.chunks_exact(3) {
+                            triangles.push(Triangle {
+                                v: [vert(f[0]), vert(f[1]), vert(f[2])],
+                                surface: id,
+                            });
+                        }
+                    }
+                }
+            }
+            // Degenerate triangles are skipped and counted, never traced.
+            let before = triangles.len();
+            let kept: Vec<Triangle> = triangles
+                .drain(first..)
+                .filter(|t| !t.degenerate())
+                .collect();
+            if kept.len() < before - first {
+                warnings.push(format!(
+                    "{name}: {label}: skipped {} degenerate triangle(s) (zero area or not finite)",
+                    before - first - kept.len()
+                ));
+            }
+            triangles.extend(kept);
+            if let Some(le) = s.emission {
+                let tris: Vec<u32> = (first as u32..triangles.len() as u32).collect();
+                let ball = (s.kind == SurfaceKind::Sphere).then(|| balls.len() as u32 - 1);
+                let area: f64 = tris
+                    .iter()
+                    .map(|&t| triangles[t as usize].area())
+                    .sum::<f64>()
+                    + ball.map_or(0.0, |b| balls[b as usize].area());
+                if area <= 0.0 {
+                    return Err(err(
+                        key("emission"),
+                        "an emitting surface has no area".into(),
+                    ));
+                }
+                lights.push(Light::Area {
+                    surface: id,
+                    triangles: tris,
+                    ball,
+                    power: PI * le * area,
+                });
+            }
+            surfaces.push(Surface {
+                name: label,
+                albedo: s.albedo,
+                emission: s.emission.unwrap_or(0.0),
+            });
+        }
+        for (li, l) in raw.light.iter().enumerate() {
+            let position = DVec3::from_array(l.position);
+            lights.push(match l.kind {
+                LightKind::Point => Light::Point {
+                    position,
+                    power: l.power,
+                },
+                LightKind::Spot => {
+                    let (Some(dir), Some(cone)) = (l.direction, l.cone_deg) else {
+                        return Err(err(
+                            format!("light[{li}].direction"),
+                            "a spot light needs direction and cone_deg".into(),
+                        ));
+                    };
+                    let axis = DVec3::from_array(dir);
+                    if !(axis.length() > 0.0) || cone > 180.0 {
+                        return Err(err(
+                            format!("light[{li}].cone_deg"),
+                            "a spot needs a non-zero direction and cone_deg in (0, 180]".into(),
+                        ));
+                    }
+                    Light::Spot {
+                        position,
+                        axis: axis.normalize(),
+                        cos_cone: cone.to_radians().cos(),
+                        power: l.power,
+                    }
+                }
+            });
+        }
+        if lights.is_empty() {
+            return Err(err(
+                "light".into(),
+                "the scene has no light: add a [[light]] or a surface with emission > 0".into(),
+            ));
+        }
+        if triangles.is_empty() && balls.is_empty() {
+            return Err(err("surface".into(), "the scene has no surface".into()));
+        }
+        let analytic = raw.analytic.map(|a| a.kind);
+        match analytic {
+            Some(AnalyticKind::PointOverPlane)
+                if !lights.iter().any(|l| matches!(l, Light::Point { .. })) =>
+            {
+                return Err(err(
+                    "analytic.kind".into(),
+                    "point-over-plane needs a point light".into(),
+                ));
+            }
+            Some(AnalyticKind::ClosedSphere)
+                if !balls
+                    .iter()
+                    .any(|b| b.inside && surfaces[b.surface as usize].emission > 0.0) =>
+            {
+                return Err(err(
+                    "analytic.kind".into(),
+                    "closed-sphere needs an emitting sphere seen from inside".into(),
+                ));
+            }
+            _ => {}
+        }
+        let camera = raw.camera.map(|c| Camera {
+            eye: DVec3::from_array(c.eye),
+            look_at: DVec3::from_array(c.look_at),
+            up: DVec3::from_array(c.up),
+            fov_deg: c.fov_deg,
+            width: c.width,
+            height: c.height,
+        });
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for t in &triangles {
+            let (a, b) = t.bounds();
+            lo = lo.min(a);
+            hi = hi.max(b);
+        }
+        for b in &balls {
+            lo = lo.min(b.center - DVec3::splat(b.radius));
+            hi = hi.max(b.center + DVec3::splat(b.radius));
+        }
+        for l in &lights {
+            if let Light::Point { position, .. } | Light::Spot { position, .. } = l {
+                lo = lo.min(*position);
+                hi = hi.max(*position);
+            }
+        }
+        let bvh = Bvh::build(&triangles);
+        Ok(Scene {
+            triangles,
+            balls,
+            surfaces,
+            lights,
+            camera,
+            analytic,
+            warnings,
+            bvh,
+            bounds: Aabb::new(lo, hi),
+        })
+    }
+
+    /// The box around all geometry and lights.
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// Total emitted power.
+    pub fn total_power(&self) -> f64 {
+        self.lights.iter().map(Light::power).sum()
+    }
+
+    /// Largest coordinate magnitude (sets self-intersection epsilons).
+    pub fn magnitude(&self) -> f64 {
+        self.bounds.magnitude().max(1e-300)
+    }
+
+    /// The nearest hit with t > t_min (skipping triangle `skip`, the one a photon leaves) and the
+    /// next intersection beyond it along the same line (+∞ if none).
+    pub fn first_two_hits(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        t_min: f64,
+        skip: Option<Prim>,
+    ) -> (Option<Hit>, f64) {
+        let skip_tri = match skip {
+            Some(Prim::Triangle(i)) => i,
+            _ => u32::MAX,
+        };
+        let mut best = TwoNearest::default();
+        self.bvh
+            .two_nearest(&self.triangles, o, d, t_min, skip_tri, &mut best);
+        // Spheres: ids above the triangles' (offset), both roots.
+        let offset = self.triangles.len() as u32;
+        for (i, b) in self.balls.iter().enumerate() {
+            if let Some((t0, t1)) = b.roots(o, d) {
+                for t in [t0, t1] {
+                    if t > t_min {
+                        best.offer(t, offset + i as u32);
+                    }
+                }
+            }
+        }
+        let (t, id) = best.first;
+        if !t.is_finite() {
+            return (None, f64::INFINITY);
+        }
+        let prim = if id < offset {
+            Prim::Triangle(id)
+        } else {
+            Prim::Ball(id - offset)
+        };
+        let surface = match prim {
+            Prim::Triangle(i) => self.triangles[i as usize].surface,
+            Prim::Ball(i) => self.balls[i as usize].surface,
+        };
+        (Some(Hit { t, prim, surface }), best.second.0)
+    }
+
+    /// The normal that receives light at a point of a primitive.
+    pub fn normal(&self, prim: Prim, p: DVec3) -> DVec3 {
+        match prim {
+            Prim::Triangle(i) => self.triangles[i as usize].normal(),
+            Prim::Ball(i) => self.balls[i as usize].normal_at(p),
+        }
+    }
+
+    /// The exact irradiance at point `p` with normal `n`, for scenes that declare a closed form.
+    pub fn exact_irradiance(&self, p: DVec3, n: DVec3) -> Option<f64> {
+        match self.analytic? {
+            AnalyticKind::PointOverPlane => {
+                let (pos, power) = self.lights.iter().find_map(|l| match l {
+                    Light::Point { position, power } => Some((*position, *power)),
+                    _ => None,
+                })?;
+                let v = pos - p;
+                let r = v.length();
+                Some(power * n.normalize().dot(v).max(0.0) / (4.0 * PI * r * r * r))
+            }
+            AnalyticKind::ClosedSphere => {
+                let b = self
+                    .balls
+                    .iter()
+                    .find(|b| b.inside && self.surfaces[b.surface as usize].emission > 0.0)?;
+                let s = &self.surfaces[b.surface as usize];
+                Some(PI * s.emission / (1.0 - s.albedo))
+            }
+        }
+    }
+}
