@@ -1,5 +1,6 @@
 //! Every spec under `tests/specs/bad/` must be refused with exit code 2, one clear message naming
-//! the file, line, column and key (each spec's first line says what to expect), and no output.
+//! the file, line, column and key (each spec's first line says what to expect, `# also:` lines what
+//! else the message must say), and no output.
 
 use crate::common::{files_below, raycost, root, run_quiet};
 
@@ -25,6 +26,12 @@ fn every_bad_spec_is_refused_with_its_location_and_nothing_is_written() {
             .and_then(|l| l.strip_prefix("# expect: "))
             .unwrap_or_else(|| panic!("{} lacks '# expect: '", spec.display()))
             .to_string();
+        // Further parts of the message (e.g. an error inside a scene file the spec names).
+        let also: Vec<&str> = text
+            .lines()
+            .skip(1)
+            .map_while(|l| l.strip_prefix("# also: "))
+            .collect();
         let out = tempfile::tempdir().expect("temp dir");
         for cmd in ["run", "check"] {
             let mut c = raycost();
@@ -50,11 +57,13 @@ fn every_bad_spec_is_refused_with_its_location_and_nothing_is_written() {
                 "{}: stderr should start with {want:?}: {stderr}",
                 spec.display()
             );
-            assert!(
-                stderr.contains(&expect),
-                "{}: stderr should contain {expect:?}: {stderr}",
-                spec.display()
-            );
+            for want in std::iter::once(expect.as_str()).chain(also.iter().copied()) {
+                assert!(
+                    stderr.contains(want),
+                    "{}: stderr should contain {want:?}: {stderr}",
+                    spec.display()
+                );
+            }
             assert_eq!(
                 stderr.lines().filter(|l| l.starts_with("error:")).count(),
                 1,

@@ -79,6 +79,7 @@ fn all_engines_agree(label: &str, st: &SegmentStore, discs: &Discs, every_path: 
                     threshold,
                     list_mode: mode,
                     chunk_points: chunk,
+                    law_ball: None,
                 };
                 for &path in &paths {
                     let mut acc = vec![0; discs.len()];

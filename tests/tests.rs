@@ -6,6 +6,7 @@ mod cli;
 mod common;
 mod detp_engines;
 mod detp_runs;
+mod lt;
 mod merge;
 mod oracle;
 mod resume;

@@ -79,7 +79,7 @@ fn photon_units(scene: &Scene, photons: u64) -> (PowerScale, Units) {
 }
 
 /// Picks a light in proportion to power.
-fn pick_light<'a>(scene: &'a Scene, u: f64) -> &'a Light {
+fn pick_light(scene: &Scene, u: f64) -> &Light {
     let total = scene.total_power();
     let mut acc = 0.0;
     for l in &scene.lights {

@@ -340,7 +340,7 @@ impl Scene {
                         ));
                     };
                     let axis = DVec3::from_array(dir);
-                    if !(axis.length() > 0.0) || cone > 180.0 {
+                    if axis.length() == 0.0 || cone > 180.0 {
                         return Err(err(
                             format!("light[{li}].cone_deg"),
                             "a spot needs a non-zero direction and cone_deg in (0, 180]".into(),

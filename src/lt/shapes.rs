@@ -51,7 +51,7 @@ impl Triangle {
         let s = o - self.v[0];
         let u = s.dot(p) * inv;
         const TOL: f64 = -1e-12;
-        if u < TOL || u > 1.0 - TOL {
+        if !(TOL..=1.0 - TOL).contains(&u) {
             return None;
         }
         let q = s.cross(e1);

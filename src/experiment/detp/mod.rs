@@ -350,7 +350,7 @@ pub fn run_point(
                 engine_s += secs(&|o| o.cache_s);
             }
             EngineChoice::DiscIndex => {
-                let st = |o: &ReplicaOut| o.index.clone().unwrap_or_default();
+                let st = |o: &ReplicaOut| o.index.unwrap_or_default();
                 row.u(format!("tests_{c}"), total(&|o| st(o).ray_disc_tests))
                     .f(
                         format!("tests_{c}_theory"),
