@@ -135,7 +135,6 @@ struct Measured {
     build_s: f64,
     sphere: u64,
     disc: u64,
-    mem: u64,
 }
 
 fn run_plan(plan: Plan) -> Vec<DetpBenchRow> {
@@ -153,7 +152,7 @@ fn run_plan(plan: Plan) -> Vec<DetpBenchRow> {
     for threads in [1, 2] {
         let p = pool(threads);
         // Brute force first: its sums are the reference for every other engine.
-        let (m, _) = p.install(|| {
+        let (m, brute_mem) = p.install(|| {
             peak_increment(|| {
                 let mut acc = vec![0; n];
                 let t = Instant::now();
@@ -164,7 +163,6 @@ fn run_plan(plan: Plan) -> Vec<DetpBenchRow> {
                     build_s: 0.0,
                     sphere: 0,
                     disc: tests,
-                    mem: 0,
                 }
             })
         });
@@ -189,7 +187,6 @@ fn run_plan(plan: Plan) -> Vec<DetpBenchRow> {
                     build_s,
                     sphere: s.ray_sphere_tests,
                     disc: s.ray_disc_tests,
-                    mem: 0,
                 }
             }),
             ("disc-index-grid", &|| {
@@ -226,10 +223,9 @@ fn run_plan(plan: Plan) -> Vec<DetpBenchRow> {
         };
         for (engine, f) in engines {
             let (m, mem) = p.install(|| peak_increment(f));
-            push(engine, Measured { mem, ..m }, mem, n);
+            push(engine, m, mem, n);
         }
-        let mem = m.mem;
-        push("brute-force", m, mem, subset.len());
+        push("brute-force", m, brute_mem, subset.len());
     }
     rows
 }
@@ -244,7 +240,6 @@ fn indexed<I: DiscIndex>(ix: &I, store: &SegmentStore, n: usize, build_s: f64) -
         build_s,
         sphere: 0,
         disc: s.ray_disc_tests,
-        mem: 0,
     }
 }
 
