@@ -399,11 +399,14 @@ mod tests {
             let probe = Probe::new(reference, all.origin_bound(), center, r, kappa(3));
             let paths = FilterPath::all_available();
             #[cfg(target_arch = "x86_64")]
-            if std::is_x86_feature_detected!("avx512f") {
-                assert!(
-                    paths.contains(&FilterPath::Avx512),
-                    "this CPU's paths: {paths:?}"
-                );
+            {
+                use std::is_x86_feature_detected as has;
+                if has!("avx512f") && has!("avx512vl") {
+                    assert!(paths.contains(&FilterPath::Avx512), "CPU paths: {paths:?}");
+                }
+                if has!("avx2") && has!("fma") {
+                    assert!(paths.contains(&FilterPath::Avx2), "CPU paths: {paths:?}");
+                }
             }
             // Every tail length of the 8- and 16-lane loops.
             for len in (st.len() - 17..=st.len()).chain(0..20) {
