@@ -9,9 +9,10 @@
 //! about touch (the paper's cost model spaces points by ≈ d; this is that within a factor 2).
 //! Sphere cache: root sphere of radius 1 + d about the origin (the smallest that holds every disc),
 //! Q = 2/3, threshold 100, exact lists, chunks of 4096 points. Grid index: cells of width 2d;
-//! octree: leaves of at most 32 discs, no side below 2d. Both were the fastest or within 15 % of it among widths d–6d and leaves of 8–128 discs, timed
-//! single-threaded at 10⁴ and 10⁵ discs (2d beat d by 1.5× at 10⁵: the walk is bound by loads of
-//! cell offsets and disc records, so fewer, fuller cells pay).
+//! octree: leaves of at most 32 discs, no side below 2d. Both were the fastest or within 15 % of
+//! it among widths d–6d and leaves of 8–128 discs, timed single-threaded at 10⁴ and 10⁵ discs (2d
+//! beat d by 1.5× at 10⁵: the walk is bound by loads of cell offsets and disc records, so fewer,
+//! fuller cells pay).
 //!
 //! Full run: n_R = 1024·1024, n_P = 10⁵, brute force on 256 points; quick: 2¹⁶ lines, 10⁴ points.
 
