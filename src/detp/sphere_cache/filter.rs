@@ -17,8 +17,8 @@
 //!    (`|s_C − s_A| + r_C ≤ r_A`, computed), every segment that meets C meets A: the true distance
 //!    to s_A is at most the distance to s_C plus `|s_C − s_A|`, so at most
 //!    `r_A + κ_j·(|w_A| + r_A) + 40ε·(|w_A| + r_A)`, and `κ_i − κ_j ≥ 2⁻³⁸` exceeds the rounding
-//!    terms by a factor of ~10⁵. This is what lets a child take its list from any enclosing ancestor
-//!    and still hold exactly the segments that meet it.
+//!    terms by a factor of ~10⁵. This is what lets a child take its list from any enclosing
+//!    ancestor and still hold exactly the segments that meet it.
 //!
 //! # Why the f32 filter decides only what it may
 //! Lists are SoA f32: origin relative to a reference point (the root's centre), direction (the
