@@ -1,9 +1,10 @@
 //! Every DETP engine — sphere cache (both list modes, all orders, several Q, thresholds and chunk
 //! sizes, every filter path this CPU has), grid index, octree — must give the brute-force sums bit
-//! for bit, on random scenes and on adversarial ones: segments grazing disc rims, discs and segments
-//! exactly on grid cell faces, edges and octree split planes, segments in a disc's plane, segments
-//! ending exactly on it, discs larger than cells, a scene moved by 10⁶, t_end finite and +∞. Adding
-//! every segment and then removing some through either index must equal the remaining segments.
+//! for bit, on random scenes and on adversarial ones: segments grazing disc rims, discs and
+//! segments exactly on grid cell faces, edges and octree split planes, segments in a disc's plane,
+//! segments ending exactly on it, discs larger than cells, a scene moved by 10⁶, t_end finite and
+//! +∞. Adding every segment and then removing some through either index must equal the remaining
+//! segments.
 
 use glam::DVec3;
 use rand::Rng;
@@ -176,8 +177,8 @@ fn segments_grazing_disc_rims() {
 /// edges, and by segments in a disc's plane (never counted) or ending exactly on it (counted).
 #[test]
 fn discs_and_segments_on_cell_faces_edges_and_split_planes() {
-    // Eight anchors at the corners fix the bounds, so adding interior discs keeps the grid frame and
-    // the octree's split planes.
+    // Eight anchors at the corners fix the bounds, so adding interior discs keeps the grid frame
+    // and the octree's split planes.
     let d = 0.05;
     let mut centers: Vec<DVec3> = (0..8)
         .map(|k| {

@@ -1,16 +1,16 @@
 //! The paper's sphere cache (§2.3), with the two repairs THEORY.md §2 calls for.
 //!
-//! Level i is a sphere of radius r_i = r_0·Q^i holding a list of segments. Points are visited in the
-//! given order (a space-filling-curve permutation). For each point:
+//! Level i is a sphere of radius r_i = r_0·Q^i holding a list of segments. Points are visited in
+//! the given order (a space-filling-curve permutation). For each point:
 //! 1. **Keep only the chain of levels that all contain the disc** (`|c − s| + d ≤ r`, computed),
 //!    dropping the first level that does not and everything below it. The paper's "pop until a
-//!    sphere contains the disc" is wrong when a child sticks out of its parent: a disc inside a deep
-//!    sphere can lie outside an ancestor whose dropped rays are then missing.
+//!    sphere contains the disc" is wrong when a child sticks out of its parent: a disc inside a
+//!    deep sphere can lie outside an ancestor whose dropped rays are then missing.
 //! 2. While the deepest level holds at least `threshold` rays and r_{i+1} ≥ d, build level i+1
-//!    centred on the point (it then contains the disc: `|c − c| + d = d ≤ r_{i+1}`). Its list is the
-//!    segments of a source list that meet it ([`filter::meets`]): in [`ListMode::Exact`] the source
-//!    is the deepest ancestor that encloses the child entirely (else the root), so every list is
-//!    exactly the segments that meet its sphere (and the root) and the rays-per-level law
+//!    centred on the point (it then contains the disc: `|c − c| + d = d ≤ r_{i+1}`). Its list is
+//!    the segments of a source list that meet it ([`filter::meets`]): in [`ListMode::Exact`] the
+//!    source is the deepest ancestor that encloses the child entirely (else the root), so every
+//!    list is exactly the segments that meet its sphere (and the root) and the rays-per-level law
 //!    n_R·(r_i/r_0)² applies; in [`ListMode::Inherited`] it is the parent (the paper's literal
 //!    rule, cheaper, but a protruding child holds fewer rays than meet it).
 //! 3. Test the deepest list against the disc with [`crate::detp::disc::crosses`].
@@ -19,9 +19,9 @@
 //! A segment crossing the disc meets every sphere that contains the disc (filter module doc,
 //! fact 1). Inherited: the deepest list is the segments that passed every sphere of the chain,
 //! which all contain the disc. Exact: by induction each list is exactly {segments meeting the root
-//! and the sphere}, because the source encloses the child (fact 2: meeting the child implies meeting
-//! the source); the disc lies in the root and the deepest sphere. A disc outside the root (a root
-//! that does not hold the scene) is tested against every segment.
+//! and the sphere}, because the source encloses the child (fact 2: meeting the child implies
+//! meeting the source); the disc lies in the root and the deepest sphere. A disc outside the root
+//! (a root that does not hold the scene) is tested against every segment.
 //!
 //! # Counters and threads
 //! The ordered points are cut into chunks of `chunk_points` (a parameter, never the thread count),

@@ -1,5 +1,5 @@
-//! Discs in a regular grid: the project's [`GridFrame`], cell-list builder and 3D-DDA, with each disc
-//! listed as its bounding ball (radius d plus the index pad) in every cell the ball meets.
+//! Discs in a regular grid: the project's [`GridFrame`], cell-list builder and 3D-DDA, with each
+//! disc listed as its bounding ball (radius d plus the index pad) in every cell the ball meets.
 //!
 //! A segment is clipped to the (padded) grid box over t ∈ [0, t_end], then walked cell by cell from
 //! its entry point; a disc listed in several cells is tested once per segment (mailbox).

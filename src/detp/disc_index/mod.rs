@@ -11,15 +11,15 @@
 //! # Why the culling is conservative
 //! Let `B` be the box around all discs ([`Discs::bounds_all`], which holds every disc with a pad),
 //! `M = |B|_∞ + diag(B)` its coordinate scale and `P = 2⁻³⁰·M` the *index pad*: every box the
-//! indexes test (cells, octree nodes, the clip box) is enlarged by at least `P`. For a segment whose
-//! origin lies within `R = 2¹⁰·M` of B's centre, every quantity a traversal computes (a slab
+//! indexes test (cells, octree nodes, the clip box) is enlarged by at least `P`. For a segment
+//! whose origin lies within `R = 2¹⁰·M` of B's centre, every quantity a traversal computes (a slab
 //! parameter, a clipped entry point, a DDA boundary) is a handful of f64 operations on magnitudes
-//! ≤ 4R, so it is off by at most ~100ε·4R = 400·2⁻⁵³·2¹⁰·M < 2⁻³³·M, eight times below P. A crossing
-//! that [`crate::detp::disc::crosses`] accepts happens at a point x of the segment inside the disc,
-//! hence inside B and inside the box of every cell or node that lists the disc and contains x; the
-//! computed traversal passes within 2⁻³³·M of x, so it tests that box, enlarged by P, and reaches
-//! the disc. Segments starting farther than R (none in the scenes studied: photons start on the
-//! scene's surfaces) are tested against every disc, which is trivially conservative.
+//! ≤ 4R, so it is off by at most ~100ε·4R = 400·2⁻⁵³·2¹⁰·M < 2⁻³³·M, eight times below P. A
+//! crossing that [`crate::detp::disc::crosses`] accepts happens at a point x of the segment inside
+//! the disc, hence inside B and inside the box of every cell or node that lists the disc and
+//! contains x; the computed traversal passes within 2⁻³³·M of x, so it tests that box, enlarged by
+//! P, and reaches the disc. Segments starting farther than R (none in the scenes studied: photons
+//! start on the scene's surfaces) are tested against every disc, which is trivially conservative.
 
 pub mod grid;
 pub mod octree;
@@ -130,8 +130,8 @@ pub trait DiscIndex: Sync {
 /// The discs of an index, renumbered along a Hilbert curve through their centres and packed
 /// centre-with-normal: a segment's candidates in neighbouring cells or leaves then sit in
 /// neighbouring memory, and a test reads one record instead of two arrays (the walks were bound by
-/// these loads; 1.3–1.4× faster at 10⁵ discs). The values are exact copies, so every decision is the
-/// one [`Discs::crossed_by`] makes on the caller's discs.
+/// these loads; 1.3–1.4× faster at 10⁵ discs). The values are exact copies, so every decision is
+/// the one [`Discs::crossed_by`] makes on the caller's discs.
 #[derive(Clone, Debug)]
 pub struct LocalDiscs {
     /// The discs in index order.

@@ -1,12 +1,12 @@
 //! Discs in an octree: the hierarchy the paper's disc-indexing cost model assumes (each level cuts
-//! the discs a segment meets by about 4, since a segment crossing a node crosses about half of its 8
-//! children's areas).
+//! the discs a segment meets by about 4, since a segment crossing a node crosses about half of its
+//! 8 children's areas).
 //!
 //! A node splits at its centre into 8 children while it holds more than `max_leaf` discs and its
 //! side exceeds `min_side`; a disc goes to every child whose closed box meets the disc's box
 //! ([`Discs::bounds`]), so a disc on a split plane sits on both sides. Traversal tests the segment
-//! against each node's box enlarged by the index pad (slab test over t ∈ [0, t_end]) and reports the
-//! discs of the leaves it reaches, each once per segment (mailbox).
+//! against each node's box enlarged by the index pad (slab test over t ∈ [0, t_end]) and reports
+//! the discs of the leaves it reaches, each once per segment (mailbox).
 
 use glam::DVec3;
 

@@ -95,6 +95,25 @@ fn both_indexes_equal_brute_force_and_add_then_remove_equals_the_complement() {
 }
 
 #[test]
+fn the_octree_splits_until_leaves_are_small_or_sides_reach_the_limit() {
+    let (_, discs) = scene(1, 4_000, 0.01, 4);
+    let deep = Octree::build(&discs, 8, 0.01);
+    let shallow = Octree::build(&discs, 8, 0.5);
+    // Sides halve from ~2: a 0.5 limit allows two splits (at most 1 + 8 + 64 nodes).
+    assert!(
+        shallow.nodes() > 9 && shallow.nodes() <= 73,
+        "{}",
+        shallow.nodes()
+    );
+    assert!(
+        deep.nodes() > 8 * shallow.nodes(),
+        "{} vs {}",
+        deep.nodes(),
+        shallow.nodes()
+    );
+}
+
+#[test]
 fn counters_do_not_depend_on_the_thread_count() {
     let (store, discs) = scene(8_000, 500, 0.05, 2);
     for (name, ix) in indexes(&discs) {

@@ -17,8 +17,8 @@
 //!    (`|s_C − s_A| + r_C ≤ r_A`, computed), every segment that meets C meets A: the true distance
 //!    to s_A is at most the distance to s_C plus `|s_C − s_A|`, so at most
 //!    `r_A + κ_j·(|w_A| + r_A) + 40ε·(|w_A| + r_A)`, and `κ_i − κ_j ≥ 2⁻³⁸` exceeds the rounding
-//!    terms by a factor of ~10⁵. This is what lets a child take its list from any enclosing ancestor
-//!    and still hold exactly the segments that meet it.
+//!    terms by a factor of ~10⁵. This is what lets a child take its list from any enclosing
+//!    ancestor and still hold exactly the segments that meet it.
 //!
 //! # Why the f32 filter decides only what it may
 //! Lists are SoA f32: origin relative to a reference point (the root's centre), direction (the
@@ -399,11 +399,14 @@ mod tests {
             let probe = Probe::new(reference, all.origin_bound(), center, r, kappa(3));
             let paths = FilterPath::all_available();
             #[cfg(target_arch = "x86_64")]
-            if std::is_x86_feature_detected!("avx512f") {
-                assert!(
-                    paths.contains(&FilterPath::Avx512),
-                    "this CPU's paths: {paths:?}"
-                );
+            {
+                use std::is_x86_feature_detected as has;
+                if has!("avx512f") && has!("avx512vl") {
+                    assert!(paths.contains(&FilterPath::Avx512), "CPU paths: {paths:?}");
+                }
+                if has!("avx2") && has!("fma") {
+                    assert!(paths.contains(&FilterPath::Avx2), "CPU paths: {paths:?}");
+                }
             }
             // Every tail length of the 8- and 16-lane loops.
             for len in (st.len() - 17..=st.len()).chain(0..20) {
