@@ -330,7 +330,7 @@ fn bench_size(
     // Contestant c: (is it the grid, does it use all threads)?
     let who = |c: usize| {
         if embree_on {
-            (c % 2 == 0, c >= 2)
+            (c.is_multiple_of(2), c >= 2)
         } else {
             (true, c == 1)
         }

@@ -44,7 +44,6 @@ use crate::detp::store::Segment;
 // The AVX-512 intrinsics are stable since Rust 1.89, above the crate's declared MSRV (1.82):
 // raising `rust-version` is the lead's call (it switches on newer lints in files outside DETP).
 #[cfg(target_arch = "x86_64")]
-#[allow(clippy::incompatible_msrv)]
 mod x86;
 
 /// The deepest level a cache may build: keeps `κ_j` positive and ≥ 2⁻³⁸ (see the module doc).
