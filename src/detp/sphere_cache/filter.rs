@@ -41,8 +41,7 @@ use glam::DVec3;
 
 use crate::detp::store::Segment;
 
-// The AVX-512 intrinsics are stable since Rust 1.89, above the crate's declared MSRV (1.82):
-// raising `rust-version` is the lead's call (it switches on newer lints in files outside DETP).
+// The AVX-512 intrinsics are stable since Rust 1.89, the crate's MSRV.
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
