@@ -1,9 +1,9 @@
 //! Sample points with normals: on a scene's surfaces at a chosen spacing, or read from a user's CSV
 //! (to compare with another renderer at chosen spots).
 //!
-//! Triangles are split into m² congruent sub-triangles (m = ⌈longest edge / spacing⌉) and get a point
-//! at each sub-triangle's centroid, so points cover the surface evenly whatever the triangle's shape
-//! class; spheres get a Fibonacci lattice of ≈ area / spacing² points. Normals are the light-receiving
+//! Triangles are split into m² congruent sub-triangles (m = ⌈√area / spacing⌉: one point per
+//! spacing² of area) and get a point at each sub-triangle's centroid, so points cover the surface
+//! evenly; spheres get a Fibonacci lattice of ≈ area / spacing² points. Normals are the light-receiving
 //! side's. Emitting surfaces get no points.
 
 use std::f64::consts::PI;
@@ -21,10 +21,8 @@ pub fn surface_points(scene: &Scene, spacing: f64, _seed: u64) -> (Vec<DVec3>, V
         if scene.surfaces[t.surface as usize].emission > 0.0 {
             continue;
         }
-        let longest = (0..3)
-            .map(|k| (t.v[(k + 1) % 3] - t.v[k]).length())
-            .fold(0.0, f64::max);
-        let m = (longest / spacing).ceil().max(1.0) as usize;
+        // m² points on area A: one per spacing² of area.
+        let m = (t.area().sqrt() / spacing).ceil().max(1.0) as usize;
         let (a, e1, e2) = (
             t.v[0],
             (t.v[1] - t.v[0]) / m as f64,
