@@ -3,7 +3,7 @@
 //! crossings up to the second intersection).
 //!
 //! Binary, split at the median centroid of the longest centroid axis, leaves of at most 4
-//! triangles; traversal keeps the two smallest t found so far and skips every box that starts
+//! triangles (a scene of at most 64 is one leaf); traversal keeps the two smallest t found so far and skips every box that starts
 //! beyond the second. Boxes are padded by 10⁻⁹ of the scene's magnitude, and a NaN slab (a ray in a
 //! box's face plane) counts as a hit, so traversal never drops a triangle the exact test accepts.
 
@@ -101,7 +101,9 @@ impl Bvh {
         self.nodes[node].lo = lo - pad;
         self.nodes[node].hi = hi + pad;
         let ext = chi - clo;
-        if order.len() <= 4 || ext.max_element() <= 0.0 {
+        // A scene of at most 64 triangles is one leaf: testing them all beats any tree (Cornell
+        // box, 32 triangles: 3.4 M rays/s as one leaf against 2.2 M through a tree of leaves of 4).
+        if order.len() <= 4 || (node == 0 && order.len() <= 64) || ext.max_element() <= 0.0 {
             self.nodes[node].start = start as u32;
             self.nodes[node].count = order.len() as u32;
             return;
