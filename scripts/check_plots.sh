@@ -32,12 +32,15 @@ echo "ok: $PNG"
 
 # Every DETP plot script on a small fresh run of its own spec (fewer rays and points: the shape of
 # the figure, not its statistics). detp-engines-cost keeps two of its sizes per axis.
-for name in lines-rays-per-level lines-cache-misses sphere-cache-q detp-engines-cost; do
+for name in lines-rays-per-level lines-cache-misses sphere-cache-q detp-engines-cost detp-accuracy cornell-levels; do
     case "$name" in
         lines-rays-per-level) args=(--set detp.points=2000 --set detp.replicas=2) ;;
         lines-cache-misses) args=(--set detp.points=5000 --set detp.chunk_points=5000) ;;
         sphere-cache-q) args=(--set detp.points=2000 --set detp.replicas=1) ;;
         detp-engines-cost) args=() ;;
+        # A set key is no longer swept: one photon count, the other keys' sweeps kept.
+        detp-accuracy) args=(--set detp.replicas=1) ;;
+        cornell-levels) args=(--set detp.point_spacing=40 --set detp.replicas=1) ;;
     esac
     spec="experiments/$name.toml"
     if [ "$name" = detp-engines-cost ]; then
@@ -45,6 +48,8 @@ for name in lines-rays-per-level lines-cache-misses sphere-cache-q detp-engines-
         sed -e 's/^"detp.photons" = .*/"detp.photons" = [8192, 16384]/' \
             -e 's/^"detp.points" = .*/"detp.points" = [500, 2000]/' "$spec" > "$TMP/$name.toml"
         spec="$TMP/$name.toml"
+    elif [ "$name" = detp-accuracy ] || [ "$name" = cornell-levels ]; then
+        args+=(--set detp.photons=5000)
     else
         args+=(--set detp.photons=16384)
     fi

@@ -5,8 +5,10 @@
 //! experiments/NAME.toml ─parse+validate─▶ Spec ─expand sweep─▶ [Point] ─run (rayon)─▶ [Row]
 //!                                                  engines + theory (pure)     results/NAME/NAME.csv
 //! ```
-//! Layers, each depending only on those above it: `geom`, `sample`, `stats`, `theory`, `scene`,
-//! `grid`, `spec`, `experiment`, `output`; `cli` and `main.rs` sit on top.
+//! Layers, each depending only on those above it: `toml_text`, `geom`, `sample`, `stats`, `theory`,
+//! `scene` (Poisson processes) and `lt` (light-transport scenes), `grid`, `detp` (ray store, discs,
+//! sphere cache, disc index, photon tracing, photon map), `output`, `spec`, `experiment`, `bench`;
+//! `cli`, `app` and `main.rs` sit on top.
 #![warn(missing_docs)]
 
 pub mod app;
@@ -25,3 +27,4 @@ pub mod scene;
 pub mod spec;
 pub mod stats;
 pub mod theory;
+pub mod toml_text;

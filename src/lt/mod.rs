@@ -20,7 +20,7 @@ use self::bvh::{Bvh, TwoNearest};
 use self::format::{AnalyticKind, LightKind, RawScene, SurfaceKind};
 use self::shapes::{Ball, Triangle};
 use crate::geom::Aabb;
-use crate::spec::error::line_col;
+use crate::toml_text::{find_key, line_col};
 
 /// A scene file that cannot be used: where and why (exit code 2 for the CLI).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -190,7 +190,7 @@ impl Scene {
         let name = path.display().to_string();
         let err = |key: String, message: String| SceneError {
             path: name.clone(),
-            line: crate::spec::error::find_key(text, &key).filter(|_| !key.is_empty()),
+            line: find_key(text, &key).filter(|_| !key.is_empty()),
             key: Some(key),
             message,
         };
