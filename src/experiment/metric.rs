@@ -6,8 +6,7 @@
 use crate::output::row::Row;
 use crate::stats::Estimate;
 
-/// One line of the terminal summary: (metric, measured, theory text, verdict).
-pub type SummaryLine = (String, Estimate, String, String);
+pub use crate::output::summary::SummaryLine;
 
 /// What a metric is held against.
 #[derive(Clone, Copy, Debug, PartialEq)]

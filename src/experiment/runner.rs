@@ -216,7 +216,17 @@ pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::Pat
             dir.display()
         );
     }
-    Ok((written, summary::render(&finished)))
+    let shown: Vec<summary::SummaryPoint> = finished
+        .iter()
+        .map(|(index, params, r, wall)| summary::SummaryPoint {
+            index: *index,
+            params,
+            lines: &r.summary,
+            rays_per_s: r.rays_per_s,
+            wall: *wall,
+        })
+        .collect();
+    Ok((written, summary::render(&shown)))
 }
 
 fn short(key: &str) -> &str {

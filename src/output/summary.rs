@@ -2,11 +2,28 @@
 
 use std::fmt::Write;
 
-use crate::experiment::PointResult;
 use crate::stats::Estimate;
 
+/// One line of the summary: (metric, measured, theory text, verdict).
+pub type SummaryLine = (String, Estimate, String, String);
+
+/// One finished point as the summary shows it.
+#[derive(Clone, Copy, Debug)]
+pub struct SummaryPoint<'a> {
+    /// Point index.
+    pub index: usize,
+    /// Its swept or set parameters, `key=value` joined by spaces.
+    pub params: &'a str,
+    /// Its metrics.
+    pub lines: &'a [SummaryLine],
+    /// Rays per second while tracing.
+    pub rays_per_s: f64,
+    /// Wall seconds of the point.
+    pub wall: f64,
+}
+
 /// Formats the summary table of the finished points.
-pub fn render(points: &[(usize, String, PointResult, f64)]) -> String {
+pub fn render(points: &[SummaryPoint]) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -20,13 +37,14 @@ pub fn render(points: &[(usize, String, PointResult, f64)]) -> String {
         "rays/s",
         "wall s"
     );
-    for (index, params, r, wall) in points {
-        for (i, (metric, e, theory, verdict)) in r.summary.iter().enumerate() {
+    for p in points {
+        let (index, params, wall) = (p.index, p.params, p.wall);
+        for (i, (metric, e, theory, verdict)) in p.lines.iter().enumerate() {
             let (p, pr, rs, w) = if i == 0 {
                 (
                     index.to_string(),
-                    params.clone(),
-                    format!("{:.3e}", r.rays_per_s),
+                    params.to_string(),
+                    format!("{:.3e}", p.rays_per_s),
                     format!("{wall:.2}"),
                 )
             } else {
