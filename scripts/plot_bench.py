@@ -8,6 +8,10 @@ Top right: how many times faster the grid is than Embree, per n: the median of t
 ratios (every round traces the same fresh rays with both engines), with their range as error bars.
 Bottom left: the grid's time per visited cell and its cells per ray against n: rays/s can only be
 flat in n if both are. Bottom right: build time and peak memory against n.
+
+The DETP engines' rows (sphere cache, grid and octree disc indices, brute force on a subset of
+points) go to a second figure, NAME.detp.png: wall time and tests per second per engine on 1 and 2
+threads, with the 1 → 2 thread speed-up.
 """
 
 import math
@@ -17,6 +21,43 @@ import raycost_plot as rp
 NAME = "bench"
 REQUIRED = ["engine", "n", "threads", "rays_per_s", "build_s", "peak_mem_bytes", "mismatches"]
 STYLES = {"grid": ("o", "-"), "grid-infinite": ("", "--"), "brute-force": ("s", "-"), "embree": ("D", "-")}
+DETP = ("sphere-cache", "disc-index-grid", "disc-index-octree")
+
+
+def is_detp(r):
+    """A DETP engine's row (brute force on discs carries the DETP rate columns)."""
+    rate = r.get("ray_disc_tests_per_s")
+    return r["engine"] in DETP or (isinstance(rate, float) and rate == rate)
+
+
+def plot_detp(rows, args):
+    """Wall time and tests per second of each DETP engine on 1 and 2 threads."""
+    engines = list(dict.fromkeys(r["engine"] for r in rows))
+    threads = sorted({r["threads"] for r in rows})
+    fig, axes = rp.subplots(1, 2, panel_w=6.0, panel_h=4.0)
+    ax_w, ax_t = axes[0]
+    width = 0.8 / len(threads)
+    for k, t in enumerate(threads):
+        sub = {r["engine"]: r for r in rows if r["threads"] == t}
+        xs = [i + (k - (len(threads) - 1) / 2) * width for i in range(len(engines))]
+        ax_w.bar(xs, [sub[e]["wall_s"] if e in sub else 0 for e in engines], width,
+                 label="%d thread%s" % (t, "" if t == 1 else "s"))
+        rate = [max(sub[e].get("ray_sphere_tests_per_s") or 0, sub[e].get("ray_disc_tests_per_s") or 0)
+                if e in sub else 0 for e in engines]
+        ax_t.bar(xs, rate, width, label="%d thread%s" % (t, "" if t == 1 else "s"))
+    for a in (ax_w, ax_t):
+        a.set_xticks(range(len(engines)))
+        a.set_xticklabels(engines, rotation=15, fontsize=8)
+        a.legend(fontsize=8)
+    ax_w.set_ylabel("wall time, s (brute force: a subset of points)")
+    ax_t.set_yscale("log")
+    ax_t.set_ylabel("counted tests per second (sphere tests for the cache)")
+    r0 = rows[0]
+    mism = sum(int(r["mismatches"]) for r in rows)
+    fig.suptitle("DETP engines: %d lines × %d points, %d mismatches against brute force"
+                 % (r0["rays"], max(r["n"] for r in rows), mism), fontsize=10)
+    args.output = rp.default_png(args.input, "detp")
+    rp.finish(fig, args)
 
 
 def paired_ratios(rounds, n, threads):
@@ -37,6 +78,8 @@ def median(xs):
 
 def plot(args):
     rows = rp.read_csv(args.input, REQUIRED)
+    detp_rows = [r for r in rows if is_detp(r)]
+    rows = [r for r in rows if not is_detp(r)]
     rows = [r for r in rows if isinstance(r.get("n"), (int, float)) and r["n"] == r["n"]]
     if not rows:
         raise rp.PlotError("%s: no rows with a number of spheres n" % args.input)
@@ -166,6 +209,8 @@ def plot(args):
             rp.pad_log_limits(a, finite_n, factor=1.6)
     fig.suptitle("raycost bench: the grid and Embree on the same spheres and rays", fontsize=11, y=1.0)
     rp.finish(fig, args)
+    if detp_rows:
+        plot_detp(detp_rows, args)
 
 
 if __name__ == "__main__":
