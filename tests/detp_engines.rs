@@ -44,20 +44,7 @@ fn lines(rng: &mut Stream, n: u32, center: DVec3, rad: f64) -> Vec<Segment> {
 }
 
 fn ball_discs(rng: &mut Stream, n: usize, center: DVec3, rad: f64, d: f64) -> Discs {
-    let mut c = Vec::new();
-    let mut nn = Vec::new();
-    while c.len() < n {
-        let p = DVec3::new(
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-        );
-        if p.length_squared() <= 1.0 {
-            c.push(center + p * rad);
-            nn.push(uniform_on_sphere(rng));
-        }
-    }
-    Discs::new(c, nn, d).unwrap()
+    Discs::in_ball(rng, n, center, rad, d)
 }
 
 /// Runs every engine on (store, discs) and asserts equality with brute force; returns the number

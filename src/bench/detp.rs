@@ -103,22 +103,9 @@ fn scene(plan: Plan) -> (SegmentStore, Discs) {
         })
         .collect();
     let d = (4.0 * std::f64::consts::PI / 3.0 / plan.points as f64).cbrt() / 2.0;
-    let mut c = Vec::with_capacity(plan.points);
-    let mut n = Vec::with_capacity(plan.points);
-    while c.len() < plan.points {
-        let p = DVec3::new(
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-        );
-        if p.length_squared() <= 1.0 {
-            c.push(p);
-            n.push(uniform_on_sphere(&mut rng));
-        }
-    }
     (
         SegmentStore::new(segs, PowerScale::for_max_power(1.0)),
-        Discs::new(c, n, d).expect("valid discs"),
+        Discs::in_ball(&mut rng, plan.points, DVec3::ZERO, 1.0, d),
     )
 }
 

@@ -63,6 +63,23 @@ impl Discs {
         })
     }
 
+    /// `n` discs of radius `d` centred uniformly in the ball (`center`, `rad`) with uniform normals:
+    /// the DETP paper's validation points (§4.2), drawn from `rng` (centre, then normal, per disc).
+    pub fn in_ball<R: rand::Rng + ?Sized>(
+        rng: &mut R,
+        n: usize,
+        center: DVec3,
+        rad: f64,
+        d: f64,
+    ) -> Self {
+        let (mut c, mut nn) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for _ in 0..n {
+            c.push(center + crate::sample::lines::uniform_in_ball(rng) * rad);
+            nn.push(crate::sample::lines::uniform_on_sphere(rng));
+        }
+        Self::new(c, nn, d).expect("finite centres, unit normals and d > 0")
+    }
+
     /// Number of discs.
     pub fn len(&self) -> usize {
         self.centers.len()

@@ -6,7 +6,7 @@ use rand::Rng;
 use super::*;
 use crate::detp::brute;
 use crate::detp::fixed::PowerScale;
-use crate::sample::{lines::uniform_line, lines::uniform_on_sphere, rng::stream};
+use crate::sample::{lines::uniform_line, rng::stream};
 
 fn scene(n_seg: u32, n_disc: usize, d: f64, seed: u64) -> (SegmentStore, Discs) {
     let mut rng = stream(&[0xd1, seed]);
@@ -21,22 +21,9 @@ fn scene(n_seg: u32, n_disc: usize, d: f64, seed: u64) -> (SegmentStore, Discs) 
             Segment::new(p, dir, 0.0, t_end, rng.gen_range(1..1000), k)
         })
         .collect();
-    let mut c = Vec::new();
-    let mut n = Vec::new();
-    while c.len() < n_disc {
-        let p = DVec3::new(
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-        );
-        if p.length_squared() <= 1.0 {
-            c.push(p);
-            n.push(uniform_on_sphere(&mut rng));
-        }
-    }
     (
         SegmentStore::new(segs, PowerScale::for_max_power(1.0)),
-        Discs::new(c, n, d).unwrap(),
+        Discs::in_ball(&mut rng, n_disc, DVec3::ZERO, 1.0, d),
     )
 }
 

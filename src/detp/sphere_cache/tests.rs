@@ -10,7 +10,7 @@ use crate::detp::brute;
 use crate::detp::fixed::PowerScale;
 use crate::detp::order::{permutation, Order};
 use crate::detp::store::Segment;
-use crate::sample::{lines::uniform_line, lines::uniform_on_sphere, rng::stream};
+use crate::sample::{lines::uniform_line, rng::stream};
 
 /// `n` μ-random lines through the unit ball as segments from their first point on the sphere:
 /// t_end = +∞ for even k, the chord (to the second point) for odd k; powers 1..1000.
@@ -33,20 +33,7 @@ fn lines(n: u32, seed: u64) -> SegmentStore {
 /// `n` points uniform in the ball of radius `rad`, uniform normals, disc radius `d`.
 fn ball_points(n: usize, rad: f64, d: f64, seed: u64) -> Discs {
     let mut rng = stream(&[0xba, seed]);
-    let mut c = Vec::new();
-    let mut nn = Vec::new();
-    while c.len() < n {
-        let p = DVec3::new(
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-        );
-        if p.length_squared() <= 1.0 {
-            c.push(p * rad);
-            nn.push(uniform_on_sphere(&mut rng));
-        }
-    }
-    Discs::new(c, nn, d).unwrap()
+    Discs::in_ball(&mut rng, n, DVec3::ZERO, rad, d)
 }
 
 fn oracle(store: &SegmentStore, discs: &Discs) -> Vec<Acc> {
