@@ -164,7 +164,8 @@ mod tests {
         let (t0, t1) = b.roots(DVec3::new(0.0, 0.0, 5.0), DVec3::X).unwrap();
         assert!((t0 + 1.0).abs() < 1e-12 && (t1 - 1.0).abs() < 1e-12);
         assert!(b.roots(DVec3::new(2.0, 0.0, 0.0), DVec3::Z).is_none());
-        // Far away and tiny: no cancellation.
+        // Far away and tiny: each root within a few ulps of t ≈ 10⁸ (no cancellation, which would
+        // lose the 2·10⁻³ chord entirely).
         let far = Ball {
             center: DVec3::new(0.0, 0.0, 1e8),
             radius: 1e-3,
@@ -172,6 +173,8 @@ mod tests {
             surface: 0,
         };
         let (t0, t1) = far.roots(DVec3::ZERO, DVec3::Z).unwrap();
-        assert!((t1 - t0 - 2e-3).abs() < 1e-9, "{}", t1 - t0);
+        let ulps = 4.0 * f64::EPSILON * 1e8;
+        assert!((t0 - (1e8 - 1e-3)).abs() <= ulps, "{t0}");
+        assert!((t1 - (1e8 + 1e-3)).abs() <= ulps, "{t1}");
     }
 }
