@@ -47,11 +47,20 @@ mod tests {
         if rss_bytes() == 0 {
             return; // no /proc: nothing to measure
         }
+        // The reading is process-wide: another test of this binary freeing memory between the
+        // "before" reading and the reset hides growth. It cannot invent growth, so the best of a
+        // few attempts must show the 64 MB.
         let mb = 64 << 20;
-        let ((), grew) = peak_increment(|| {
-            let v = vec![1u8; mb];
-            std::hint::black_box(&v);
-        });
+        let grew = (0..5)
+            .map(|_| {
+                peak_increment(|| {
+                    let v = vec![1u8; mb];
+                    std::hint::black_box(&v);
+                })
+                .1
+            })
+            .max()
+            .unwrap_or(0);
         assert!(grew >= mb as u64 * 9 / 10, "peak grew by {grew} bytes");
     }
 }
