@@ -131,6 +131,25 @@ impl SegmentStore {
         self.segments.len() * std::mem::size_of::<Segment>() + self.photon_start.len() * 4
     }
 
+    /// `n` μ-random lines through the unit ball as segments from their first point on the sphere
+    /// (t_end = +∞ for even k, the chord for odd k), powers 1..1000 from `rng`: the unit tests'
+    /// store. The draws per line: the line, then the power.
+    #[cfg(test)]
+    pub fn test_lines<R: rand::Rng>(rng: &mut R, n: u32) -> Self {
+        let segs = (0..n)
+            .map(|k| {
+                let (p, d) = crate::sample::lines::uniform_line(rng);
+                let t_end = if k % 2 == 0 {
+                    f64::INFINITY
+                } else {
+                    -2.0 * p.dot(d)
+                };
+                Segment::new(p, d, 0.0, t_end, rng.gen_range(1..1000), k)
+            })
+            .collect();
+        Self::new(segs, PowerScale::for_max_power(1.0))
+    }
+
     /// The segments of photon `p` (requires `photon_start`).
     pub fn photon(&self, p: usize) -> &[Segment] {
         let (a, b) = (

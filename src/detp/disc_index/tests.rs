@@ -1,30 +1,15 @@
 //! Both indexes against the oracle, add-then-remove, thread-count independence, the slab clip.
 
 use glam::DVec3;
-use rand::Rng;
 
 use super::*;
 use crate::detp::brute;
-use crate::detp::fixed::PowerScale;
-use crate::sample::{lines::uniform_line, rng::stream};
+use crate::sample::rng::stream;
 
 fn scene(n_seg: u32, n_disc: usize, d: f64, seed: u64) -> (SegmentStore, Discs) {
     let mut rng = stream(&[0xd1, seed]);
-    let segs = (0..n_seg)
-        .map(|k| {
-            let (p, dir) = uniform_line(&mut rng);
-            let t_end = if k % 2 == 0 {
-                f64::INFINITY
-            } else {
-                -2.0 * p.dot(dir)
-            };
-            Segment::new(p, dir, 0.0, t_end, rng.gen_range(1..1000), k)
-        })
-        .collect();
-    (
-        SegmentStore::new(segs, PowerScale::for_max_power(1.0)),
-        Discs::in_ball(&mut rng, n_disc, DVec3::ZERO, 1.0, d),
-    )
+    let store = SegmentStore::test_lines(&mut rng, n_seg);
+    (store, Discs::in_ball(&mut rng, n_disc, DVec3::ZERO, 1.0, d))
 }
 
 fn indexes(discs: &Discs) -> Vec<(&'static str, Box<dyn Run>)> {

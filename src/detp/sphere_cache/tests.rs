@@ -2,32 +2,17 @@
 //! rays-per-level law of integral geometry.
 
 use glam::DVec3;
-use rand::Rng;
 
 use super::filter::FilterPath;
 use super::*;
 use crate::detp::brute;
-use crate::detp::fixed::PowerScale;
 use crate::detp::order::{permutation, Order};
-use crate::detp::store::Segment;
-use crate::sample::{lines::uniform_line, rng::stream};
+use crate::sample::rng::stream;
 
 /// `n` μ-random lines through the unit ball as segments from their first point on the sphere:
 /// t_end = +∞ for even k, the chord (to the second point) for odd k; powers 1..1000.
 fn lines(n: u32, seed: u64) -> SegmentStore {
-    let mut rng = stream(&[0x5c, seed]);
-    let segs = (0..n)
-        .map(|k| {
-            let (p, d) = uniform_line(&mut rng);
-            let t_end = if k % 2 == 0 {
-                f64::INFINITY
-            } else {
-                -2.0 * p.dot(d)
-            };
-            Segment::new(p, d, 0.0, t_end, rng.gen_range(1..1000), k)
-        })
-        .collect();
-    SegmentStore::new(segs, PowerScale::for_max_power(1.0))
+    SegmentStore::test_lines(&mut stream(&[0x5c, seed]), n)
 }
 
 /// `n` points uniform in the ball of radius `rad`, uniform normals, disc radius `d`.
