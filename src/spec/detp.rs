@@ -409,15 +409,22 @@ impl DetpConfig {
                         )),
                     })
                 }
-                PointSourceKind::File => Points::File(resolve(
-                    "detp.points_file",
-                    d.points_file.as_deref().ok_or_else(|| {
-                        e(
-                            "detp.points_file",
-                            "missing: point_source = \"file\" needs a CSV".into(),
-                        )
-                    })?,
-                )?),
+                PointSourceKind::File => {
+                    let path = resolve(
+                        "detp.points_file",
+                        d.points_file.as_deref().ok_or_else(|| {
+                            e(
+                                "detp.points_file",
+                                "missing: point_source = \"file\" needs a CSV".into(),
+                            )
+                        })?,
+                    )?;
+                    // Read it now: a bad row (a zero normal, not a number) is bad input,
+                    // refused before anything is written.
+                    crate::detp::surface_points::read_points_csv(&path)
+                        .map_err(|m| e("detp.points_file", m))?;
+                    Points::File(path)
+                }
             };
         if d.points.is_some() && kind != PointSourceKind::Ball {
             return Err(e(
