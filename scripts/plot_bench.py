@@ -51,7 +51,7 @@ def plot_detp(rows, args):
         a.legend(fontsize=8)
     ax_w.set_ylabel("wall time, s (brute force: a subset of points)")
     ax_t.set_yscale("log")
-    ax_t.set_ylabel("counted tests per second (sphere tests for the cache)")
+    ax_t.set_ylabel("tests/s (cache: sphere tests)")
     r0 = rows[0]
     mism = sum(int(r["mismatches"]) for r in rows)
     fig.suptitle("DETP engines: %d lines × %d points, %d mismatches against brute force"
