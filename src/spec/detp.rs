@@ -444,6 +444,12 @@ impl DetpConfig {
         if d.engines.is_empty() {
             return Err(e("detp.engines", "empty: name at least one engine".into()));
         }
+        if d.engines.iter().all(|&x| x == EngineChoice::PhotonMap) {
+            return Err(e(
+                "detp.engines",
+                "name a DETP engine (sphere-cache, disc-index or brute-force): the photon map is a baseline beside them".into(),
+            ));
+        }
         for (i, a) in d.engines.iter().enumerate() {
             if d.engines[..i].contains(a) {
                 return Err(e(

@@ -71,7 +71,8 @@ pub(crate) struct PointSet {
     pub(crate) exact: Vec<f64>,
 }
 
-/// Sample points of a point: drawn once per point (all replicas share them, only the rays change).
+/// Sample points of a lines point (uniform in the ball, or a user's CSV): drawn once per point (all
+/// replicas share them, only the rays change).
 fn points(cfg: &DetpConfig, point: u64) -> anyhow::Result<PointSet> {
     let (centers, normals) = match &cfg.points {
         Points::Ball(n) => {
@@ -89,8 +90,11 @@ fn points(cfg: &DetpConfig, point: u64) -> anyhow::Result<PointSet> {
                 .collect();
             pairs.into_iter().unzip()
         }
-        Points::Surface(_) | Points::File(_) => {
-            anyhow::bail!("surface and file points come with a scene (see scene::points)")
+        Points::File(p) => {
+            crate::detp::surface_points::read_points_csv(p).map_err(anyhow::Error::msg)?
+        }
+        Points::Surface(_) => {
+            anyhow::bail!("surface points need a scene (the spec check refuses this)")
         }
     };
     let discs = Discs::new(centers, normals, cfg.disc_radius).map_err(anyhow::Error::msg)?;
