@@ -19,6 +19,7 @@
 //! - [`disc_index`]: discs in a spatial index (grid, octree) that segments traverse, adding or removing;
 //! - [`photon`]: photon tracing into the store, one keyed stream per photon;
 //! - [`surface_points`]: sample points on a scene's surfaces at spacing ≈ d;
+//! - [`quasi_static`]: frame-by-frame incremental recalculation as dynamic objects move;
 //! - [`photon_map`]: Jensen's k-nearest-neighbour estimate over the same photons (the baseline).
 
 pub mod brute;
@@ -28,6 +29,7 @@ pub mod fixed;
 pub mod order;
 pub mod photon;
 pub mod photon_map;
+pub mod quasi_static;
 pub mod sphere_cache;
 pub mod store;
 pub mod surface_points;

@@ -11,14 +11,28 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use crate::lt::Scene;
+use crate::lt::shapes::{Ball, Triangle};
+use crate::lt::{Scene, Surface};
 
-/// Points and unit normals on every non-emitting surface, at spacing ≈ `spacing`. `seed` is kept
-/// for a jittered variant; the lattice itself is deterministic.
+/// Points and unit normals on every non-emitting static surface, at spacing ≈ `spacing` (a dynamic
+/// object's points come from [`points_on`] over its rest geometry). `seed` is kept for a jittered
+/// variant; the lattice itself is deterministic.
 pub fn surface_points(scene: &Scene, spacing: f64, _seed: u64) -> (Vec<DVec3>, Vec<DVec3>) {
+    let (t, b) = scene.static_geometry();
+    points_on(t, b, &scene.surfaces, spacing)
+}
+
+/// Points and unit normals on the non-emitting ones of `triangles` and `balls`, at spacing
+/// ≈ `spacing`.
+pub fn points_on(
+    triangles: &[Triangle],
+    balls: &[Ball],
+    surfaces: &[Surface],
+    spacing: f64,
+) -> (Vec<DVec3>, Vec<DVec3>) {
     let (mut pts, mut nrm) = (Vec::new(), Vec::new());
-    for t in &scene.triangles {
-        if scene.surfaces[t.surface as usize].emission > 0.0 {
+    for t in triangles {
+        if surfaces[t.surface as usize].emission > 0.0 {
             continue;
         }
         // m² points on area A: one per spacing² of area.
@@ -41,8 +55,8 @@ pub fn surface_points(scene: &Scene, spacing: f64, _seed: u64) -> (Vec<DVec3>, V
             }
         }
     }
-    for b in &scene.balls {
-        if scene.surfaces[b.surface as usize].emission > 0.0 && !b.inside {
+    for b in balls {
+        if surfaces[b.surface as usize].emission > 0.0 && !b.inside {
             continue;
         }
         let count = (b.area() / (spacing * spacing)).round().max(1.0) as usize;

@@ -129,6 +129,11 @@ impl Bvh {
         self.split(tris, b, left + 1, start + mid);
     }
 
+    /// Over no triangles?
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
     /// Bytes held.
     pub fn bytes(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<Node>() + self.order.len() * 4

@@ -35,6 +35,71 @@ pub struct RawScene {
     pub camera: Option<RawCamera>,
     /// A closed form for the irradiance.
     pub analytic: Option<RawAnalytic>,
+    /// Dynamic objects: the surfaces naming one in `dynamic` move with its motion.
+    #[serde(default)]
+    pub dynamic: Vec<RawDynamic>,
+}
+
+/// Motion paths of `[[dynamic]]`.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum PathKind {
+    /// Around a circle (`center`, `radius`, `axis`, `turns`).
+    Circle,
+    /// Along a polyline (`points`) at constant speed.
+    Line,
+}
+
+/// `[[dynamic]]`: a dynamic object and its motion over the frames (τ = 0 … 1).
+///
+/// ```toml
+/// [[dynamic]]
+/// name = "ball"                 # surfaces with dynamic = "ball" move together
+/// path = "circle"               # or "line" with points = [[x, y, z], ...]
+/// center = [278, 200, 280]      # the object's bounding-sphere centre travels this path
+/// radius = 120
+/// axis = [0, 1, 0]
+/// turns = 1.0
+/// spin_deg = 0.0                # spin about spin_axis through the object's centre
+/// spin_axis = [0, 1, 0]
+/// ```
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawDynamic {
+    /// The name surfaces refer to.
+    pub name: String,
+    /// The path kind.
+    pub path: PathKind,
+    /// Circle centre.
+    #[serde(default, deserialize_with = "opt_point")]
+    pub center: Option<[f64; 3]>,
+    /// Circle radius.
+    #[serde(default, deserialize_with = "opt_positive")]
+    pub radius: Option<f64>,
+    /// Circle axis (normal of its plane).
+    #[serde(default, deserialize_with = "opt_point")]
+    pub axis: Option<[f64; 3]>,
+    /// Turns around the circle over the frames.
+    #[serde(default = "one", deserialize_with = "positive")]
+    pub turns: f64,
+    /// Polyline points (≥ 2).
+    #[serde(default, deserialize_with = "points")]
+    pub points: Vec<[f64; 3]>,
+    /// Spin over the frames, degrees.
+    #[serde(default, deserialize_with = "finite_number")]
+    pub spin_deg: f64,
+    /// Spin axis.
+    #[serde(default, deserialize_with = "opt_point")]
+    pub spin_axis: Option<[f64; 3]>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn finite_number<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    let v = toml::Value::deserialize(d)?;
+    finite(&v).ok_or_else(|| D::Error::custom("expected a finite number"))
 }
 
 /// Surface kinds.
@@ -79,6 +144,8 @@ pub struct RawSurface {
     /// Emitted radiance L_e (> 0 makes it an area light).
     #[serde(default, deserialize_with = "opt_positive")]
     pub emission: Option<f64>,
+    /// The `[[dynamic]]` object this surface belongs to (it moves with it).
+    pub dynamic: Option<String>,
 }
 
 /// Light kinds.

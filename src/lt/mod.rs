@@ -9,6 +9,7 @@
 
 pub mod bvh;
 pub mod format;
+pub mod motion;
 pub mod shapes;
 
 use std::f64::consts::PI;
@@ -17,7 +18,8 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 
 use self::bvh::{Bvh, TwoNearest};
-use self::format::{AnalyticKind, LightKind, RawScene, SurfaceKind};
+use self::format::{AnalyticKind, LightKind, PathKind, RawScene, SurfaceKind};
+use self::motion::{Motion, Mover, MoverPart};
 use self::shapes::{Ball, Triangle};
 use crate::geom::Aabb;
 use crate::toml_text::{find_key, line_col};
@@ -158,8 +160,41 @@ pub struct Scene {
     pub analytic: Option<AnalyticKind>,
     /// Things skipped with a warning (degenerate triangles).
     pub warnings: Vec<String>,
+    /// Dynamic objects. Their geometry at the current pose follows the static geometry in
+    /// `triangles` and `balls` (see [`Scene::set_tau`]).
+    pub movers: Vec<Mover>,
+    /// Static triangles: `triangles[..n_static_tris]`.
+    pub n_static_tris: usize,
+    /// Static spheres: `balls[..n_static_balls]`.
+    pub n_static_balls: usize,
+    /// The movers' pose (normalised time), NaN before the first [`Scene::set_tau`].
+    tau: f64,
     bvh: Bvh,
+    /// Over the posed dynamic triangles (ids relative to `n_static_tris`), rebuilt at each pose.
+    dyn_bvh: Bvh,
     bounds: Aabb,
+}
+
+/// What a scene is made of, before its hierarchy and bounds are built (from a TOML scene file or an
+/// AFF file).
+#[derive(Debug, Default)]
+pub struct SceneParts {
+    /// Static triangles.
+    pub triangles: Vec<Triangle>,
+    /// Static spheres.
+    pub balls: Vec<Ball>,
+    /// Surfaces.
+    pub surfaces: Vec<Surface>,
+    /// Lights.
+    pub lights: Vec<Light>,
+    /// Camera.
+    pub camera: Option<Camera>,
+    /// Closed form.
+    pub analytic: Option<AnalyticKind>,
+    /// Warnings so far.
+    pub warnings: Vec<String>,
+    /// Dynamic objects.
+    pub movers: Vec<Mover>,
 }
 
 impl Scene {
@@ -198,6 +233,9 @@ impl Scene {
         let (mut triangles, mut balls, mut surfaces) = (Vec::new(), Vec::new(), Vec::new());
         let mut warnings = Vec::new();
         let mut lights = Vec::new();
+        // Geometry of each [[dynamic]] object, gathered from the surfaces naming it.
+        let mut moving: Vec<(Vec<Triangle>, Vec<Ball>)> =
+            vec![Default::default(); raw.dynamic.len()];
         for (si, s) in raw.surface.iter().enumerate() {
             let key = |k: &str| format!("surface[{si}].{k}");
             let id = si as u32;
@@ -298,6 +336,24 @@ impl Scene {
                 ));
             }
             triangles.extend(kept);
+            if let Some(dname) = &s.dynamic {
+                let Some(k) = raw.dynamic.iter().position(|d| &d.name == dname) else {
+                    return Err(err(
+                        key("dynamic"),
+                        format!("no [[dynamic]] object is named \"{dname}\""),
+                    ));
+                };
+                if s.emission.is_some() {
+                    return Err(err(
+                        key("emission"),
+                        "a dynamic surface cannot emit (lights are static)".into(),
+                    ));
+                }
+                moving[k].0.extend(triangles.drain(first..));
+                if s.kind == SurfaceKind::Sphere {
+                    moving[k].1.extend(balls.pop());
+                }
+            }
             if let Some(le) = s.emission {
                 let tris: Vec<u32> = (first as u32..triangles.len() as u32).collect();
                 let ball = (s.kind == SurfaceKind::Sphere).then(|| balls.len() as u32 - 1);
@@ -394,6 +450,89 @@ impl Scene {
             width: c.width,
             height: c.height,
         });
+        let mut movers = Vec::new();
+        for (k, (d, (tris, bls))) in raw.dynamic.iter().zip(moving).enumerate() {
+            let key = |f: &str| format!("dynamic[{k}].{f}");
+            if tris.is_empty() && bls.is_empty() {
+                return Err(err(
+                    key("name"),
+                    format!("no surface names dynamic = \"{}\"", d.name),
+                ));
+            }
+            let unit = |v: Option<[f64; 3]>, f: &str| -> Result<DVec3, SceneError> {
+                let a = DVec3::from_array(v.unwrap_or([0.0, 1.0, 0.0]));
+                if a.length() > 0.0 {
+                    Ok(a.normalize())
+                } else {
+                    Err(err(key(f), "an axis must be non-zero".into()))
+                }
+            };
+            let spin_axis = unit(d.spin_axis, "spin_axis")?;
+            let motion = match d.path {
+                PathKind::Circle => {
+                    let (Some(c), Some(r)) = (d.center, d.radius) else {
+                        return Err(err(
+                            key("path"),
+                            "a circle path needs center and radius".into(),
+                        ));
+                    };
+                    Motion::Circle {
+                        center: DVec3::from_array(c),
+                        radius: r,
+                        axis: unit(d.axis, "axis")?,
+                        turns: d.turns,
+                        spin_deg: d.spin_deg,
+                        spin_axis,
+                    }
+                }
+                PathKind::Line => {
+                    if d.points.len() < 2 {
+                        return Err(err(
+                            key("points"),
+                            "a line path needs at least two points".into(),
+                        ));
+                    }
+                    Motion::Path {
+                        points: d.points.iter().map(|&p| DVec3::from_array(p)).collect(),
+                        spin_deg: d.spin_deg,
+                        spin_axis,
+                    }
+                }
+            };
+            movers.push(Mover::new(
+                d.name.clone(),
+                vec![MoverPart {
+                    triangles: tris,
+                    balls: bls,
+                    motion,
+                }],
+            ));
+        }
+        Ok(Self::assemble(SceneParts {
+            triangles,
+            balls,
+            surfaces,
+            lights,
+            camera,
+            analytic,
+            warnings,
+            movers,
+        }))
+    }
+
+    /// Builds the hierarchy and bounds over `parts` (static geometry and lights; the movers stay
+    /// unposed until [`Scene::set_tau`]).
+    pub fn assemble(parts: SceneParts) -> Scene {
+        let SceneParts {
+            triangles,
+            balls,
+            surfaces,
+            lights,
+            camera,
+            analytic,
+            warnings,
+            movers,
+        } = parts;
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         for t in &triangles {
@@ -412,7 +551,9 @@ impl Scene {
             }
         }
         let bvh = Bvh::build(&triangles);
-        Ok(Scene {
+        Scene {
+            n_static_tris: triangles.len(),
+            n_static_balls: balls.len(),
             triangles,
             balls,
             surfaces,
@@ -420,9 +561,43 @@ impl Scene {
             camera,
             analytic,
             warnings,
+            movers,
+            tau: f64::NAN,
             bvh,
+            dyn_bvh: Bvh::default(),
             bounds: Aabb::new(lo, hi),
-        })
+        }
+    }
+
+    /// Poses every mover at normalised time τ: their world geometry replaces the previous pose's
+    /// after the static geometry, and the dynamic hierarchy is rebuilt. A pure function of τ.
+    pub fn set_tau(&mut self, tau: f64) {
+        if self.tau == tau || self.movers.is_empty() {
+            self.tau = tau;
+            return;
+        }
+        self.triangles.truncate(self.n_static_tris);
+        self.balls.truncate(self.n_static_balls);
+        for m in &self.movers {
+            let p = m.posed(tau);
+            self.triangles.extend(p.triangles);
+            self.balls.extend(p.balls);
+        }
+        self.dyn_bvh = Bvh::build(&self.triangles[self.n_static_tris..]);
+        self.tau = tau;
+    }
+
+    /// The current pose (NaN before the first [`Scene::set_tau`]).
+    pub fn tau(&self) -> f64 {
+        self.tau
+    }
+
+    /// Static geometry only: (triangles, spheres).
+    pub fn static_geometry(&self) -> (&[Triangle], &[Ball]) {
+        (
+            &self.triangles[..self.n_static_tris],
+            &self.balls[..self.n_static_balls],
+        )
     }
 
     /// The box around all geometry and lights.
@@ -454,8 +629,22 @@ impl Scene {
             _ => u32::MAX,
         };
         let mut best = TwoNearest::default();
+        let n = self.n_static_tris;
         self.bvh
-            .two_nearest(&self.triangles, o, d, t_min, skip_tri, &mut best);
+            .two_nearest(&self.triangles[..n], o, d, t_min, skip_tri, &mut best);
+        if !self.dyn_bvh.is_empty() {
+            // Dynamic triangles after the static ones, in a fixed order: a photon's path depends only
+            // on the geometry, never on which frames came before.
+            let mut dynamic = TwoNearest::default();
+            let skip_dyn = skip_tri.wrapping_sub(n as u32);
+            self.dyn_bvh
+                .two_nearest(&self.triangles[n..], o, d, t_min, skip_dyn, &mut dynamic);
+            for (t, id) in [dynamic.first, dynamic.second] {
+                if t.is_finite() {
+                    best.offer(t, id + n as u32);
+                }
+            }
+        }
         // Spheres: ids above the triangles' (offset), both roots.
         let offset = self.triangles.len() as u32;
         for (i, b) in self.balls.iter().enumerate() {

@@ -1,0 +1,627 @@
+//! Quasi-static DETP: a few dynamic objects move through a static scene, frame by frame, and the
+//! irradiance at every sample point is kept up to date without tracing everything again (the DETP
+//! paper's incremental recalculation, §3).
+//!
+//! Frame 0 traces every photon into the store and lists each segment in a [`SegmentIndex`]. At each
+//! later frame:
+//! 1. **search**: the index gives the segments that meet a mover's bounding sphere at its old or its
+//!    new pose; their photons are the affected ones (counted: cells, listings, tests);
+//! 2. **re-trace** those photons from their own streams at the new pose (the rest of each path may
+//!    change too); their old segments are kept aside, the new ones take fresh slots;
+//! 3. **static points**: subtract the old segments' power and add the new ones' (through the disc
+//!    index built once, or through a sphere cache over just those segments);
+//! 4. **dynamic points** (on a mover, posed with it): discarded and recomputed from all rays, by a
+//!    sphere cache rooted at the mover's bounding sphere (fed by the index: only segments that meet it
+//!    can cross its discs) or by a disc index built around the mover that every segment traverses.
+//!    Theorem 2 picks per mover (`Engine::Hybrid`), or the spec forces one.
+//!
+//! # Why incremental equals full, bit for bit
+//! A photon's path is a pure function of (seed, photon id, geometry at this frame): [`photon`]
+//! draws from the photon's own stream, and [`Scene::first_two_hits`] offers static and dynamic hits in a
+//! fixed order. A photon none of whose stored pieces `[0, t_end]` meets a mover at the old or the new
+//! pose sees the same first and second hits at every bounce, so its path — and every draw after it —
+//! is unchanged; the search finds every other photon (conservatively, see [`segment_index`]). So the
+//! live segments are exactly the segments a full trace of the frame produces. Powers are integers,
+//! so a static point's sum after "minus old, plus new" is the sum over those segments, whatever the
+//! order; dynamic points are summed afresh. [`QuasiStatic::full_recalculation`] checks it.
+
+pub mod segment_index;
+
+use std::time::Instant;
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::disc::Discs;
+use super::disc_index::{DiscIndex, IndexStats, Octree};
+use super::fixed::{Acc, PowerScale};
+use super::order::{permutation, Order};
+use super::photon::{retrace, trace_photons};
+use super::sphere_cache::{self, CacheStats, SphereCacheParams};
+use super::store::{Segment, SegmentStore};
+use super::surface_points::points_on;
+use crate::lt::motion::tau;
+use crate::lt::Scene;
+use segment_index::{SearchStats, SegmentIndex};
+
+/// How a mover's dynamic points are recomputed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Engine {
+    /// Sphere cache below the crossover ratio r_D/r_0, disc index above (Theorem 2).
+    Hybrid,
+    /// Always the sphere cache (static points too).
+    SphereCache,
+    /// Always a disc index (static points too).
+    DiscIndex,
+}
+
+/// What one mover's points were computed with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Used {
+    /// Sphere cache.
+    SphereCache,
+    /// Disc index.
+    DiscIndex,
+}
+
+/// Settings of a quasi-static run.
+#[derive(Clone, Debug)]
+pub struct Params {
+    /// Photons per frame.
+    pub photons: u64,
+    /// Seed of the photons' streams.
+    pub seed: u64,
+    /// Frames F (τ = f/(F − 1)).
+    pub frames: u32,
+    /// Disc radius d.
+    pub disc_radius: f64,
+    /// Spacing of the sample points on surfaces.
+    pub spacing: f64,
+    /// Engine choice.
+    pub engine: Engine,
+    /// Crossover r_D/r_0 of the hybrid choice.
+    pub crossover: f64,
+    /// Sphere-cache settings (Q, threshold, lists, chunks).
+    pub cache: SphereCacheParams,
+    /// Point order for the sphere cache.
+    pub order: Order,
+    /// Octree leaf size.
+    pub octree_leaf: usize,
+}
+
+/// Counts and times of one frame.
+#[derive(Clone, Debug, Default)]
+pub struct FrameStats {
+    /// Frame number.
+    pub frame: u32,
+    /// Segments that meet a mover's bounding sphere at the old or the new pose.
+    pub affected_segments: u64,
+    /// Of them, those meeting it at the new pose (the integral-geometry count n_R·(r_D/r_0)²).
+    pub meeting_new: u64,
+    /// Photons re-traced.
+    pub photons_retraced: u64,
+    /// Segments removed (the re-traced photons' old paths) and added (their new paths).
+    pub segments_removed: u64,
+    /// Segments added.
+    pub segments_added: u64,
+    /// The search's counts.
+    pub search: SearchStats,
+    /// Static points: ray–disc tests of the update, and ray–sphere tests if a sphere cache did it.
+    pub static_disc_tests: u64,
+    /// Static points: ray–sphere tests (sphere cache only).
+    pub static_sphere_tests: u64,
+    /// Dynamic points: ray–disc tests.
+    pub dynamic_disc_tests: u64,
+    /// Dynamic points: ray–sphere tests (sphere cache only).
+    pub dynamic_sphere_tests: u64,
+    /// Engine used per mover.
+    pub used: Vec<Used>,
+    /// Seconds: search, re-trace, static update, dynamic points, and the whole frame.
+    pub search_s: f64,
+    /// Re-trace seconds.
+    pub retrace_s: f64,
+    /// Static-update seconds.
+    pub static_s: f64,
+    /// Dynamic-points seconds.
+    pub dynamic_s: f64,
+    /// Whole frame seconds.
+    pub frame_s: f64,
+}
+
+/// A mover's sample points: at rest (per part, in the part's own coordinates), and posed at the
+/// current frame.
+struct DynamicPoints {
+    mover: usize,
+    /// (part, rest points, rest normals).
+    rest: Vec<(usize, Vec<DVec3>, Vec<DVec3>)>,
+    discs: Discs,
+    acc: Vec<Acc>,
+}
+
+impl DynamicPoints {
+    /// Points on every part of `mover`, at spacing ≈ `spacing` in the world (a part's own
+    /// coordinates may be scaled: the spacing there is divided by its map's scale at τ = 0).
+    fn new(scene: &Scene, mover: usize, spacing: f64, d: f64) -> Self {
+        let m = &scene.movers[mover];
+        let maps = m.part_maps(0.0);
+        let rest: Vec<(usize, Vec<DVec3>, Vec<DVec3>)> = m
+            .parts
+            .iter()
+            .zip(&maps)
+            .enumerate()
+            .map(|(k, (part, map))| {
+                let s = map.matrix3.determinant().abs().cbrt().max(1e-300);
+                let (p, n) = points_on(&part.triangles, &part.balls, &scene.surfaces, spacing / s);
+                (k, p, n)
+            })
+            .collect();
+        let mut dp = Self {
+            mover,
+            rest,
+            discs: Discs::new(vec![], vec![], d).expect("d > 0"),
+            acc: Vec::new(),
+        };
+        dp.discs = dp.posed(scene, 0.0, d);
+        dp
+    }
+
+    /// The discs at τ: points mapped with their part, normals with its inverse transpose.
+    fn posed(&self, scene: &Scene, tau: f64, d: f64) -> Discs {
+        let maps = scene.movers[self.mover].part_maps(tau);
+        let (mut c, mut n) = (Vec::new(), Vec::new());
+        for (k, p, nn) in &self.rest {
+            let m = maps[*k];
+            let nm = m.matrix3.inverse().transpose();
+            c.extend(p.iter().map(|&x| m.transform_point3(x)));
+            n.extend(nn.iter().map(|&x| nm * x));
+        }
+        Discs::new(c, n, d).expect("posed points are finite")
+    }
+}
+
+/// The state of a quasi-static run at its current frame.
+pub struct QuasiStatic {
+    /// The scene, posed at the current frame.
+    pub scene: Scene,
+    params: Params,
+    /// Segments in slots; a dead slot has power 0 and t_end = −1 (it crosses nothing).
+    store: SegmentStore,
+    /// Per photon: its slots `start..start + len`.
+    paths: Vec<(u32, u32)>,
+    dead: usize,
+    index: SegmentIndex,
+    seen: Vec<bool>,
+    /// Static sample points.
+    pub static_discs: Discs,
+    static_acc: Vec<Acc>,
+    static_index: Octree,
+    /// Root sphere of the static sphere cache (the scene's).
+    root: (DVec3, f64),
+    static_perm: Vec<u32>,
+    dynamic: Vec<DynamicPoints>,
+    /// Current frame.
+    pub frame: u32,
+    /// Bounding spheres of the movers at the current pose.
+    spheres: Vec<(DVec3, f64)>,
+}
+
+/// Seconds spent in `f`, with its value.
+fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
+    let t = Instant::now();
+    let v = f();
+    (v, t.elapsed().as_secs_f64())
+}
+
+impl QuasiStatic {
+    /// Frame 0: poses the scene, traces every photon, builds the segment index, the static disc
+    /// index and every sample point's sum. Returns the state and frame 0's stats (its `frame_s` is
+    /// the full cost).
+    pub fn start(mut scene: Scene, params: Params) -> (Self, FrameStats) {
+        let t_all = Instant::now();
+        scene.set_tau(tau(0, params.frames));
+        let (st, sb) = scene.static_geometry();
+        let (c, n) = points_on(st, sb, &scene.surfaces, params.spacing);
+        let static_discs = Discs::new(c, n, params.disc_radius).expect("surface points are finite");
+        let (store, trace_s) = timed(|| trace_photons(&scene, params.photons, params.seed));
+        let paths = (0..params.photons as usize)
+            .map(|p| {
+                let (a, b) = (store.photon_start[p], store.photon_start[p + 1]);
+                (a, b - a)
+            })
+            .collect();
+        let root = sphere_cache::root_sphere(&{
+            let (b, d) = (scene.bounds(), static_discs.bounds_all());
+            crate::geom::Aabb::new(b.lo.min(d.lo), b.hi.max(d.hi))
+        });
+        let index = SegmentIndex::new(scene.bounds(), (store.len() / 64).clamp(64, 1 << 18));
+        let static_index =
+            Octree::build(&static_discs, params.octree_leaf, 2.0 * params.disc_radius);
+        let static_perm = permutation(&static_discs.centers, params.order, 10);
+        let dynamic = (0..scene.movers.len())
+            .map(|k| DynamicPoints::new(&scene, k, params.spacing, params.disc_radius))
+            .collect();
+        let mut qs = Self {
+            spheres: scene
+                .movers
+                .iter()
+                .map(|m| m.bounds_at(tau(0, params.frames)))
+                .collect(),
+            scene,
+            params,
+            store,
+            paths,
+            dead: 0,
+            index,
+            seen: Vec::new(),
+            static_acc: Vec::new(),
+            static_discs,
+            static_index,
+            root,
+            static_perm,
+            dynamic,
+            frame: 0,
+        };
+        qs.rebuild_index();
+        let mut stats = FrameStats {
+            retrace_s: trace_s,
+            segments_added: qs.store.len() as u64,
+            photons_retraced: qs.params.photons,
+            ..Default::default()
+        };
+        let ((acc, t), s) = timed(|| qs.static_sums(&qs.store, None));
+        qs.static_acc = acc;
+        stats.static_disc_tests = t.0;
+        stats.static_sphere_tests = t.1;
+        stats.static_s = s;
+        let (dynamic, s) = timed(|| qs.dynamic_sums(&qs.store, true));
+        stats.dynamic_s = s;
+        qs.apply_dynamic(dynamic, &mut stats);
+        stats.frame_s = t_all.elapsed().as_secs_f64();
+        (qs, stats)
+    }
+
+    /// The run's settings.
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// Segments alive in the store.
+    pub fn live_segments(&self) -> usize {
+        self.store.len() - self.dead
+    }
+
+    /// Lists every live slot in the segment index afresh.
+    fn rebuild_index(&mut self) {
+        self.index.clear();
+        for &(a, l) in &self.paths {
+            for k in a..a + l {
+                self.index.insert(k, &self.store.segments[k as usize]);
+            }
+        }
+    }
+
+    /// Moves the live segments to the front, photon by photon, and re-lists them (when more than
+    /// half of the slots are dead). Slot numbers change; sums do not.
+    fn compact(&mut self) {
+        let mut segs = Vec::with_capacity(self.live_segments());
+        for p in &mut self.paths {
+            let (a, l) = *p;
+            *p = (segs.len() as u32, l);
+            segs.extend_from_slice(&self.store.segments[a as usize..(a + l) as usize]);
+        }
+        self.store.segments = segs;
+        self.dead = 0;
+        self.rebuild_index();
+    }
+
+    /// Static points' sums from `store` (all its segments, or the listed ones): by the disc index,
+    /// or by a sphere cache over those segments when the spec forces it. Returns the sums and (disc
+    /// tests, sphere tests).
+    fn static_sums(&self, store: &SegmentStore, only: Option<&[u32]>) -> (Vec<Acc>, (u64, u64)) {
+        let mut acc = vec![0; self.static_discs.len()];
+        if self.params.engine == Engine::SphereCache {
+            let sub;
+            let s = match only {
+                Some(ids) => {
+                    sub = subset(store, ids);
+                    &sub
+                }
+                None => store,
+            };
+            let st = sphere_cache::run(
+                s,
+                &self.static_discs,
+                &self.static_perm,
+                self.root,
+                &self.params.cache,
+                &mut acc,
+            );
+            (acc, (st.ray_disc_tests, st.ray_sphere_tests))
+        } else {
+            let st: IndexStats = self.static_index.accumulate(store, only, 1, &mut acc);
+            (acc, (st.ray_disc_tests, 0))
+        }
+    }
+
+    /// Which engine a mover's points use.
+    fn engine_for(&self, mover: usize) -> Used {
+        match self.params.engine {
+            Engine::SphereCache => Used::SphereCache,
+            Engine::DiscIndex => Used::DiscIndex,
+            Engine::Hybrid => {
+                let ratio = self.scene.movers[mover].radius() / self.root.1;
+                if ratio < self.params.crossover {
+                    Used::SphereCache
+                } else {
+                    Used::DiscIndex
+                }
+            }
+        }
+    }
+
+    /// Every mover's points posed at the current frame and summed afresh from `store`. `indexed`:
+    /// `store` is the state's own (the segment index may feed the sphere cache).
+    fn dynamic_sums(
+        &self,
+        store: &SegmentStore,
+        indexed: bool,
+    ) -> Vec<(Discs, Vec<Acc>, Used, CacheStats, IndexStats)> {
+        let t = self.scene.tau();
+        self.dynamic
+            .iter()
+            .map(|dp| {
+                let discs = dp.posed(&self.scene, t, self.params.disc_radius);
+                let mut acc = vec![0; discs.len()];
+                let used = self.engine_for(dp.mover);
+                let (mut cs, mut is) = (CacheStats::default(), IndexStats::default());
+                if discs.is_empty() {
+                    return (discs, acc, used, cs, is);
+                }
+                match used {
+                    Used::SphereCache => {
+                        let (c, r) = self.spheres[dp.mover];
+                        let root = (
+                            c,
+                            (r + self.params.disc_radius) * (1.0 + 1e-9) + self.index.pad(),
+                        );
+                        let perm = permutation(&discs.centers, self.params.order, 10);
+                        if indexed {
+                            let live = |id: u32| !is_dead(&self.store.segments[id as usize]);
+                            let mut seen = vec![false; store.len()];
+                            let (ids, _) =
+                                self.index
+                                    .query(&store.segments, root.0, root.1, &live, &mut seen);
+                            let sub = subset(store, &ids);
+                            cs = sphere_cache::run(
+                                &sub,
+                                &discs,
+                                &perm,
+                                root,
+                                &self.params.cache,
+                                &mut acc,
+                            );
+                        } else {
+                            cs = sphere_cache::run(
+                                store,
+                                &discs,
+                                &perm,
+                                root,
+                                &self.params.cache,
+                                &mut acc,
+                            );
+                        }
+                    }
+                    Used::DiscIndex => {
+                        let idx = Octree::build(
+                            &discs,
+                            self.params.octree_leaf,
+                            2.0 * self.params.disc_radius,
+                        );
+                        is = idx.accumulate(store, None, 1, &mut acc);
+                    }
+                }
+                (discs, acc, used, cs, is)
+            })
+            .collect()
+    }
+
+    fn apply_dynamic(
+        &mut self,
+        out: Vec<(Discs, Vec<Acc>, Used, CacheStats, IndexStats)>,
+        stats: &mut FrameStats,
+    ) {
+        for (dp, (discs, acc, used, cs, is)) in self.dynamic.iter_mut().zip(out) {
+            dp.discs = discs;
+            dp.acc = acc;
+            stats.used.push(used);
+            stats.dynamic_disc_tests += cs.ray_disc_tests + is.ray_disc_tests;
+            stats.dynamic_sphere_tests += cs.ray_sphere_tests;
+        }
+    }
+
+    /// Advances to frame `f` (any frame: poses are pure functions of τ).
+    pub fn step(&mut self, f: u32) -> FrameStats {
+        let t_all = Instant::now();
+        let mut stats = FrameStats {
+            frame: f,
+            ..Default::default()
+        };
+        let t_new = tau(f, self.params.frames);
+        let new_spheres: Vec<(DVec3, f64)> = self
+            .scene
+            .movers
+            .iter()
+            .map(|m| m.bounds_at(t_new))
+            .collect();
+        // 1. Search.
+        let ((affected, photons), s) = timed(|| {
+            let mut affected: Vec<u32> = Vec::new();
+            let live = |id: u32| !is_dead(&self.store.segments[id as usize]);
+            let mut seen = std::mem::take(&mut self.seen);
+            let mut meeting_new = 0;
+            for (old, new) in self.spheres.iter().zip(&new_spheres) {
+                for (k, &(c, r)) in [old, new].into_iter().enumerate() {
+                    let (ids, st) = self
+                        .index
+                        .query(&self.store.segments, c, r, &live, &mut seen);
+                    stats.search.add(&st);
+                    if k == 1 {
+                        meeting_new += ids.len() as u64;
+                    }
+                    affected.extend(ids);
+                }
+            }
+            self.seen = seen;
+            stats.meeting_new = meeting_new;
+            affected.sort_unstable();
+            affected.dedup();
+            let mut photons: Vec<u32> = affected
+                .iter()
+                .map(|&i| self.store.segments[i as usize].photon)
+                .collect();
+            photons.sort_unstable();
+            photons.dedup();
+            (affected, photons)
+        });
+        stats.search_s = s;
+        stats.affected_segments = affected.len() as u64;
+        stats.photons_retraced = photons.len() as u64;
+        // 2. Re-trace at the new pose.
+        self.scene.set_tau(t_new);
+        self.spheres = new_spheres;
+        let (new_paths, s) = timed(|| {
+            photons
+                .par_iter()
+                .map(|&p| retrace(&self.scene, self.params.seed, self.params.photons, p))
+                .collect::<Vec<Vec<Segment>>>()
+        });
+        stats.retrace_s = s;
+        let mut old = Vec::new();
+        let mut added = Vec::new();
+        for (&p, path) in photons.iter().zip(new_paths) {
+            let (a, l) = self.paths[p as usize];
+            for k in a..a + l {
+                let seg = &mut self.store.segments[k as usize];
+                old.push(*seg);
+                seg.power = 0;
+                seg.t_end = -1.0;
+            }
+            self.dead += l as usize;
+            let start = self.store.segments.len() as u32;
+            self.paths[p as usize] = (start, path.len() as u32);
+            for (i, s) in path.into_iter().enumerate() {
+                added.push(start + i as u32);
+                self.store.segments.push(s);
+            }
+        }
+        for &id in &added {
+            self.index.insert(id, &self.store.segments[id as usize]);
+        }
+        stats.segments_removed = old.len() as u64;
+        stats.segments_added = added.len() as u64;
+        // 3. Static points: minus old, plus new.
+        let ((), s) = timed(|| {
+            let old_store = SegmentStore::new(old, self.store.scale);
+            let (minus, t1) = self.static_sums(&old_store, None);
+            let (plus, t2) = self.static_sums(&self.store, Some(&added));
+            for ((a, m), p) in self.static_acc.iter_mut().zip(minus).zip(plus) {
+                *a += p - m;
+            }
+            stats.static_disc_tests = t1.0 + t2.0;
+            stats.static_sphere_tests = t1.1 + t2.1;
+        });
+        stats.static_s = s;
+        // 4. Dynamic points, afresh.
+        let (dynamic, s) = timed(|| self.dynamic_sums(&self.store, true));
+        stats.dynamic_s = s;
+        self.apply_dynamic(dynamic, &mut stats);
+        if self.dead > self.live_segments() {
+            self.compact();
+        }
+        self.frame = f;
+        stats.frame_s = t_all.elapsed().as_secs_f64();
+        stats
+    }
+
+    /// Irradiance sums: static points, then every mover's points (in mover order).
+    pub fn sums(&self) -> Vec<Acc> {
+        let mut v = self.static_acc.clone();
+        for dp in &self.dynamic {
+            v.extend_from_slice(&dp.acc);
+        }
+        v
+    }
+
+    /// All sample points in the order of [`Self::sums`] (static, then each mover's, posed).
+    pub fn discs(&self) -> Discs {
+        let mut c = self.static_discs.centers.clone();
+        let mut n = self.static_discs.normals.clone();
+        for dp in &self.dynamic {
+            c.extend_from_slice(&dp.discs.centers);
+            n.extend_from_slice(&dp.discs.normals);
+        }
+        Discs::new(c, n, self.params.disc_radius).expect("finite points")
+    }
+
+    /// Static points, and each mover's points.
+    pub fn point_counts(&self) -> (usize, Vec<usize>) {
+        (
+            self.static_discs.len(),
+            self.dynamic.iter().map(|d| d.discs.len()).collect(),
+        )
+    }
+
+    /// The power scale of the sums.
+    pub fn scale(&self) -> PowerScale {
+        self.store.scale
+    }
+
+    /// The scene's root sphere (centre, r_0).
+    pub fn root(&self) -> (DVec3, f64) {
+        self.root
+    }
+
+    /// The live segments, photon by photon (what a full trace of this frame gives).
+    pub fn live_store(&self) -> SegmentStore {
+        let mut segs = Vec::with_capacity(self.live_segments());
+        for &(a, l) in &self.paths {
+            segs.extend_from_slice(&self.store.segments[a as usize..(a + l) as usize]);
+        }
+        SegmentStore::new(segs, self.store.scale)
+    }
+
+    /// A full recalculation of the current frame: every photon traced again, every sum afresh with
+    /// the same engines. Returns the sums (in [`Self::sums`] order), the fresh store, and seconds.
+    pub fn full_recalculation(&self) -> (Vec<Acc>, SegmentStore, f64) {
+        let t = Instant::now();
+        let store = trace_photons(&self.scene, self.params.photons, self.params.seed);
+        let (mut sums, _) = self.static_sums(&store, None);
+        for (_, acc, ..) in self.dynamic_sums(&store, false) {
+            sums.extend(acc);
+        }
+        (sums, store, t.elapsed().as_secs_f64())
+    }
+}
+
+/// A slot emptied by a re-trace (power 0 and t_end = −1: it can cross nothing).
+#[inline]
+fn is_dead(s: &Segment) -> bool {
+    s.power == 0 && s.t_end == -1.0
+}
+
+/// The listed segments as a store of their own.
+fn subset(store: &SegmentStore, ids: &[u32]) -> SegmentStore {
+    SegmentStore::new(
+        ids.iter().map(|&i| store.segments[i as usize]).collect(),
+        store.scale,
+    )
+}
+
+/// Points whose sums differ.
+pub fn mismatches(a: &[Acc], b: &[Acc]) -> u64 {
+    assert_eq!(a.len(), b.len(), "the same points");
+    a.iter().zip(b).filter(|(x, y)| x != y).count() as u64
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,117 @@
+//! Incremental = full, bit for bit, frame after frame; the search finds every affected photon.
+
+use super::*;
+use crate::lt::Scene;
+
+fn scene() -> Scene {
+    let p = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/experiments/scenes/cornell-dynamic.toml"
+    );
+    Scene::load(std::path::Path::new(p)).expect("the dynamic Cornell box loads")
+}
+
+fn params(engine: Engine, photons: u64, frames: u32) -> Params {
+    Params {
+        photons,
+        seed: 11,
+        frames,
+        disc_radius: 20.0,
+        spacing: 40.0,
+        engine,
+        crossover: crate::theory::detp::crossover_ratio(2.0 / 3.0, f64::INFINITY),
+        cache: SphereCacheParams {
+            threshold: 16,
+            chunk_points: 256,
+            ..Default::default()
+        },
+        order: Order::Hilbert,
+        octree_leaf: 8,
+    }
+}
+
+/// Steps through `frames` frames and checks every one against a full recalculation: the sums, and
+/// the live segments themselves (photon by photon, bit for bit).
+fn check_frames(engine: Engine, photons: u64, frames: u32, every: u32) -> (u64, u64) {
+    let (mut qs, first) = QuasiStatic::start(scene(), params(engine, photons, frames));
+    assert_eq!(first.photons_retraced, photons);
+    let (mut retraced, mut changed) = (0, 0);
+    let mut before = qs.sums();
+    for f in 1..frames {
+        let st = qs.step(f);
+        assert!(
+            st.photons_retraced < photons,
+            "frame {f}: the search re-traced everything"
+        );
+        retraced += st.photons_retraced;
+        if f % every == 0 || f == frames - 1 {
+            let (full, store, _) = qs.full_recalculation();
+            let live = qs.live_store();
+            assert_eq!(
+                live.segments, store.segments,
+                "frame {f}: live segments differ from a full trace"
+            );
+            assert_eq!(
+                mismatches(&qs.sums(), &full),
+                0,
+                "frame {f}: incremental ≠ full"
+            );
+        }
+        let now = qs.sums();
+        changed += mismatches(
+            &now[..qs.static_discs.len()],
+            &before[..qs.static_discs.len()],
+        );
+        before = now;
+    }
+    (retraced, changed)
+}
+
+#[test]
+fn incremental_equals_full_over_1000_frames() {
+    let (retraced, changed) = check_frames(Engine::Hybrid, 1500, 1000, 1);
+    // Not a vacuous check: photons were re-traced and static points did change.
+    assert!(
+        retraced > 1000,
+        "only {retraced} photons re-traced in 1000 frames"
+    );
+    assert!(changed > 100, "static sums changed only {changed} times");
+}
+
+#[test]
+fn every_engine_is_exact() {
+    for engine in [Engine::SphereCache, Engine::DiscIndex, Engine::Hybrid] {
+        check_frames(engine, 3000, 24, 1);
+    }
+}
+
+#[test]
+fn frames_can_be_visited_in_any_order() {
+    // Poses are pure functions of τ: jumping around gives the same sums as a full trace.
+    let (mut qs, _) = QuasiStatic::start(scene(), params(Engine::Hybrid, 2000, 50));
+    for f in [37, 3, 49, 0, 12] {
+        qs.step(f);
+        let (full, ..) = qs.full_recalculation();
+        assert_eq!(mismatches(&qs.sums(), &full), 0, "frame {f}");
+    }
+}
+
+#[test]
+fn hybrid_picks_by_ratio() {
+    let mut s = scene();
+    for m in &mut s.movers {
+        m.scale = 0.9 * 0.35 * 900.0 / m.rest_radius; // below the crossover for r_0 ≈ 900
+    }
+    let (qs, st) = QuasiStatic::start(s, params(Engine::Hybrid, 500, 4));
+    let r0 = qs.root().1;
+    for (m, used) in qs.scene.movers.iter().zip(&st.used) {
+        let ratio = m.radius() / r0;
+        let want = if ratio < qs.params().crossover {
+            Used::SphereCache
+        } else {
+            Used::DiscIndex
+        };
+        assert_eq!(*used, want, "ratio {ratio}");
+    }
+    assert!(st.used.contains(&Used::SphereCache) || st.used.contains(&Used::DiscIndex));
+}
