@@ -5,6 +5,7 @@ pub mod detp;
 pub mod grid;
 pub mod machine;
 pub mod metric;
+pub mod quasi_static;
 pub mod runner;
 
 pub use crate::output::row::{Row, Value};
@@ -30,6 +31,7 @@ pub fn side_tables(kind: crate::spec::Kind) -> &'static [&'static str] {
     match kind {
         Kind::Grid | Kind::GridScaling | Kind::GridCostModel => &["hist"],
         Kind::Detp => &["levels", "points"],
+        Kind::QuasiStatic => &["frames", "points"],
     }
 }
 
@@ -44,5 +46,6 @@ pub fn run_point(
     match config {
         PointConfig::Grid(g) => Ok(grid::run_point(g, point, machine, progress)),
         PointConfig::Detp(d) => detp::run_point(d, point, progress),
+        PointConfig::QuasiStatic(q) => quasi_static::run_point(q, point, progress),
     }
 }

@@ -279,6 +279,7 @@ pub fn describe(spec: &Spec) -> String {
                 format!("{scene}, {} rays", g.rays)
             }
             PointConfig::Detp(d) => super::detp::describe(d),
+            PointConfig::QuasiStatic(q) => super::quasi_static::describe(q),
         };
         s.push_str(&format!(
             "  point {:>4}: {params}{}{what}\n",

@@ -69,6 +69,8 @@ pub enum PointConfig {
     Grid(GridConfig),
     /// Kind `detp`.
     Detp(DetpConfig),
+    /// Kind `quasi-static`.
+    QuasiStatic(Box<super::quasi_static::QuasiStaticConfig>),
 }
 
 impl PointConfig {
@@ -91,7 +93,50 @@ impl PointConfig {
             }
         };
         match kind {
+            Kind::QuasiStatic => {
+                for (t, present) in [
+                    ("scene", raw.scene.is_some()),
+                    ("grid", raw.grid.is_some()),
+                    ("histogram", raw.histogram.is_some()),
+                    ("scaling", raw.scaling.is_some()),
+                ] {
+                    foreign(t, present)?;
+                }
+                if raw.experiment.rays.is_some() {
+                    return Err(e(
+                        "experiment.rays",
+                        "kind quasi-static counts its rays in detp.photons".into(),
+                    ));
+                }
+                let d = raw.detp.as_ref().ok_or_else(|| {
+                    e(
+                        "detp",
+                        "missing: kind quasi-static needs a [detp] table".into(),
+                    )
+                })?;
+                let dy = raw.dynamic.as_ref().ok_or_else(|| {
+                    e(
+                        "dynamic",
+                        "missing: kind quasi-static needs a [dynamic] table (frames)".into(),
+                    )
+                })?;
+                super::quasi_static::QuasiStaticConfig::from_raw(
+                    raw.experiment.seed,
+                    d,
+                    dy,
+                    base_dir,
+                )
+                .map(|c| PointConfig::QuasiStatic(Box::new(c)))
+            }
             Kind::Detp => {
+                foreign("dynamic", raw.dynamic.is_some())?;
+                if raw.detp.as_ref().is_some_and(|d| d.engine.is_some()) {
+                    return Err(e(
+                        "detp.engine",
+                        "belongs to kind quasi-static (kind detp runs every engine in detp.engines)"
+                            .into(),
+                    ));
+                }
                 foreign("scene", raw.scene.is_some())?;
                 foreign("grid", raw.grid.is_some())?;
                 foreign("histogram", raw.histogram.is_some())?;
@@ -110,6 +155,7 @@ impl PointConfig {
             }
             Kind::Grid | Kind::GridScaling | Kind::GridCostModel => {
                 foreign("detp", raw.detp.is_some())?;
+                foreign("dynamic", raw.dynamic.is_some())?;
                 GridConfig::from_raw(raw).map(PointConfig::Grid)
             }
         }
@@ -119,7 +165,7 @@ impl PointConfig {
     pub fn grid(&self) -> Option<&GridConfig> {
         match self {
             PointConfig::Grid(g) => Some(g),
-            PointConfig::Detp(_) => None,
+            PointConfig::Detp(_) | PointConfig::QuasiStatic(_) => None,
         }
     }
 
@@ -128,6 +174,7 @@ impl PointConfig {
         match self {
             PointConfig::Grid(g) => g.rays,
             PointConfig::Detp(d) => d.photons * d.replicas,
+            PointConfig::QuasiStatic(q) => q.detp.photons * u64::from(q.frames),
         }
     }
 }

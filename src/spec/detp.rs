@@ -100,6 +100,10 @@ pub struct RawDetp {
     /// Write the per-sample-point irradiance table `NAME.points.csv`.
     #[serde(default)]
     pub write_points: bool,
+    /// Kind `quasi-static`: `"hybrid"` (Theorem 2 picks per object), `"sphere-cache"` or
+    /// `"disc-index"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub engine: Option<DynamicEngine>,
     /// Memory the ray store and engines may take, GiB.
     #[serde(default = "default_budget", deserialize_with = "positive")]
     pub memory_budget_gib: f64,
@@ -163,6 +167,15 @@ choice!(
 choice!(
     /// Photon-map filter.
     FilterChoice { Cone => "cone", Disc => "disc" } default Cone
+);
+
+choice!(
+    /// Kind `quasi-static`: how dynamic points are recomputed (and static points updated).
+    DynamicEngine {
+        Hybrid => "hybrid",
+        SphereCache => "sphere-cache",
+        DiscIndex => "disc-index",
+    } default Hybrid
 );
 
 impl EngineChoice {

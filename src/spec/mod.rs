@@ -9,6 +9,7 @@
 pub mod config;
 pub mod detp;
 pub mod error;
+pub mod quasi_static;
 pub mod raw;
 pub mod sweep;
 

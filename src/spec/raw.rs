@@ -18,6 +18,9 @@ pub struct RawSpec {
     /// `[detp]`: rays, points, discs and engines (kind `detp`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub detp: Option<super::detp::RawDetp>,
+    /// `[dynamic]`: frames and dynamic objects (kind `quasi-static`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dynamic: Option<super::quasi_static::RawDynamicSpec>,
     /// `[histogram]`: binning of the t* and N_I distributions.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub histogram: Option<RawHistogram>,
@@ -36,7 +39,7 @@ pub struct RawExperiment {
     /// Result folder and file stem: letters, digits, `-` and `_`.
     #[serde(deserialize_with = "name")]
     pub name: String,
-    /// `grid`, `grid-scaling`, `grid-cost-model` or `detp`.
+    /// `grid`, `grid-scaling`, `grid-cost-model`, `detp` or `quasi-static`.
     pub kind: Kind,
     /// Master seed of every random stream.
     #[serde(default = "default_seed")]
@@ -66,6 +69,8 @@ pub enum Kind {
     /// DETP: a ray store (uniform lines or photons), discs on sample points, and the engines that
     /// gather the segments crossing each disc (sphere cache, disc index, brute force, photon map).
     Detp,
+    /// DETP frame by frame as dynamic objects move: incremental recalculation against full.
+    QuasiStatic,
 }
 
 impl Kind {
@@ -76,6 +81,7 @@ impl Kind {
             Kind::GridScaling => "grid-scaling",
             Kind::GridCostModel => "grid-cost-model",
             Kind::Detp => "detp",
+            Kind::QuasiStatic => "quasi-static",
         }
     }
 }

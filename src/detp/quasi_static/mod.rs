@@ -33,7 +33,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::disc::Discs;
-use super::disc_index::{DiscIndex, IndexStats, Octree};
+use super::disc_index::{DiscIndex, GridIndex, IndexStats, Octree};
 use super::fixed::{Acc, PowerScale};
 use super::order::{permutation, Order};
 use super::photon::{retrace, trace_photons};
@@ -85,8 +85,26 @@ pub struct Params {
     pub cache: SphereCacheParams,
     /// Point order for the sphere cache.
     pub order: Order,
-    /// Octree leaf size.
-    pub octree_leaf: usize,
+    /// The static points' disc index (and the dynamic points' when a disc index does them).
+    pub index: IndexKind,
+}
+
+/// Which disc index.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum IndexKind {
+    /// A regular grid of this cell width.
+    Grid(f64),
+    /// An octree with leaves of at most this many discs (and sides ≥ 2d).
+    Octree(usize),
+}
+
+impl IndexKind {
+    fn build(self, discs: &Discs, d: f64) -> Box<dyn DiscIndex> {
+        match self {
+            IndexKind::Grid(w) => Box::new(GridIndex::build(discs, w)),
+            IndexKind::Octree(leaf) => Box::new(Octree::build(discs, leaf, 2.0 * d)),
+        }
+    }
 }
 
 /// Counts and times of one frame.
@@ -100,10 +118,12 @@ pub struct FrameStats {
     pub meeting_new: u64,
     /// Photons re-traced.
     pub photons_retraced: u64,
-    /// Segments removed (the re-traced photons' old paths) and added (their new paths).
+    /// Segments removed: each re-traced photon's old path from its first changed segment on.
     pub segments_removed: u64,
-    /// Segments added.
+    /// Segments added (removed and added: the changed part of each re-traced path).
     pub segments_added: u64,
+    /// Segments of the re-traced photons' new paths (changed or not).
+    pub segments_retraced: u64,
     /// The search's counts.
     pub search: SearchStats,
     /// Static points: ray–disc tests of the update, and ray–sphere tests if a sphere cache did it.
@@ -194,7 +214,7 @@ pub struct QuasiStatic {
     /// Static sample points.
     pub static_discs: Discs,
     static_acc: Vec<Acc>,
-    static_index: Octree,
+    static_index: Box<dyn DiscIndex>,
     /// Root sphere of the static sphere cache (the scene's).
     root: (DVec3, f64),
     static_perm: Vec<u32>,
@@ -234,8 +254,7 @@ impl QuasiStatic {
             crate::geom::Aabb::new(b.lo.min(d.lo), b.hi.max(d.hi))
         });
         let index = SegmentIndex::new(scene.bounds(), (store.len() / 64).clamp(64, 1 << 18));
-        let static_index =
-            Octree::build(&static_discs, params.octree_leaf, 2.0 * params.disc_radius);
+        let static_index = params.index.build(&static_discs, params.disc_radius);
         let static_perm = permutation(&static_discs.centers, params.order, 10);
         let dynamic = (0..scene.movers.len())
             .map(|k| DynamicPoints::new(&scene, k, params.spacing, params.disc_radius))
@@ -412,11 +431,7 @@ impl QuasiStatic {
                         }
                     }
                     Used::DiscIndex => {
-                        let idx = Octree::build(
-                            &discs,
-                            self.params.octree_leaf,
-                            2.0 * self.params.disc_radius,
-                        );
+                        let idx = self.params.index.build(&discs, self.params.disc_radius);
                         is = idx.accumulate(store, None, 1, &mut acc);
                     }
                 }
@@ -496,27 +511,33 @@ impl QuasiStatic {
                 .collect::<Vec<Vec<Segment>>>()
         });
         stats.retrace_s = s;
+        // The new path replaces the old one in fresh slots; only the segments from the first one
+        // that differs on are changes for the sums (a path's prefix before it meets the object is
+        // the same, bit for bit).
         let mut old = Vec::new();
         let mut added = Vec::new();
+        let mut retraced = 0;
         for (&p, path) in photons.iter().zip(new_paths) {
             let (a, l) = self.paths[p as usize];
-            for k in a..a + l {
-                let seg = &mut self.store.segments[k as usize];
-                old.push(*seg);
+            let before = &self.store.segments[a as usize..(a + l) as usize];
+            let same = before.iter().zip(&path).take_while(|(x, y)| x == y).count();
+            old.extend_from_slice(&before[same..]);
+            for seg in &mut self.store.segments[a as usize..(a + l) as usize] {
                 seg.power = 0;
                 seg.t_end = -1.0;
             }
             self.dead += l as usize;
             let start = self.store.segments.len() as u32;
             self.paths[p as usize] = (start, path.len() as u32);
-            for (i, s) in path.into_iter().enumerate() {
-                added.push(start + i as u32);
-                self.store.segments.push(s);
-            }
+            retraced += path.len();
+            added.extend(start + same as u32..start + path.len() as u32);
+            self.store.segments.extend(path);
         }
-        for &id in &added {
-            self.index.insert(id, &self.store.segments[id as usize]);
+        let first_new = self.store.segments.len() - retraced;
+        for id in first_new..self.store.segments.len() {
+            self.index.insert(id as u32, &self.store.segments[id]);
         }
+        stats.segments_retraced = retraced as u64;
         stats.segments_removed = old.len() as u64;
         stats.segments_added = added.len() as u64;
         // 3. Static points: minus old, plus new.

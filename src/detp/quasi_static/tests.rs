@@ -26,7 +26,11 @@ fn params(engine: Engine, photons: u64, frames: u32) -> Params {
             ..Default::default()
         },
         order: Order::Hilbert,
-        octree_leaf: 8,
+        index: if engine == Engine::DiscIndex {
+            IndexKind::Octree(8)
+        } else {
+            IndexKind::Grid(40.0)
+        },
     }
 }
 

@@ -1,0 +1,271 @@
+//! Kind `quasi-static`: the `[detp]` table (a scene source, surface points, d, Q, …) plus
+//! `[dynamic]`: how many frames, the dynamic objects' size r_D/r_0, the engine choice for their
+//! points and how often a frame is checked against a full recalculation.
+//!
+//! Everything that can be checked before running is checked here, so bad input is refused before
+//! anything is written: the scene must have a dynamic object; once scaled, no object may be as large
+//! as the scene, leave the scene's box at any frame, or overlap another object.
+
+use serde::{Deserialize, Serialize};
+
+use super::config::ConfigError;
+use super::detp::{DetpConfig, DynamicEngine, Points, RawDetp, Rays};
+use super::raw::{count, opt_count};
+
+/// `[dynamic]`.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawDynamicSpec {
+    /// F: frames (frame 0 is the full trace; τ = f/(F − 1)).
+    #[serde(deserialize_with = "count")]
+    pub frames: u64,
+    /// r_D/r_0 of every dynamic object (each scaled about its centre); absent: as in the scene.
+    #[serde(
+        default,
+        deserialize_with = "opt_ratio",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub ratio: Option<f64>,
+    /// The hybrid engine's crossover r_D/r_0 (default: Theorem 2 at the run's Q and n_D).
+    #[serde(
+        default,
+        deserialize_with = "opt_ratio",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub crossover: Option<f64>,
+    /// Check every k-th frame against a full recalculation (`full_mismatch`, `full_frame_s`);
+    /// 0: never. The last frame is always checked when k > 0.
+    #[serde(default = "one", deserialize_with = "count_or_zero")]
+    pub check_every: u64,
+    /// Frames at which the whole irradiance is written to `NAME.points.csv` (with
+    /// `detp.write_points`): default the first and the last.
+    #[serde(
+        default,
+        deserialize_with = "opt_count",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub points_frame: Option<u64>,
+}
+
+fn one() -> u64 {
+    1
+}
+
+fn count_or_zero<'de, D: serde::Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
+    use serde::de::Error as _;
+    let v = toml::Value::deserialize(d)?;
+    match v {
+        toml::Value::Integer(i) if i >= 0 => Ok(i as u64),
+        other => Err(D::Error::custom(format!(
+            "got {other}, expected an integer ≥ 0"
+        ))),
+    }
+}
+
+fn opt_ratio<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    use serde::de::Error as _;
+    let x = super::raw::number(d)?;
+    if x.is_finite() && x > 0.0 && x < 1.0 {
+        Ok(Some(x))
+    } else {
+        Err(D::Error::custom(format!(
+            "got {x}, expected a ratio r_D/r_0 in (0, 1)"
+        )))
+    }
+}
+
+/// A validated quasi-static point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct QuasiStaticConfig {
+    /// The DETP settings (scene, points, d, Q, threshold, order, octree).
+    pub detp: DetpConfig,
+    /// Frames.
+    pub frames: u32,
+    /// r_D/r_0 of every dynamic object, if the spec sets it.
+    pub ratio: Option<f64>,
+    /// Hybrid crossover, if the spec sets it.
+    pub crossover: Option<f64>,
+    /// Full-recalculation check period (0: never).
+    pub check_every: u64,
+    /// The engine choice.
+    pub engine: DynamicEngine,
+    /// Frame whose irradiance goes to the points table (default: the last).
+    pub points_frame: Option<u32>,
+}
+
+impl QuasiStaticConfig {
+    /// Validates `[detp]` and `[dynamic]` together, loading the scene and checking its motion.
+    pub fn from_raw(
+        seed: u64,
+        d: &RawDetp,
+        dy: &RawDynamicSpec,
+        base_dir: &std::path::Path,
+    ) -> Result<Self, ConfigError> {
+        let e = |k: &str, m: String| (k.to_string(), m);
+        let detp = DetpConfig::from_raw(seed, d, base_dir)?;
+        let Rays::Scene(path) = &detp.rays else {
+            return Err(e(
+                "detp.source",
+                "kind quasi-static traces photons in a scene: set detp.source = \"scene\"".into(),
+            ));
+        };
+        if !matches!(detp.points, Points::Surface(_)) {
+            return Err(e(
+                "detp.point_source",
+                "kind quasi-static puts its points on the scene's surfaces (\"surface\")".into(),
+            ));
+        }
+        if detp.replicas != 1 {
+            return Err(e(
+                "detp.replicas",
+                "kind quasi-static runs one realisation (frames are its samples)".into(),
+            ));
+        }
+        if dy.frames > 1 << 20 {
+            return Err(e(
+                "dynamic.frames",
+                format!("got {}, at most 2²⁰", dy.frames),
+            ));
+        }
+        if let Some(f) = dy.points_frame {
+            if f >= dy.frames {
+                return Err(e(
+                    "dynamic.points_frame",
+                    format!("got {f}, the frames are 0…{}", dy.frames - 1),
+                ));
+            }
+        }
+        let mut scene =
+            crate::lt::Scene::load(path).map_err(|err| e("detp.scene", err.to_string()))?;
+        apply_ratio(&mut scene, dy.ratio);
+        check_motion(&scene, dy.frames as u32).map_err(|(k, m)| e(k, m))?;
+        check_lights(&scene).map_err(|m| e("detp.scene", m))?;
+        Ok(Self {
+            detp,
+            frames: dy.frames as u32,
+            ratio: dy.ratio,
+            crossover: dy.crossover,
+            check_every: dy.check_every,
+            engine: d.engine.unwrap_or_default(),
+            points_frame: dy.points_frame.map(|f| f as u32),
+        })
+    }
+}
+
+/// Scales every dynamic object about its centre to r_D = ratio·r_0 (r_0: the radius of the sphere
+/// around the scene's static box).
+pub fn apply_ratio(scene: &mut crate::lt::Scene, ratio: Option<f64>) {
+    let Some(ratio) = ratio else { return };
+    let r0 = crate::detp::sphere_cache::root_sphere(&scene.bounds()).1;
+    for m in &mut scene.movers {
+        m.scale = ratio * r0 / m.rest_radius.max(1e-300);
+    }
+}
+
+/// The motion's checks over every frame: a dynamic object at all; none as large as the scene
+/// (r_D < r_0); each inside the scene's box at every frame; no two overlapping (posed boxes meet).
+pub fn check_motion(scene: &crate::lt::Scene, frames: u32) -> Result<(), (&'static str, String)> {
+    use crate::lt::motion::tau;
+    if scene.movers.is_empty() {
+        return Err((
+            "detp.scene",
+            "kind quasi-static needs a dynamic object: mark surfaces with dynamic = \"NAME\" and add a [[dynamic]] table (or an AFF animated transform)".into(),
+        ));
+    }
+    let b = scene.bounds();
+    let r0 = crate::detp::sphere_cache::root_sphere(&b).1;
+    let slack = 1e-9 * b.magnitude().max(1e-300);
+    for m in &scene.movers {
+        if m.radius() >= r0 {
+            return Err((
+                "dynamic.ratio",
+                format!(
+                    "dynamic object \"{}\" has r_D = {:.4} ≥ r_0 = {:.4}: it is larger than the scene",
+                    m.name,
+                    m.radius(),
+                    r0
+                ),
+            ));
+        }
+    }
+    // Every frame when there are few, else 4096 evenly spaced ones plus the ends (motions are smooth).
+    let step = (frames / 4096).max(1);
+    let mut fs: Vec<u32> = (0..frames).step_by(step as usize).collect();
+    fs.push(frames - 1);
+    for f in fs {
+        let t = tau(f, frames);
+        let boxes: Vec<(glam::DVec3, glam::DVec3)> = scene
+            .movers
+            .iter()
+            .map(|m| {
+                let p = m.posed(t);
+                let mut lo = glam::DVec3::splat(f64::INFINITY);
+                let mut hi = -lo;
+                for v in p.triangles.iter().flat_map(|t| t.v) {
+                    lo = lo.min(v);
+                    hi = hi.max(v);
+                }
+                for s in &p.balls {
+                    lo = lo.min(s.center - s.radius);
+                    hi = hi.max(s.center + s.radius);
+                }
+                (lo, hi)
+            })
+            .collect();
+        for (m, (lo, hi)) in scene.movers.iter().zip(&boxes) {
+            if lo.cmplt(b.lo - slack).any() || hi.cmpgt(b.hi + slack).any() {
+                return Err((
+                    "dynamic.frames",
+                    format!(
+                        "dynamic object \"{}\" leaves the scene's box at frame {f} (its box {lo:.3}…{hi:.3}, the scene's {:.3}…{:.3})",
+                        m.name, b.lo, b.hi
+                    ),
+                ));
+            }
+        }
+        for i in 0..boxes.len() {
+            for j in i + 1..boxes.len() {
+                let (a, c) = (boxes[i], boxes[j]);
+                if a.0.cmple(c.1).all() && c.0.cmple(a.1).all() {
+                    return Err((
+                        "detp.scene",
+                        format!(
+                            "dynamic objects \"{}\" and \"{}\" overlap at frame {f} (their boxes meet)",
+                            scene.movers[i].name, scene.movers[j].name
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Lights shut inside closed geometry light nothing: a point or spot light inside a sphere seen from
+/// outside is refused (`Scene` has no other closed solids it can decide exactly).
+pub fn check_lights(scene: &crate::lt::Scene) -> Result<(), String> {
+    use crate::lt::Light;
+    let mut enclosed = 0;
+    let mut lights = 0;
+    for l in &scene.lights {
+        let (Light::Point { position, .. } | Light::Spot { position, .. }) = l else {
+            continue;
+        };
+        lights += 1;
+        if scene
+            .balls
+            .iter()
+            .copied()
+            .chain(scene.movers.iter().flat_map(|m| m.posed(0.0).balls))
+            .any(|b| !b.inside && b.center.distance(*position) < b.radius)
+        {
+            enclosed += 1;
+        }
+    }
+    if lights > 0 && enclosed == lights && lights == scene.lights.len() {
+        return Err(format!(
+            "every light ({lights}) is inside a closed sphere seen from outside: no photon can leave it"
+        ));
+    }
+    Ok(())
+}
