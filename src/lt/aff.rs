@@ -1,0 +1,1 @@
+//! AFF reader (in progress).
