@@ -59,7 +59,8 @@ pub trait KbValue: Copy + std::fmt::Debug + PartialEq {
 /// Kochanek's multipliers of the outgoing tangent at `k[1]` and the incoming one at `k[2]`:
 /// (out0, out1, in0, in1), weights of (P1−P0, P2−P1) and (P2−P1, P3−P2).
 fn multipliers<T>(k: [&KbKey<T>; 4]) -> (f64, f64, f64, f64) {
-    let adj = |num: f64, den: f64| if den > 0.0 { 2.0 * num / den } else { 1.0 };
+    // As the reference code, but a zero denominator (three keys at one time) gives 1, not NaN.
+    let adj = |num: f64, den: f64| if den != 0.0 { 2.0 * num / den } else { 1.0 };
     let (t0, t1, t2, t3) = (k[0].time, k[1].time, k[2].time, k[3].time);
     let a = k[1];
     let adj0 = adj(t2 - t1, t2 - t0);
@@ -176,23 +177,17 @@ struct Segment<T> {
 pub struct KbTrack<T> {
     keys: Vec<KbKey<T>>,
     segments: Vec<Segment<T>>,
+    sorted: bool,
 }
 
 impl<T: KbValue> KbTrack<T> {
-    /// A track from its keys (at least one, times finite and non-decreasing).
+    /// A track from its keys (at least one, finite times). Times should not decrease; BART's own
+    /// files break that (the robots' `gun_rot` tracks jump back from 48 to 42), so decreasing times
+    /// are accepted and evaluated as the reference code does: the first segment whose end time lies
+    /// after `t` is used (see [`KbTrack::monotonic`]).
     pub fn new(mut keys: Vec<KbKey<T>>) -> Result<Self, String> {
         if keys.is_empty() {
             return Err("a keyframe track needs at least one key".into());
-        }
-        for (i, w) in keys.windows(2).enumerate() {
-            if w[1].time < w[0].time {
-                return Err(format!(
-                    "key {} has time {} before the previous key's {}: times must not decrease",
-                    i + 1,
-                    w[1].time,
-                    w[0].time
-                ));
-            }
         }
         if keys.iter().any(|k| !k.time.is_finite()) {
             return Err("key times must be finite".into());
@@ -220,7 +215,17 @@ impl<T: KbValue> KbTrack<T> {
                 c: T::segment([&w[0], &w[1], &w[2], &w[3]]),
             })
             .collect();
-        Ok(KbTrack { keys, segments })
+        let sorted = keys.windows(2).all(|w| w[0].time <= w[1].time);
+        Ok(KbTrack {
+            keys,
+            segments,
+            sorted,
+        })
+    }
+
+    /// Are the key times non-decreasing?
+    pub fn monotonic(&self) -> bool {
+        self.keys.windows(2).all(|w| w[0].time <= w[1].time)
     }
 
     /// The keys, as given (quaternions normalised and hemisphere-aligned).
@@ -249,8 +254,15 @@ impl<T: KbValue> KbTrack<T> {
         if time >= last.t1 {
             return T::eval(&last.c, 1.0);
         }
-        // First segment with time < t1 (segments are sorted by t1).
-        let i = segs.partition_point(|s| s.t1 <= time).min(segs.len() - 1);
+        // The first segment with time < t1 (a binary search when the times are sorted).
+        let i = if self.sorted {
+            segs.partition_point(|s| s.t1 <= time)
+        } else {
+            segs.iter()
+                .position(|s| time < s.t1)
+                .unwrap_or(segs.len() - 1)
+        }
+        .min(segs.len() - 1);
         let s = &segs[i];
         let range = s.t1 - s.t0;
         let u = if range > 0.0 {
@@ -429,11 +441,20 @@ mod tests {
         assert_eq!(tr.at(-50.0), tr.at(0.0));
         assert_eq!(tr.at(50.0), tr.at(2.5));
         assert!(KbTrack::<DVec3>::new(vec![]).is_err());
-        assert!(KbTrack::new(vec![
-            key(1.0, DVec3::ZERO, 0.0, 0.0, 0.0),
-            key(0.0, DVec3::ZERO, 0.0, 0.0, 0.0)
+        // Decreasing times (as in BART's robot files) are accepted and stay finite.
+        let tr = KbTrack::new(vec![
+            key(0.0, DVec3::ZERO, 0.0, 0.0, 0.0),
+            key(1.0, DVec3::X, 0.0, 0.0, 0.0),
+            key(2.0, DVec3::Y, 0.0, 0.0, 0.0),
+            key(1.5, DVec3::Z, 0.0, 0.0, 0.0),
+            key(2.5, DVec3::ONE, 0.0, 0.0, 0.0),
+            key(3.0, DVec3::ONE, 0.0, 0.0, 0.0),
         ])
-        .is_err());
+        .unwrap();
+        assert!(!tr.monotonic());
+        for i in 0..40 {
+            assert!(tr.at(i as f64 * 0.1).is_finite());
+        }
         // Repeated times (BART's robot camera starts with two keys at 0.0) are harmless.
         let tr = KbTrack::new(vec![
             key(0.0, DVec3::ZERO, 0.0, 0.0, 0.0),
