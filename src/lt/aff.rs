@@ -693,7 +693,7 @@ impl Loader {
                         format!("a polygon needs at least 3 vertices, got {n}"),
                     ));
                 }
-                let mut pts = Vec::with_capacity(n);
+                let mut pts = Vec::with_capacity(n.min(1 << 16));
                 for _ in 0..n {
                     pts.push(cx.vec3("a polygon vertex X Y Z")?);
                     if key == "pp" {
@@ -741,8 +741,8 @@ impl Loader {
                         cx.err_at(cx.at, "an animated triangle needs at least one key".into())
                     );
                 }
-                let mut times = Vec::with_capacity(n);
-                let mut vertices = Vec::with_capacity(n);
+                let mut times = Vec::with_capacity(n.min(1 << 16));
+                let mut vertices = Vec::with_capacity(n.min(1 << 16));
                 let local = self.top().local;
                 for _ in 0..n {
                     let tm = cx.num("a key time")?;
@@ -928,7 +928,7 @@ impl Loader {
     fn mesh(&mut self, cx: &mut Ctx) -> Result<(), SceneError> {
         cx.word("vertices")?;
         let nv = cx.int("the number of vertices", MAX_COUNT)?;
-        let mut verts = Vec::with_capacity(nv);
+        let mut verts = Vec::with_capacity(nv.min(1 << 16));
         for _ in 0..nv {
             verts.push(cx.vec3("a mesh vertex X Y Z")?);
         }
@@ -1283,6 +1283,294 @@ mod tests {
             s.warnings
         );
         Some(s)
+    }
+
+    fn bounds(ts: &[Triangle]) -> (DVec3, DVec3) {
+        ts.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), t| {
+                let (a, b) = t.bounds();
+                (lo.min(a), hi.max(b))
+            },
+        )
+    }
+
+    #[test]
+    fn kitchen() {
+        let Some(s) = bart("kitchen/kitchen.aff") else {
+            return;
+        };
+        // Counted independently (mesh `triangles N` + polygons + `tt`, includes with their
+        // multiplicity: 110,561), less 41 zero-area triangles.
+        assert_eq!(s.triangles.len(), 103_338);
+        assert_eq!(s.dynamic_len(), 7_182);
+        assert!(s.patches.is_empty());
+        assert_eq!(s.lights.len(), 6);
+        assert!(s.lights.iter().all(|l| matches!(l, Light::Point { .. })));
+        assert!((s.lights[0].power() - 0.3).abs() < 1e-12);
+        let c = s.camera.as_ref().expect("camera");
+        assert_eq!((c.fov_deg, c.width, c.height), (40.0, 800, 600));
+        assert!(s.camera_animation.is_some());
+        assert_eq!(s.time, Some((0.0, 20.0, 800)));
+        assert_eq!(s.movers.len(), 1);
+        let car = &s.movers[0];
+        assert_eq!(car.name, "toycar");
+        assert_eq!(car.len(), 7_182);
+        // Nested rotating wheels share the mover, with longer chains.
+        assert!(car.parts.iter().any(|p| p.chain.len() > 1));
+        let (a0, a1) = bounds(&car.triangles_at(0.0));
+        let (b0, b1) = bounds(&car.triangles_at(20.0));
+        let moved = ((a0 + a1) / 2.0 - (b0 + b1) / 2.0).length();
+        assert!(moved > 0.5, "the toy car moved only {moved}");
+        // At t = 0 it stands at its first translation key (4.45, 0, 2.75), on the floor.
+        let centre = (a0 + a1) / 2.0;
+        assert!(
+            (centre.x - 4.45).abs() < 0.2 && (centre.z - 2.75).abs() < 0.2,
+            "{centre}"
+        );
+        for sf in &s.surfaces {
+            assert!((0.0..=0.95).contains(&sf.albedo) && sf.emission == 0.0);
+        }
+        let n = s.surfaces.len() as u32;
+        assert!(s.triangles.iter().all(|t| t.surface < n && !t.degenerate()));
+    }
+
+    #[test]
+    fn robot() {
+        let Some(s) = bart("robot/Robot.aff") else {
+            return;
+        };
+        assert_eq!(s.triangles.len(), 9_170);
+        assert_eq!(s.dynamic_len(), 62_410);
+        assert_eq!(s.movers.len(), 10);
+        assert_eq!(s.lights.len(), 1);
+        assert_eq!(s.time, Some((0.0, 50.0, 800)));
+        assert!(s.camera.is_some());
+        for m in &s.movers {
+            let (a0, a1) = bounds(&m.triangles_at(0.0));
+            let (b0, b1) = bounds(&m.triangles_at(50.0));
+            assert!(
+                (a0 - b0).length() + (a1 - b1).length() > 1e-3,
+                "{} does not move",
+                m.name
+            );
+            assert!(a0.is_finite() && b1.is_finite());
+        }
+    }
+
+    #[test]
+    fn museum() {
+        let Some(s) = bart("museum/museum5.aff") else {
+            return;
+        };
+        assert_eq!(s.triangles.len(), 10_668);
+        assert_eq!(s.patches.len(), 1_024);
+        assert!(s.movers.is_empty());
+        assert_eq!(s.lights.len(), 2);
+        assert_eq!(s.time, Some((-1.0, 5.0, 300)));
+        let p = &s.patches[0];
+        assert_eq!(p.times, vec![0.0, 1.0, 2.0, 3.0, 4.0]);
+        assert_eq!(p.at(1.0).v[0], DVec3::new(-0.121070, 3.370914, 0.157006));
+        let half = p.at(0.5).v[0];
+        assert!((half - (p.vertices[0][0] + p.vertices[1][0]) / 2.0).length() < 1e-12);
+        assert_eq!(p.at(-1.0).v, p.vertices[0]);
+        assert_eq!(s.triangles_at(2.0).len(), 10_668 + 1_024);
+    }
+
+    fn parse(text: &str) -> Result<AffScene, SceneError> {
+        parse_aff(text, Path::new("/nonexistent/inline.aff"))
+    }
+
+    fn err(text: &str) -> SceneError {
+        match parse(text) {
+            Ok(_) => panic!("expected an error for {text:?}"),
+            Err(e) => {
+                eprintln!("{e}");
+                e
+            }
+        }
+    }
+
+    #[test]
+    fn tiny_nff() {
+        let s = parse(
+            "v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 45\nhither 1\nresolution 64 48\n\
+             b 0.1 0.1 0.1\nl 0 4 0\nl 1 4 0 0.5 0.25 0.75\n\
+             f 0.8 0.4 0.6 0.5 0.5 10 0 1\n\
+             p 4\n-1 -1 0\n1 -1 0\n1 1 0\n-1 1 0\n\
+             s 0 0 -2 0.5\n\
+             c 0 0 0 1 0 1 0 1\n",
+        )
+        .unwrap();
+        let c = s.camera.unwrap();
+        assert_eq!(
+            (c.eye, c.fov_deg, c.width, c.height),
+            (DVec3::new(0.0, 0.0, 5.0), 45.0, 64, 48)
+        );
+        assert_eq!(s.lights.len(), 2);
+        assert_eq!(s.lights[0].power(), 1.0);
+        assert!((s.lights[1].power() - 0.5).abs() < 1e-12);
+        assert_eq!(s.surfaces.len(), 1);
+        assert!((s.surfaces[0].albedo - 0.3).abs() < 1e-12);
+        let sphere = 2 * ROUND * (ROUND / 2 - 1);
+        assert_eq!(s.triangles.len(), 2 + sphere + 2 * ROUND);
+        // Quad normal +z; sphere and cone normals point outward.
+        assert!(s.triangles[0].normal().z > 0.99);
+        for t in &s.triangles[2..2 + sphere] {
+            assert!(t.normal().dot(t.centroid() - DVec3::new(0.0, 0.0, -2.0)) > 0.0);
+        }
+        for t in &s.triangles[2 + sphere..] {
+            let c = t.centroid();
+            assert!(t.normal().dot(DVec3::new(c.x, 0.0, c.z)) > 0.0);
+        }
+        assert_eq!(s.warnings.len(), 2, "{:?}", s.warnings);
+    }
+
+    #[test]
+    fn transforms_and_movers() {
+        let s = parse(
+            "fm 0 0 0 0.5 0.5 0.5 0 0 0 1 0 1\n\
+             xs 2 2 2  0 1 0 0  1 0 0\n{\n\
+               x a\n{\n\
+                 xs 1 1 1  0 0 1 90  0 0 0 { p 3  1 0 0  0 1 0  0 0 1 }\n\
+                 x b { p 3  1 0 0  0 1 0  0 0 1 }\n\
+               }\n\
+               p 3  1 0 0  0 1 0  0 0 1\n\
+             }\n\
+             k a { transl 1  0  0 5 0  0 0 0 }\n\
+             k b { rot 1  0  0 0 1 180  0 0 0 }\n",
+        )
+        .unwrap();
+        // The static triangle: scaled by 2, moved by +x.
+        assert_eq!(s.triangles.len(), 1);
+        assert_eq!(s.triangles[0].v[0], DVec3::new(3.0, 0.0, 0.0));
+        assert_eq!(s.movers.len(), 1);
+        let m = &s.movers[0];
+        assert_eq!((m.name.as_str(), m.parts.len()), ("a", 2));
+        // Part of `a`: rotation baked in, chain = [Fixed(xs), a].
+        let pa = &m.parts[0];
+        assert_eq!(pa.chain.len(), 2);
+        assert!((pa.triangles[0].v[0] - DVec3::Y).length() < 1e-12);
+        let w = spline::compose(&pa.chain, 0.0).transform_point3(pa.triangles[0].v[0]);
+        // (1,0,0) → rotated (0,1,0) → a: +5y → (0,6,0) → xs: ×2, +x → (1,12,0).
+        assert!((w - DVec3::new(1.0, 12.0, 0.0)).length() < 1e-12, "{w}");
+        // Nested `b`: chain [Fixed, a, b].
+        let pb = &m.parts[1];
+        assert_eq!(pb.chain.len(), 3);
+        let w = spline::compose(&pb.chain, 0.0).transform_point3(pb.triangles[0].v[0]);
+        assert!((w - DVec3::new(-1.0, 10.0, 0.0)).length() < 1e-12, "{w}");
+    }
+
+    #[test]
+    fn errors_name_the_line() {
+        let e = err("fm 0 0 0 0.5 0.5 0.5 0 0 0 1 0 1\n\nzz 1 2 3\n");
+        assert_eq!((e.line, e.key.as_deref()), (Some((3, 1)), Some("zz")));
+        assert!(e.message.contains("unknown directive"));
+        assert_eq!(e.path, "/nonexistent/inline.aff");
+
+        let e = err("l 1 2 3\nl 1 2 x3\n");
+        assert_eq!((e.line, e.key.as_deref()), (Some((2, 7)), Some("l")));
+        assert!(e.message.contains("not a number"), "{}", e.message);
+
+        // Too few numbers: the next directive is met where a number was expected.
+        let e = err("b 0 0 0\nfm 0.1 0.2 0.3\np 3 0 0 0 1 0 0 0 1 0\n");
+        assert_eq!((e.line, e.key.as_deref()), (Some((3, 1)), Some("fm")));
+        // Too many.
+        let e = err("b 0 0 0 1\n");
+        assert_eq!(e.line, Some((1, 9)));
+
+        let e = err("m\nvertices 3\n0 0 0\n1 0 0\n0 1 0\ntriangles 2\n0 1 2\n0 2 3\n");
+        assert_eq!((e.line, e.key.as_deref()), (Some((8, 5)), Some("m")));
+        assert!(e.message.contains("out of range"), "{}", e.message);
+        let e =
+            err("m\nvertices 3\n0 0 0\n1 0 0\n0 1 0\nnormals 1 0 0 1\ntriangles 1\n0 1 2 0 0 1\n");
+        assert_eq!(e.line, Some((8, 11)));
+
+        let e = err("\n\ni 0 not_there.aff\n");
+        assert_eq!((e.line, e.key.as_deref()), (Some((3, 5)), Some("i")));
+        assert!(e.message.contains("not_there.aff"));
+
+        let e = err("xs 1 1 1 0 1 0 0 0 0 0\n{\np 3 0 0 0 1 0 0 0 1 0\n");
+        assert_eq!((e.line, e.key.as_deref()), (Some((2, 1)), Some("xs")));
+        assert!(e.message.contains("unterminated"));
+        let e = err("x car {\n}\nk car {\ntransl 2\n0 0 0 0 0 0 0\n");
+        assert_eq!(
+            (e.line.map(|l| l.0), e.key.as_deref()),
+            (Some(6), Some("k"))
+        );
+        assert!(e.message.contains("started at line 3"), "{}", e.message);
+        let e = err("x car {\n}\nk car {\ntransl 1\n0 0 0 0 0 0 0\n");
+        assert_eq!(e.line, Some((3, 7)));
+        assert!(e.message.contains("unterminated"), "{}", e.message);
+        let e = err("p 3 0 0 0 1 0 0 0 1 0\n}\n");
+        assert_eq!(e.line, Some((2, 1)));
+        let e = err("x car p 3 0 0 0 1 0 0 0 1 0\n");
+        assert!(e.message.contains("expected `{`"));
+        let e = err("k car { spin 1 0 0 0 0 }");
+        assert!(e.message.contains("unknown keyframe track"));
+        let e = err("v\nfrom 0 0 0\nat 0 0 1\nangle 30\n");
+        assert!(e.message.contains("up"), "{}", e.message);
+        let e = err("p 2 0 0 0 1 1 1\n");
+        assert!(e.message.contains("at least 3"));
+    }
+
+    #[test]
+    fn errors_in_includes_name_the_included_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let sub = dir.path().join("sub");
+        std::fs::create_dir(&sub).unwrap();
+        std::fs::write(dir.path().join("top.aff"), "i 0 sub/mid.aff\n").unwrap();
+        // `mid` includes `leaf.aff`, found in its own folder; `shared.aff` only at the root.
+        std::fs::write(sub.join("mid.aff"), "i 0 leaf.aff\ni 0 shared.aff\n").unwrap();
+        std::fs::write(sub.join("leaf.aff"), "p 3 0 0 0 1 0 0 0 1 0\n").unwrap();
+        std::fs::write(
+            dir.path().join("shared.aff"),
+            "% ok\np 3 0 0 0 1 0 0 0 1 0\n",
+        )
+        .unwrap();
+        let s = load_aff(&dir.path().join("top.aff")).unwrap();
+        assert_eq!(s.triangles.len(), 2);
+        std::fs::write(sub.join("leaf.aff"), "p 3 0 0 0 1 0 0 0 1 0\n\n  bogus\n").unwrap();
+        let e = load_aff(&dir.path().join("top.aff")).unwrap_err();
+        assert!(e.path.ends_with("leaf.aff"), "{e}");
+        assert_eq!(e.line, Some((3, 3)));
+        // A cycle is an error, not a stack overflow.
+        std::fs::write(sub.join("leaf.aff"), "i 0 mid.aff\n").unwrap();
+        let e = load_aff(&dir.path().join("top.aff")).unwrap_err();
+        assert!(e.message.contains("cycle"), "{e}");
+    }
+
+    #[test]
+    fn missing_file_points_to_bart() {
+        let e = load_aff(Path::new("/nonexistent/kitchen.aff")).unwrap_err();
+        assert!(e.message.contains("../shared/scenes/bart/") && e.message.contains("Lext"));
+    }
+
+    #[test]
+    fn never_panics_on_truncated_or_garbled_input() {
+        let text = "v from 0 0 5 at 0 0 0 up 0 1 0 angle 45 hither 1 resolution 64 48\n\
+                    fm 0.1 0.1 0.1 0.5 0.5 0.5 0 0 0 1 0 1\n\
+                    x car { xs 1 1 1 0 1 0 30 0 0 0 { m vertices 3 0 0 0 1 0 0 0 1 0 \
+                    normals 3 0 0 1 0 0 1 0 0 1 texturecoords 3 t.ppm 0 0 1 0 0 1 \
+                    triangles 1 0 1 2 0 1 2 0 1 2 } }\n\
+                    tpa 2 0 0 0 0 0 0 1 1 0 0 0 0 1 0 1 0 0 0 1 1 1 0 0 0 0 1 1 0 0 0 0 1 0 1 0 0 0 1\n\
+                    tt t.ppm 0 0 0 0 0 1 0 0 1 0 0 1 0 0 1\n\
+                    c 0 0 0 1 0 1 0 0.5\ns 0 0 0 1\n\
+                    k car { transl 4 0 0 0 0 0 0 0 1 1 0 0 0 0 0 2 2 0 0 0 0 0 3 3 0 0 0 0 0 \
+                    rot 1 0 0 1 0 90 0 0 0 scale 1 0 1 1 1 0 0 0 }\na 0 3 10\n";
+        let full = parse(text).unwrap();
+        assert_eq!((full.movers.len(), full.patches.len()), (1, 1));
+        for cut in 0..text.len() {
+            let _ = parse(&text[..cut]);
+        }
+        let tokens: Vec<&str> = text.split_whitespace().collect();
+        for i in 0..tokens.len() {
+            for junk in ["}", "{", "-1", "1e400", "nan", "x", "99999999"] {
+                let mut t = tokens.clone();
+                t[i] = junk;
+                let _ = parse(&t.join(" "));
+            }
+        }
     }
 
     #[test]
