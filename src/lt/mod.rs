@@ -7,10 +7,12 @@
 //! Ray casting answers the nearest hit *and* the second intersection along the same line (a
 //! [`bvh::Bvh`] over triangles; spheres, which scenes have few of, are tested directly).
 
+pub mod aff;
 pub mod bvh;
 pub mod format;
 pub mod motion;
 pub mod shapes;
+pub mod spline;
 
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
