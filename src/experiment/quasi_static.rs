@@ -235,7 +235,6 @@ pub fn run_point(
         "photons_retraced",
         "segments_retraced",
         "segments_changed",
-        "segments_changed",
         "search_tests",
         "search_cells",
         "static_tests",

@@ -185,6 +185,84 @@ impl AffScene {
     }
 }
 
+impl AffScene {
+    /// The scene's parts for [`super::Scene::assemble`]: static triangles, surfaces, point lights,
+    /// the camera, and one dynamic object per mover, keyframed over the animation range `a START
+    /// END` (or the keys' range). BART's animated triangles (`tpa`, the museum's art piece) deform
+    /// rather than move rigidly: they are frozen at the start time, with a counted warning.
+    pub fn into_parts(self) -> super::SceneParts {
+        use super::motion::{Motion, Mover, MoverPart as Part};
+        let (start, end) = self.time.map_or_else(
+            || {
+                self.movers
+                    .iter()
+                    .flat_map(|m| &m.parts)
+                    .flat_map(|p| &p.chain)
+                    .filter_map(|n| match n {
+                        Node::Animated { kb, .. } => Some(kb),
+                        Node::Fixed(_) => None,
+                    })
+                    .flat_map(|kb| {
+                        [
+                            kb.translate.as_ref().map(KbTrack::active_range),
+                            kb.rotate.as_ref().map(KbTrack::active_range),
+                            kb.scale.as_ref().map(KbTrack::active_range),
+                        ]
+                    })
+                    .flatten()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (c, d)| {
+                        (a.min(c), b.max(d))
+                    })
+            },
+            |(a, b, _)| (a, b),
+        );
+        let (start, end) = if start.is_finite() {
+            (start, end)
+        } else {
+            (0.0, 0.0)
+        };
+        let mut triangles = self.triangles;
+        let mut warnings = self.warnings;
+        if !self.patches.is_empty() {
+            warnings.push(format!(
+                "{} animated triangle(s) (tpa) deform rather than move rigidly: frozen at t = {start}",
+                self.patches.len()
+            ));
+            triangles.extend(self.patches.iter().map(|p| p.at(start)));
+        }
+        let movers = self
+            .movers
+            .into_iter()
+            .map(|m| {
+                let parts = m
+                    .parts
+                    .into_iter()
+                    .map(|p| Part {
+                        triangles: p.triangles,
+                        balls: Vec::new(),
+                        motion: Motion::Keyframed {
+                            chain: p.chain,
+                            start,
+                            end,
+                        },
+                    })
+                    .collect();
+                Mover::keyframed(m.name, parts)
+            })
+            .collect();
+        super::SceneParts {
+            triangles,
+            balls: Vec::new(),
+            surfaces: self.surfaces,
+            lights: self.lights,
+            camera: self.camera,
+            analytic: None,
+            warnings,
+            movers,
+        }
+    }
+}
+
 /// Reads an AFF or NFF scene (with its includes).
 pub fn load_aff(path: &Path) -> Result<AffScene, SceneError> {
     let name = path.display().to_string();

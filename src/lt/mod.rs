@@ -200,8 +200,25 @@ pub struct SceneParts {
 }
 
 impl Scene {
-    /// Reads a scene file (OBJ paths are relative to it).
+    /// Reads a scene file: TOML (OBJ paths are relative to it), or AFF/NFF (`.aff`, `.nff`: BART
+    /// scenes, includes relative to it).
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        if matches!(ext.as_deref(), Some("aff" | "nff")) {
+            let parts = aff::load_aff(path)?.into_parts();
+            if parts.lights.is_empty() {
+                return Err(SceneError {
+                    path: path.display().to_string(),
+                    line: None,
+                    key: Some("l".into()),
+                    message: "the scene has no light: add a point light `l X Y Z`".into(),
+                });
+            }
+            return Ok(Self::assemble(parts));
+        }
         let name = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|e| SceneError {
             path: name.clone(),

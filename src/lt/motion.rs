@@ -45,6 +45,17 @@ pub enum Motion {
         /// Unit spin axis.
         spin_axis: DVec3,
     },
+    /// A chain of fixed and keyframed (Kochanek–Bartels) transforms, outermost first, evaluated at
+    /// animation time `start + τ·(end − start)` (BART's `x NAME` / `k NAME`). The chain maps the
+    /// part's own coordinates to the world.
+    Keyframed {
+        /// Outermost first.
+        chain: Vec<super::spline::Node>,
+        /// Animation time at τ = 0.
+        start: f64,
+        /// Animation time at τ = 1.
+        end: f64,
+    },
 }
 
 impl Motion {
@@ -80,6 +91,9 @@ impl Motion {
                 polyline_at(points, tau),
                 DQuat::from_axis_angle(*spin_axis, (spin_deg * tau).to_radians()),
             ),
+            Motion::Keyframed { chain, start, end } => {
+                super::spline::compose(chain, start + tau * (end - start))
+            }
         }
     }
 }
@@ -158,6 +172,21 @@ impl Mover {
             rest_radius: r,
             scale: 1.0,
         }
+    }
+
+    /// A keyframed object (BART): parts in their own coordinates, so its rest bounding sphere is
+    /// taken at τ = 0 in the world (scale 1: it keeps its size).
+    pub fn keyframed(name: String, parts: Vec<MoverPart>) -> Self {
+        let mut m = Self::new(name, parts);
+        (m.rest_center, m.rest_radius) = m.bounds_at(0.0);
+        m
+    }
+
+    /// Does some part follow keyframes (so a spec cannot rescale it about a rest centre)?
+    pub fn is_keyframed(&self) -> bool {
+        self.parts
+            .iter()
+            .any(|p| matches!(p.motion, Motion::Keyframed { .. }))
     }
 
     /// The bounding-sphere radius of the scaled object (r_D).

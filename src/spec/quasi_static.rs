@@ -137,6 +137,17 @@ impl QuasiStaticConfig {
         }
         let mut scene =
             crate::lt::Scene::load(path).map_err(|err| e("detp.scene", err.to_string()))?;
+        if dy.ratio.is_some() {
+            if let Some(m) = scene.movers.iter().find(|m| m.is_keyframed()) {
+                return Err(e(
+                    "dynamic.ratio",
+                    format!(
+                        "dynamic object \"{}\" is keyframed (an AFF scene): it keeps its size; r_D/r_0 can be swept for scene-file objects with a path",
+                        m.name
+                    ),
+                ));
+            }
+        }
         apply_ratio(&mut scene, dy.ratio);
         check_motion(&scene, dy.frames as u32).map_err(|(k, m)| e(k, m))?;
         check_lights(&scene).map_err(|m| e("detp.scene", m))?;
