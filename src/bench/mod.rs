@@ -22,6 +22,7 @@ mod agreement;
 mod calibrate;
 pub mod detp;
 pub mod memory;
+pub mod quasi_static;
 mod rounds;
 mod table;
 
@@ -239,15 +240,19 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
     println!("\nDETP engines (uniform lines through the unit sphere, points in the ball):");
     let detp_rows = detp::run(quick);
     print_detp(&detp_rows);
+    println!("\nQuasi-static DETP (one frame, incremental vs full):");
+    let qs_rows = quasi_static::run(quick)?;
     let rows: Vec<Row> = measured
         .iter()
         .map(Measured::row)
         .chain(detp_rows.iter().map(table::detp_row))
+        .chain(qs_rows.iter().map(quasi_static::QsRow::row))
         .collect();
     let rounds = measured
         .iter()
         .map(Measured::round_rows)
-        .chain(detp_rows.iter().map(|_| Vec::new()));
+        .chain(detp_rows.iter().map(|_| Vec::new()))
+        .chain(qs_rows.iter().map(|_| Vec::new()));
     for (row, rounds) in table::union_columns(&rows).iter().zip(rounds) {
         sink.append(row, &[("rounds", rounds)])
             .context("could not append to the bench table")?;

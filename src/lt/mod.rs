@@ -219,25 +219,30 @@ impl Scene {
             }
             return Ok(Self::assemble(parts));
         }
-        let name = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-            path: name.clone(),
+            path: path.display().to_string(),
             line: None,
             key: None,
             message: format!("cannot read the scene file: {e}"),
         })?;
-        let de = toml::Deserializer::new(&text);
+        Self::parse(&text, path)
+    }
+
+    /// A TOML scene from its text; `path` names it in errors and anchors relative OBJ paths.
+    pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        let name = path.display().to_string();
+        let de = toml::Deserializer::new(text);
         let raw: RawScene = serde_path_to_error::deserialize(de).map_err(|e| {
             let key = e.path().to_string();
             let inner = e.into_inner();
             SceneError {
                 path: name.clone(),
-                line: inner.span().map(|s| line_col(&text, s.start)),
+                line: inner.span().map(|s| line_col(text, s.start)),
                 key: (!key.is_empty() && key != ".").then_some(key),
                 message: inner.message().trim().to_string(),
             }
         })?;
-        Self::from_raw(raw, path, &text)
+        Self::from_raw(raw, path, text)
     }
 
     fn from_raw(raw: RawScene, path: &Path, text: &str) -> Result<Scene, SceneError> {
