@@ -9,7 +9,8 @@ names=("$@")
 if [ ${#names[@]} -eq 0 ]; then
   names=(quickstart grid-cell-width grid-first-hit grid-radius-classes grid-scaling grid-concentration grid-cost-model
          lines-rays-per-level lines-cache-misses-unsorted lines-cache-misses sphere-cache-q detp-engines-cost
-         detp-accuracy cornell-levels)
+         detp-accuracy cornell-levels quasi-static-frames quasi-static-crossover quasi-static-static-points
+         real-scene-levels speed-vs-error)
 fi
 for name in "${names[@]}"; do
   extra=()

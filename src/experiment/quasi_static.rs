@@ -196,6 +196,18 @@ pub fn run_point(
             points_at = Some((qs.sums(), qs.discs()));
         }
     }
+    // Error of the last frame against a high-photon reference (relative RMSE over the points, and
+    // the reference's own Poisson share of it, which the RMSE cannot go below).
+    let reference = cfg.reference_photons.map(|n| {
+        let mine = qs.irradiance();
+        let t = std::time::Instant::now();
+        let refr = qs.reference_irradiance(n, crate::sample::rng::hash_key(&[cfg.detp.seed, point, 0x7265_66]));
+        let ref_s = t.elapsed().as_secs_f64();
+        let mean_ref = refr.iter().sum::<f64>() / refr.len().max(1) as f64;
+        let mse = mine.iter().zip(&refr).map(|(a, b)| (a - b).powi(2)).sum::<f64>()
+            / mine.len().max(1) as f64;
+        (mse.sqrt() / mean_ref, ref_s, n)
+    });
     let est: Vec<Estimate> = means.iter().map(ClusteredMean::estimate).collect();
     let get = |name: &str| est[names.iter().position(|n| *n == name).expect("a metric")];
 
@@ -251,9 +263,15 @@ pub fn run_point(
     let full = full_s.estimate();
     row.estimate("full_frame_s", &full)
         .f("frame0_s", f0.frame_s)
+        .f("static_index_build_s", qs.static_index_build_s)
         .f("speedup", full.mean / get("frame_s").mean)
         .u("full_mismatch", full_mismatch)
         .u("full_checked", full_checked);
+    if let Some((rmse, ref_s, n)) = reference {
+        row.f("irradiance_rmse", rmse)
+            .u("reference_photons", n)
+            .f("reference_s", ref_s);
+    }
     // Theorem 2 for this run's n (costs in ray tests, t = u).
     let q = cfg.detp.q;
     let (sc_static, di_static) = th::static_points_cost(f_r, n_s as f64, q);

@@ -45,6 +45,14 @@ pub struct RawDynamicSpec {
         skip_serializing_if = "Option::is_none"
     )]
     pub points_frame: Option<u64>,
+    /// Photons of a reference full recalculation of the last frame (another seed): the run's
+    /// irradiance error against it goes to `irradiance_rmse` (relative). Absent: no reference.
+    #[serde(
+        default,
+        deserialize_with = "opt_count",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub reference_photons: Option<u64>,
 }
 
 fn one() -> u64 {
@@ -91,6 +99,8 @@ pub struct QuasiStaticConfig {
     pub engine: DynamicEngine,
     /// Frame whose irradiance goes to the points table (default: the last).
     pub points_frame: Option<u32>,
+    /// Photons of the reference recalculation of the last frame.
+    pub reference_photons: Option<u64>,
 }
 
 impl QuasiStaticConfig {
@@ -120,6 +130,11 @@ impl QuasiStaticConfig {
                 "detp.replicas",
                 "kind quasi-static runs one realisation (frames are its samples)".into(),
             ));
+        }
+        if let Some(n) = dy.reference_photons {
+            if n > 1 << 31 {
+                return Err(e("dynamic.reference_photons", format!("got {n}, at most 2³¹")));
+            }
         }
         if dy.frames > 1 << 20 {
             return Err(e(
@@ -159,6 +174,7 @@ impl QuasiStaticConfig {
             check_every: dy.check_every,
             engine: d.engine.unwrap_or_default(),
             points_frame: dy.points_frame.map(|f| f as u32),
+            reference_photons: dy.reference_photons,
         })
     }
 }

@@ -223,6 +223,8 @@ pub struct QuasiStatic {
     pub frame: u32,
     /// Bounding spheres of the movers at the current pose.
     spheres: Vec<(DVec3, f64)>,
+    /// Seconds to build the static disc index (once, at frame 0).
+    pub static_index_build_s: f64,
 }
 
 /// Seconds spent in `f`, with its value.
@@ -254,7 +256,8 @@ impl QuasiStatic {
             crate::geom::Aabb::new(b.lo.min(d.lo), b.hi.max(d.hi))
         });
         let index = SegmentIndex::new(scene.bounds(), (store.len() / 64).clamp(64, 1 << 18));
-        let static_index = params.index.build(&static_discs, params.disc_radius);
+        let (static_index, static_index_build_s) =
+            timed(|| params.index.build(&static_discs, params.disc_radius));
         let static_perm = permutation(&static_discs.centers, params.order, 10);
         let dynamic = (0..scene.movers.len())
             .map(|k| DynamicPoints::new(&scene, k, params.spacing, params.disc_radius))
@@ -279,6 +282,7 @@ impl QuasiStatic {
             static_perm,
             dynamic,
             frame: 0,
+            static_index_build_s,
         };
         qs.rebuild_index();
         let mut stats = FrameStats {
@@ -590,6 +594,27 @@ impl QuasiStatic {
             self.static_discs.len(),
             self.dynamic.iter().map(|d| d.discs.len()).collect(),
         )
+    }
+
+    /// Irradiance at every sample point (order of [`Self::sums`]): power over πd².
+    pub fn irradiance(&self) -> Vec<f64> {
+        let area = std::f64::consts::PI * self.params.disc_radius.powi(2);
+        self.sums()
+            .iter()
+            .map(|&a| self.store.scale.watts(a) / area)
+            .collect()
+    }
+
+    /// A reference irradiance at the same points and frame from a fresh trace of `photons` photons
+    /// with another `seed` (for the error of a run against a high-photon reference).
+    pub fn reference_irradiance(&self, photons: u64, seed: u64) -> Vec<f64> {
+        let store = trace_photons(&self.scene, photons, seed);
+        let discs = self.discs();
+        let d = self.params.disc_radius;
+        let mut acc = vec![0; discs.len()];
+        GridIndex::build(&discs, 2.0 * d).accumulate(&store, None, 1, &mut acc);
+        let area = std::f64::consts::PI * d * d;
+        acc.iter().map(|&a| store.scale.watts(a) / area).collect()
     }
 
     /// The power scale of the sums.
