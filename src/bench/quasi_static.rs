@@ -202,11 +202,9 @@ mod tests {
     #[test]
     fn quick_part_is_exact() {
         // Smaller than --quick: a few photons, every row exact and the incremental frame cheaper.
-        let mut scene = crate::lt::Scene::parse(
-            super::CORNELL,
-            std::path::Path::new("cornell-bench.toml"),
-        )
-        .unwrap();
+        let mut scene =
+            crate::lt::Scene::parse(super::CORNELL, std::path::Path::new("cornell-bench.toml"))
+                .unwrap();
         crate::spec::quasi_static::apply_ratio(&mut scene, Some(0.1));
         let (_, rows) = super::one_frame(
             scene,

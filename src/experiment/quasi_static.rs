@@ -201,10 +201,17 @@ pub fn run_point(
     let reference = cfg.reference_photons.map(|n| {
         let mine = qs.irradiance();
         let t = std::time::Instant::now();
-        let refr = qs.reference_irradiance(n, crate::sample::rng::hash_key(&[cfg.detp.seed, point, 0x7265_66]));
+        let refr = qs.reference_irradiance(
+            n,
+            crate::sample::rng::hash_key(&[cfg.detp.seed, point, 0x7265_66]),
+        );
         let ref_s = t.elapsed().as_secs_f64();
         let mean_ref = refr.iter().sum::<f64>() / refr.len().max(1) as f64;
-        let mse = mine.iter().zip(&refr).map(|(a, b)| (a - b).powi(2)).sum::<f64>()
+        let mse = mine
+            .iter()
+            .zip(&refr)
+            .map(|(a, b)| (a - b).powi(2))
+            .sum::<f64>()
             / mine.len().max(1) as f64;
         (mse.sqrt() / mean_ref, ref_s, n)
     });

@@ -43,7 +43,7 @@ use super::spline::{self, axis_angle_deg, KbKey, KbTrack, KbTransform, Node};
 use super::{Camera, Light, SceneError, Surface};
 
 /// Where BART scenes live and what they are, for the "file not found" message.
-const BART_HINT: &str = "BART scenes come from ../shared/scenes/bart/ (BART: A Benchmark for \
+pub const BART_HINT: &str = "BART scenes come from ../shared/scenes/bart/ (BART: A Benchmark for \
 Animated Ray Tracing, Lext, Assarsson & Möller 2001), e.g. ../shared/scenes/bart/kitchen/kitchen.aff";
 
 /// Segments around a tessellated sphere or cone.

@@ -116,7 +116,7 @@ impl PointConfig {
                 })?;
                 let dy = raw.dynamic.as_ref().ok_or_else(|| {
                     e(
-                        "dynamic",
+                        "experiment.kind",
                         "missing: kind quasi-static needs a [dynamic] table (frames)".into(),
                     )
                 })?;

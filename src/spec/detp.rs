@@ -363,7 +363,16 @@ impl DetpConfig {
             if path.is_file() {
                 Ok(path)
             } else {
-                Err(e(key, format!("{}: no such file", path.display())))
+                let aff = matches!(
+                    path.extension().and_then(|x| x.to_str()),
+                    Some("aff" | "nff")
+                );
+                let hint = if aff {
+                    format!("; {}", crate::lt::aff::BART_HINT)
+                } else {
+                    String::new()
+                };
+                Err(e(key, format!("{}: no such file{hint}", path.display())))
             }
         };
         let rays = match (d.source, &d.scene) {

@@ -37,11 +37,11 @@ pub struct RawDynamicSpec {
     /// 0: never. The last frame is always checked when k > 0.
     #[serde(default = "one", deserialize_with = "count_or_zero")]
     pub check_every: u64,
-    /// Frames at which the whole irradiance is written to `NAME.points.csv` (with
-    /// `detp.write_points`): default the first and the last.
+    /// The frame whose irradiance is written to `NAME.points.csv` (with `detp.write_points`);
+    /// default the last.
     #[serde(
         default,
-        deserialize_with = "opt_count",
+        deserialize_with = "opt_count_or_zero",
         skip_serializing_if = "Option::is_none"
     )]
     pub points_frame: Option<u64>,
@@ -68,6 +68,10 @@ fn count_or_zero<'de, D: serde::Deserializer<'de>>(d: D) -> Result<u64, D::Error
             "got {other}, expected an integer ≥ 0"
         ))),
     }
+}
+
+fn opt_count_or_zero<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
+    count_or_zero(d).map(Some)
 }
 
 fn opt_ratio<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
@@ -133,7 +137,10 @@ impl QuasiStaticConfig {
         }
         if let Some(n) = dy.reference_photons {
             if n > 1 << 31 {
-                return Err(e("dynamic.reference_photons", format!("got {n}, at most 2³¹")));
+                return Err(e(
+                    "dynamic.reference_photons",
+                    format!("got {n}, at most 2³¹"),
+                ));
             }
         }
         if dy.frames > 1 << 20 {
@@ -164,7 +171,13 @@ impl QuasiStaticConfig {
             }
         }
         apply_ratio(&mut scene, dy.ratio);
-        check_motion(&scene, dy.frames as u32).map_err(|(k, m)| e(k, m))?;
+        // A size or motion problem is the scene's, or the ratio's when the spec rescales.
+        let blame = if dy.ratio.is_some() {
+            "dynamic.ratio"
+        } else {
+            "detp.scene"
+        };
+        check_motion(&scene, dy.frames as u32).map_err(|m| e(blame, m))?;
         check_lights(&scene).map_err(|m| e("detp.scene", m))?;
         Ok(Self {
             detp,
@@ -191,27 +204,23 @@ pub fn apply_ratio(scene: &mut crate::lt::Scene, ratio: Option<f64>) {
 
 /// The motion's checks over every frame: a dynamic object at all; none as large as the scene
 /// (r_D < r_0); each inside the scene's box at every frame; no two overlapping (posed boxes meet).
-pub fn check_motion(scene: &crate::lt::Scene, frames: u32) -> Result<(), (&'static str, String)> {
+pub fn check_motion(scene: &crate::lt::Scene, frames: u32) -> Result<(), String> {
     use crate::lt::motion::tau;
     if scene.movers.is_empty() {
-        return Err((
-            "detp.scene",
+        return Err(
             "kind quasi-static needs a dynamic object: mark surfaces with dynamic = \"NAME\" and add a [[dynamic]] table (or an AFF animated transform)".into(),
-        ));
+        );
     }
     let b = scene.bounds();
     let r0 = crate::detp::sphere_cache::root_sphere(&b).1;
     let slack = 1e-9 * b.magnitude().max(1e-300);
     for m in &scene.movers {
         if m.radius() >= r0 {
-            return Err((
-                "dynamic.ratio",
-                format!(
-                    "dynamic object \"{}\" has r_D = {:.4} ≥ r_0 = {:.4}: it is larger than the scene",
-                    m.name,
-                    m.radius(),
-                    r0
-                ),
+            return Err(format!(
+                "dynamic object \"{}\" has r_D = {:.4} ≥ r_0 = {:.4}: it is larger than the scene",
+                m.name,
+                m.radius(),
+                r0
             ));
         }
     }
@@ -241,25 +250,19 @@ pub fn check_motion(scene: &crate::lt::Scene, frames: u32) -> Result<(), (&'stat
             .collect();
         for (m, (lo, hi)) in scene.movers.iter().zip(&boxes) {
             if lo.cmplt(b.lo - slack).any() || hi.cmpgt(b.hi + slack).any() {
-                return Err((
-                    "dynamic.frames",
-                    format!(
+                return Err(format!(
                         "dynamic object \"{}\" leaves the scene's box at frame {f} (its box {lo:.3}…{hi:.3}, the scene's {:.3}…{:.3})",
                         m.name, b.lo, b.hi
-                    ),
-                ));
+                    ));
             }
         }
         for i in 0..boxes.len() {
             for j in i + 1..boxes.len() {
                 let (a, c) = (boxes[i], boxes[j]);
                 if a.0.cmple(c.1).all() && c.0.cmple(a.1).all() {
-                    return Err((
-                        "detp.scene",
-                        format!(
-                            "dynamic objects \"{}\" and \"{}\" overlap at frame {f} (their boxes meet)",
-                            scene.movers[i].name, scene.movers[j].name
-                        ),
+                    return Err(format!(
+                        "dynamic objects \"{}\" and \"{}\" overlap at frame {f} (their boxes meet)",
+                        scene.movers[i].name, scene.movers[j].name
                     ));
                 }
             }
