@@ -137,6 +137,27 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Merge(m) => {
             crate::output::merge::run(&m.inputs, m.out.as_deref(), m.force, m.quiet)
         }
+        Command::Render(r) => {
+            let spec = Spec::load(&r.spec, &r.set)?;
+            let frames = match (r.frame, r.frames.is_empty()) {
+                (Some(f), _) => vec![f],
+                (None, true) => vec![0],
+                (None, false) => r.frames,
+            };
+            let opts = crate::render::RenderOptions {
+                frames,
+                point: r.point,
+                out: r.out,
+                gif: r.gif,
+                diff: r.diff,
+                width: r.width,
+                colormap: r.colormap,
+                force: r.force,
+            };
+            let log = crate::render::run(&spec, &opts)?;
+            write!(std::io::stdout().lock(), "{log}")?;
+            Ok(())
+        }
     }
 }
 
