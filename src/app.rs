@@ -153,11 +153,26 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 width: r.width,
                 colormap: r.colormap,
                 force: r.force,
+                eye: vec3("--eye", &r.eye)?,
+                look_at: vec3("--look-at", &r.look_at)?,
+                fov: r.fov,
             };
             let log = crate::render::run(&spec, &opts)?;
             write!(std::io::stdout().lock(), "{log}")?;
             Ok(())
         }
+    }
+}
+
+/// An optional point given as X,Y,Z.
+fn vec3(flag: &str, v: &[f64]) -> anyhow::Result<Option<glam::DVec3>> {
+    match v {
+        [] => Ok(None),
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Some(glam::DVec3::new(*x, *y, *z))),
+        _ => Err(UsageError(format!(
+            "{flag}: expected three finite numbers X,Y,Z, got {v:?}"
+        ))
+        .into()),
     }
 }
 

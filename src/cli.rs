@@ -65,6 +65,25 @@ pub struct RenderArgs {
     /// False colour (viridis) instead of grey.
     #[arg(long)]
     pub colormap: bool,
+    /// Move the scene's camera: eye position X,Y,Z.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_negative_numbers = true,
+        value_name = "X,Y,Z"
+    )]
+    pub eye: Vec<f64>,
+    /// Aim the scene's camera at X,Y,Z.
+    #[arg(
+        long = "look-at",
+        value_delimiter = ',',
+        allow_negative_numbers = true,
+        value_name = "X,Y,Z"
+    )]
+    pub look_at: Vec<f64>,
+    /// The camera's vertical field of view, degrees.
+    #[arg(long)]
+    pub fov: Option<f64>,
     /// Replace existing files.
     #[arg(long)]
     pub force: bool,

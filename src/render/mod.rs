@@ -54,6 +54,12 @@ pub struct RenderOptions {
     pub colormap: bool,
     /// Replace existing files.
     pub force: bool,
+    /// Camera override: eye.
+    pub eye: Option<glam::DVec3>,
+    /// Camera override: point looked at.
+    pub look_at: Option<glam::DVec3>,
+    /// Camera override: vertical field of view, degrees.
+    pub fov: Option<f64>,
 }
 
 /// One rendered frame.
@@ -194,6 +200,7 @@ pub fn run(spec: &Spec, o: &RenderOptions) -> anyhow::Result<String> {
         )
         .into());
     };
+    let cam = aim(cam, o)?;
     let (w, h) = size(&cam, o.width)?;
     let mut log = String::new();
 
@@ -351,6 +358,30 @@ pub fn run(spec: &Spec, o: &RenderOptions) -> anyhow::Result<String> {
         t_all.elapsed().as_secs_f64()
     )?;
     Ok(log)
+}
+
+/// The scene's camera, moved and aimed as the options say.
+fn aim(mut cam: Camera, o: &RenderOptions) -> anyhow::Result<Camera> {
+    if let Some(e) = o.eye {
+        cam.eye = e;
+    }
+    if let Some(l) = o.look_at {
+        cam.look_at = l;
+    }
+    if let Some(f) = o.fov {
+        if !(f.is_finite() && f > 0.0 && f < 180.0) {
+            return Err(UsageError(format!("--fov: got {f}, expected degrees in (0, 180)")).into());
+        }
+        cam.fov_deg = f;
+    }
+    let fwd = cam.look_at - cam.eye;
+    if fwd.length() == 0.0 || fwd.cross(cam.up).length() <= 1e-12 * fwd.length() * cam.up.length() {
+        return Err(UsageError(
+            "the camera looks at its own eye or along its up vector (set --eye/--look-at apart, not straight up or down)".into(),
+        )
+        .into());
+    }
+    Ok(cam)
 }
 
 /// The image size: the camera's, or `width` wide with the camera's aspect ratio.

@@ -89,7 +89,7 @@ pub fn indices(b: &[Radiosity], exposure: f64, palette: Palette) -> Vec<u8> {
             } else if x == f64::INFINITY {
                 255
             } else {
-                palette.index((x * exposure).max(0.0).min(1.0).powf(1.0 / 2.2))
+                palette.index((x * exposure).clamp(0.0, 1.0).powf(1.0 / 2.2))
             }
         })
         .collect()
