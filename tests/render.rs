@@ -68,7 +68,7 @@ fn renders_a_lit_strip_whose_incremental_frames_equal_full_recalculations() {
         let mean = floor.iter().map(|&v| f64::from(v)).sum::<f64>() / floor.len() as f64;
         assert!(mean > 60.0, "frame {f}: floor mean grey {mean}");
         assert!(
-            (0..6).any(|y| (20..28).any(|x| at(x, y) == 255)),
+            (0..12).any(|y| (16..32).any(|x| at(x, y) == 255)),
             "frame {f}: the light is white"
         );
     }
