@@ -137,6 +137,42 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Merge(m) => {
             crate::output::merge::run(&m.inputs, m.out.as_deref(), m.force, m.quiet)
         }
+        Command::Render(r) => {
+            let spec = Spec::load(&r.spec, &r.set)?;
+            let frames = match (r.frame, r.frames.is_empty()) {
+                (Some(f), _) => vec![f],
+                (None, true) => vec![0],
+                (None, false) => r.frames,
+            };
+            let opts = crate::render::RenderOptions {
+                frames,
+                point: r.point,
+                out: r.out,
+                gif: r.gif,
+                diff: r.diff,
+                width: r.width,
+                colormap: r.colormap,
+                force: r.force,
+                eye: vec3("--eye", &r.eye)?,
+                look_at: vec3("--look-at", &r.look_at)?,
+                fov: r.fov,
+            };
+            let log = crate::render::run(&spec, &opts)?;
+            write!(std::io::stdout().lock(), "{log}")?;
+            Ok(())
+        }
+    }
+}
+
+/// An optional point given as X,Y,Z.
+fn vec3(flag: &str, v: &[f64]) -> anyhow::Result<Option<glam::DVec3>> {
+    match v {
+        [] => Ok(None),
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Some(glam::DVec3::new(*x, *y, *z))),
+        _ => Err(UsageError(format!(
+            "{flag}: expected three finite numbers X,Y,Z, got {v:?}"
+        ))
+        .into()),
     }
 }
 

@@ -28,6 +28,65 @@ pub enum Command {
     Bench(BenchArgs),
     /// Join the shards of a sweep (NAME.shard-K-of-N.csv) into NAME.csv, checking that they fit.
     Merge(MergeArgs),
+    /// Render the DETP irradiance of a quasi-static spec's frame(s), seen from the scene's camera.
+    Render(RenderArgs),
+}
+
+/// `raycost render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// A kind quasi-static spec (or kind detp with detp.source = "scene": frame 0 only).
+    pub spec: PathBuf,
+    /// Override a spec key; repeatable.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// The frame to render (default 0).
+    #[arg(long, conflicts_with = "frames")]
+    pub frame: Option<u32>,
+    /// Several frames, side by side in one PNG (left to right, reached in this order).
+    #[arg(long, value_delimiter = ',', value_name = "F1,F2,...")]
+    pub frames: Vec<u32>,
+    /// Which sweep point of the spec (0-based).
+    #[arg(long, default_value_t = 0)]
+    pub point: usize,
+    /// The PNG (default results/render/NAME.frame-F.png).
+    #[arg(long, value_name = "PNG")]
+    pub out: Option<PathBuf>,
+    /// Also an animated GIF of the frames.
+    #[arg(long, value_name = "GIF")]
+    pub gif: Option<PathBuf>,
+    /// Also the difference image |incremental − full recalculation| (black: exact; red: not), and
+    /// the count of differing pixels on stdout.
+    #[arg(long, value_name = "PNG")]
+    pub diff: Option<PathBuf>,
+    /// Image width in pixels (the height keeps the camera's aspect ratio).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// False colour (viridis) instead of grey.
+    #[arg(long)]
+    pub colormap: bool,
+    /// Move the scene's camera: eye position X,Y,Z.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_negative_numbers = true,
+        value_name = "X,Y,Z"
+    )]
+    pub eye: Vec<f64>,
+    /// Aim the scene's camera at X,Y,Z.
+    #[arg(
+        long = "look-at",
+        value_delimiter = ',',
+        allow_negative_numbers = true,
+        value_name = "X,Y,Z"
+    )]
+    pub look_at: Vec<f64>,
+    /// The camera's vertical field of view, degrees.
+    #[arg(long)]
+    pub fov: Option<f64>,
+    /// Replace existing files.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// `raycost run`.

@@ -9,5 +9,6 @@ mod detp_runs;
 mod lt;
 mod merge;
 mod oracle;
+mod render;
 mod resume;
 mod slurm;

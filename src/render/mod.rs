@@ -1,0 +1,414 @@
+//! `raycost render`: the DETP irradiance of a quasi-static run, seen from the scene's camera.
+//!
+//! For each frame asked for, the quasi-static engine is advanced incrementally (frame 0 is a full
+//! trace; later frames are reached by [`QuasiStatic::step`], whose poses are pure functions of
+//! time, so stepping straight to a frame is valid). One primary ray per pixel centre finds the
+//! visible point; a tangent disc of the spec's `detp.disc_radius` there (normal facing the camera)
+//! is the pixel's sample point, and its DETP sum is gathered from the live segment store through a
+//! grid disc index. A pixel shows the radiosity B = albedo·E/π, one exposure for every frame of the
+//! picture (99th percentile → 0.9, gamma 1/2.2); emitters are white, nothing seen is black.
+//!
+//! `--diff` gathers the same discs from a full recalculation of the frame and marks the pixels
+//! whose integer sums differ (there should be none: incremental equals full bit for bit).
+//!
+//! Nothing here is on the path of `run`, `check` or `bench`.
+
+pub mod camera;
+pub mod encode;
+pub mod gather;
+pub mod tone;
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use crate::app::UsageError;
+use crate::detp::quasi_static::QuasiStatic;
+use crate::experiment::quasi_static as eq;
+use crate::lt::Camera;
+use crate::output::OutputError;
+use crate::spec::detp::{DynamicEngine, Points, Rays};
+use crate::spec::quasi_static::QuasiStaticConfig;
+use crate::spec::{PointConfig, Spec, SpecError};
+
+use camera::{Pixel, View};
+use encode::Indexed;
+use tone::{Palette, Radiosity};
+
+/// What to render and where.
+#[derive(Clone, Debug)]
+pub struct RenderOptions {
+    /// Frames, in the order they are reached and shown (left to right).
+    pub frames: Vec<u32>,
+    /// Sweep point (default 0).
+    pub point: usize,
+    /// The PNG (default `results/render/NAME.frame-F.png`).
+    pub out: Option<PathBuf>,
+    /// An animated GIF of the frames too.
+    pub gif: Option<PathBuf>,
+    /// The difference image incremental − full.
+    pub diff: Option<PathBuf>,
+    /// Image width (height keeps the camera's aspect ratio).
+    pub width: Option<u32>,
+    /// False colour instead of grey.
+    pub colormap: bool,
+    /// Replace existing files.
+    pub force: bool,
+    /// Camera override: eye.
+    pub eye: Option<glam::DVec3>,
+    /// Camera override: point looked at.
+    pub look_at: Option<glam::DVec3>,
+    /// Camera override: vertical field of view, degrees.
+    pub fov: Option<f64>,
+}
+
+/// One rendered frame.
+struct Frame {
+    b: Vec<Radiosity>,
+    /// Per pixel: differs from the full recalculation, and |ΔE| (with `--diff`).
+    diff: Option<(Vec<f64>, usize)>,
+}
+
+/// The spec's quasi-static config for the point (a `detp` scene spec becomes a one-frame run).
+fn config(spec: &Spec, point: usize) -> anyhow::Result<(QuasiStaticConfig, Option<u64>)> {
+    let n = spec.points.len();
+    let Some(p) = spec.points.get(point) else {
+        return Err(UsageError(format!(
+            "--point: got {point}, the spec has points 0…{}",
+            n.saturating_sub(1)
+        ))
+        .into());
+    };
+    match &p.config {
+        PointConfig::QuasiStatic(q) => Ok(((**q).clone(), None)),
+        PointConfig::Detp(d) if matches!(d.rays, Rays::Scene(_)) => {
+            let mut detp = d.clone();
+            if !matches!(detp.points, Points::Surface(_)) {
+                // The engine's own sample points are not shown; any spacing will do.
+                detp.points = Points::Surface(4.0 * d.disc_radius);
+            }
+            Ok((
+                QuasiStaticConfig {
+                    detp,
+                    frames: 1,
+                    ratio: None,
+                    crossover: None,
+                    check_every: 0,
+                    engine: DynamicEngine::default(),
+                    points_frame: None,
+                },
+                // Replica 0's photons of a `detp` run.
+                Some(crate::sample::rng::hash_key(&[d.seed, point as u64, 0])),
+            ))
+        }
+        _ => Err(spec_error(
+            spec,
+            "experiment.kind",
+            "raycost render needs kind \"quasi-static\", or kind \"detp\" with detp.source = \"scene\"",
+        )
+        .into()),
+    }
+}
+
+/// A spec error at `key`, located in the spec file when possible.
+fn spec_error(spec: &Spec, key: &str, message: &str) -> SpecError {
+    let text = std::fs::read_to_string(&spec.path).unwrap_or_default();
+    let last = key.rsplit('.').next().unwrap_or(key);
+    SpecError {
+        source_name: spec.path.clone(),
+        location: crate::toml_text::find_key(&text, key)
+            .or_else(|| crate::toml_text::find_key(&text, last)),
+        key: Some(key.to_string()),
+        message: message.to_string(),
+    }
+}
+
+/// The radiosity of every pixel of `view` from sums `acc` (watts per unit `w`).
+fn radiosity(view: &View, acc: &[i64], watts_per_unit: f64) -> Vec<Radiosity> {
+    let d = view.discs.radius;
+    let area = std::f64::consts::PI * d * d;
+    view.pixels
+        .iter()
+        .map(|p| match *p {
+            Pixel::Miss => f64::NAN,
+            Pixel::Emitter => f64::INFINITY,
+            Pixel::Disc { disc, albedo } => {
+                let e = acc[disc as usize] as f64 * watts_per_unit / area;
+                albedo * e / std::f64::consts::PI
+            }
+        })
+        .collect()
+}
+
+fn default_out(spec: &Spec, frames: &[u32]) -> PathBuf {
+    let f: Vec<String> = frames.iter().map(u32::to_string).collect();
+    let which = if frames.len() == 1 {
+        format!("frame-{}", f[0])
+    } else {
+        format!("frames-{}", f.join("-"))
+    };
+    Path::new("results/render").join(format!("{}.{which}.png", spec.base.experiment.name))
+}
+
+/// Renders; returns what to print.
+pub fn run(spec: &Spec, o: &RenderOptions) -> anyhow::Result<String> {
+    let t_all = Instant::now();
+    let (cfg, seed) = config(spec, o.point)?;
+    if o.frames.is_empty() {
+        return Err(UsageError("--frames: give at least one frame".into()).into());
+    }
+    if let Some(&f) = o.frames.iter().find(|&&f| f >= cfg.frames) {
+        let what = if cfg.frames == 1 {
+            "the spec has only frame 0".to_string()
+        } else {
+            format!("the spec's frames are 0…{}", cfg.frames - 1)
+        };
+        return Err(UsageError(format!("--frame: got {f}, {what}")).into());
+    }
+    let out = o
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out(spec, &o.frames));
+    let mut targets = vec![&out];
+    targets.extend(o.gif.iter());
+    targets.extend(o.diff.iter());
+    for (i, t) in targets.iter().enumerate() {
+        if targets[..i].contains(t) {
+            return Err(UsageError(format!("{} is named twice", t.display())).into());
+        }
+        if t.exists() && !o.force {
+            return Err(OutputError {
+                path: t.display().to_string(),
+                message: "exists; add --force to replace it".into(),
+            }
+            .into());
+        }
+    }
+    // The scene and its camera, before any tracing.
+    let scene = eq::scene(&cfg)?;
+    let Some(cam) = scene.camera.clone() else {
+        let path = match &cfg.detp.rays {
+            Rays::Scene(p) => p.display().to_string(),
+            Rays::Lines => String::new(),
+        };
+        return Err(spec_error(
+            spec,
+            "detp.scene",
+            &format!(
+                "the scene {path} has no camera: add a [camera] table (TOML scene) or a `v` view (AFF) to render it"
+            ),
+        )
+        .into());
+    };
+    let cam = aim(cam, o)?;
+    let (w, h) = size(&cam, o.width)?;
+    let mut log = String::new();
+
+    // Frame 0: the full trace.
+    let t = Instant::now();
+    let (mut qs, _) = start(&cfg, o.point as u64, seed)?;
+    let trace_s = t.elapsed().as_secs_f64();
+    writeln!(
+        log,
+        "render: {} point {}: frame 0 traced ({} photons, {} segments) in {:.3} s",
+        spec.path,
+        o.point,
+        cfg.detp.photons,
+        qs.live_segments(),
+        trace_s
+    )?;
+    let (mut step_s, mut gather_s, mut full_s) = (0.0, 0.0, 0.0);
+    let mut shown: Vec<Frame> = Vec::new();
+    for &f in &o.frames {
+        if f != qs.frame {
+            let t = Instant::now();
+            let st = qs.step(f);
+            step_s += t.elapsed().as_secs_f64();
+            writeln!(
+                log,
+                "render: stepped to frame {f}: {} photons re-traced in {:.3} s",
+                st.photons_retraced, st.frame_s
+            )?;
+        }
+        let t = Instant::now();
+        let view = camera::view(&qs.scene, &cam, w, h, cfg.detp.disc_radius);
+        let live = qs.live_store();
+        let acc = gather::gather(&view.discs, &live);
+        let b = radiosity(&view, &acc, live.scale.watts_per_unit);
+        gather_s += t.elapsed().as_secs_f64();
+        let diff = if o.diff.is_some() {
+            let t = Instant::now();
+            let (_, full, _) = qs.full_recalculation();
+            let acc_full = gather::gather(&view.discs, &full);
+            let e_inc = radiosity(&view, &acc, live.scale.watts_per_unit);
+            let e_full = radiosity(&view, &acc_full, full.scale.watts_per_unit);
+            let mut dif = vec![0.0; view.pixels.len()];
+            let mut count = 0;
+            for (k, p) in view.pixels.iter().enumerate() {
+                if let Pixel::Disc { disc, albedo } = *p {
+                    let i = disc as usize;
+                    if acc[i] != acc_full[i] || live.scale != full.scale {
+                        count += 1;
+                        // Back from radiosity to irradiance.
+                        dif[k] = ((e_inc[k] - e_full[k]) * std::f64::consts::PI
+                            / albedo.max(1e-300))
+                        .abs()
+                        .max(f64::MIN_POSITIVE);
+                    }
+                }
+            }
+            full_s += t.elapsed().as_secs_f64();
+            let max = dif.iter().copied().fold(0.0, f64::max);
+            writeln!(
+                log,
+                "render: frame {f}, {w}×{h} pixels, {count} pixel(s) differ (max |ΔE| = {max})"
+            )?;
+            Some((dif, count))
+        } else {
+            None
+        };
+        shown.push(Frame { b, diff });
+    }
+
+    // Tone map and encode.
+    let t = Instant::now();
+    let palette = if o.colormap {
+        Palette::Colour
+    } else {
+        Palette::Grey
+    };
+    let exposure = tone::exposure(shown.iter().map(|f| f.b.as_slice()));
+    let images: Vec<Vec<u8>> = shown
+        .iter()
+        .map(|f| tone::indices(&f.b, exposure, palette))
+        .collect();
+    let (wu, hu) = (w as usize, h as usize);
+    let k = images.len() as u32;
+    let rgb = palette.rgb();
+    let pal = o.colormap.then_some(rgb.as_slice());
+    let data = tone::strip(&images, wu, hu);
+    encode::write_png(
+        &out,
+        &Indexed {
+            width: w * k,
+            height: h,
+            data: &data,
+            palette: pal,
+        },
+    )?;
+    let frames_txt: Vec<String> = o.frames.iter().map(u32::to_string).collect();
+    writeln!(
+        log,
+        "wrote {} ({}×{h}, frame(s) {}, exposure {exposure:.6e})",
+        out.display(),
+        w * k,
+        frames_txt.join(", ")
+    )?;
+    if let Some(g) = &o.gif {
+        encode::write_gif(g, w, h, &images, &rgb, 50)?;
+        writeln!(log, "wrote {} ({w}×{h}, {k} frame(s))", g.display())?;
+    }
+    if let Some(dpath) = &o.diff {
+        let red: Vec<u8> = (0..=255u8).flat_map(|i| [i, 0, 0]).collect();
+        let diffs: Vec<Vec<u8>> = shown
+            .iter()
+            .map(|f| {
+                let (dif, _) = f.diff.as_ref().expect("diffs computed");
+                let max = dif.iter().copied().fold(0.0, f64::max);
+                dif.iter()
+                    .map(|&x| {
+                        if x > 0.0 {
+                            128 + (127.0 * x / max).round() as u8
+                        } else {
+                            0
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let total: usize = shown
+            .iter()
+            .map(|f| f.diff.as_ref().map_or(0, |d| d.1))
+            .sum();
+        let data = tone::strip(&diffs, wu, hu);
+        encode::write_png(
+            dpath,
+            &Indexed {
+                width: w * k,
+                height: h,
+                data: &data,
+                palette: Some(&red),
+            },
+        )?;
+        writeln!(
+            log,
+            "wrote {} (|E_incremental − E_full|: {total} pixel(s) differ over {k} frame(s))",
+            dpath.display()
+        )?;
+    }
+    let encode_s = t.elapsed().as_secs_f64();
+    writeln!(
+        log,
+        "render: times: frame 0 trace {trace_s:.3} s, stepping {step_s:.3} s, gathering {gather_s:.3} s{}, encoding {encode_s:.3} s, total {:.3} s",
+        if o.diff.is_some() {
+            format!(", full recalculation + gather {full_s:.3} s")
+        } else {
+            String::new()
+        },
+        t_all.elapsed().as_secs_f64()
+    )?;
+    Ok(log)
+}
+
+/// The scene's camera, moved and aimed as the options say.
+fn aim(mut cam: Camera, o: &RenderOptions) -> anyhow::Result<Camera> {
+    if let Some(e) = o.eye {
+        cam.eye = e;
+    }
+    if let Some(l) = o.look_at {
+        cam.look_at = l;
+    }
+    if let Some(f) = o.fov {
+        if !(f.is_finite() && f > 0.0 && f < 180.0) {
+            return Err(UsageError(format!("--fov: got {f}, expected degrees in (0, 180)")).into());
+        }
+        cam.fov_deg = f;
+    }
+    let fwd = cam.look_at - cam.eye;
+    if fwd.length() == 0.0 || fwd.cross(cam.up).length() <= 1e-12 * fwd.length() * cam.up.length() {
+        return Err(UsageError(
+            "the camera looks at its own eye or along its up vector (set --eye/--look-at apart, not straight up or down)".into(),
+        )
+        .into());
+    }
+    Ok(cam)
+}
+
+/// The image size: the camera's, or `width` wide with the camera's aspect ratio.
+fn size(cam: &Camera, width: Option<u32>) -> anyhow::Result<(u32, u32)> {
+    match width {
+        None => Ok((cam.width.max(1), cam.height.max(1))),
+        Some(0) => Err(UsageError("--width: got 0, expected at least 1 pixel".into()).into()),
+        Some(w) => {
+            let h = (f64::from(w) * f64::from(cam.height) / f64::from(cam.width.max(1))).round();
+            Ok((w, (h as u32).max(1)))
+        }
+    }
+}
+
+/// Frame 0 of the run (`seed`: overrides the quasi-static photon seed, for `detp` specs).
+fn start(
+    cfg: &QuasiStaticConfig,
+    point: u64,
+    seed: Option<u64>,
+) -> anyhow::Result<(QuasiStatic, crate::detp::quasi_static::FrameStats)> {
+    match seed {
+        None => eq::start(cfg, point),
+        Some(s) => {
+            let scene = eq::scene(cfg)?;
+            let mut p = eq::params(cfg, point, 1.0);
+            p.seed = s;
+            Ok(QuasiStatic::start(scene, p))
+        }
+    }
+}
