@@ -96,6 +96,7 @@ fn config(spec: &Spec, point: usize) -> anyhow::Result<(QuasiStaticConfig, Optio
                     check_every: 0,
                     engine: DynamicEngine::default(),
                     points_frame: None,
+                    reference_photons: None,
                 },
                 // Replica 0's photons of a `detp` run.
                 Some(crate::sample::rng::hash_key(&[d.seed, point as u64, 0])),
