@@ -58,3 +58,27 @@ for name in lines-rays-per-level lines-cache-misses sphere-cache-q detp-engines-
     test -s "$TMP/$name/$name.png" || { echo "error: $name.png was not written" >&2; exit 1; }
     echo "ok: $name.png"
 done
+
+# The quasi-static plot scripts on small fresh runs of their specs (few photons and frames, coarse
+# points); the kitchen ones read ../shared/scenes/bart/ as the committed runs do.
+for name in quasi-static-frames quasi-static-crossover quasi-static-static-points real-scene-levels speed-vs-error; do
+    case "$name" in
+        quasi-static-frames) args=(--set detp.photons=5000 --set dynamic.frames=6 --set dynamic.check_every=2
+                                   --set detp.point_spacing=40) ;;
+        quasi-static-crossover) args=(--set detp.photons=5000 --set dynamic.frames=2 --set detp.point_spacing=40) ;;
+        quasi-static-static-points) args=(--set detp.photons=5000 --set dynamic.frames=3 --set dynamic.check_every=1) ;;
+        real-scene-levels) args=(--set detp.photons=5000 --set detp.point_spacing=0.3 --set detp.replicas=1) ;;
+        speed-vs-error) args=(--set dynamic.frames=3 --set dynamic.check_every=1 --set detp.point_spacing=0.3
+                              --set dynamic.reference_photons=20000) ;;
+    esac
+    spec="experiments/$name.toml"
+    if [ "$name" = speed-vs-error ]; then
+        sed -e 's/^"detp.photons" = .*/"detp.photons" = [2000, 8000]/' "$spec" > "experiments/.check-$name.toml"
+        spec="experiments/.check-$name.toml"
+    fi
+    "$RAYCOST" run "$spec" --out "$TMP" --quiet "${args[@]}"
+    rm -f "experiments/.check-$name.toml"
+    MPLBACKEND=Agg "$PYTHON" "scripts/plot_${name//-/_}.py" --input "$TMP/$name/$name.csv"
+    test -s "$TMP/$name/$name.png" || { echo "error: $name.png was not written" >&2; exit 1; }
+    echo "ok: $name.png"
+done

@@ -207,7 +207,7 @@ pub fn run(spec: &Spec, o: &RenderOptions) -> anyhow::Result<String> {
 
     // Frame 0: the full trace.
     let t = Instant::now();
-    let (mut qs, _) = start(&cfg, o.point as u64, seed)?;
+    let (mut qs, _) = start(&cfg, seed)?;
     let trace_s = t.elapsed().as_secs_f64();
     writeln!(
         log,
@@ -400,14 +400,13 @@ fn size(cam: &Camera, width: Option<u32>) -> anyhow::Result<(u32, u32)> {
 /// Frame 0 of the run (`seed`: overrides the quasi-static photon seed, for `detp` specs).
 fn start(
     cfg: &QuasiStaticConfig,
-    point: u64,
     seed: Option<u64>,
 ) -> anyhow::Result<(QuasiStatic, crate::detp::quasi_static::FrameStats)> {
     match seed {
-        None => eq::start(cfg, point),
+        None => eq::start(cfg),
         Some(s) => {
             let scene = eq::scene(cfg)?;
-            let mut p = eq::params(cfg, point, 1.0);
+            let mut p = eq::params(cfg, 1.0);
             p.seed = s;
             Ok(QuasiStatic::start(scene, p))
         }
