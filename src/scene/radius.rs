@@ -62,6 +62,7 @@ impl RadiusDist {
     }
 
     /// Draws one radius.
+    #[inline]
     pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
         match *self {
             Self::Constant(r) => r,
