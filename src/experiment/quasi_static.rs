@@ -48,6 +48,8 @@ pub fn params(cfg: &QuasiStaticConfig, n_dynamic_points: f64) -> Params {
             DynamicEngine::Hybrid => Engine::Hybrid,
             DynamicEngine::SphereCache => Engine::SphereCache,
             DynamicEngine::DiscIndex => Engine::DiscIndex,
+            // Frame 0 runs by Theorem 2's rule; the predictor then picks (see `run_point`).
+            DynamicEngine::Predicted => Engine::Hybrid,
         },
         crossover: cfg
             .crossover
@@ -123,6 +125,13 @@ pub fn run_point(
 ) -> anyhow::Result<PointResult> {
     let (mut qs, f0) = start(cfg)?;
     progress(cfg.detp.photons);
+    let predictions = cfg.predict.map(|fraction| {
+        let rule: Vec<Used> = (0..qs.scene.movers.len())
+            .map(|m| qs.rule_engine(m))
+            .collect();
+        let p = qs.predict_and_pick(fraction, cfg.engine == DynamicEngine::Predicted);
+        (fraction, p, rule)
+    });
     let (r_c, r0) = qs.root();
     let _ = r_c;
     let n_r = qs.live_segments() as f64;
@@ -277,6 +286,41 @@ pub fn run_point(
         .f("speedup", full.mean / get("frame_s").mean)
         .u("full_mismatch", full_mismatch)
         .u("full_checked", full_checked);
+    if let Some((fraction, preds, rule)) = &predictions {
+        // The first object's figures; picks are counted over all objects.
+        let p = preds[0];
+        let name = |u: Used| match u {
+            Used::SphereCache => "sphere-cache",
+            Used::DiscIndex => "disc-index",
+        };
+        row.f("predict_fraction", *fraction)
+            .f("predicted_sphere_cache_s", p.predicted[0])
+            .f("predicted_disc_index_s", p.predicted[1])
+            .f("measured_sphere_cache_s", p.measured[0])
+            .f("measured_disc_index_s", p.measured[1])
+            .f(
+                "prediction_error_sphere_cache",
+                p.predicted[0] / p.measured[0] - 1.0,
+            )
+            .f(
+                "prediction_error_disc_index",
+                p.predicted[1] / p.measured[1] - 1.0,
+            )
+            .s("predicted_pick", name(p.pick))
+            .s("best_engine", name(p.best))
+            .u(
+                "pick_right",
+                preds.iter().filter(|p| p.pick == p.best).count() as u64,
+            )
+            .u(
+                "rule_pick_right",
+                preds
+                    .iter()
+                    .zip(rule)
+                    .filter(|(p, r)| p.best == **r)
+                    .count() as u64,
+            );
+    }
     if let Some((rmse, ref_s, n)) = reference {
         row.f("irradiance_rmse", rmse)
             .u("reference_photons", n)

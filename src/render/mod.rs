@@ -97,6 +97,7 @@ fn config(spec: &Spec, point: usize) -> anyhow::Result<(QuasiStaticConfig, Optio
                     engine: DynamicEngine::default(),
                     points_frame: None,
                     reference_photons: None,
+                    predict: None,
                 },
                 // Replica 0's photons of a `detp` run.
                 Some(crate::sample::rng::hash_key(&[d.seed, point as u64, 0])),

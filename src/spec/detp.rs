@@ -175,6 +175,7 @@ choice!(
         Hybrid => "hybrid",
         SphereCache => "sphere-cache",
         DiscIndex => "disc-index",
+        Predicted => "predicted",
     } default Hybrid
 );
 

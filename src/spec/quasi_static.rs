@@ -53,6 +53,26 @@ pub struct RawDynamicSpec {
         skip_serializing_if = "Option::is_none"
     )]
     pub reference_photons: Option<u64>,
+    /// The §4.1 predictor: the fraction of the photons whose segments predict each engine's cost
+    /// at frame 0 (with `detp.engine = "predicted"` the prediction picks the engine; default 0.05).
+    #[serde(
+        default,
+        deserialize_with = "opt_fraction",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub predict: Option<f64>,
+}
+
+fn opt_fraction<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    use serde::de::Error as _;
+    let x = super::raw::number(d)?;
+    if x.is_finite() && x > 0.0 && x <= 1.0 {
+        Ok(Some(x))
+    } else {
+        Err(D::Error::custom(format!(
+            "got {x}, expected a fraction of the photons in (0, 1]"
+        )))
+    }
 }
 
 fn one() -> u64 {
@@ -105,6 +125,8 @@ pub struct QuasiStaticConfig {
     pub points_frame: Option<u32>,
     /// Photons of the reference recalculation of the last frame.
     pub reference_photons: Option<u64>,
+    /// The predictor's fraction of photons (set, or 0.05 when the engine is "predicted").
+    pub predict: Option<f64>,
 }
 
 impl QuasiStaticConfig {
@@ -188,6 +210,9 @@ impl QuasiStaticConfig {
             engine: d.engine.unwrap_or_default(),
             points_frame: dy.points_frame.map(|f| f as u32),
             reference_photons: dy.reference_photons,
+            predict: dy
+                .predict
+                .or((d.engine == Some(DynamicEngine::Predicted)).then_some(0.05)),
         })
     }
 }

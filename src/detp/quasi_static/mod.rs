@@ -225,6 +225,23 @@ pub struct QuasiStatic {
     spheres: Vec<(DVec3, f64)>,
     /// Seconds to build the static disc index (once, at frame 0).
     pub static_index_build_s: f64,
+    /// Engines picked per mover by [`QuasiStatic::predict_and_pick`] (empty: the rule of
+    /// `params.engine`).
+    picked: Vec<Used>,
+}
+
+/// The §4.1 predictor for one mover: each engine's dynamic-point cost predicted from a fraction of
+/// the photons, and measured on all of them at the same frame.
+#[derive(Clone, Copy, Debug)]
+pub struct Prediction {
+    /// Predicted seconds (sphere cache, disc index): the fraction's seconds over the fraction.
+    pub predicted: [f64; 2],
+    /// Measured seconds on every segment (sphere cache, disc index).
+    pub measured: [f64; 2],
+    /// The engine the prediction picks.
+    pub pick: Used,
+    /// The engine that was faster on every segment.
+    pub best: Used,
 }
 
 /// Seconds spent in `f`, with its value.
@@ -283,6 +300,7 @@ impl QuasiStatic {
             dynamic,
             frame: 0,
             static_index_build_s,
+            picked: Vec::new(),
         };
         qs.rebuild_index();
         let mut stats = FrameStats {
@@ -366,20 +384,28 @@ impl QuasiStatic {
         }
     }
 
-    /// Which engine a mover's points use.
-    fn engine_for(&self, mover: usize) -> Used {
+    /// Which engine a mover's points use by the run's rule (Theorem 2's ratio for the hybrid),
+    /// unless the predictor picked.
+    pub fn rule_engine(&self, mover: usize) -> Used {
         match self.params.engine {
             Engine::SphereCache => Used::SphereCache,
             Engine::DiscIndex => Used::DiscIndex,
             Engine::Hybrid => {
-                let ratio = self.scene.movers[mover].radius() / self.root.1;
-                if ratio < self.params.crossover {
+                if self.scene.movers[mover].radius() / self.root.1 < self.params.crossover {
                     Used::SphereCache
                 } else {
                     Used::DiscIndex
                 }
             }
         }
+    }
+
+    /// Which engine a mover's points use.
+    fn engine_for(&self, mover: usize) -> Used {
+        self.picked
+            .get(mover)
+            .copied()
+            .unwrap_or_else(|| self.rule_engine(mover))
     }
 
     /// Every mover's points posed at the current frame and summed afresh from `store`. `indexed`:
@@ -389,13 +415,26 @@ impl QuasiStatic {
         store: &SegmentStore,
         indexed: bool,
     ) -> Vec<(Discs, Vec<Acc>, Used, CacheStats, IndexStats)> {
+        self.dynamic_sums_with(store, indexed, None, None)
+    }
+
+    /// [`Self::dynamic_sums`] with every mover's engine forced to `force` (when given), for every
+    /// mover or `only` one.
+    fn dynamic_sums_with(
+        &self,
+        store: &SegmentStore,
+        indexed: bool,
+        force: Option<Used>,
+        only: Option<usize>,
+    ) -> Vec<(Discs, Vec<Acc>, Used, CacheStats, IndexStats)> {
         let t = self.scene.tau();
         self.dynamic
             .iter()
+            .filter(|dp| only.is_none_or(|m| m == dp.mover))
             .map(|dp| {
                 let discs = dp.posed(&self.scene, t, self.params.disc_radius);
                 let mut acc = vec![0; discs.len()];
-                let used = self.engine_for(dp.mover);
+                let used = force.unwrap_or_else(|| self.engine_for(dp.mover));
                 let (mut cs, mut is) = (CacheStats::default(), IndexStats::default());
                 if discs.is_empty() {
                     return (discs, acc, used, cs, is);
@@ -594,6 +633,50 @@ impl QuasiStatic {
             self.static_discs.len(),
             self.dynamic.iter().map(|d| d.discs.len()).collect(),
         )
+    }
+
+    /// The paper's §4.1 predictor: runs each dynamic-point engine on the segments of the first
+    /// `fraction` of the photons (a fraction of the rays: both engines' costs are linear in n_R),
+    /// scales its time by 1/fraction, and (with `apply`) picks the cheaper one per mover for the
+    /// frames that follow. To say whether the pick was right, both engines also run on every
+    /// segment once.
+    pub fn predict_and_pick(&mut self, fraction: f64, apply: bool) -> Vec<Prediction> {
+        assert!(fraction > 0.0 && fraction <= 1.0, "fraction in (0, 1]");
+        let live = self.live_store();
+        let cut = ((self.params.photons as f64 * fraction).ceil() as u32).max(1);
+        let part = SegmentStore::new(
+            live.segments
+                .iter()
+                .filter(|s| s.photon < cut)
+                .copied()
+                .collect(),
+            live.scale,
+        );
+        let time = |store: &SegmentStore, u: Used, m: usize| {
+            let t = Instant::now();
+            let _ = self.dynamic_sums_with(store, false, Some(u), Some(m));
+            t.elapsed().as_secs_f64()
+        };
+        let engines = [Used::SphereCache, Used::DiscIndex];
+        let pick_of = |c: [f64; 2]| if c[0] <= c[1] { engines[0] } else { engines[1] };
+        let out: Vec<Prediction> = self
+            .dynamic
+            .iter()
+            .map(|dp| {
+                let predicted = engines.map(|u| time(&part, u, dp.mover) / fraction);
+                let measured = engines.map(|u| time(&live, u, dp.mover));
+                Prediction {
+                    predicted,
+                    measured,
+                    pick: pick_of(predicted),
+                    best: pick_of(measured),
+                }
+            })
+            .collect();
+        if apply {
+            self.picked = out.iter().map(|p| p.pick).collect();
+        }
+        out
     }
 
     /// Irradiance at every sample point (order of [`Self::sums`]): power over πd².

@@ -119,3 +119,27 @@ fn hybrid_picks_by_ratio() {
     }
     assert!(st.used.contains(&Used::SphereCache) || st.used.contains(&Used::DiscIndex));
 }
+
+#[test]
+fn the_predictor_picks_a_measured_engine_and_stays_exact() {
+    let (mut qs, _) = QuasiStatic::start(scene(), params(Engine::Hybrid, 3000, 10));
+    let preds = qs.predict_and_pick(0.25, true);
+    assert_eq!(preds.len(), qs.scene.movers.len());
+    for p in &preds {
+        assert!(p
+            .predicted
+            .iter()
+            .chain(&p.measured)
+            .all(|&s| s > 0.0 && s.is_finite()));
+        let faster = if p.measured[0] <= p.measured[1] {
+            Used::SphereCache
+        } else {
+            Used::DiscIndex
+        };
+        assert_eq!(p.best, faster);
+    }
+    let st = qs.step(5);
+    assert_eq!(st.used, preds.iter().map(|p| p.pick).collect::<Vec<_>>());
+    let (full, ..) = qs.full_recalculation();
+    assert_eq!(mismatches(&qs.sums(), &full), 0);
+}
