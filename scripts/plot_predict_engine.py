@@ -8,7 +8,7 @@ import raycost_plot as rp
 
 NAME = "predict-engine"
 REQUIRED = ["dynamic.ratio", "predicted_sphere_cache_s", "predicted_disc_index_s", "measured_sphere_cache_s",
-            "measured_disc_index_s", "pick_right", "rule_pick_right", "predicted_pick", "best_engine"]
+            "measured_disc_index_s", "timed_pick_right", "timed_rule_pick_right", "timed_pick", "timed_best_engine"]
 
 
 def plot(args):
@@ -30,14 +30,14 @@ def plot(args):
     ax_e.set_xlabel("r_D / r_0")
     ax_e.set_ylabel("prediction error, %")
     ax_e.legend(fontsize=7)
-    right = sum(r["pick_right"] for r in rows)
-    rule = sum(r["rule_pick_right"] for r in rows)
+    right = sum(r["timed_pick_right"] for r in rows)
+    rule = sum(r["timed_rule_pick_right"] for r in rows)
     rp.text_box(ax_e, "pick right: predictor %d/%d, Theorem 2 rule %d/%d" % (right, len(rows), rule, len(rows)))
     for r in rows:
         print("r_D/r_0 %.2f: predicted SC %.4f s DI %.4f s; measured SC %.4f s DI %.4f s; pick %s, best %s (%s); rule right: %s" % (
             r["dynamic.ratio"], r["predicted_sphere_cache_s"], r["predicted_disc_index_s"], r["measured_sphere_cache_s"],
-            r["measured_disc_index_s"], r["predicted_pick"], r["best_engine"], "right" if r["pick_right"] else "WRONG",
-            "yes" if r["rule_pick_right"] else "no"))
+            r["measured_disc_index_s"], r["timed_pick"], r["timed_best_engine"], "right" if r["timed_pick_right"] else "WRONG",
+            "yes" if r["timed_rule_pick_right"] else "no"))
     print("predictor right %d/%d, Theorem 2 rule right %d/%d" % (right, len(rows), rule, len(rows)))
     rp.finish(fig, args)
 

@@ -299,21 +299,21 @@ pub fn run_point(
             .f("measured_sphere_cache_s", p.measured[0])
             .f("measured_disc_index_s", p.measured[1])
             .f(
-                "prediction_error_sphere_cache",
+                "timed_prediction_error_sphere_cache",
                 p.predicted[0] / p.measured[0] - 1.0,
             )
             .f(
-                "prediction_error_disc_index",
+                "timed_prediction_error_disc_index",
                 p.predicted[1] / p.measured[1] - 1.0,
             )
-            .s("predicted_pick", name(p.pick))
-            .s("best_engine", name(p.best))
+            .s("timed_pick", name(p.pick))
+            .s("timed_best_engine", name(p.best))
             .u(
-                "pick_right",
+                "timed_pick_right",
                 preds.iter().filter(|p| p.pick == p.best).count() as u64,
             )
             .u(
-                "rule_pick_right",
+                "timed_rule_pick_right",
                 preds
                     .iter()
                     .zip(rule)

@@ -70,7 +70,14 @@ impl Row {
     }
 }
 
-/// Is `col` a timing column (allowed to differ between runs of the same spec and seed)?
+/// Is `col` a timing column (allowed to differ between runs of the same spec and seed)? Seconds
+/// end in `_s`; an estimate of seconds is `X_s_mean`, `X_s_se`; `rays_per_s` and `speedup` are
+/// rates; `timed_*` columns are decisions taken from measured times (the §4.1 predictor's pick).
 pub fn is_timing_column(col: &str) -> bool {
-    col.ends_with("_s") || col == "rays_per_s"
+    col.ends_with("_s")
+        || col.ends_with("_s_mean")
+        || col.ends_with("_s_se")
+        || col == "rays_per_s"
+        || col == "speedup"
+        || col.starts_with("timed_")
 }
