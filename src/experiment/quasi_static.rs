@@ -231,14 +231,7 @@ pub fn run_point(
     let get = |name: &str| est[names.iter().position(|n| *n == name).expect("a metric")];
 
     let mut row = Row::default();
-    let used: Vec<&str> = f0
-        .used
-        .iter()
-        .map(|u| match u {
-            Used::SphereCache => "sphere-cache",
-            Used::DiscIndex => "disc-index",
-        })
-        .collect();
+    let used: Vec<&str> = f0.used.iter().map(|u| u.as_str()).collect();
     row.u("frames", u64::from(cfg.frames))
         .u("photons", cfg.detp.photons)
         .u("segments", n_r as u64)
@@ -262,21 +255,8 @@ pub fn run_point(
         Theory::Prediction(f_r),
     )
     .write(&mut row, &mut summary);
-    for n in [
-        "photons_retraced",
-        "segments_retraced",
-        "segments_changed",
-        "search_tests",
-        "search_cells",
-        "static_tests",
-        "dynamic_tests",
-        "dynamic_sphere_tests",
-        "search_s",
-        "retrace_s",
-        "static_s",
-        "dynamic_s",
-        "frame_s",
-    ] {
+    // The rest of the per-frame estimates (the first two carry theory columns, above).
+    for n in &names[2..] {
         row.estimate(n, &get(n));
     }
     let full = full_s.estimate();
@@ -289,10 +269,7 @@ pub fn run_point(
     if let Some((fraction, preds, rule)) = &predictions {
         // The first object's figures; picks are counted over all objects.
         let p = preds[0];
-        let name = |u: Used| match u {
-            Used::SphereCache => "sphere-cache",
-            Used::DiscIndex => "disc-index",
-        };
+        let name = |u: Used| u.as_str();
         row.f("predict_fraction", *fraction)
             .f("predicted_sphere_cache_s", p.predicted[0])
             .f("predicted_disc_index_s", p.predicted[1])
@@ -385,14 +362,7 @@ pub fn run_point(
 /// One row of the frames table.
 fn frame_row(st: &FrameStats, full: Option<(f64, u64)>) -> Row {
     let mut r = Row::default();
-    let used: Vec<&str> = st
-        .used
-        .iter()
-        .map(|u| match u {
-            Used::SphereCache => "sphere-cache",
-            Used::DiscIndex => "disc-index",
-        })
-        .collect();
+    let used: Vec<&str> = st.used.iter().map(|u| u.as_str()).collect();
     r.u("frame", u64::from(st.frame))
         .u("retraced_rays", st.affected_segments)
         .u("rays_meeting_object", st.meeting_new)

@@ -64,6 +64,16 @@ pub enum Used {
     DiscIndex,
 }
 
+impl Used {
+    /// The spelling in specs and tables.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Used::SphereCache => "sphere-cache",
+            Used::DiscIndex => "disc-index",
+        }
+    }
+}
+
 /// Settings of a quasi-static run.
 #[derive(Clone, Debug)]
 pub struct Params {
