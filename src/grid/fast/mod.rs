@@ -19,8 +19,9 @@
 //!   the AVX2 walk ([`avx2`]) computes cells a few steps before it tests them and prefetches each
 //!   cell's offsets, then its records ([`FastGrid::lookahead`]), so that the misses of several cells
 //!   are in flight together instead of one after another.
-//! - **Tests are 8 at a time** (AVX2; 16 with AVX-512, [`Walk::Avx512`]), in f32, in the quantised
-//!   units of the cell, and only a listing that passes is re-tested exactly ([`Sphere::intersect`], f64) on its full-precision copy, stored in
+//! - **Tests are 8 at a time** (AVX2; 16 with AVX-512, [`Walk::Avx512`], opt-in: see
+//!   [`Walk::PREFERRED`]), in f32, in the quantised units of the cell, and only a listing that
+//!   passes is re-tested exactly ([`Sphere::intersect`], f64) on its full-precision copy, stored in
 //!   listing order so that a candidate costs one miss, not two (index, then sphere).
 //! - **The cell width follows the costs**: with a test costing ~1/30 of a step, wider cells (~17
 //!   listings) beat the paper-style optimum of a few listings per cell; `raycost bench` fits T_I and
@@ -124,30 +125,45 @@ pub enum Walk {
 }
 
 impl Walk {
-    /// Every walk, fastest first where the CPU has it.
+    /// Every walk, widest filter first.
     pub const ALL: [Walk; 3] = [Walk::Avx512, Walk::Avx2, Walk::Portable];
 
-    /// The walk a new grid uses on this CPU: the first of [`Walk::PREFERRED`] it can run.
-    ///
-    /// AVX-512 comes first although at the cell width that suits the AVX2 walk it is no faster:
-    /// measured with `examples/walk_speed.rs` (n = 10⁶, ρ = 1, r = 0.1, rays from the centre,
-    /// interleaved rounds, medians; 2-vCPU "Intel(R) Xeon(R) Processor" KVM guest with AVX-512
-    /// F/VL, loaded by other work), AVX-512 / AVX2 rays/s on 1 thread is 0.99–1.00 at a = 2.0 and
-    /// 2.36 (16–10 listings per cell: the walk waits on memory, not on the filter), 1.10 at
-    /// a = 2.8, 1.16 at a = 3.2 and 1.20 at a = 4 (73 listings per cell). It is never measurably
-    /// slower, and it makes filtering cheaper, so the cost model that `raycost bench` fits on the
-    /// walk in use picks wider cells, where it wins: best width, AVX-512 1.58 M rays/s (a = 2.8)
-    /// against AVX2 1.52 M (a = 2.36), 1.04×. A CPU whose AVX-512 clocks down or splits 512-bit
-    /// operations in two could differ; force a walk with [`FastGrid::set_walk`] to compare.
+    /// The walk a new grid uses on this CPU: the one named by the environment variable
+    /// `RAYCOST_WALK` (`avx512`, `avx2` or `portable`) if set and this CPU can run it, else the
+    /// first of [`Walk::PREFERRED`] it can run. `raycost bench` records the result (`walk = ...`
+    /// in `bench.meta.toml`).
     pub fn detect() -> Self {
-        Self::PREFERRED
+        let forced = match std::env::var("RAYCOST_WALK").as_deref() {
+            Ok("avx512") => Some(Walk::Avx512),
+            Ok("avx2") => Some(Walk::Avx2),
+            Ok("portable") => Some(Walk::Portable),
+            _ => None,
+        };
+        forced
             .into_iter()
+            .chain(Self::PREFERRED)
             .find(|w| w.available())
             .unwrap_or(Walk::Portable)
     }
 
-    /// Order of preference of [`detect`](Self::detect).
-    pub const PREFERRED: [Walk; 3] = [Walk::Avx512, Walk::Avx2, Walk::Portable];
+    /// Order of preference of [`detect`](Self::detect): AVX2 first, so that a CPU with AVX-512
+    /// still takes the AVX2 walk unless `RAYCOST_WALK=avx512` asks for the other one.
+    ///
+    /// Why: the 16-wide filter is no faster at the cell widths the cost model picks. Measured with
+    /// `examples/walk_speed.rs` (n = 10⁶, ρ = 1, r = 0.1, 200 000 rays from the centre per round, 9
+    /// interleaved rounds, medians; 2-vCPU KVM guest "Intel(R) Xeon(R) Processor", family 6
+    /// model 167, AVX-512 F/VL/BW/DQ/FP16), AVX-512 / AVX2 rays/s, median of paired rounds:
+    /// - a = 2.36 (the width `raycost bench` picks, 16.4 listings per cell): 1.004 and 1.004 on 1
+    ///   thread (1.53–1.56 M rays/s each), 0.990 and 0.985 on 2 threads (3.0–3.2 M each);
+    /// - a = 2.0: 0.99 (1 thread); a = 2.8: 1.10 / 1.08 (1 / 2 threads); a = 3.2: 1.16; a = 4
+    ///   (73 listings per cell): 1.20 / 1.28.
+    ///
+    /// The walk waits on memory (a DRAM miss per few cells), not on the filter, once a cell holds
+    /// about one AVX2 vector's worth of listings; AVX-512 only wins where cells are wide, and at
+    /// its own best width (a = 2.8: 1.56 M rays/s on 1 thread) it ties AVX2 at its best (a = 2.36:
+    /// 1.52–1.56 M). On 2 threads at a = 2.36 it is 1–1.5 % slower, and older AVX-512 CPUs lower
+    /// their clock under 512-bit instructions, so AVX2 stays the default.
+    pub const PREFERRED: [Walk; 3] = [Walk::Avx2, Walk::Avx512, Walk::Portable];
 
     /// Whether this CPU can run the walk.
     pub fn available(self) -> bool {
