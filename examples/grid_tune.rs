@@ -9,7 +9,8 @@
 //! `A` is the cell width; `AHEAD` and `RECORDS` the walk's lookahead (cells computed and prefetched
 //! ahead, cells whose records are prefetched ahead; default 6:3); `twice` traces every ray twice in
 //! a row, so that `twice − once` is the in-cache (compute-only) cost of a ray and `once` minus that
-//! is what memory costs. Environment: `PORTABLE=1` uses the portable walk, `SORTED=1` traces the
+//! is what memory costs. Environment: `PORTABLE=1` uses the portable walk (as `WALK=portable`;
+//! `WALK=avx2` or `WALK=avx512` force those walks where the CPU has them), `SORTED=1` traces the
 //! rays in direction order (coherent), `ROUNDS_SHOWN=1` prints every round.
 //!
 //! Scene: N centres uniform in a cube at ρ = 1, r = 0.1, rays from its centre (the bench's).
@@ -73,6 +74,12 @@ fn main() {
             }
             if std::env::var_os("PORTABLE").is_some() {
                 grid.set_walk(Walk::Portable);
+            }
+            match std::env::var("WALK").as_deref() {
+                Ok("avx512") => grid.set_walk(Walk::Avx512),
+                Ok("avx2") => grid.set_walk(Walk::Avx2),
+                Ok("portable") => grid.set_walk(Walk::Portable),
+                _ => {}
             }
             eprintln!(
                 "{c}: built in {:.2} s, {:.0} MB",

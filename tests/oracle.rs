@@ -19,19 +19,25 @@ use raycost::sample::{directions::uniform_direction, rng::stream};
 /// Traces every ray through the grid and brute force; panics with a rerun hint on the first mismatch.
 fn check(label: &str, frame: GridFrame, spheres: &[Sphere], rays: &[Ray]) -> usize {
     let grid = FiniteGrid::build(frame, spheres);
-    let mut fast = FastGrid::build(frame, spheres);
-    let mut portable = FastGrid::build(frame, spheres);
-    portable.set_walk(Walk::Portable);
-    fast.set_walk(Walk::Avx2);
+    // The query-optimised grid on every walk this CPU has (AVX-512, AVX2, portable).
+    let fast: Vec<FastGrid> = Walk::all_available()
+        .into_iter()
+        .map(|w| {
+            let mut g = FastGrid::build(frame, spheres);
+            g.set_walk(w);
+            assert_eq!(g.walk(), w);
+            g
+        })
+        .collect();
     let mut mb = Mailbox::default();
     let mut hits = 0;
     for (i, ray) in rays.iter().enumerate() {
         let mut lists = &grid;
         let counted = trace(&mut lists, ray, &mut mb, i % 2 == 0, u32::MAX);
         let got = counted.hit;
-        // The query-optimised grid, on both walks (the AVX2 one where the CPU has it): same hit bit
-        // for bit, same N_I (listings) and N_S.
-        for g in [&fast, &portable] {
+        // The query-optimised grid, on every walk: same hit bit for bit, same N_I (listings) and
+        // N_S.
+        for g in &fast {
             let q = g.trace(ray);
             assert_eq!(
                 (q.hit.map(|h| (h.id, h.t.to_bits())), q.n_i, q.n_s),

@@ -19,7 +19,8 @@
 //!   the AVX2 walk ([`avx2`]) computes cells a few steps before it tests them and prefetches each
 //!   cell's offsets, then its records ([`FastGrid::lookahead`]), so that the misses of several cells
 //!   are in flight together instead of one after another.
-//! - **Tests are 8 at a time**, in f32, in the quantised units of the cell, and only a listing that
+//! - **Tests are 8 at a time** (AVX2; 16 with AVX-512, [`Walk::Avx512`], opt-in: see
+//!   [`Walk::PREFERRED`]), in f32, in the quantised units of the cell, and only a listing that
 //!   passes is re-tested exactly ([`Sphere::intersect`], f64) on its full-precision copy, stored in
 //!   listing order so that a candidate costs one miss, not two (index, then sphere).
 //! - **The cell width follows the costs**: with a test costing ~1/30 of a step, wider cells (~17
@@ -91,7 +92,8 @@ pub struct FastGrid {
     filter_r2: f32,
     /// Margin m_b of the along-ray test, quantisation units.
     margin_b: f32,
-    use_avx2: bool,
+    /// The walk [`trace`](Self::trace) takes (one this CPU can run).
+    walk: Walk,
     /// Cells ahead of the one tested at which the AVX2 walk computes a cell (and prefetches its
     /// offsets), and at which it prefetches the cell's records.
     pub lookahead: (usize, usize),
@@ -110,9 +112,12 @@ pub struct FastTrace {
     pub n_c: u32,
 }
 
-/// Which walk [`FastGrid::trace`] uses.
+/// Which walk [`FastGrid::trace`] uses. All return the same hits and counts, bit for bit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Walk {
+    /// The pipelined walk with a 16-wide filter (x86_64 CPUs with AVX-512 F and VL besides AVX2,
+    /// FMA and BMI2).
+    Avx512,
     /// The pipelined AVX2 walk (x86_64 CPUs with AVX2, FMA and BMI2).
     Avx2,
     /// The plain walk: [`Dda`] cell by cell, scalar filter. Any CPU.
@@ -120,13 +125,58 @@ pub enum Walk {
 }
 
 impl Walk {
-    /// The walk a new grid uses on this CPU.
+    /// Every walk, widest filter first.
+    pub const ALL: [Walk; 3] = [Walk::Avx512, Walk::Avx2, Walk::Portable];
+
+    /// The walk a new grid uses on this CPU: the one named by the environment variable
+    /// `RAYCOST_WALK` (`avx512`, `avx2` or `portable`) if set and this CPU can run it, else the
+    /// first of [`Walk::PREFERRED`] it can run. `raycost bench` records the result (`walk = ...`
+    /// in `bench.meta.toml`).
     pub fn detect() -> Self {
-        if avx2_available() {
-            Walk::Avx2
-        } else {
-            Walk::Portable
+        let forced = match std::env::var("RAYCOST_WALK").as_deref() {
+            Ok("avx512") => Some(Walk::Avx512),
+            Ok("avx2") => Some(Walk::Avx2),
+            Ok("portable") => Some(Walk::Portable),
+            _ => None,
+        };
+        forced
+            .into_iter()
+            .chain(Self::PREFERRED)
+            .find(|w| w.available())
+            .unwrap_or(Walk::Portable)
+    }
+
+    /// Order of preference of [`detect`](Self::detect): AVX2 first, so that a CPU with AVX-512
+    /// still takes the AVX2 walk unless `RAYCOST_WALK=avx512` asks for the other one.
+    ///
+    /// Why: the 16-wide filter is no faster at the cell widths the cost model picks. Measured with
+    /// `examples/walk_speed.rs` (n = 10⁶, ρ = 1, r = 0.1, 200 000 rays from the centre per round, 9
+    /// interleaved rounds, medians; 2-vCPU KVM guest "Intel(R) Xeon(R) Processor", family 6
+    /// model 167, AVX-512 F/VL/BW/DQ/FP16), AVX-512 / AVX2 rays/s, median of paired rounds:
+    /// - a = 2.36 (the width `raycost bench` picks, 16.4 listings per cell): 1.004 and 1.004 on 1
+    ///   thread (1.53–1.56 M rays/s each), 0.990 and 0.985 on 2 threads (3.0–3.2 M each);
+    /// - a = 2.0: 0.99 (1 thread); a = 2.8: 1.10 / 1.08 (1 / 2 threads); a = 3.2: 1.16; a = 4
+    ///   (73 listings per cell): 1.20 / 1.28.
+    ///
+    /// The walk waits on memory (a DRAM miss per few cells), not on the filter, once a cell holds
+    /// about one AVX2 vector's worth of listings; AVX-512 only wins where cells are wide, and at
+    /// its own best width (a = 2.8: 1.56 M rays/s on 1 thread) it ties AVX2 at its best (a = 2.36:
+    /// 1.52–1.56 M). On 2 threads at a = 2.36 it is 1–1.5 % slower, and older AVX-512 CPUs lower
+    /// their clock under 512-bit instructions, so AVX2 stays the default.
+    pub const PREFERRED: [Walk; 3] = [Walk::Avx2, Walk::Avx512, Walk::Portable];
+
+    /// Whether this CPU can run the walk.
+    pub fn available(self) -> bool {
+        match self {
+            Walk::Avx512 => avx2_available() && avx512_available(),
+            Walk::Avx2 => avx2_available(),
+            Walk::Portable => true,
         }
+    }
+
+    /// The walks this CPU can run (tests run every one of them).
+    pub fn all_available() -> Vec<Walk> {
+        Self::ALL.into_iter().filter(|w| w.available()).collect()
     }
 }
 
@@ -203,7 +253,7 @@ impl FastGrid {
             qstep,
             filter_r2: (filter_r * filter_r) as f32,
             margin_b: margin_b as f32,
-            use_avx2: avx2_available(),
+            walk: Walk::detect(),
             lookahead: (6, 3),
         }
     }
@@ -218,17 +268,17 @@ impl FastGrid {
 
     /// The walk [`trace`](Self::trace) uses on this machine.
     pub fn walk(&self) -> Walk {
-        if self.use_avx2 {
-            Walk::Avx2
-        } else {
-            Walk::Portable
-        }
+        self.walk
     }
 
-    /// Forces a walk (for tests and comparisons); [`Walk::Avx2`] falls back to the portable walk
-    /// where the CPU lacks AVX2, FMA or BMI2.
+    /// Forces a walk (for tests and comparisons); a walk the CPU cannot run falls back to the
+    /// next one it can ([`Walk::Avx512`] → [`Walk::Avx2`] → [`Walk::Portable`]).
     pub fn set_walk(&mut self, walk: Walk) {
-        self.use_avx2 = walk == Walk::Avx2 && avx2_available();
+        self.walk = Walk::ALL
+            .into_iter()
+            .skip_while(|&w| w != walk)
+            .find(|w| w.available())
+            .unwrap_or(Walk::Portable);
     }
 
     /// The first sphere `ray` enters inside the grid, with N_I and N_S. `ray` must start inside
@@ -246,12 +296,16 @@ impl FastGrid {
             },
             "the query grid traces rays that start inside it"
         );
-        #[cfg(target_arch = "x86_64")]
-        if self.use_avx2 {
-            // SAFETY: `use_avx2` is true only when the CPU reports AVX2, FMA and BMI2.
-            return unsafe { avx2::trace(self, ray) };
+        match self.walk {
+            // SAFETY: `walk` is Avx512 only when the CPU reports AVX-512 F and VL, AVX2, FMA and
+            // BMI2 (`Walk::available`).
+            #[cfg(target_arch = "x86_64")]
+            Walk::Avx512 => unsafe { avx2::trace_avx512(self, ray) },
+            // SAFETY: `walk` is Avx2 only when the CPU reports AVX2, FMA and BMI2.
+            #[cfg(target_arch = "x86_64")]
+            Walk::Avx2 => unsafe { avx2::trace(self, ray) },
+            _ => self.trace_portable(ray),
         }
-        self.trace_portable(ray)
     }
 
     /// The plain walk: [`Dda`] cell by cell, the filter one listing at a time.
@@ -349,6 +403,17 @@ fn avx2_available() -> bool {
     }
 }
 
+fn avx512_available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use rand::Rng;
@@ -403,35 +468,43 @@ mod tests {
         assert!(grazes > 1000, "too few grazing cases: {grazes}");
     }
 
-    /// Both walks return the same hit and counts on random rays through a random scene.
+    /// Every walk this CPU has returns the same hit and counts on random rays through random
+    /// scenes: a sparse one (~5 listings per cell, large spheres in many cells) and a dense one
+    /// (~45 per cell), so that every tail length of the 8- and 16-wide filters occurs.
     #[test]
-    fn avx2_and_portable_walks_agree() {
+    fn avx512_avx2_and_portable_walks_agree() {
         let mut rng = stream(&[0xA7A7]);
         let frame = GridFrame {
             origin: DVec3::splat(-10.0),
             width: 1.3,
             dims: Some([16, 15, 17]),
         };
-        let spheres: Vec<Sphere> = (0..6000)
-            .map(|id| Sphere {
-                c: DVec3::new(rng.gen(), rng.gen(), rng.gen()) * 21.0 - DVec3::splat(10.0),
-                r: if id % 97 == 0 {
-                    2.0
-                } else {
-                    rng.gen_range(0.02..0.3)
-                },
-                id,
-            })
-            .collect();
-        let mut grid = FastGrid::build(frame, &spheres);
-        for _ in 0..20_000 {
-            let o = DVec3::new(rng.gen(), rng.gen(), rng.gen()) * 19.0 - DVec3::splat(9.5);
-            let ray = Ray::new(o, uniform_direction(&mut rng));
-            grid.set_walk(Walk::Avx2);
-            let fast = grid.trace(&ray);
-            grid.set_walk(Walk::Portable);
-            let plain = grid.trace(&ray);
-            assert_eq!(fast, plain, "ray {ray:?}");
+        let walks = Walk::all_available();
+        eprintln!("walks on this CPU: {walks:?}");
+        for (n, n_rays) in [(6000, 20_000), (60_000, 5_000)] {
+            let spheres: Vec<Sphere> = (0..n)
+                .map(|id| Sphere {
+                    c: DVec3::new(rng.gen(), rng.gen(), rng.gen()) * 21.0 - DVec3::splat(10.0),
+                    r: if id % 97 == 0 {
+                        2.0
+                    } else {
+                        rng.gen_range(0.02..0.3)
+                    },
+                    id,
+                })
+                .collect();
+            let mut grid = FastGrid::build(frame, &spheres);
+            for _ in 0..n_rays {
+                let o = DVec3::new(rng.gen(), rng.gen(), rng.gen()) * 19.0 - DVec3::splat(9.5);
+                let ray = Ray::new(o, uniform_direction(&mut rng));
+                grid.set_walk(Walk::Portable);
+                let plain = grid.trace(&ray);
+                for &w in &walks {
+                    grid.set_walk(w);
+                    assert_eq!(grid.walk(), w);
+                    assert_eq!(grid.trace(&ray), plain, "n = {n}, {w:?} walk, ray {ray:?}");
+                }
+            }
         }
     }
 }
