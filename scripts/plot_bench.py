@@ -22,6 +22,7 @@ NAME = "bench"
 REQUIRED = ["engine", "n", "threads", "rays_per_s", "build_s", "peak_mem_bytes", "mismatches"]
 STYLES = {"grid": ("o", "-"), "grid-infinite": ("", "--"), "brute-force": ("s", "-"), "embree": ("D", "-")}
 DETP = ("sphere-cache", "disc-index-grid", "disc-index-octree")
+QUASI_STATIC = ("frame0", "full", "incremental", "kitchen-frame0", "kitchen-full", "kitchen-incremental")
 
 
 def is_detp(r):
@@ -76,8 +77,36 @@ def median(xs):
     return math.nan if m == 0 else (xs[m // 2] if m % 2 else 0.5 * (xs[m // 2 - 1] + xs[m // 2]))
 
 
+def plot_quasi_static(rows, args):
+    """Seconds of frame 0, one incremental frame and a full recalculation of it, per scene."""
+    fig, axes = rp.subplots(1, 1, panel_w=6.5, panel_h=4.0)
+    ax = axes[0][0]
+    names = [r["engine"] for r in rows]
+    secs = [r["frame_s"] for r in rows]
+    ax.bar(range(len(rows)), secs, color=["C%d" % (0 if "frame0" in n else 1 if "full" in n else 2) for n in names])
+    ax.set_xticks(range(len(rows)))
+    ax.set_xticklabels(names, rotation=15, fontsize=8)
+    ax.set_yscale("log")
+    ax.set_ylabel("seconds")
+    by = {r["engine"]: r for r in rows}
+    lines = []
+    for scene, pre in (("Cornell", ""), ("kitchen", "kitchen-")):
+        inc, full = by.get(pre + "incremental"), by.get(pre + "full")
+        if inc and full:
+            lines.append("%s: incremental %.1f× faster than full, frame / implied %.2f, %d mismatches" % (
+                scene, full["frame_s"] / inc["frame_s"], inc["frame_s"] / inc["implied_s"], inc["mismatches"]))
+    for l in lines:
+        print(l)
+    rp.text_box(ax, "\n".join(lines), loc="upper right", fontsize=7.5)
+    ax.set_title("quasi-static: one frame, incremental vs full", fontsize=10)
+    args.output = rp.default_png(args.input, "quasi-static")
+    rp.finish(fig, args)
+
+
 def plot(args):
     rows = rp.read_csv(args.input, REQUIRED)
+    qs_rows = [r for r in rows if r["engine"] in QUASI_STATIC]
+    rows = [r for r in rows if r["engine"] not in QUASI_STATIC]
     detp_rows = [r for r in rows if is_detp(r)]
     rows = [r for r in rows if not is_detp(r)]
     rows = [r for r in rows if isinstance(r.get("n"), (int, float)) and r["n"] == r["n"]]
@@ -211,6 +240,8 @@ def plot(args):
     rp.finish(fig, args)
     if detp_rows:
         plot_detp(detp_rows, args)
+    if qs_rows:
+        plot_quasi_static(qs_rows, args)
 
 
 if __name__ == "__main__":
