@@ -62,13 +62,14 @@ done
 # The quasi-static plot scripts on small fresh runs of their specs (few photons and frames, coarse
 # points); the kitchen ones read ../shared/scenes/bart/ as the committed runs do.
 for name in quasi-static-frames quasi-static-crossover quasi-static-static-points real-scene-levels speed-vs-error \
-            predict-engine; do
+            predict-engine quasi-static-robots; do
     case "$name" in
         quasi-static-frames) args=(--set detp.photons=5000 --set dynamic.frames=6 --set dynamic.check_every=2
                                    --set detp.point_spacing=40) ;;
         quasi-static-crossover) args=(--set detp.photons=5000 --set dynamic.frames=2 --set detp.point_spacing=40) ;;
         quasi-static-static-points) args=(--set detp.photons=5000 --set dynamic.frames=3 --set dynamic.check_every=1) ;;
         real-scene-levels) args=(--set detp.photons=5000 --set detp.point_spacing=0.3 --set detp.replicas=1) ;;
+        quasi-static-robots) args=(--set detp.photons=5000 --set dynamic.frames=4 --set detp.point_spacing=4) ;;
         predict-engine) args=(--set detp.photons=5000 --set detp.point_spacing=40) ;;
         speed-vs-error) args=(--set dynamic.frames=3 --set dynamic.check_every=1 --set detp.point_spacing=0.3
                               --set dynamic.reference_photons=20000) ;;

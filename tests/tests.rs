@@ -9,6 +9,7 @@ mod detp_runs;
 mod lt;
 mod merge;
 mod oracle;
+mod quasi_static;
 mod render;
 mod resume;
 mod slurm;

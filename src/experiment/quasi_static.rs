@@ -123,6 +123,9 @@ pub fn run_point(
     _point: u64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> anyhow::Result<PointResult> {
+    for w in &cfg.warnings {
+        eprintln!("warning: point {_point}: {w}");
+    }
     let (mut qs, f0) = start(cfg)?;
     progress(cfg.detp.photons);
     let predictions = cfg.predict.map(|fraction| {
@@ -241,7 +244,8 @@ pub fn run_point(
         .f("r0", r0)
         .f("ratio", ratios.iter().copied().fold(0.0, f64::max))
         .f("crossover", qs.params().crossover)
-        .s("engine_used", used.join("+"));
+        .s("engine_used", used.join("+"))
+        .u("warnings", cfg.warnings.len() as u64);
     let mut summary = Vec::new();
     Metric::new(
         "retraced_rays",
@@ -437,8 +441,13 @@ fn points_table(
 
 /// One line for `raycost check`.
 pub fn describe(cfg: &QuasiStaticConfig) -> String {
+    let warnings: String = cfg
+        .warnings
+        .iter()
+        .map(|w| format!("\n      warning: {w}"))
+        .collect();
     format!(
-        "{}; {} frames, r_D/r_0 {}, engine {}, full check every {} frame(s)",
+        "{}; {} frames, r_D/r_0 {}, engine {}, full check every {} frame(s){warnings}",
         super::detp::describe(&cfg.detp),
         cfg.frames,
         cfg.ratio

@@ -98,6 +98,7 @@ fn config(spec: &Spec, point: usize) -> anyhow::Result<(QuasiStaticConfig, Optio
                     points_frame: None,
                     reference_photons: None,
                     predict: None,
+                    warnings: Vec::new(),
                 },
                 // Replica 0's photons of a `detp` run.
                 Some(crate::sample::rng::hash_key(&[d.seed, point as u64, 0])),

@@ -127,6 +127,9 @@ pub struct QuasiStaticConfig {
     pub reference_photons: Option<u64>,
     /// The predictor's fraction of photons (set, or 0.05 when the engine is "predicted").
     pub predict: Option<f64>,
+    /// Counted warnings about the scene and its motion (shown by `check`, printed and counted by
+    /// `run`).
+    pub warnings: Vec<String>,
 }
 
 impl QuasiStaticConfig {
@@ -199,7 +202,8 @@ impl QuasiStaticConfig {
         } else {
             "detp.scene"
         };
-        check_motion(&scene, dy.frames as u32).map_err(|m| e(blame, m))?;
+        let mut warnings = check_motion(&scene, dy.frames as u32).map_err(|m| e(blame, m))?;
+        warnings.extend(scene.warnings.iter().cloned());
         check_lights(&scene).map_err(|m| e("detp.scene", m))?;
         Ok(Self {
             detp,
@@ -213,6 +217,7 @@ impl QuasiStaticConfig {
             predict: dy
                 .predict
                 .or((d.engine == Some(DynamicEngine::Predicted)).then_some(0.05)),
+            warnings,
         })
     }
 }
@@ -228,8 +233,10 @@ pub fn apply_ratio(scene: &mut crate::lt::Scene, ratio: Option<f64>) {
 }
 
 /// The motion's checks over every frame: a dynamic object at all; none as large as the scene
-/// (r_D < r_0); each inside the scene's box at every frame; no two overlapping (posed boxes meet).
-pub fn check_motion(scene: &crate::lt::Scene, frames: u32) -> Result<(), String> {
+/// (r_D < r_0); each inside the scene's box (to 1 % of its diagonal) at every frame; no two
+/// overlapping (posed boxes meet).
+pub fn check_motion(scene: &crate::lt::Scene, frames: u32) -> Result<Vec<String>, String> {
+    let mut warnings = Vec::new();
     use crate::lt::motion::tau;
     if scene.movers.is_empty() {
         return Err(
@@ -238,7 +245,9 @@ pub fn check_motion(scene: &crate::lt::Scene, frames: u32) -> Result<(), String>
     }
     let b = scene.bounds();
     let r0 = crate::detp::sphere_cache::root_sphere(&b).1;
-    let slack = 1e-9 * b.magnitude().max(1e-300);
+    // Poking out of the box by up to 1 % of its diagonal is allowed (BART's robots dip their feet
+    // 4 cm under a 535-unit-tall city); the segment index searches outside its box exactly anyway.
+    let slack = 0.01 * (b.hi - b.lo).length();
     for m in &scene.movers {
         if m.radius() >= r0 {
             return Err(format!(
@@ -284,16 +293,24 @@ pub fn check_motion(scene: &crate::lt::Scene, frames: u32) -> Result<(), String>
         for i in 0..boxes.len() {
             for j in i + 1..boxes.len() {
                 let (a, c) = (boxes[i], boxes[j]);
-                if a.0.cmple(c.1).all() && c.0.cmple(a.1).all() {
-                    return Err(format!(
-                        "dynamic objects \"{}\" and \"{}\" overlap at frame {f} (their boxes meet)",
-                        scene.movers[i].name, scene.movers[j].name
+                let pair = (&scene.movers[i].name, &scene.movers[j].name);
+                if a.0.cmple(c.1).all()
+                    && c.0.cmple(a.1).all()
+                    && !warnings
+                        .iter()
+                        .any(|w: &String| w.contains(&format!("\"{}\" and \"{}\"", pair.0, pair.1)))
+                {
+                    // Boxes meeting is not proof of interpenetration (BART's robots walk side by
+                    // side), and exactness does not depend on it: a counted warning.
+                    warnings.push(format!(
+                        "dynamic objects \"{}\" and \"{}\" may overlap: their boxes meet at frame {f}",
+                        pair.0, pair.1
                     ));
                 }
             }
         }
     }
-    Ok(())
+    Ok(warnings)
 }
 
 /// Lights shut inside closed geometry light nothing: a point or spot light inside a sphere seen from

@@ -60,7 +60,7 @@ pub fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
     (header, rows)
 }
 
-/// The non-timing columns of a CSV (timing columns end in `_s` or are `rays_per_s`).
+/// The non-timing columns of a CSV (the crate's own rule, `output::row::is_timing_column`).
 pub fn measured_columns(path: &Path) -> Vec<Vec<(String, String)>> {
     let (h, rows) = read_csv(path);
     rows.into_iter()
@@ -68,7 +68,7 @@ pub fn measured_columns(path: &Path) -> Vec<Vec<(String, String)>> {
             h.iter()
                 .cloned()
                 .zip(r)
-                .filter(|(c, _)| !(c.ends_with("_s") || c == "rays_per_s"))
+                .filter(|(c, _)| !raycost::output::row::is_timing_column(c))
                 .collect()
         })
         .collect()

@@ -47,6 +47,10 @@ pub struct SegmentIndex {
     dims: [i64; 3],
     bounds: Aabb,
     cells: Vec<Vec<u32>>,
+    /// Segments whose piece is not wholly inside the box (an origin outside it, or a piece running
+    /// past it): a query whose ball reaches outside the box tests all of them, so an object that
+    /// pokes out of the scene's box is still searched exactly.
+    outer: Vec<u32>,
     pad: f64,
 }
 
@@ -77,6 +81,7 @@ impl SegmentIndex {
             dims,
             bounds: Aabb::new(lo, hi),
             cells: vec![Vec::new(); (dims[0] * dims[1] * dims[2]) as usize],
+            outer: Vec::new(),
             pad,
         }
     }
@@ -95,8 +100,12 @@ impl SegmentIndex {
         let (o, d) = (s.o(), s.d());
         let t_end = s.t_end() * (1.0 + 1e-6);
         let Some((t0, t1)) = crate::detp::disc_index::clip(o, d, &self.bounds, 0.0, t_end) else {
+            self.outer.push(id);
             return;
         };
+        if t0 > 0.0 || t1 < t_end {
+            self.outer.push(id);
+        }
         let start = o + d * t0;
         let ray = Ray::new(start, d);
         let len = t1 - t0;
@@ -114,6 +123,7 @@ impl SegmentIndex {
     /// Removes every listing (keeps the cells' capacity).
     pub fn clear(&mut self) {
         self.cells.iter_mut().for_each(Vec::clear);
+        self.outer.clear();
     }
 
     /// Listings held.
@@ -166,6 +176,23 @@ impl SegmentIndex {
                 }
             }
         }
+        let inside = (c - DVec3::splat(r)).cmpge(self.bounds.lo).all()
+            && (c + DVec3::splat(r)).cmple(self.bounds.hi).all();
+        if !inside {
+            for &id in &self.outer {
+                st.listings += 1;
+                let i = id as usize;
+                if seen[i] || !live(id) {
+                    continue;
+                }
+                seen[i] = true;
+                touched.push(id);
+                st.tested += 1;
+                if meets_ball(&segments[i], c, r, self.pad) {
+                    hits.push(id);
+                }
+            }
+        }
         for id in touched {
             seen[id as usize] = false;
         }
@@ -198,17 +225,20 @@ mod tests {
     fn finds_exactly_what_a_scan_finds() {
         let mut rng = stream(&[77]);
         let store = SegmentStore::test_lines(&mut rng, 4000);
-        let b = Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0));
+        // A box smaller than the lines' ball, so pieces run out of it.
+        let b = Aabb::new(DVec3::splat(-0.7), DVec3::splat(0.7));
         let mut idx = SegmentIndex::new(b, 512);
         for (i, s) in store.segments.iter().enumerate() {
             idx.insert(i as u32, s);
         }
         let mut seen = Vec::new();
-        for _ in 0..50 {
+        for k in 0..80 {
+            // The last 30 balls reach out of the index's box (an object poking out of the scene).
+            let span = if k < 50 { 0.8 } else { 1.4 };
             let c = DVec3::new(
-                rng.gen_range(-0.8..0.8),
-                rng.gen_range(-0.8..0.8),
-                rng.gen_range(-0.8..0.8),
+                rng.gen_range(-span..span),
+                rng.gen_range(-span..span),
+                rng.gen_range(-span..span),
             );
             let r = rng.gen_range(0.01..0.3);
             let live = |id: u32| id % 7 != 3;
