@@ -646,10 +646,10 @@ impl QuasiStatic {
     }
 
     /// The paper's §4.1 predictor: runs each dynamic-point engine on the segments of the first
-    /// `fraction` of the photons (a fraction of the rays: both engines' costs are linear in n_R),
-    /// scales its time by 1/fraction, and (with `apply`) picks the cheaper one per mover for the
-    /// frames that follow. To say whether the pick was right, both engines also run on every
-    /// segment once.
+    /// `fraction` of the photons (a fraction of the rays: both engines' costs are linear in n_R
+    /// beyond a fixed part, timed on no segments), scales the part that grows with the rays by
+    /// 1/fraction, and (with `apply`) picks the cheaper one per mover for the frames that follow.
+    /// To say whether the pick was right, both engines also run on every segment once.
     pub fn predict_and_pick(&mut self, fraction: f64, apply: bool) -> Vec<Prediction> {
         assert!(fraction > 0.0 && fraction <= 1.0, "fraction in (0, 1]");
         let live = self.live_store();
@@ -662,6 +662,7 @@ impl QuasiStatic {
                 .collect(),
             live.scale,
         );
+        let none = SegmentStore::new(Vec::new(), live.scale);
         let time = |store: &SegmentStore, u: Used, m: usize| {
             let t = Instant::now();
             let _ = self.dynamic_sums_with(store, false, Some(u), Some(m));
@@ -673,7 +674,12 @@ impl QuasiStatic {
             .dynamic
             .iter()
             .map(|dp| {
-                let predicted = engines.map(|u| time(&part, u, dp.mover) / fraction);
+                // cost(n_R) = fixed + per-ray·n_R: the fixed part (posing the discs, building
+                // the index or the order) is timed on no segments and not scaled.
+                let predicted = engines.map(|u| {
+                    let fixed = time(&none, u, dp.mover);
+                    fixed + (time(&part, u, dp.mover) - fixed).max(0.0) / fraction
+                });
                 let measured = engines.map(|u| time(&live, u, dp.mover));
                 Prediction {
                     predicted,
