@@ -156,30 +156,9 @@ impl SegmentIndex {
         let mut st = SearchStats::default();
         let mut hits = Vec::new();
         let mut touched = Vec::new();
-        for z in lo[2]..=hi[2] {
-            for y in lo[1]..=hi[1] {
-                for x in lo[0]..=hi[0] {
-                    st.cells += 1;
-                    for &id in &self.cells[self.slot([x, y, z])] {
-                        st.listings += 1;
-                        let i = id as usize;
-                        if seen[i] || !live(id) {
-                            continue;
-                        }
-                        seen[i] = true;
-                        touched.push(id);
-                        st.tested += 1;
-                        if meets_ball(&segments[i], c, r, self.pad) {
-                            hits.push(id);
-                        }
-                    }
-                }
-            }
-        }
-        let inside = (c - DVec3::splat(r)).cmpge(self.bounds.lo).all()
-            && (c + DVec3::splat(r)).cmple(self.bounds.hi).all();
-        if !inside {
-            for &id in &self.outer {
+        // Tests each live listing once (the `seen` mark), whichever list it comes from.
+        let mut visit = |list: &[u32], st: &mut SearchStats| {
+            for &id in list {
                 st.listings += 1;
                 let i = id as usize;
                 if seen[i] || !live(id) {
@@ -192,6 +171,19 @@ impl SegmentIndex {
                     hits.push(id);
                 }
             }
+        };
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                for x in lo[0]..=hi[0] {
+                    st.cells += 1;
+                    visit(&self.cells[self.slot([x, y, z])], &mut st);
+                }
+            }
+        }
+        let inside = (c - DVec3::splat(r)).cmpge(self.bounds.lo).all()
+            && (c + DVec3::splat(r)).cmple(self.bounds.hi).all();
+        if !inside {
+            visit(&self.outer, &mut st);
         }
         for id in touched {
             seen[id as usize] = false;
