@@ -18,11 +18,11 @@ use super::metric::{Metric, Theory};
 use super::{PointResult, Row};
 use crate::geom::{Aabb, Ray, Sphere};
 use crate::grid::{
-    brute_force, build::frame_around, mailbox::Mailbox, trace, FiniteGrid, GridFrame, TraceCounts,
+    brute_force, build::frame_around, mailbox::Mailbox, trace, FiniteGrid, TraceCounts,
 };
 use crate::sample::{directions::uniform_direction, rng::domain, rng::stream};
 use crate::scene::finite::FiniteScene;
-use crate::scene::lazy::{LazyCache, LazyScene};
+use crate::scene::infinite::{InfiniteCaches, InfiniteScene, Walk};
 use crate::spec::{GridConfig, Kind, SceneModel};
 use crate::stats::{gof, ClusteredMean, Histogram};
 use crate::theory::grid::{self as th, Eye, GridTheoryInput};
@@ -284,7 +284,7 @@ fn run_replica(
         && cfg.kind == Kind::GridScaling
         && finite.is_some_and(|f| f.spheres.len() as u64 <= cfg.brute_force_max_n);
     let max_steps = u32::try_from(cfg.max_steps).unwrap_or(u32::MAX);
-    let run_batch = |cache: &mut LazyCache, b: u64| -> Acc {
+    let run_batch = |caches: &mut InfiniteCaches, b: u64| -> Acc {
         let mut acc = Acc::new(t_hi, cfg.bins);
         let mut rng = stream(&[domain::RAYS, cfg.seed, point, replica, b]);
         let n_rays = BATCH.min(rays - b * BATCH);
@@ -308,24 +308,21 @@ fn run_replica(
                     .collect()
             }
             None => {
-                // Each group of `rays_per_scene` rays shares one scene realisation.
-                let frame = GridFrame {
-                    origin: DVec3::ZERO,
-                    width: a,
-                    dims: None,
+                let scene = InfiniteScene {
+                    intensity: cfg.intensity,
+                    classes: &cfg.classes,
+                    draw: cfg.draw,
                 };
+                let walk = Walk {
+                    cell_width: a,
+                    eye_magnitude: 2.0 * a,
+                    rays_per_scene: cfg.rays_per_scene as usize,
+                    mailbox: cfg.mailbox,
+                    max_steps,
+                };
+                let key = [domain::SCENE, cfg.seed, point, b];
                 let mut c = Vec::with_capacity(rays.len());
-                for (g, group) in rays.chunks(cfg.rays_per_scene as usize).enumerate() {
-                    let key = [domain::SCENE, cfg.seed, point, b, g as u64];
-                    let scene = LazyScene::new(cfg.intensity, &cfg.classes, cfg.draw, a, &key);
-                    let mut lists = scene.cells(frame, 2.0 * a, cache);
-                    c.extend(
-                        group
-                            .iter()
-                            .map(|r| trace(&mut lists, r, &mut mailbox, cfg.mailbox, max_steps)),
-                    );
-                    acc.generated += lists.generated() as u64;
-                }
+                acc.generated += scene.trace_batch(&walk, &key, &rays, caches, &mut c);
                 c
             }
         };
@@ -355,7 +352,7 @@ fn run_replica(
         let b1 = (b0 + CHUNK_BATCHES).min(batches);
         let parts: Vec<Acc> = (b0..b1)
             .into_par_iter()
-            .map_init(LazyCache::default, run_batch)
+            .map_init(InfiniteCaches::default, run_batch)
             .collect();
         for p in &parts {
             total.merge(p);

@@ -1,0 +1,538 @@
+//! The infinite Poisson scene realised afresh for each ray, only in the region its walk can read.
+//!
+//! # Why
+//! A grid query reads the spheres listed in the cells it visits, and a sphere is listed in a cell
+//! only if its centre lies within `R` (the largest radius, plus a margin over the listing pad) of the
+//! cell: in the cell's reach box `M(C) = [lo − R, hi + R]³`. So one ray needs the process only on
+//! `U = ∪ M(C)` over the cells it visits. When every ray has its own realisation
+//! (`grid.rays_per_scene = 1`), `U` is all that has to exist, and it can be drawn from one
+//! sequential stream per ray, with no hashing of space at all.
+//!
+//! # How, and why it is exact
+//! A 3D-DDA walk is monotone along every axis and steps one axis at a time. A step from `C` to
+//! its neighbour along axis `i` adds to `U` the slab `M(C') \ M(C)`, of width `a` along `i` and
+//! `a + 2R` across; it is disjoint from every earlier reach box, since those end where `M(C)` ends
+//! along `i`. So `U` is the disjoint union of the first cell's reach box and one slab per step, and
+//! a Poisson(ρ·volume) count of independent uniform centres in each piece, each with independent
+//! marks (class i with probability α_i, then its radius), is exactly the marked Poisson process of
+//! intensity ρ restricted to `U`. The walk may stop on a hit that depends on the spheres drawn so
+//! far: the pieces not yet drawn are independent of them, so stopping early changes nothing.
+//!
+//! Spheres whose centre falls behind the current reach box along the step's axis can never be
+//! listed again (monotone walk) and are dropped: the memory held is the ~ρ·(a + 2R)³ spheres of
+//! one reach box, whatever the ray's length.
+//!
+//! The per-cell lists are built with exactly the test of [`super::lazy::LazyCells`]: every sphere
+//! whose padded ball meets the cell. The shared-realisation engine ([`super::lazy`]) remains for
+//! `rays_per_scene > 1`; the tests hold the two to the same distribution.
+
+use glam::DVec3;
+use rand::Rng;
+
+use super::{RadiusClass, RadiusDraw};
+use crate::geom::Sphere;
+use crate::grid::{Cell, CellLists, GridFrame};
+use crate::sample::{counter::SplitMix64, rng::hash_key, PoissonTable};
+
+/// Margin of a reach box over the largest radius, as a fraction of the cell width: larger than
+/// the listing pad `64ε·(magnitude + r + a)` for every cell within about 10⁹ cell widths of the
+/// origin (a walk is cut off long before).
+pub const REACH_MARGIN: f64 = 1.0 / 65536.0;
+
+/// The process's constants for one radius draw (fixed per scene for per-sphere radii, drawn per
+/// ray for per-scene radii).
+#[derive(Clone, Debug, Default)]
+struct Pieces {
+    /// Reach `R` = largest radius + margin.
+    reach: f64,
+    /// Largest radius.
+    r_max: f64,
+    /// Poisson laws of the counts in the first cell's reach box and in a slab.
+    cube: PoissonTable,
+    slab: PoissonTable,
+}
+
+impl Pieces {
+    fn new(intensity: f64, r_max: f64, a: f64) -> Self {
+        let reach = r_max + a * REACH_MARGIN;
+        let w = a + 2.0 * reach;
+        Self {
+            reach,
+            r_max,
+            cube: PoissonTable::new(intensity * w * w * w),
+            slab: PoissonTable::new(intensity * a * w * w),
+        }
+    }
+}
+
+/// An infinite Poisson sphere scene of which each ray sees its own independent realisation.
+#[derive(Clone, Debug)]
+pub struct TubeScene {
+    intensity: f64,
+    classes: Vec<RadiusClass>,
+    draw: RadiusDraw,
+    /// Cumulative class fractions (the mark's draw), the last one ∞.
+    cumulative: Vec<f64>,
+    width: f64,
+    /// The pieces for per-sphere radii (known before any draw).
+    fixed: Option<Pieces>,
+}
+
+impl TubeScene {
+    /// The scene for a grid of cell width `cell_width`.
+    pub fn new(intensity: f64, classes: &[RadiusClass], draw: RadiusDraw, cell_width: f64) -> Self {
+        let mut acc = 0.0;
+        let mut cumulative: Vec<f64> = classes
+            .iter()
+            .map(|c| {
+                acc += c.fraction;
+                acc
+            })
+            .collect();
+        if let Some(last) = cumulative.last_mut() {
+            *last = f64::INFINITY;
+        }
+        let fixed = match draw {
+            RadiusDraw::PerSphere => {
+                let r_max = classes.iter().map(|c| c.radius.max()).fold(0.0, f64::max);
+                Some(Pieces::new(intensity, r_max, cell_width))
+            }
+            RadiusDraw::PerScene => None,
+        };
+        Self {
+            intensity,
+            classes: classes.to_vec(),
+            draw,
+            cumulative,
+            width: cell_width,
+            fixed,
+        }
+    }
+
+    /// A cell-list source over this scene for a grid placed by `frame` (unbounded), using `cache`.
+    /// Call [`TubeCells::start_ray`] before each ray's walk.
+    pub fn cells<'a>(
+        &'a self,
+        frame: GridFrame,
+        eye_magnitude: f64,
+        cache: &'a mut TubeCache,
+    ) -> TubeCells<'a> {
+        debug_assert_eq!(frame.width, self.width);
+        cache.generated = 0;
+        TubeCells {
+            scene: self,
+            frame,
+            eye_magnitude,
+            cache,
+            rng: SplitMix64::new(0),
+            radii: Vec::new(),
+            pieces: self.fixed.clone().unwrap_or_default(),
+            last: None,
+            next_id: 0,
+        }
+    }
+}
+
+/// Buffers reused from ray to ray: the spheres of the current reach box and the list buffer.
+#[derive(Debug, Default)]
+pub struct TubeCache {
+    active: Vec<Sphere>,
+    scratch: Vec<Sphere>,
+    generated: usize,
+    /// Every sphere drawn for the current ray (tests check lists against it).
+    #[cfg(test)]
+    log: Vec<Sphere>,
+}
+
+/// Cell lists of one ray's realisation of a [`TubeScene`], drawn as its walk proceeds.
+#[derive(Debug)]
+pub struct TubeCells<'a> {
+    scene: &'a TubeScene,
+    frame: GridFrame,
+    eye_magnitude: f64,
+    cache: &'a mut TubeCache,
+    rng: SplitMix64,
+    /// Per-scene radius of each class for this ray's realisation.
+    radii: Vec<f64>,
+    pieces: Pieces,
+    /// The cell listed last (the walk's position), or `None` before the first.
+    last: Option<Cell>,
+    next_id: u64,
+}
+
+impl TubeCells<'_> {
+    /// Starts a new realisation for the ray keyed by `key` (its stream is `hash_key(key)`).
+    pub fn start_ray(&mut self, key: &[u64]) {
+        self.rng = SplitMix64::new(hash_key(key));
+        if self.scene.draw == RadiusDraw::PerScene {
+            self.radii.clear();
+            for c in &self.scene.classes {
+                let r = c.radius.sample(&mut self.rng);
+                self.radii.push(r);
+            }
+            let r_max = self.radii.iter().copied().fold(0.0, f64::max);
+            self.pieces = Pieces::new(self.scene.intensity, r_max, self.scene.width);
+        }
+        self.last = None;
+        self.next_id = 0;
+        self.cache.active.clear();
+        #[cfg(test)]
+        self.cache.log.clear();
+    }
+
+    /// Spheres drawn so far for the rays since [`TubeScene::cells`].
+    pub fn generated(&self) -> usize {
+        self.cache.generated
+    }
+
+    /// Draws a Poisson count (the slab's law, or the first reach box's) of marked centres uniform in the box `[lo, hi]` into the active set.
+    fn draw_box(&mut self, slab: bool, lo: DVec3, hi: DVec3) {
+        let law = if slab {
+            &self.pieces.slab
+        } else {
+            &self.pieces.cube
+        };
+        let n = law.sample(&mut self.rng);
+        let size = hi - lo;
+        let many = self.scene.classes.len() > 1;
+        for _ in 0..n {
+            let u = DVec3::new(self.rng.gen(), self.rng.gen(), self.rng.gen());
+            let class = if many {
+                let v: f64 = self.rng.gen();
+                self.scene
+                    .cumulative
+                    .iter()
+                    .position(|&c| v < c)
+                    .unwrap_or(0)
+            } else {
+                0
+            };
+            let r = match self.scene.draw {
+                RadiusDraw::PerScene => self.radii[class],
+                RadiusDraw::PerSphere => self.scene.classes[class].radius.sample(&mut self.rng),
+            };
+            let sphere = Sphere {
+                c: lo + u * size,
+                r,
+                id: self.next_id,
+            };
+            self.cache.active.push(sphere);
+            #[cfg(test)]
+            self.cache.log.push(sphere);
+            self.next_id += 1;
+        }
+        self.cache.generated += n as usize;
+    }
+
+    /// Moves the realisation to `cell`: the first cell's reach box, or the slab a step adds.
+    fn advance(&mut self, cell: Cell) {
+        let cb = self.frame.cell_box(cell);
+        let reach = self.pieces.reach;
+        let (mut lo, mut hi) = (cb.lo - DVec3::splat(reach), cb.hi + DVec3::splat(reach));
+        let Some(last) = self.last else {
+            self.draw_box(false, lo, hi);
+            self.last = Some(cell);
+            return;
+        };
+        let axis = (0..3)
+            .find(|&i| cell[i] != last[i])
+            .expect("advance is called on a new cell");
+        let step = cell[axis] - last[axis];
+        assert!(
+            step.abs() == 1 && (0..3).all(|i| i == axis || cell[i] == last[i]),
+            "a tube realisation follows a DDA walk: {last:?} → {cell:?} is not one step"
+        );
+        let a = self.frame.width;
+        let active = &mut self.cache.active;
+        if step > 0 {
+            lo[axis] = hi[axis] - a;
+            let floor = cb.lo[axis] - reach;
+            active.retain(|s| s.c[axis] >= floor);
+        } else {
+            hi[axis] = lo[axis] + a;
+            let ceil = cb.hi[axis] + reach;
+            active.retain(|s| s.c[axis] <= ceil);
+        }
+        self.draw_box(true, lo, hi);
+        self.last = Some(cell);
+    }
+}
+
+impl CellLists for TubeCells<'_> {
+    fn frame(&self) -> &GridFrame {
+        &self.frame
+    }
+
+    #[inline]
+    fn pad_magnitude(&self, cell: Cell) -> f64 {
+        self.frame.cell_box(cell).magnitude() + self.eye_magnitude
+    }
+
+    fn list(&mut self, cell: Cell) -> &[Sphere] {
+        if self.last != Some(cell) {
+            self.advance(cell);
+        }
+        let cb = self.frame.cell_box(cell);
+        let magnitude = self.pad_magnitude(cell);
+        let r_max = self.pieces.r_max;
+        assert!(
+            r_max + self.frame.pad(magnitude, r_max) <= self.pieces.reach,
+            "cell {cell:?} is too far from the origin for the reach margin"
+        );
+        let c = &mut *self.cache;
+        c.scratch.clear();
+        for s in &c.active {
+            let q = s.c.clamp(cb.lo, cb.hi);
+            let rr = s.r + self.frame.pad(magnitude, s.r);
+            if (s.c - q).length_squared() <= rr * rr {
+                c.scratch.push(*s);
+            }
+        }
+        &c.scratch
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::Ray;
+    use crate::grid::Dda;
+    use crate::sample::{directions::uniform_direction, rng::stream};
+    use crate::scene::RadiusDist;
+
+    fn frame(a: f64) -> GridFrame {
+        GridFrame {
+            origin: DVec3::ZERO,
+            width: a,
+            dims: None,
+        }
+    }
+
+    fn mixture() -> Vec<RadiusClass> {
+        vec![
+            RadiusClass {
+                fraction: 0.6,
+                radius: RadiusDist::Constant(0.1),
+            },
+            RadiusClass {
+                fraction: 0.4,
+                radius: RadiusDist::Uniform { lo: 0.05, hi: 0.45 },
+            },
+        ]
+    }
+
+    /// Along whole walks, every cell's list is exactly the drawn spheres whose padded ball meets
+    /// the cell: no sphere is dropped from the active set while a later cell could still list it,
+    /// and the slabs cover every reach box. Cells narrower and wider than the spheres, eyes near
+    /// and far from the origin, both radius draws.
+    #[test]
+    fn lists_equal_the_definition_along_walks() {
+        let mut rng = stream(&[0x7b]);
+        let mut cache = TubeCache::default();
+        let mut checked = 0usize;
+        for (case, (a, rho, offset)) in [(0.5, 1.0, 0.0f64), (0.15, 3.0, 40.0), (2.0, 1.0, -1e3)]
+            .into_iter()
+            .enumerate()
+        {
+            for draw in [RadiusDraw::PerSphere, RadiusDraw::PerScene] {
+                let scene = TubeScene::new(rho, &mixture(), draw, a);
+                let f = frame(a);
+                let mut lists = scene.cells(f, offset.abs() + 2.0 * a, &mut cache);
+                for ray_no in 0..60u64 {
+                    lists.start_ray(&[case as u64, ray_no]);
+                    let eye = DVec3::splat(offset) + DVec3::new(rng.gen(), rng.gen(), rng.gen());
+                    let ray = Ray::new(eye, uniform_direction(&mut rng));
+                    for (cell, _, _) in Dda::new(&f, &ray).take(60) {
+                        let mut got = lists.list(cell).to_vec();
+                        let cb = f.cell_box(cell);
+                        let m = lists.pad_magnitude(cell);
+                        let mut want: Vec<Sphere> = lists
+                            .cache
+                            .log
+                            .iter()
+                            .copied()
+                            .filter(|s| {
+                                let p = s.r + f.pad(m, s.r);
+                                cb.distance_squared(s.c) <= p * p
+                            })
+                            .collect();
+                        got.sort_by_key(|s| s.id);
+                        want.sort_by_key(|s| s.id);
+                        assert_eq!(got, want, "case {case} {draw:?} cell {cell:?}");
+                        checked += want.len();
+                    }
+                }
+            }
+        }
+        assert!(checked > 3000, "checked {checked}");
+    }
+
+    /// The realisation along a walk is the Poisson process: over independent rays, the centres in
+    /// the reach box of the walk's 1st and 12th cells number Poisson(ρ·|M|) (mean and variance
+    /// within 4 standard errors), the classes have their fractions, and centres in the 12th cell
+    /// have no neighbour within s½ with probability ½ (P(D > s) = exp(−ρ·4πs³/3); the reach box
+    /// holds every centre within R ≥ s½ of the cell). Tolerances are never tuned: 4 SE.
+    #[test]
+    fn walks_see_a_poisson_process() {
+        let (a, rho) = (0.4, 2.0);
+        let classes = vec![
+            RadiusClass {
+                fraction: 0.7,
+                radius: RadiusDist::Constant(0.45),
+            },
+            RadiusClass {
+                fraction: 0.3,
+                radius: RadiusDist::Constant(0.2),
+            },
+        ];
+        let scene = TubeScene::new(rho, &classes, RadiusDraw::PerSphere, a);
+        let f = frame(a);
+        let mut cache = TubeCache::default();
+        let mut lists = scene.cells(f, 2.0 * a, &mut cache);
+        let reach = 0.45 + a * REACH_MARGIN;
+        let volume = (a + 2.0 * reach).powi(3);
+        let s_half = (0.5f64.ln() / (-rho * 4.0 / 3.0 * std::f64::consts::PI)).cbrt();
+        assert!(s_half < reach);
+        let mut rng = stream(&[0x7c]);
+        let reps = 20_000;
+        let (mut first, mut twelfth) = (Vec::new(), Vec::new());
+        let (mut small, mut all) = (0u64, 0u64);
+        let (mut far, mut inner) = (0u64, 0u64);
+        for rep in 0..reps {
+            lists.start_ray(&[rep]);
+            let eye = DVec3::new(rng.gen(), rng.gen(), rng.gen()) * a;
+            let ray = Ray::new(eye, uniform_direction(&mut rng));
+            for (k, (cell, _, _)) in Dda::new(&f, &ray).take(12).enumerate() {
+                lists.list(cell);
+                let cb = f.cell_box(cell);
+                let (lo, hi) = (cb.lo - DVec3::splat(reach), cb.hi + DVec3::splat(reach));
+                let active = &lists.cache.active;
+                let n = active
+                    .iter()
+                    .filter(|s| s.c.cmpge(lo).all() && s.c.cmple(hi).all())
+                    .count();
+                assert_eq!(n, active.len(), "the active set is the reach box");
+                if k == 0 {
+                    first.push(n as f64);
+                }
+                if k == 11 {
+                    twelfth.push(n as f64);
+                    for s in active {
+                        all += 1;
+                        small += u64::from(s.r < 0.3);
+                        if s.c.cmpge(cb.lo).all() && s.c.cmple(cb.hi).all() {
+                            inner += 1;
+                            let d = active
+                                .iter()
+                                .filter(|q| q.id != s.id)
+                                .map(|q| q.c.distance(s.c))
+                                .fold(f64::INFINITY, f64::min);
+                            far += u64::from(d > s_half);
+                        }
+                    }
+                }
+            }
+        }
+        let lambda = rho * volume;
+        for counts in [&first, &twelfth] {
+            let n = counts.len() as f64;
+            let mean = counts.iter().sum::<f64>() / n;
+            let var = counts.iter().map(|c| (c - mean).powi(2)).sum::<f64>() / (n - 1.0);
+            assert!(
+                (mean - lambda).abs() < 4.0 * (lambda / n).sqrt(),
+                "mean {mean} vs {lambda}"
+            );
+            let se_var = ((2.0 * lambda * lambda + lambda) / n).sqrt();
+            assert!((var - lambda).abs() < 4.0 * se_var, "var {var} vs {lambda}");
+        }
+        let f_small = small as f64 / all as f64;
+        assert!(
+            (f_small - 0.3).abs() < 4.0 * (0.21 / all as f64).sqrt(),
+            "{f_small}"
+        );
+        // Centres of one ray's cell are few and nearly independent; binomial SE.
+        let p = far as f64 / inner as f64;
+        assert!(inner > 2000, "{inner}");
+        assert!(
+            (p - 0.5).abs() < 4.0 * (0.25 / inner as f64).sqrt(),
+            "P(D > s½) = {p} over {inner}"
+        );
+    }
+
+    /// The two engines realise the same process: over independent rays, the per-ray realisation
+    /// (`rays_per_scene = 1`) and the shared block realisation (groups of 4, standard errors
+    /// clustered by group) give the same mean N_I, mailboxed N_I, N_S and hit distance, each within
+    /// 4 combined standard errors; for a mixture of radius laws drawn per sphere and per scene.
+    #[test]
+    fn tube_and_block_engines_agree() {
+        use crate::scene::infinite::{InfiniteCaches, InfiniteScene, Walk};
+        for (case, (a, draw)) in [(0.3, RadiusDraw::PerSphere), (0.8, RadiusDraw::PerScene)]
+            .into_iter()
+            .enumerate()
+        {
+            let classes = mixture();
+            let scene = InfiniteScene {
+                intensity: 1.5,
+                classes: &classes,
+                draw,
+            };
+            // Per engine: per-group sums of (n_i, n_i_mb, n_s, t) and their squares' cluster sums.
+            let mut means = Vec::new();
+            for rays_per_scene in [1usize, 4] {
+                let walk = Walk {
+                    cell_width: a,
+                    eye_magnitude: 2.0 * a,
+                    rays_per_scene,
+                    mailbox: true,
+                    max_steps: 10_000_000,
+                };
+                let mut caches = InfiniteCaches::default();
+                let mut groups: Vec<[f64; 4]> = Vec::new();
+                for b in 0..40u64 {
+                    let mut rng = stream(&[0x7d, case as u64, rays_per_scene as u64, b]);
+                    let rays: Vec<Ray> = (0..512)
+                        .map(|_| {
+                            let eye = DVec3::new(rng.gen(), rng.gen(), rng.gen()) * a;
+                            Ray::new(eye, uniform_direction(&mut rng))
+                        })
+                        .collect();
+                    let mut out = Vec::new();
+                    let key = [0x7e, case as u64, rays_per_scene as u64, b];
+                    scene.trace_batch(&walk, &key, &rays, &mut caches, &mut out);
+                    for g in out.chunks(rays_per_scene) {
+                        let mut s = [0.0; 4];
+                        for c in g {
+                            let t = c.hit.map_or(0.0, |h| h.t);
+                            s[0] += f64::from(c.n_i);
+                            s[1] += f64::from(c.n_i_mb);
+                            s[2] += f64::from(c.n_s);
+                            s[3] += t;
+                        }
+                        groups.push(s);
+                    }
+                }
+                let rays = (groups.len() * rays_per_scene) as f64;
+                let mut m = [(0.0, 0.0); 4];
+                for (i, mi) in m.iter_mut().enumerate() {
+                    let mean = groups.iter().map(|g| g[i]).sum::<f64>() / rays;
+                    // Cluster-robust variance of the ratio mean.
+                    let var = groups
+                        .iter()
+                        .map(|g| (g[i] - mean * rays_per_scene as f64).powi(2))
+                        .sum::<f64>()
+                        / (rays * rays);
+                    *mi = (mean, var.sqrt());
+                }
+                means.push(m);
+            }
+            for i in 0..4 {
+                let ((m1, s1), (m2, s2)) = (means[0][i], means[1][i]);
+                let se = (s1 * s1 + s2 * s2).sqrt();
+                assert!(
+                    (m1 - m2).abs() < 4.0 * se,
+                    "case {case} quantity {i}: tube {m1} ± {s1}, blocks {m2} ± {s2}"
+                );
+            }
+        }
+    }
+}
