@@ -65,9 +65,15 @@ pub fn trace<L: CellLists + ?Sized>(
     for (cell, _t_enter, t_exit) in Dda::new(&frame, ray) {
         visited += 1;
         last_exit = t_exit;
-        let cb = frame.cell_box(cell);
         let magnitude = lists.pad_magnitude(cell);
-        for s in lists.list(cell) {
+        let list = lists.list(cell);
+        // Most cells of a fine grid list nothing: their box is never needed.
+        let cb = if list.is_empty() {
+            crate::geom::Aabb::new(frame.origin, frame.origin)
+        } else {
+            frame.cell_box(cell)
+        };
+        for s in list {
             counts.n_i += 1;
             // A sphere whose padded box lies strictly inside this cell is listed here only, so it
             // cannot come again: count it as distinct without touching the mailbox.

@@ -225,6 +225,7 @@ impl TubeCells<'_> {
     }
 
     /// Moves the realisation to `cell`: the first cell's reach box, or the slab a step adds.
+    #[inline(always)]
     fn advance(&mut self, cell: Cell) {
         let cb = self.frame.cell_box(cell);
         let reach = self.pieces.reach;
@@ -243,15 +244,21 @@ impl TubeCells<'_> {
             "a tube realisation follows a DDA walk: {last:?} → {cell:?} is not one step"
         );
         let a = self.frame.width;
+        // Drop the spheres left behind along the step's axis (swap-remove: order is irrelevant).
         let active = &mut self.cache.active;
+        let behind = |c: f64| if step > 0 { c < lo[axis] } else { c > hi[axis] };
+        let mut i = 0;
+        while i < active.len() {
+            if behind(active[i].c[axis]) {
+                active.swap_remove(i);
+            } else {
+                i += 1;
+            }
+        }
         if step > 0 {
             lo[axis] = hi[axis] - a;
-            let floor = cb.lo[axis] - reach;
-            active.retain(|s| s.c[axis] >= floor);
         } else {
             hi[axis] = lo[axis] + a;
-            let ceil = cb.hi[axis] + reach;
-            active.retain(|s| s.c[axis] <= ceil);
         }
         self.draw_box(true, lo, hi);
         self.last = Some(cell);
@@ -268,19 +275,23 @@ impl CellLists for TubeCells<'_> {
         self.frame.cell_box(cell).magnitude() + self.eye_magnitude
     }
 
+    #[inline(always)]
     fn list(&mut self, cell: Cell) -> &[Sphere] {
         if self.last != Some(cell) {
             self.advance(cell);
         }
+        let c = &mut *self.cache;
+        c.scratch.clear();
+        if c.active.is_empty() {
+            return &c.scratch;
+        }
         let cb = self.frame.cell_box(cell);
-        let magnitude = self.pad_magnitude(cell);
+        let magnitude = cb.magnitude() + self.eye_magnitude;
         let r_max = self.pieces.r_max;
         assert!(
             r_max + self.frame.pad(magnitude, r_max) <= self.pieces.reach,
             "cell {cell:?} is too far from the origin for the reach margin"
         );
-        let c = &mut *self.cache;
-        c.scratch.clear();
         for s in &c.active {
             let q = s.c.clamp(cb.lo, cb.hi);
             let rr = s.r + self.frame.pad(magnitude, s.r);
