@@ -12,6 +12,12 @@ flat in n if both are. Bottom right: build time and peak memory against n.
 The DETP engines' rows (sphere cache, grid and octree disc indices, brute force on a subset of
 points) go to a second figure, NAME.detp.png: wall time and tests per second per engine on 1 and 2
 threads, with the 1 → 2 thread speed-up.
+
+The infinite scene's rows (`grid-infinite`, one per cell width and thread count) draw only their best
+width in the main figure; all widths go to NAME.infinite.png: rays/s and ns per visited cell against
+the cell width, on 1 and 2 threads, beside the finite grid's rays/s (n = 10^6, paired rounds) and
+issue 10's target (1/3 of it), with the paired ratio infinite / finite of each width. A CSV from
+before the width sweep (one grid-infinite row per thread count) still plots.
 """
 
 import math
@@ -22,6 +28,8 @@ NAME = "bench"
 REQUIRED = ["engine", "n", "threads", "rays_per_s", "build_s", "peak_mem_bytes", "mismatches"]
 STYLES = {"grid": ("o", "-"), "grid-infinite": ("", "--"), "brute-force": ("s", "-"), "embree": ("D", "-")}
 DETP = ("sphere-cache", "disc-index-grid", "disc-index-octree")
+INFINITE = "grid-infinite"
+TARGET_RATIO = 1.0 / 3.0
 QUASI_STATIC = ("frame0", "full", "incremental", "kitchen-frame0", "kitchen-full", "kitchen-incremental")
 
 
@@ -103,6 +111,70 @@ def plot_quasi_static(rows, args):
     rp.finish(fig, args)
 
 
+def best_infinite(rows):
+    """Per thread count, the infinite scene's best row: the one marked timed_best, else the fastest."""
+    best = {}
+    for r in rows:
+        if r["engine"] != INFINITE:
+            continue
+        t = r["threads"]
+        marked = lambda x: (x.get("timed_best") or 0) == 1
+        if t not in best or (marked(r), r["rays_per_s"]) > (marked(best[t]), best[t]["rays_per_s"]):
+            best[t] = r
+    return best
+
+
+def plot_infinite(rows, args):
+    """The infinite scene at every cell width: rays/s and ns per cell, against the finite grid."""
+    fig, axes = rp.subplots(1, 2, panel_w=6.2, panel_h=4.4)
+    ax, ax_c = axes[0]
+    lines = []
+    for k, t in enumerate(sorted({r["threads"] for r in rows})):
+        grp = rp.sort_by([r for r in rows if r["threads"] == t], "cell_width")
+        label = "%d thread%s" % (t, "" if t == 1 else "s")
+        color = "C%d" % k
+        ax.plot(rp.col(grp, "cell_width"), rp.col(grp, "rays_per_s"), "o-", color=color, ms=5,
+                label="infinite, " + label)
+        ax_c.plot(rp.col(grp, "cell_width"), [r["cell_s"] * 1e9 for r in grp], "o-", color=color, ms=5,
+                  label=label)
+        best = best_infinite(grp)[t]
+        ax.plot([best["cell_width"]], [best["rays_per_s"]], "*", color=color, ms=14, mec="k")
+        fin = best.get("finite_rays_per_s")
+        if isinstance(fin, (int, float)) and fin == fin and fin > 0:
+            ax.axhline(fin, color=color, ls="--", lw=1.2,
+                       label="finite grid, n = %.0e, %s" % (best["finite_n"], label))
+            ax.axhline(fin * TARGET_RATIO, color=color, ls=":", lw=1.0, label="target: finite / 3, " + label)
+            for r in grp:
+                ratio = r.get("timed_finite_ratio")
+                if isinstance(ratio, float) and ratio == ratio:
+                    ax.annotate("%.3f" % ratio, (r["cell_width"], r["rays_per_s"]), textcoords="offset points",
+                                xytext=(4, 5 - 12 * k), fontsize=7, color=color)
+            lines.append("%s: best a = %.2f, %.3g rays/s = %.3f × finite (paired rounds %.3f–%.3f)" % (
+                label, best["cell_width"], best["rays_per_s"], best["timed_finite_ratio"],
+                best["timed_finite_ratio_min"], best["timed_finite_ratio_max"]))
+        else:
+            lines.append("%s: best a = %.2f, %.3g rays/s" % (label, best["cell_width"], best["rays_per_s"]))
+    for l in lines:
+        print(l)
+    rp.log_scale(ax, x=True, y=True)
+    ax.set_xlabel("cell width a")
+    ax.set_ylabel("rays per second (median over rounds)")
+    ax.set_title("infinite Poisson scene (ρ = 1, r = 0.1; ★ best width; labels: infinite / finite)",
+                 fontsize=9)
+    ax.legend(fontsize=7, loc="center right")
+    rp.log_scale(ax_c, x=True)
+    ax_c.set_ylim(bottom=0)
+    ax_c.set_xlabel("cell width a")
+    ax_c.set_ylabel("ns per visited cell (median round)")
+    ax_c.set_title("cost per visited cell (N_S + 1 per ray)", fontsize=10)
+    ax_c.legend(fontsize=7.5)
+    for a in (ax, ax_c):
+        a.grid(True, which="major", alpha=0.3)
+    fig.suptitle("raycost bench, infinite scene: " + "; ".join(lines), fontsize=8.5)
+    args.output = rp.default_png(args.input, "infinite")
+    rp.finish(fig, args)
+
+
 def plot(args):
     rows = rp.read_csv(args.input, REQUIRED)
     qs_rows = [r for r in rows if r["engine"] in QUASI_STATIC]
@@ -110,6 +182,10 @@ def plot(args):
     detp_rows = [r for r in rows if is_detp(r)]
     rows = [r for r in rows if not is_detp(r)]
     rows = [r for r in rows if isinstance(r.get("n"), (int, float)) and r["n"] == r["n"]]
+    inf_rows = [r for r in rows if r["engine"] == INFINITE]
+    # The main figure shows the infinite scene at its best width only.
+    best = {id(r) for r in best_infinite(inf_rows).values()}
+    rows = [r for r in rows if r["engine"] != INFINITE or id(r) in best]
     if not rows:
         raise rp.PlotError("%s: no rows with a number of spheres n" % args.input)
     finite_n = sorted({r["n"] for r in rows if r["n"] > 0})
@@ -132,8 +208,10 @@ def plot(args):
             ls = ":" if ls == "-" else "-."
         label = "%s, %s thread%s" % (engine, threads, "" if threads == 1 else "s")
         if all(r["n"] <= 0 for r in grp):
+            width = grp[0].get("cell_width")
             ax.axhline(grp[0]["rays_per_s"], color=color_of[engine], ls=ls, lw=1.4,
-                       label=label + " (infinite scene)")
+                       label=label + " (infinite scene%s)" % (
+                           ", best a = %.2f" % width if engine == INFINITE and len(inf_rows) > 2 else ""))
         else:
             grp = rp.sort_by([r for r in grp if r["n"] > 0], "n")
             ax.plot(rp.col(grp, "n"), rp.col(grp, "rays_per_s"), marker=marker or "o", ls=ls,
@@ -242,6 +320,8 @@ def plot(args):
         plot_detp(detp_rows, args)
     if qs_rows:
         plot_quasi_static(qs_rows, args)
+    if len({r.get("cell_width") for r in inf_rows}) > 1:
+        plot_infinite(inf_rows, args)
 
 
 if __name__ == "__main__":

@@ -6,7 +6,8 @@
 //!   and T_S fitted on this machine ([`calibrate`]);
 //! - `embree` (feature `embree`): Intel Embree 3's BVH over the same spheres;
 //! - `brute-force`: every sphere, on a subset of the rays (the oracle);
-//! - `grid-infinite`: the lazily generated infinite scene (no n), the study's counting tracer.
+//! - `grid-infinite`: the lazily generated infinite scene (no n), the study's counting tracer, at
+//!   several cell widths, timed beside the finite grid in its own rounds ([`infinite`]).
 //!
 //! The grid and Embree are timed in alternating rounds on 1 thread and on all threads
 //! ([`rounds`]): each round traces a fresh slice of the rays with every engine, so the per-round
@@ -14,13 +15,15 @@
 //! grid against brute force (exactly, on a subset), against itself across thread counts, and
 //! Embree against the grid (by sphere, [`agreement`]).
 //!
-//! Output: `OUT/bench/bench.csv` (one row per engine, n and thread count; `rays_per_s` is the
-//! median over rounds), `bench.rounds.csv` (every round's seconds, from which the paired ratios
-//! are computed) and `bench.meta.toml` (machine, calibration).
+//! Output: `OUT/bench/bench.csv` (one row per engine, n and thread count, and cell width for
+//! `grid-infinite`; `rays_per_s` is the median over rounds), `bench.rounds.csv` (every round's
+//! seconds, from which the paired ratios are computed), `bench.infinite-rounds.csv` (the same for
+//! the infinite scene and its finite reference) and `bench.meta.toml` (machine, calibration).
 
 mod agreement;
 mod calibrate;
 pub mod detp;
+mod infinite;
 pub mod memory;
 pub mod quasi_static;
 mod rounds;
@@ -35,15 +38,13 @@ use rayon::prelude::*;
 
 use self::agreement::Agreement;
 use self::rounds::{alternate, median, paired_ratios, RoundTimes};
-use crate::experiment::grid::BATCH;
 use crate::geom::{Aabb, Ray, Sphere};
 use crate::grid::fast::{FastGrid, FastTrace};
-use crate::grid::{build::frame_around, mailbox::Mailbox, trace, GridFrame, Hit};
+use crate::grid::{build::frame_around, Hit};
 use crate::output::row::Row;
 use crate::output::sink::{Sink, SinkOptions};
 use crate::sample::{directions::uniform_direction, rng::stream};
 use crate::scene::finite::{FiniteScene, FiniteSize};
-use crate::scene::lazy::LazyScene;
 use crate::scene::{RadiusClass, RadiusDist, RadiusDraw};
 
 const RHO: f64 = 1.0;
@@ -60,8 +61,6 @@ struct Plan {
     brute_force_rays: usize,
     /// Spheres and rays of the calibration scene, and its rounds.
     calibration: (u64, usize, usize),
-    /// Rays traced through the infinite scene.
-    lazy_rays: usize,
 }
 
 impl Plan {
@@ -73,7 +72,6 @@ impl Plan {
                 rays_per_round: 50_000,
                 brute_force_rays: 2_000,
                 calibration: (100_000, 20_000, 3),
-                lazy_rays: 20_000,
             }
         } else {
             Self {
@@ -82,7 +80,6 @@ impl Plan {
                 rays_per_round: 300_000,
                 brute_force_rays: 500,
                 calibration: (1_000_000, 100_000, 5),
-                lazy_rays: 200_000,
             }
         }
     }
@@ -188,7 +185,7 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         SinkOptions {
             force,
             resume: false,
-            tables: &["rounds"],
+            tables: &["rounds", infinite::ROUNDS_TABLE],
         },
     )?
     .expect("a sink opened without --resume always exists");
@@ -234,9 +231,10 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
     for &n in plan.sizes {
         measured.extend(bench_size(n, a, &plan, &classes, &rays, all)?);
     }
-    measured.extend(bench_lazy(a, &plan, &classes, all)?);
+    let inf = infinite::run(quick, a, &classes, all)?;
 
     print_summary(&measured, plan.sizes, all);
+    inf.print();
     println!("\nDETP engines (uniform lines through the unit sphere, points in the ball):");
     let detp_rows = detp::run(quick);
     print_detp(&detp_rows);
@@ -245,16 +243,22 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
     let rows: Vec<Row> = measured
         .iter()
         .map(Measured::row)
+        .chain(inf.rows.iter().map(infinite::InfiniteRow::row))
         .chain(detp_rows.iter().map(table::detp_row))
         .chain(qs_rows.iter().map(quasi_static::QsRow::row))
         .collect();
-    let rounds = measured
+    let sides = measured
         .iter()
-        .map(Measured::round_rows)
+        .map(|m| vec![("rounds", m.round_rows())])
+        .chain(
+            inf.round_rows()
+                .into_iter()
+                .map(|r| vec![(infinite::ROUNDS_TABLE, r)]),
+        )
         .chain(detp_rows.iter().map(|_| Vec::new()))
         .chain(qs_rows.iter().map(|_| Vec::new()));
-    for (row, rounds) in table::union_columns(&rows).iter().zip(rounds) {
-        sink.append(row, &[("rounds", rounds)])
+    for (row, side) in table::union_columns(&rows).iter().zip(sides) {
+        sink.append(row, &side)
             .context("could not append to the bench table")?;
     }
     let points: Vec<String> = cal
@@ -458,72 +462,6 @@ fn bench_size(
                 n_s: f64::NAN,
             });
         }
-    }
-    Ok(out)
-}
-
-/// The lazily generated infinite scene (no n: it has no boundary), same cell width and directions,
-/// traced with the study's counting tracer; one timed run per thread count.
-fn bench_lazy(
-    a: f64,
-    plan: &Plan,
-    classes: &[RadiusClass],
-    all: usize,
-) -> anyhow::Result<Vec<Measured>> {
-    let dirs = directions(plan.lazy_rays, KEY);
-    let mut out = Vec::new();
-    for threads in [1, all] {
-        let pool = pool(threads)?;
-        let start = Instant::now();
-        // The lazy scene's own memory: the per-batch caches of generated cells.
-        let ((n_i, n_s), grew) = memory::peak_increment(|| {
-            pool.install(|| {
-                dirs.par_chunks(BATCH as usize)
-                    .enumerate()
-                    .map_init(
-                        crate::scene::lazy::LazyCache::default,
-                        |cache, (b, chunk)| {
-                            let scene = LazyScene::new(
-                                RHO,
-                                classes,
-                                RadiusDraw::PerSphere,
-                                a,
-                                &[KEY, 1, b as u64],
-                            );
-                            let frame = GridFrame {
-                                origin: DVec3::ZERO,
-                                width: a,
-                                dims: None,
-                            };
-                            let mut lists = scene.cells(frame, 2.0 * a, cache);
-                            let mut mb = Mailbox::default();
-                            let eye = DVec3::splat(0.5 * a);
-                            chunk.iter().fold((0.0, 0.0), |acc, &d| {
-                                let c =
-                                    trace(&mut lists, &Ray::new(eye, d), &mut mb, true, 10_000_000);
-                                (acc.0 + f64::from(c.n_i), acc.1 + f64::from(c.n_s))
-                            })
-                        },
-                    )
-                    .reduce(|| (0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1))
-            })
-        });
-        let secs = start.elapsed().as_secs_f64();
-        let rays = dirs.len() as f64;
-        out.push(Measured {
-            engine: "grid-infinite",
-            n: 0,
-            threads,
-            cell_width: a,
-            secs: vec![secs],
-            rays_per_round: dirs.len(),
-            build_s: 0.0,
-            peak_mem_bytes: grew,
-            structure_bytes: 0,
-            agreement: Agreement::default(),
-            n_i: n_i / rays,
-            n_s: n_s / rays,
-        });
     }
     Ok(out)
 }

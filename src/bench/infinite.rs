@@ -1,0 +1,628 @@
+//! The lazily generated infinite scene in `raycost bench`: the grid experiments' throughput as a
+//! tracked figure (issue 10).
+//!
+//! Set-up, as the grid experiments run it (`experiments/quickstart.toml`): an infinite Poisson scene
+//! at ρ = 1, r = 0.1 ([`LazyScene`]), the eye uniform in its cell (cell [0, a)³), uniform
+//! directions, the counting tracer ([`crate::grid::trace`]) with mailboxing, and every group of
+//! [`RAYS_PER_SCENE`] rays (the experiments' default `grid.rays_per_scene`) sharing one realisation.
+//! Rays are handed to the thread pool in batches of [`BATCH`]; each thread keeps one [`LazyCache`]
+//! from batch to batch, as an experiment's worker does.
+//!
+//! Several cell widths are timed, each on 1 thread and on all threads, beside the finite query grid
+//! ([`FastGrid`]) on the bench's n-sphere scene (n = 10⁶; 10⁵ with `--quick`) at the bench's cell
+//! width. All of them run in alternating rounds ([`super::rounds`]): each round traces a fresh slice
+//! of rays with every contestant, so the ratio infinite / finite is a median of per-round paired
+//! ratios, like the bench's other ratios. Issue 10 asks the best width to reach
+//! [`TARGET_RATIO`] of the finite grid on 1 and on 2 threads.
+//!
+//! Rows (`bench.csv`): `engine = grid-infinite`, `n = 0`, one per cell width and thread count, with
+//! the bench's columns (`rays_per_s`, `round_*_s`, `cell_s` = seconds per visited cell, visited
+//! cells being Σ (N_S + 1), `peak_mem_bytes`, `checked`/`mismatches`: the rays' counts and hits on
+//! 1 thread against all threads, `n_i_mean`, `n_s_mean`) and `n_i_mb_mean`, `hit_mean`,
+//! `generated_mean` (spheres generated per realisation), `rays_per_scene`, `eye`, `timed_best` (1 on
+//! the fastest width of its thread count), `finite_n`, `finite_cell_width`, `finite_rays_per_s`,
+//! `timed_finite_ratio` (median of the per-round ratios of this row's rays/s to the finite grid's
+//! on as many threads) with `timed_finite_ratio_min`/`_max`. Every round's seconds and visited
+//! cells, the finite grid's included (`engine = grid`), go to `bench.infinite-rounds.csv`.
+
+use std::sync::Mutex;
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::rounds::{alternate, median};
+use super::{bench_scene, directions, memory, pool, trace_into, KEY, RHO};
+use crate::experiment::grid::BATCH;
+use crate::geom::Ray;
+use crate::grid::fast::{FastGrid, FastTrace};
+use crate::grid::{build::frame_around, mailbox::Mailbox, trace, GridFrame, TraceCounts};
+use crate::output::row::Row;
+use crate::sample::directions::{uniform_direction, uniform_unit_cube};
+use crate::sample::rng::stream;
+use crate::scene::lazy::{LazyCache, LazyScene};
+use crate::scene::{RadiusClass, RadiusDraw};
+
+/// The engine name of the rows.
+pub const ENGINE: &str = "grid-infinite";
+/// The side table of every round's seconds (`bench.infinite-rounds.csv`).
+pub const ROUNDS_TABLE: &str = "infinite-rounds";
+/// Cell widths timed by the full bench.
+pub const WIDTHS: &[f64] = &[0.2, 0.35, 0.5, 0.7, 1.0, 1.5, 2.0];
+/// Cell widths timed by `bench --quick`.
+pub const QUICK_WIDTHS: &[f64] = &[0.35, 0.7, 1.5];
+/// Rays sharing one scene realisation: the experiments' default (`grid.rays_per_scene`).
+pub const RAYS_PER_SCENE: usize = 256;
+/// Issue 10's target for the best width: at least this fraction of the finite grid's rays/s.
+pub const TARGET_RATIO: f64 = 1.0 / 3.0;
+/// The experiments' default walk bound (`grid.max_steps`).
+const MAX_STEPS: u32 = 10_000_000;
+
+/// How much this part of the bench measures.
+#[derive(Clone, Debug)]
+struct Plan {
+    widths: &'static [f64],
+    rounds: usize,
+    /// Infinite-scene rays per round and contestant (a multiple of [`BATCH`]).
+    rays_per_round: usize,
+    /// Spheres of the finite reference scene, and its rays per round.
+    finite_n: u64,
+    finite_rays_per_round: usize,
+}
+
+impl Plan {
+    fn new(quick: bool) -> Self {
+        if quick {
+            Self {
+                widths: QUICK_WIDTHS,
+                rounds: 3,
+                rays_per_round: 2048,
+                finite_n: 100_000,
+                finite_rays_per_round: 50_000,
+            }
+        } else {
+            Self {
+                widths: WIDTHS,
+                rounds: 5,
+                rays_per_round: 16_384,
+                finite_n: 1_000_000,
+                finite_rays_per_round: 300_000,
+            }
+        }
+    }
+}
+
+/// The finite query grid timed in the same rounds.
+#[derive(Clone, Debug)]
+pub struct FiniteRef {
+    pub n: u64,
+    pub cell_width: f64,
+    pub rays_per_round: usize,
+    pub secs: Vec<f64>,
+    /// Cells visited per round, Σ (N_S + 1).
+    pub cells: Vec<u64>,
+}
+
+impl FiniteRef {
+    pub fn rays_per_s(&self) -> f64 {
+        self.rays_per_round as f64 / median(&self.secs)
+    }
+}
+
+/// One cell width on one thread count.
+#[derive(Clone, Debug)]
+pub struct InfiniteRow {
+    pub cell_width: f64,
+    pub threads: usize,
+    pub rays_per_round: usize,
+    /// Seconds of each round.
+    pub secs: Vec<f64>,
+    /// Cells visited per round, Σ (N_S + 1).
+    pub cells: Vec<u64>,
+    pub n_i: f64,
+    pub n_i_mb: f64,
+    pub n_s: f64,
+    pub hit: f64,
+    /// Rays cut off by the walk bound (0 expected).
+    pub truncated: u64,
+    /// Mean spheres generated per scene realisation.
+    pub generated: f64,
+    /// Resident memory the per-thread caches grew by on a first pass with fresh caches.
+    pub peak_mem_bytes: u64,
+    /// Rays compared between 1 thread and all threads, and how many differed.
+    pub checked: u64,
+    pub mismatches: u64,
+    /// The fastest width of its thread count (median rays/s).
+    pub best: bool,
+    /// The finite grid on as many threads, and this row's per-round ratios to it.
+    pub finite: FiniteRef,
+    pub ratios: Vec<f64>,
+}
+
+impl InfiniteRow {
+    pub fn rays_per_s(&self) -> f64 {
+        self.rays_per_round as f64 / median(&self.secs)
+    }
+
+    /// Seconds per visited cell: the median over rounds of the round's seconds per cell.
+    pub fn cell_s(&self) -> f64 {
+        let per: Vec<f64> = self
+            .secs
+            .iter()
+            .zip(&self.cells)
+            .map(|(&s, &c)| s / c as f64)
+            .collect();
+        median(&per)
+    }
+
+    /// Median, min and max of the per-round ratios to the finite grid.
+    pub fn ratio(&self) -> (f64, f64, f64) {
+        let (lo, hi) = self
+            .ratios
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(l, h), &x| (l.min(x), h.max(x)));
+        (median(&self.ratios), lo, hi)
+    }
+
+    /// The bench table's row (the bench's columns first, in its order).
+    pub fn row(&self) -> Row {
+        let fold = |f: fn(f64, f64) -> f64, init| self.secs.iter().copied().fold(init, f);
+        let (ratio, lo, hi) = self.ratio();
+        let mut row = Row::default();
+        row.s("engine", ENGINE)
+            .u("n", 0)
+            .u("threads", self.threads as u64)
+            .f("cell_width", self.cell_width)
+            .u("rays", (self.rays_per_round * self.secs.len()) as u64)
+            .u("rounds", self.secs.len() as u64);
+        row.f("rays_per_s", self.rays_per_s())
+            .f("round_min_s", fold(f64::min, f64::INFINITY))
+            .f("round_median_s", median(&self.secs))
+            .f("round_max_s", fold(f64::max, 0.0))
+            .f("cell_s", self.cell_s())
+            .f("build_s", 0.0)
+            .u("peak_mem_bytes", self.peak_mem_bytes)
+            .u("structure_bytes", 0);
+        row.u("checked", self.checked)
+            .u("mismatches", self.mismatches)
+            .u("f32_ties", 0)
+            .f("t_rel_diff_max", 0.0)
+            .f("n_i_mean", self.n_i)
+            .f("n_s_mean", self.n_s);
+        row.f("n_i_mb_mean", self.n_i_mb)
+            .f("hit_mean", self.hit)
+            .u("truncated", self.truncated)
+            .f("generated_mean", self.generated)
+            .u("rays_per_scene", RAYS_PER_SCENE as u64)
+            .s("eye", "uniform")
+            .u("timed_best", u64::from(self.best))
+            .u("finite_n", self.finite.n)
+            .f("finite_cell_width", self.finite.cell_width)
+            .f("finite_rays_per_s", self.finite.rays_per_s())
+            .f("timed_finite_ratio", ratio)
+            .f("timed_finite_ratio_min", lo)
+            .f("timed_finite_ratio_max", hi);
+        row
+    }
+
+    /// This row's rounds for `bench.infinite-rounds.csv`; `with_finite` adds the finite grid's.
+    pub fn round_rows(&self, with_finite: bool) -> Vec<Row> {
+        let one = |engine: &str, n: u64, a: f64, rays: usize, r: usize, cells: u64, s: f64| {
+            let mut row = Row::default();
+            row.s("engine", engine)
+                .u("n", n)
+                .u("threads", self.threads as u64)
+                .f("cell_width", a)
+                .u("round", r as u64)
+                .u("rays", rays as u64)
+                .u("cells", cells)
+                .f("round_s", s);
+            row
+        };
+        let f = &self.finite;
+        let finite = f
+            .secs
+            .iter()
+            .zip(&f.cells)
+            .enumerate()
+            .map(|(r, (&s, &c))| one("grid", f.n, f.cell_width, f.rays_per_round, r, c, s));
+        let own = self
+            .secs
+            .iter()
+            .zip(&self.cells)
+            .enumerate()
+            .map(|(r, (&s, &c))| one(ENGINE, 0, self.cell_width, self.rays_per_round, r, c, s));
+        if with_finite {
+            finite.chain(own).collect()
+        } else {
+            own.collect()
+        }
+    }
+}
+
+/// What this part of the bench measured: one row per width and thread count (widths fastest).
+#[derive(Clone, Debug, Default)]
+pub struct Infinite {
+    pub rows: Vec<InfiniteRow>,
+}
+
+impl Infinite {
+    /// The side-table rows of each row, in row order (the finite grid's rounds with the first row
+    /// of each thread count).
+    pub fn round_rows(&self) -> Vec<Vec<Row>> {
+        self.rows
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                let first = i == 0 || self.rows[i - 1].threads != r.threads;
+                r.round_rows(first)
+            })
+            .collect()
+    }
+
+    /// The best row of each thread count.
+    pub fn best(&self) -> impl Iterator<Item = &InfiniteRow> {
+        self.rows.iter().filter(|r| r.best)
+    }
+
+    /// A readable table on stdout, and the best width of each thread count against the target.
+    pub fn print(&self) {
+        let Some(first) = self.rows.first() else {
+            return;
+        };
+        println!(
+            "\nInfinite Poisson scene (lazily generated; ρ = {RHO}, r = {}, eye uniform in its cell, {RAYS_PER_SCENE} rays per realisation), beside the finite query grid at n = {:.0e} (a = {:.3}), paired rounds:",
+            super::R,
+            first.finite.n as f64,
+            first.finite.cell_width
+        );
+        println!(
+            "{:>6} {:>4} {:>11} {:>19} {:>8} {:>7} {:>7} {:>6} {:>8} {:>8} {:>5} {:>11} {:>19}",
+            "a",
+            "thr",
+            "rays/s",
+            "round range",
+            "ns/cell",
+            "N_I",
+            "N_S",
+            "hit",
+            "spheres",
+            "peak MB",
+            "mism",
+            "inf/finite",
+            "round range"
+        );
+        for r in &self.rows {
+            let (ratio, lo, hi) = r.ratio();
+            let (slow, fast) = (
+                r.rays_per_round as f64 / r.secs.iter().copied().fold(0.0, f64::max),
+                r.rays_per_round as f64 / r.secs.iter().copied().fold(f64::INFINITY, f64::min),
+            );
+            println!(
+                "{:>6.2} {:>4} {:>11.4e} {:>9.3e}–{:<9.3e} {:>8.1} {:>7.1} {:>7.2} {:>6.3} {:>8.0} {:>8.1} {:>5} {:>11.4} {:>9.4}–{:<9.4}{}",
+                r.cell_width,
+                r.threads,
+                r.rays_per_s(),
+                slow,
+                fast,
+                r.cell_s() * 1e9,
+                r.n_i,
+                r.n_s,
+                r.hit,
+                r.generated,
+                r.peak_mem_bytes as f64 / 1e6,
+                r.mismatches,
+                ratio,
+                lo,
+                hi,
+                if r.best { "  ← best" } else { "" }
+            );
+        }
+        for r in self.best() {
+            let (ratio, lo, hi) = r.ratio();
+            println!(
+                "infinite best, {} thread(s): a = {:.2}, {:.4e} rays/s; finite grid (n = {:.0e}) {:.4e} rays/s; infinite / finite {ratio:.4} (paired rounds {lo:.4}–{hi:.4}); target ≥ {TARGET_RATIO:.3}: {}",
+                r.threads,
+                r.cell_width,
+                r.rays_per_s(),
+                r.finite.n as f64,
+                r.finite.rays_per_s(),
+                if ratio >= TARGET_RATIO { "met" } else { "not met" }
+            );
+        }
+    }
+}
+
+/// One contestant of the rounds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Who {
+    /// The finite query grid on (threads).
+    Finite(usize),
+    /// Width index, threads.
+    Infinite(usize, usize),
+}
+
+/// Runs this part of the bench: the finite grid at the bench's cell width `finite_a`, the infinite
+/// scene at every width of the plan, each on 1 and on `all` threads.
+pub fn run(
+    quick: bool,
+    finite_a: f64,
+    classes: &[RadiusClass],
+    all: usize,
+) -> anyhow::Result<Infinite> {
+    let plan = Plan::new(quick);
+    let thread_counts: Vec<usize> = if all > 1 { vec![1, all] } else { vec![1] };
+    let pools = thread_counts
+        .iter()
+        .map(|&t| pool(t))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    // One cache per worker of each pool, kept from batch to batch and round to round.
+    let caches: Vec<Vec<Mutex<LazyCache>>> = thread_counts
+        .iter()
+        .map(|&t| (0..t).map(|_| Mutex::new(LazyCache::default())).collect())
+        .collect();
+
+    // The finite reference: the bench's n-sphere scene (the same realisation as its grid rows).
+    let (spheres, bounds) = bench_scene(classes, plan.finite_n, KEY ^ plan.finite_n);
+    let grid = FastGrid::build(frame_around(bounds, finite_a, DVec3::ZERO), &spheres);
+    drop(spheres);
+    let fin_per = plan.finite_rays_per_round;
+    let fin_rays: Vec<Ray> = directions(plan.rounds * fin_per, KEY)
+        .into_iter()
+        .map(|d| Ray::new(DVec3::ZERO, d))
+        .collect();
+    let mut fin_out: Vec<Vec<FastTrace>> =
+        vec![vec![FastTrace::default(); fin_rays.len()]; thread_counts.len()];
+
+    // The infinite scene's rays, per width: one warm-up slice, then one slice per round.
+    let per = plan.rays_per_round;
+    let warm = 2 * BATCH as usize * all;
+    let inf_rays: Vec<Vec<Ray>> = plan
+        .widths
+        .iter()
+        .enumerate()
+        .map(|(i, &a)| eye_rays(a, warm + plan.rounds * per, &[KEY, 3, i as u64]))
+        .collect();
+    let mut inf_out: Vec<Vec<Vec<TraceCounts>>> = plan
+        .widths
+        .iter()
+        .map(|_| vec![vec![TraceCounts::default(); plan.rounds * per]; thread_counts.len()])
+        .collect();
+
+    let mut who = Vec::new();
+    for (t, _) in thread_counts.iter().enumerate() {
+        who.push(Who::Finite(t));
+        who.extend((0..plan.widths.len()).map(|i| Who::Infinite(i, t)));
+    }
+
+    // Untimed warm-up: fault in the finite grid; grow each width's caches from fresh ones (their
+    // growth is the row's memory), then leave every cache grown.
+    let mut peak = vec![vec![0u64; thread_counts.len()]; plan.widths.len()];
+    let mut generated = vec![0u64; plan.widths.len()];
+    for (t, p) in pools.iter().enumerate() {
+        let mut scratch = vec![FastTrace::default(); fin_per];
+        p.install(|| trace_into(&grid, &fin_rays[..fin_per], &mut scratch));
+        for (i, &a) in plan.widths.iter().enumerate() {
+            let fresh: Vec<Mutex<LazyCache>> = (0..thread_counts[t])
+                .map(|_| Mutex::new(LazyCache::default()))
+                .collect();
+            let mut out = vec![TraceCounts::default(); warm];
+            let (_, grew) = memory::peak_increment(|| {
+                p.install(|| trace_lazy(classes, a, &inf_rays[i][..warm], 0, &mut out, &fresh))
+            });
+            peak[i][t] = grew;
+            drop(fresh);
+            p.install(|| trace_lazy(classes, a, &inf_rays[i][..warm], 0, &mut out, &caches[t]));
+        }
+    }
+
+    let times = alternate(who.len(), plan.rounds, |c, r| match who[c] {
+        Who::Finite(t) => {
+            let span = r * fin_per..(r + 1) * fin_per;
+            let out = &mut fin_out[t][span.clone()];
+            pools[t].install(|| trace_into(&grid, &fin_rays[span], out));
+        }
+        Who::Infinite(i, t) => {
+            let span = r * per..(r + 1) * per;
+            let rays = &inf_rays[i][warm + span.start..warm + span.end];
+            let out = &mut inf_out[i][t][span];
+            // Batch keys continue the warm-up's, so every round traces fresh realisations.
+            let first_batch = (warm + r * per) / BATCH as usize;
+            let a = plan.widths[i];
+            let g = pools[t].install(|| trace_lazy(classes, a, rays, first_batch, out, &caches[t]));
+            if t == 0 {
+                generated[i] += g;
+            }
+        }
+    });
+    drop(grid);
+
+    let cells_of = |counts: &[u32]| -> u64 { counts.iter().map(|&s| u64::from(s) + 1).sum() };
+    let finite: Vec<FiniteRef> = thread_counts
+        .iter()
+        .enumerate()
+        .map(|(t, _)| {
+            let c = who
+                .iter()
+                .position(|&w| w == Who::Finite(t))
+                .expect("finite");
+            FiniteRef {
+                n: plan.finite_n,
+                cell_width: finite_a,
+                rays_per_round: fin_per,
+                secs: times.secs[c].clone(),
+                cells: fin_out[t]
+                    .chunks(fin_per)
+                    .map(|ch| cells_of(&ch.iter().map(|q| q.n_s).collect::<Vec<_>>()))
+                    .collect(),
+            }
+        })
+        .collect();
+
+    let mut rows = Vec::new();
+    for (t, &threads) in thread_counts.iter().enumerate() {
+        for (i, &a) in plan.widths.iter().enumerate() {
+            let c = who
+                .iter()
+                .position(|&w| w == Who::Infinite(i, t))
+                .expect("infinite");
+            let counts = &inf_out[i][t];
+            let rays = counts.len() as f64;
+            let mean = |f: fn(&TraceCounts) -> f64| counts.iter().map(f).sum::<f64>() / rays;
+            // Against the first thread count (1): the same rays and realisations, so the same
+            // counts and hits, to the bit.
+            let mismatches = counts
+                .iter()
+                .zip(&inf_out[i][0])
+                .filter(|(x, y)| x != y)
+                .count() as u64;
+            let secs = times.secs[c].clone();
+            let fin = &finite[t];
+            let ratios = secs
+                .iter()
+                .zip(&fin.secs)
+                .map(|(&s, &fs)| (per as f64 / s) / (fin_per as f64 / fs))
+                .collect();
+            let scenes = (plan.rounds * per).div_ceil(RAYS_PER_SCENE) as f64;
+            rows.push(InfiniteRow {
+                cell_width: a,
+                threads,
+                rays_per_round: per,
+                secs,
+                cells: counts
+                    .chunks(per)
+                    .map(|ch| cells_of(&ch.iter().map(|q| q.n_s).collect::<Vec<_>>()))
+                    .collect(),
+                n_i: mean(|q| f64::from(q.n_i)),
+                n_i_mb: mean(|q| f64::from(q.n_i_mb)),
+                n_s: mean(|q| f64::from(q.n_s)),
+                hit: mean(|q| f64::from(u8::from(q.hit.is_some()))),
+                truncated: counts.iter().filter(|q| q.truncated).count() as u64,
+                generated: generated[i] as f64 / scenes,
+                peak_mem_bytes: peak[i][t],
+                checked: if t == 0 { 0 } else { counts.len() as u64 },
+                mismatches,
+                best: false,
+                finite: fin.clone(),
+                ratios,
+            });
+        }
+        let group = rows.len() - plan.widths.len()..rows.len();
+        if let Some(b) = rows[group.clone()]
+            .iter()
+            .enumerate()
+            .max_by(|x, y| x.1.rays_per_s().total_cmp(&y.1.rays_per_s()))
+            .map(|(k, _)| group.start + k)
+        {
+            rows[b].best = true;
+        }
+    }
+    Ok(Infinite { rows })
+}
+
+/// `n` rays with the eye uniform in the cell [0, a)³ and uniform directions, from stream `key`.
+fn eye_rays(a: f64, n: usize, key: &[u64]) -> Vec<Ray> {
+    let mut rng = stream(key);
+    (0..n)
+        .map(|_| {
+            let d = uniform_direction(&mut rng);
+            Ray::new(uniform_unit_cube(&mut rng) * a, d)
+        })
+        .collect()
+}
+
+/// Traces `rays` through the infinite scene at cell width `a` into `out`, on the current pool, as
+/// the grid experiments do: batches of [`BATCH`] rays in parallel (batch `first_batch + k` for the
+/// k-th), each group of [`RAYS_PER_SCENE`] rays in its own realisation, keyed by batch and group;
+/// each worker uses its own cache of `caches`. Returns the spheres generated, summed over groups.
+fn trace_lazy(
+    classes: &[RadiusClass],
+    a: f64,
+    rays: &[Ray],
+    first_batch: usize,
+    out: &mut [TraceCounts],
+    caches: &[Mutex<LazyCache>],
+) -> u64 {
+    let frame = GridFrame {
+        origin: DVec3::ZERO,
+        width: a,
+        dims: None,
+    };
+    out.par_chunks_mut(BATCH as usize)
+        .zip(rays.par_chunks(BATCH as usize))
+        .enumerate()
+        .map(|(k, (out, rays))| {
+            let worker = rayon::current_thread_index().unwrap_or(0) % caches.len();
+            let mut cache = caches[worker]
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            let mut mailbox = Mailbox::default();
+            let mut generated = 0;
+            let b = (first_batch + k) as u64;
+            for (g, (out, rays)) in out
+                .chunks_mut(RAYS_PER_SCENE)
+                .zip(rays.chunks(RAYS_PER_SCENE))
+                .enumerate()
+            {
+                let scene = LazyScene::new(
+                    RHO,
+                    classes,
+                    RadiusDraw::PerSphere,
+                    a,
+                    &[KEY, 4, b, g as u64],
+                );
+                let mut lists = scene.cells(frame, 2.0 * a, &mut cache);
+                for (o, r) in out.iter_mut().zip(rays) {
+                    *o = trace(&mut lists, r, &mut mailbox, true, MAX_STEPS);
+                }
+                generated += lists.generated() as u64;
+            }
+            generated
+        })
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quick_plan_is_a_subset_and_rounds_are_whole_batches() {
+        for quick in [false, true] {
+            let p = Plan::new(quick);
+            assert_eq!(p.rays_per_round % BATCH as usize, 0);
+            assert!(p.widths.iter().all(|w| WIDTHS.contains(w)));
+        }
+        assert_eq!(
+            RAYS_PER_SCENE as u64, BATCH,
+            "the experiments' default shares a batch"
+        );
+    }
+
+    #[test]
+    fn lazy_trace_is_independent_of_the_thread_count_and_counts_cells() {
+        let classes = [RadiusClass {
+            fraction: 1.0,
+            radius: crate::scene::RadiusDist::Constant(super::super::R),
+        }];
+        let rays = eye_rays(0.5, 2 * BATCH as usize, &[KEY, 99]);
+        let mut one = vec![TraceCounts::default(); rays.len()];
+        let mut two = one.clone();
+        let c1 = [Mutex::new(LazyCache::default())];
+        let c2 = [
+            Mutex::new(LazyCache::default()),
+            Mutex::new(LazyCache::default()),
+        ];
+        let g1 = pool(1)
+            .expect("pool")
+            .install(|| trace_lazy(&classes, 0.5, &rays, 7, &mut one, &c1));
+        let g2 = pool(2)
+            .expect("pool")
+            .install(|| trace_lazy(&classes, 0.5, &rays, 7, &mut two, &c2));
+        assert_eq!(one, two);
+        assert_eq!(g1, g2);
+        assert!(g1 > 0);
+        // At ρ = 1, r = 0.1 almost every ray hits within the walk bound.
+        assert!(one.iter().filter(|q| q.hit.is_some()).count() > rays.len() * 9 / 10);
+        assert!(one.iter().all(|q| !q.truncated));
+    }
+}
