@@ -2,10 +2,11 @@
 //! tracked figure (issue 10).
 //!
 //! Set-up, as the grid experiments run it (`experiments/quickstart.toml`): an infinite Poisson scene
-//! at ρ = 1, r = 0.1 ([`LazyScene`]), the eye uniform in its cell (cell [0, a)³), uniform
-//! directions, the counting tracer ([`crate::grid::trace`]) with mailboxing, and every group of
-//! [`RAYS_PER_SCENE`] rays (the experiments' default `grid.rays_per_scene`) sharing one realisation.
-//! Rays are handed to the thread pool in batches of [`BATCH`]; each thread keeps one [`LazyCache`]
+//! at ρ = 1, r = 0.1 ([`InfiniteScene`], which picks the engine as experiments do), the eye uniform
+//! in its cell (cell [0, a)³), uniform directions, the counting tracer ([`crate::grid::trace`]) with
+//! mailboxing, and every group of [`RAYS_PER_SCENE`] rays (the experiments' default
+//! `grid.rays_per_scene`: 1, each ray its own realisation) sharing one realisation.
+//! Rays are handed to the thread pool in batches of [`BATCH`]; each thread keeps one [`InfiniteCaches`]
 //! from batch to batch, as an experiment's worker does.
 //!
 //! Several cell widths are timed, each on 1 thread and on all threads, beside the finite query grid
@@ -19,7 +20,7 @@
 //! the bench's columns (`rays_per_s`, `round_*_s`, `cell_s` = seconds per visited cell, visited
 //! cells being Σ (N_S + 1), `peak_mem_bytes`, `checked`/`mismatches`: the rays' counts and hits on
 //! 1 thread against all threads, `n_i_mean`, `n_s_mean`) and `n_i_mb_mean`, `hit_mean`,
-//! `generated_mean` (spheres generated per realisation), `rays_per_scene`, `eye`, `timed_best` (1 on
+//! `generated_mean` (spheres generated per ray), `rays_per_scene`, `eye`, `timed_best` (1 on
 //! the fastest width of its thread count), `finite_n`, `finite_cell_width`, `finite_rays_per_s`,
 //! `timed_finite_ratio` (median of the per-round ratios of this row's rays/s to the finite grid's
 //! on as many threads) with `timed_finite_ratio_min`/`_max`. Every round's seconds and visited
@@ -35,11 +36,11 @@ use super::{bench_scene, directions, memory, pool, trace_into, KEY, RHO};
 use crate::experiment::grid::BATCH;
 use crate::geom::Ray;
 use crate::grid::fast::{FastGrid, FastTrace};
-use crate::grid::{build::frame_around, mailbox::Mailbox, trace, GridFrame, TraceCounts};
+use crate::grid::{build::frame_around, TraceCounts};
 use crate::output::row::Row;
 use crate::sample::directions::{uniform_direction, uniform_unit_cube};
 use crate::sample::rng::stream;
-use crate::scene::lazy::{LazyCache, LazyScene};
+use crate::scene::infinite::{InfiniteCaches, InfiniteScene, Walk};
 use crate::scene::{RadiusClass, RadiusDraw};
 
 /// The engine name of the rows.
@@ -51,7 +52,7 @@ pub const WIDTHS: &[f64] = &[0.2, 0.35, 0.5, 0.7, 1.0, 1.5, 2.0];
 /// Cell widths timed by `bench --quick`.
 pub const QUICK_WIDTHS: &[f64] = &[0.35, 0.7, 1.5];
 /// Rays sharing one scene realisation: the experiments' default (`grid.rays_per_scene`).
-pub const RAYS_PER_SCENE: usize = 256;
+pub const RAYS_PER_SCENE: usize = crate::spec::DEFAULT_RAYS_PER_SCENE as usize;
 /// Issue 10's target for the best width: at least this fraction of the finite grid's rays/s.
 pub const TARGET_RATIO: f64 = 1.0 / 3.0;
 /// The experiments' default walk bound (`grid.max_steps`).
@@ -356,9 +357,13 @@ pub fn run(
         .map(|&t| pool(t))
         .collect::<anyhow::Result<Vec<_>>>()?;
     // One cache per worker of each pool, kept from batch to batch and round to round.
-    let caches: Vec<Vec<Mutex<LazyCache>>> = thread_counts
+    let caches: Vec<Vec<Mutex<InfiniteCaches>>> = thread_counts
         .iter()
-        .map(|&t| (0..t).map(|_| Mutex::new(LazyCache::default())).collect())
+        .map(|&t| {
+            (0..t)
+                .map(|_| Mutex::new(InfiniteCaches::default()))
+                .collect()
+        })
         .collect();
 
     // The finite reference: the bench's n-sphere scene (the same realisation as its grid rows).
@@ -402,8 +407,8 @@ pub fn run(
         let mut scratch = vec![FastTrace::default(); fin_per];
         p.install(|| trace_into(&grid, &fin_rays[..fin_per], &mut scratch));
         for (i, &a) in plan.widths.iter().enumerate() {
-            let fresh: Vec<Mutex<LazyCache>> = (0..thread_counts[t])
-                .map(|_| Mutex::new(LazyCache::default()))
+            let fresh: Vec<Mutex<InfiniteCaches>> = (0..thread_counts[t])
+                .map(|_| Mutex::new(InfiniteCaches::default()))
                 .collect();
             let mut out = vec![TraceCounts::default(); warm];
             let (_, grew) = memory::peak_increment(|| {
@@ -540,12 +545,19 @@ fn trace_lazy(
     rays: &[Ray],
     first_batch: usize,
     out: &mut [TraceCounts],
-    caches: &[Mutex<LazyCache>],
+    caches: &[Mutex<InfiniteCaches>],
 ) -> u64 {
-    let frame = GridFrame {
-        origin: DVec3::ZERO,
-        width: a,
-        dims: None,
+    let scene = InfiniteScene {
+        intensity: RHO,
+        classes,
+        draw: RadiusDraw::PerSphere,
+    };
+    let walk = Walk {
+        cell_width: a,
+        eye_magnitude: 2.0 * a,
+        rays_per_scene: RAYS_PER_SCENE,
+        mailbox: true,
+        max_steps: MAX_STEPS,
     };
     out.par_chunks_mut(BATCH as usize)
         .zip(rays.par_chunks(BATCH as usize))
@@ -555,27 +567,10 @@ fn trace_lazy(
             let mut cache = caches[worker]
                 .lock()
                 .unwrap_or_else(std::sync::PoisonError::into_inner);
-            let mut mailbox = Mailbox::default();
-            let mut generated = 0;
             let b = (first_batch + k) as u64;
-            for (g, (out, rays)) in out
-                .chunks_mut(RAYS_PER_SCENE)
-                .zip(rays.chunks(RAYS_PER_SCENE))
-                .enumerate()
-            {
-                let scene = LazyScene::new(
-                    RHO,
-                    classes,
-                    RadiusDraw::PerSphere,
-                    a,
-                    &[KEY, 4, b, g as u64],
-                );
-                let mut lists = scene.cells(frame, 2.0 * a, &mut cache);
-                for (o, r) in out.iter_mut().zip(rays) {
-                    *o = trace(&mut lists, r, &mut mailbox, true, MAX_STEPS);
-                }
-                generated += lists.generated() as u64;
-            }
+            let mut counts = Vec::with_capacity(rays.len());
+            let generated = scene.trace_batch(&walk, &[KEY, 4, b], rays, &mut cache, &mut counts);
+            out.copy_from_slice(&counts);
             generated
         })
         .sum()
@@ -592,9 +587,9 @@ mod tests {
             assert_eq!(p.rays_per_round % BATCH as usize, 0);
             assert!(p.widths.iter().all(|w| WIDTHS.contains(w)));
         }
-        assert_eq!(
-            RAYS_PER_SCENE as u64, BATCH,
-            "the experiments' default shares a batch"
+        assert!(
+            RAYS_PER_SCENE as u64 <= BATCH,
+            "a realisation fits in a batch"
         );
     }
 
@@ -607,10 +602,10 @@ mod tests {
         let rays = eye_rays(0.5, 2 * BATCH as usize, &[KEY, 99]);
         let mut one = vec![TraceCounts::default(); rays.len()];
         let mut two = one.clone();
-        let c1 = [Mutex::new(LazyCache::default())];
+        let c1 = [Mutex::new(InfiniteCaches::default())];
         let c2 = [
-            Mutex::new(LazyCache::default()),
-            Mutex::new(LazyCache::default()),
+            Mutex::new(InfiniteCaches::default()),
+            Mutex::new(InfiniteCaches::default()),
         ];
         let g1 = pool(1)
             .expect("pool")

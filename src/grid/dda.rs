@@ -69,9 +69,20 @@ impl Dda {
                 };
                 let b = self.g0[i] + k as f64 * self.a;
                 // Rounding can put the boundary a hair behind the origin: clamp to the entry.
-                ((b - self.o[i]) * self.inv_d[i]).max(self.t_enter)
+                later((b - self.o[i]) * self.inv_d[i], self.t_enter)
             }
         }
+    }
+}
+
+/// The larger of two distances (never NaN here): `f64::max` without its NaN handling, which costs
+/// three extra instructions on every step of every walk.
+#[inline(always)]
+fn later(t: f64, t_enter: f64) -> f64 {
+    if t > t_enter {
+        t
+    } else {
+        t_enter
     }
 }
 
@@ -114,7 +125,7 @@ impl Iterator for Dda {
         } else {
             2
         };
-        let t_exit = t[axis].max(self.t_enter);
+        let t_exit = later(t[axis], self.t_enter);
         let out = (self.cell, self.t_enter, t_exit);
         if t_exit == f64::INFINITY {
             self.done = true;

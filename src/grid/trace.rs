@@ -21,7 +21,7 @@ pub struct Hit {
 impl Hit {
     /// Is `(t, id)` nearer than `best` (ties to the smaller id)?
     #[inline]
-    fn beats(t: f64, id: u64, best: &Option<Hit>) -> bool {
+    pub(crate) fn beats(t: f64, id: u64, best: &Option<Hit>) -> bool {
         match best {
             None => true,
             Some(b) => t < b.t || (t == b.t && id < b.id),

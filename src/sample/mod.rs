@@ -70,14 +70,27 @@ impl PoissonTable {
     }
 
     /// One draw, equal to `poisson(rng, mu)` on the same stream.
-    #[inline]
+    #[inline(always)]
     pub fn sample<R: rand::Rng + ?Sized>(&self, rng: &mut R) -> u64 {
         if self.cdf.is_empty() {
             return poisson(rng, self.mu);
         }
         let u: f64 = rng.gen();
-        // The loop stops at the first k with u ≤ cdf[k] (or at k = 1000).
-        match self.cdf.iter().position(|&c| u <= c) {
+        // The loop stops at the first k with u ≤ cdf[k] (or at k = 1000): the number of leading
+        // entries below u. The first four are counted without branches (small means end there).
+        let head = self.cdf.len().min(4);
+        let below = self.cdf[..head]
+            .iter()
+            .map(|&c| usize::from(c < u))
+            .sum::<usize>();
+        if below < head {
+            return below as u64;
+        }
+        match self.cdf[head..]
+            .iter()
+            .position(|&c| u <= c)
+            .map(|k| k + head)
+        {
             Some(k) => k as u64,
             // Beyond the table the running sum no longer grows: the loop runs on to its cap.
             None => 1000,

@@ -78,8 +78,8 @@ impl InfiniteScene<'_> {
             let mut lists = scene.cells(frame, walk.eye_magnitude, &mut caches.tube);
             for (g, ray) in rays.iter().enumerate() {
                 group_key[last] = g as u64;
-                lists.start_ray(&group_key);
-                out.push(trace(&mut lists, ray, mb, walk.mailbox, walk.max_steps));
+                // The fused tracer: `trace` over `lists`, bit for bit, whatever `walk.mailbox`.
+                out.push(lists.trace_ray(&group_key, ray, walk.max_steps));
             }
             return lists.generated() as u64;
         }

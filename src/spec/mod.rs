@@ -16,5 +16,5 @@ pub mod sweep;
 pub use config::{GridConfig, PointConfig, SceneModel};
 pub use detp::DetpConfig;
 pub use error::SpecError;
-pub use raw::{Kind, RawSpec};
+pub use raw::{Kind, RawSpec, DEFAULT_RAYS_PER_SCENE};
 pub use sweep::{Point, Spec};

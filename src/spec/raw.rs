@@ -369,8 +369,11 @@ fn default_max_steps() -> u64 {
     10_000_000
 }
 fn default_rays_per_scene() -> u64 {
-    1
+    DEFAULT_RAYS_PER_SCENE
 }
+
+/// `grid.rays_per_scene` when a spec leaves it out: independent rays.
+pub const DEFAULT_RAYS_PER_SCENE: u64 = 1;
 fn default_bins() -> u64 {
     40
 }
