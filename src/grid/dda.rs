@@ -23,6 +23,8 @@ pub struct Dda {
     t_enter: f64,
     dims: Option<[i64; 3]>,
     done: bool,
+    /// The axis of the latest step (towards the cell the next call returns).
+    axis: usize,
 }
 
 impl Dda {
@@ -41,6 +43,7 @@ impl Dda {
             t_enter: 0.0,
             dims: frame.dims,
             done: false,
+            axis: 0,
         };
         for (i, &di) in d.iter().enumerate() {
             if di > 0.0 {
@@ -72,6 +75,15 @@ impl Dda {
                 later((b - self.o[i]) * self.inv_d[i], self.t_enter)
             }
         }
+    }
+}
+
+impl Dda {
+    /// The axis and sign of the step the latest [`Iterator::next`] took: how the walk enters the
+    /// cell the next call returns. (Walkers that keep per-cell state update only that axis.)
+    #[inline(always)]
+    pub fn last_step(&self) -> (usize, i64) {
+        (self.axis, self.step[self.axis])
     }
 }
 
@@ -118,13 +130,10 @@ impl Iterator for Dda {
         // The axis whose face comes first (ties go to the lowest axis; the other axes follow with
         // zero-length cells).
         let t = &self.t_next;
-        let axis = if t[0] <= t[1] && t[0] <= t[2] {
-            0
-        } else if t[1] <= t[2] {
-            1
-        } else {
-            2
-        };
+        // Without branches (which axis comes next is the least predictable thing in a walk):
+        // 0 if t0 ≤ t1 and t0 ≤ t2, else 1 if t1 ≤ t2, else 2.
+        let not_0 = usize::from(t[1] < t[0]) | usize::from(t[2] < t[0]);
+        let axis = not_0 * (1 + usize::from(t[2] < t[1]));
         let t_exit = later(t[axis], self.t_enter);
         let out = (self.cell, self.t_enter, t_exit);
         if t_exit == f64::INFINITY {
@@ -132,6 +141,7 @@ impl Iterator for Dda {
             return Some(out);
         }
         self.cell[axis] += self.step[axis];
+        self.axis = axis;
         self.t_enter = t_exit;
         if let Some(d) = self.dims {
             if self.cell[axis] < 0 || self.cell[axis] >= d[axis] {

@@ -138,6 +138,9 @@ impl TubeScene {
 #[derive(Clone, Copy, Debug)]
 struct Active {
     s: Sphere,
+    /// Where the traced ray meets it ([`Sphere::intersect`], ∞ for a miss), computed when it is
+    /// drawn so that the walk's loop over the active set has no branch; ∞ on the generic path.
+    t: f64,
     /// Listed in a visited cell already (the mailbox).
     seen: bool,
 }
@@ -194,39 +197,50 @@ impl TubeCells<'_> {
         self.cache.generated
     }
 
-    /// Draws a Poisson count (the slab's law, or the first reach box's) of marked centres uniform in the box `[lo, hi]` into the active set.
-    fn draw_box(&mut self, slab: bool, lo: DVec3, hi: DVec3) {
+    /// Draws a Poisson count (the slab's law, or the first reach box's) of marked centres uniform
+    /// in the box `[lo, hi]` into the active set.
+    /// With `ray`, each sphere also keeps where the ray meets it.
+    #[inline(always)]
+    fn draw_box(&mut self, slab: bool, lo: [f64; 3], hi: [f64; 3], ray: Option<&Ray>) {
         let law = if slab {
             &self.pieces.slab
         } else {
             &self.pieces.cube
         };
         let n = law.sample(&mut self.rng);
-        let size = hi - lo;
-        let many = self.scene.classes.len() > 1;
+        if n == 0 {
+            return;
+        }
+        let size = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
+        let scene = self.scene;
+        let many = scene.classes.len() > 1;
+        let active = &mut self.cache.active;
         for _ in 0..n {
-            let u = DVec3::new(self.rng.gen(), self.rng.gen(), self.rng.gen());
+            // Three uniforms, then the class, then the radius: the stream's order is the model.
+            let u: [f64; 3] = [self.rng.gen(), self.rng.gen(), self.rng.gen()];
             let class = if many {
                 let v: f64 = self.rng.gen();
-                self.scene
-                    .cumulative
-                    .iter()
-                    .position(|&c| v < c)
-                    .unwrap_or(0)
+                scene.cumulative.iter().position(|&c| v < c).unwrap_or(0)
             } else {
                 0
             };
-            let r = match self.scene.draw {
+            let r = match scene.draw {
                 RadiusDraw::PerScene => self.radii[class],
-                RadiusDraw::PerSphere => self.scene.classes[class].radius.sample(&mut self.rng),
+                RadiusDraw::PerSphere => scene.classes[class].radius.sample(&mut self.rng),
             };
             let sphere = Sphere {
-                c: lo + u * size,
+                c: DVec3::new(
+                    lo[0] + u[0] * size[0],
+                    lo[1] + u[1] * size[1],
+                    lo[2] + u[2] * size[2],
+                ),
                 r,
                 id: self.next_id,
             };
-            self.cache.active.push(Active {
+            let t = ray.and_then(|ray| sphere.intersect(ray));
+            active.push(Active {
                 s: sphere,
+                t: t.unwrap_or(f64::INFINITY),
                 seen: false,
             });
             #[cfg(test)]
@@ -236,14 +250,33 @@ impl TubeCells<'_> {
         self.cache.generated += n as usize;
     }
 
-    /// Moves the realisation to `cell`: the first cell's reach box, or the slab a step adds.
+    /// Drops the spheres that fell behind the reach box `[lo, hi]` along `axis` after a step of
+    /// sign `step` (they can never be listed again: the walk is monotone). A stable, branch-free
+    /// compaction: the kept spheres keep their order.
     #[inline(always)]
+    fn drop_behind(&mut self, axis: usize, step: i64, lo: &[f64; 3], hi: &[f64; 3]) {
+        let active = &mut self.cache.active;
+        let mut kept = 0;
+        for i in 0..active.len() {
+            let e = active[i];
+            let c = e.s.c.to_array()[axis];
+            let keep = if step > 0 {
+                c >= lo[axis]
+            } else {
+                c <= hi[axis]
+            };
+            active[kept] = e;
+            kept += usize::from(keep);
+        }
+        active.truncate(kept);
+    }
+
+    /// Moves the realisation to `cell`: the first cell's reach box, or the slab a step adds.
     fn advance(&mut self, cell: Cell) {
         let cb = self.frame.cell_box(cell);
-        let reach = self.pieces.reach;
-        let (mut lo, mut hi) = (cb.lo - DVec3::splat(reach), cb.hi + DVec3::splat(reach));
         let Some(last) = self.last else {
-            self.draw_box(false, lo, hi);
+            let b = ReachBox::of(&cb, self.pieces.reach);
+            self.draw_box(false, b.lo, b.hi, None);
             self.last = Some(cell);
             return;
         };
@@ -255,47 +288,88 @@ impl TubeCells<'_> {
             step.abs() == 1 && (0..3).all(|i| i == axis || cell[i] == last[i]),
             "a tube realisation follows a DDA walk: {last:?} → {cell:?} is not one step"
         );
+        self.step_into(ReachBox::of(&cb, self.pieces.reach), axis, step);
+        self.last = Some(cell);
+    }
+
+    /// After a step of sign `step` along `axis` into the cell of reach box `b`: drops what fell
+    /// behind and draws the slab the step adds.
+    #[inline(always)]
+    fn step_into(&mut self, b: ReachBox, axis: usize, step: i64) {
+        self.drop_behind(axis, step, &b.lo, &b.hi);
+        let (mut lo, mut hi) = (b.lo, b.hi);
         let a = self.frame.width;
-        // Drop the spheres left behind along the step's axis (swap-remove: order is irrelevant).
-        let active = &mut self.cache.active;
-        let behind = |c: f64| if step > 0 { c < lo[axis] } else { c > hi[axis] };
-        let mut i = 0;
-        while i < active.len() {
-            if behind(active[i].s.c[axis]) {
-                active.swap_remove(i);
-            } else {
-                i += 1;
-            }
-        }
         if step > 0 {
             lo[axis] = hi[axis] - a;
         } else {
             hi[axis] = lo[axis] + a;
         }
-        self.draw_box(true, lo, hi);
-        self.last = Some(cell);
+        self.draw_box(true, lo, hi, None);
     }
 }
 
-/// Is `s` listed in the cell of box `cb`: does its padded ball meet the box? (The lazy engine's
-/// test, operation for operation.)
-#[inline(always)]
-fn meets(s: &Sphere, cb: &crate::geom::Aabb, frame: &GridFrame, magnitude: f64) -> bool {
-    // Plain comparisons instead of `DVec3::clamp` (no NaN can occur): the same values, fewer
-    // instructions on the hottest line of the walk.
-    let gap = |p: f64, lo: f64, hi: f64| {
-        if p < lo {
-            p - lo
-        } else if p > hi {
-            p - hi
-        } else {
-            0.0
+/// A cell's reach box `[lo − R, hi + R]³`, per axis.
+#[derive(Clone, Copy, Debug)]
+struct ReachBox {
+    lo: [f64; 3],
+    hi: [f64; 3],
+}
+
+impl ReachBox {
+    #[inline(always)]
+    fn of(cb: &crate::geom::Aabb, reach: f64) -> Self {
+        let (lo, hi) = (cb.lo.to_array(), cb.hi.to_array());
+        Self {
+            lo: [lo[0] - reach, lo[1] - reach, lo[2] - reach],
+            hi: [hi[0] + reach, hi[1] + reach, hi[2] + reach],
         }
-    };
+    }
+}
+
+/// The box of `cell` and its magnitude: [`GridFrame::cell_box`] and
+/// [`crate::geom::Aabb::magnitude`], the same numbers, as plain arrays. Recomputed whole at every
+/// step: updating only the axis that changed would write single lanes that the next vector read
+/// of the box must wait for (a store-forwarding stall that cost 13 % of the walk).
+#[inline(always)]
+fn cell_box(frame: &GridFrame, cell: &Cell) -> ([f64; 3], [f64; 3], f64) {
+    let (o, w) = (frame.origin, frame.width);
+    let lo = [
+        o.x + cell[0] as f64 * w,
+        o.y + cell[1] as f64 * w,
+        o.z + cell[2] as f64 * w,
+    ];
+    let hi = [lo[0] + w, lo[1] + w, lo[2] + w];
+    let m = |i: usize| max(lo[i].abs(), hi[i].abs());
+    (lo, hi, max(m(0), max(m(1), m(2))))
+}
+
+/// `f64::max` for values that are never NaN (one instruction instead of four).
+#[inline(always)]
+fn max(x: f64, y: f64) -> f64 {
+    if x > y {
+        x
+    } else {
+        y
+    }
+}
+
+/// Signed distance from `p` to `[lo, hi]` along one axis, up to sign (0 inside): what
+/// [`crate::geom::Aabb::distance_squared`] squares, without branches.
+#[inline(always)]
+fn gap(p: f64, lo: f64, hi: f64) -> f64 {
+    let below = p - lo;
+    let above = p - hi;
+    (if below < 0.0 { below } else { 0.0 }) + (if above > 0.0 { above } else { 0.0 })
+}
+
+/// Is `s` listed in the cell of box `[lo, hi]`: does its padded ball meet the box? (The lazy
+/// engine's test, operation for operation: the squared distance is the same number.)
+#[inline(always)]
+fn meets(s: &Sphere, lo: &[f64; 3], hi: &[f64; 3], frame: &GridFrame, magnitude: f64) -> bool {
     let (dx, dy, dz) = (
-        gap(s.c.x, cb.lo.x, cb.hi.x),
-        gap(s.c.y, cb.lo.y, cb.hi.y),
-        gap(s.c.z, cb.lo.z, cb.hi.z),
+        gap(s.c.x, lo[0], hi[0]),
+        gap(s.c.y, lo[1], hi[1]),
+        gap(s.c.z, lo[2], hi[2]),
     );
     let rr = s.r + frame.pad(magnitude, s.r);
     dx * dx + dy * dy + dz * dz <= rr * rr
@@ -307,44 +381,93 @@ impl TubeCells<'_> {
     /// `start_ray(key)` then `trace(self, ray, …)`, bit for bit (tested), for either mailbox
     /// setting: a sphere's first listing is its distinct test, and its intersection is computed
     /// then, once (a repeat could not change the nearest hit). What it saves is the per-cell list
-    /// buffer, the mailbox's hash set and the calls between them.
+    /// buffer, the mailbox's hash set and the calls between them; the loop over the active set
+    /// has no data-dependent branch (each sphere's distance along the ray is computed when it is
+    /// drawn): with ~1 sphere per cell, the walk's time goes to per-step control flow more
+    /// than to arithmetic (measured as time only: this VM exposes no branch-miss counters).
     pub fn trace_ray(&mut self, key: &[u64], ray: &Ray, max_steps: u32) -> TraceCounts {
         self.start_ray(key);
         let frame = self.frame;
+        let reach = self.pieces.reach;
+        let r_max = self.pieces.r_max;
         let mut counts = TraceCounts::default();
-        let mut best: Option<Hit> = None;
+        let (mut best_t, mut best_id) = (f64::INFINITY, u64::MAX);
         let mut visited = 0u32;
         let mut last_exit = 0.0;
         let mut stopped = false;
-        for (cell, _t_enter, t_exit) in Dda::new(&frame, ray) {
+        let mut dda = Dda::new(&frame, ray);
+        let mut entered = None;
+        while let Some((cell, _t_enter, t_exit)) = dda.next() {
             visited += 1;
             last_exit = t_exit;
-            self.advance(cell);
-            if !self.cache.active.is_empty() {
-                let cb = frame.cell_box(cell);
-                let magnitude = cb.magnitude() + self.eye_magnitude;
-                let r_max = self.pieces.r_max;
-                assert!(
-                    r_max + frame.pad(magnitude, r_max) <= self.pieces.reach,
-                    "cell {cell:?} is too far from the origin for the reach margin"
-                );
-                for e in self.cache.active.iter_mut() {
-                    if !meets(&e.s, &cb, &frame, magnitude) {
-                        continue;
-                    }
-                    counts.n_i += 1;
-                    if e.seen {
-                        continue;
-                    }
-                    e.seen = true;
-                    counts.n_i_mb += 1;
-                    if let Some(t) = e.s.intersect(ray) {
-                        if Hit::beats(t, e.s.id, &best) {
-                            best = Some(Hit { id: e.s.id, t });
+            let (lo, hi, magnitude) = cell_box(&frame, &cell);
+            let reach_lo = [lo[0] - reach, lo[1] - reach, lo[2] - reach];
+            let reach_hi = [hi[0] + reach, hi[1] + reach, hi[2] + reach];
+            match entered {
+                None => self.draw_box(false, reach_lo, reach_hi, Some(ray)),
+                Some((axis, step)) => {
+                    let a = frame.width;
+                    // The slab: the reach box, cut to width a on the step's far side (selects,
+                    // not a store into one lane).
+                    let cut_lo = |j: usize| {
+                        if j == axis && step > 0 {
+                            reach_hi[j] - a
+                        } else {
+                            reach_lo[j]
                         }
-                    }
+                    };
+                    let cut_hi = |j: usize| {
+                        if j == axis && step < 0 {
+                            reach_lo[j] + a
+                        } else {
+                            reach_hi[j]
+                        }
+                    };
+                    let slab_lo = [cut_lo(0), cut_lo(1), cut_lo(2)];
+                    let slab_hi = [cut_hi(0), cut_hi(1), cut_hi(2)];
+                    self.draw_box(true, slab_lo, slab_hi, Some(ray));
                 }
             }
+            // One pass over the active set, without a branch: drop what fell behind the reach
+            // box along the step's axis (a stable compaction; the slab's spheres, appended last,
+            // all stay), and count and mailbox the listings of the others. The order and the
+            // set are those of drop-then-draw, so this is the generic walk's list, bit for bit.
+            let (axis, forward, bound) = match entered {
+                None => (0, true, f64::NEG_INFINITY),
+                Some((axis, step)) if step > 0 => (axis, true, reach_lo[axis]),
+                Some((axis, _)) => (axis, false, reach_hi[axis]),
+            };
+            let magnitude = magnitude + self.eye_magnitude;
+            let active = &mut self.cache.active;
+            let mut kept = 0;
+            for i in 0..active.len() {
+                let mut e = active[i];
+                let c = e.s.c.to_array()[axis];
+                let keep = if forward { c >= bound } else { c <= bound };
+                let listed = keep & meets(&e.s, &lo, &hi, &frame, magnitude);
+                let first = listed & !e.seen;
+                counts.n_i += u32::from(listed);
+                counts.n_i_mb += u32::from(first);
+                // `Hit::beats` on the precomputed distance. A miss (∞) can only displace
+                // another ∞, which still reads as no hit; a real distance beats any ∞.
+                let beats = first & ((e.t < best_t) | ((e.t == best_t) & (e.s.id < best_id)));
+                best_t = if beats { e.t } else { best_t };
+                best_id = if beats { e.s.id } else { best_id };
+                e.seen |= listed;
+                active[kept] = e;
+                kept += usize::from(keep);
+            }
+            active.truncate(kept);
+            if kept > 0 {
+                assert!(
+                    r_max + frame.pad(magnitude, r_max) <= reach,
+                    "cell {cell:?} is too far from the origin for the reach margin"
+                );
+            }
+            let best = (best_t < f64::INFINITY).then_some(Hit {
+                id: best_id,
+                t: best_t,
+            });
             if matches!(best, Some(b) if b.t <= t_exit) {
                 stopped = true;
                 break;
@@ -354,8 +477,13 @@ impl TubeCells<'_> {
                 stopped = true;
                 break;
             }
+            entered = Some(dda.last_step());
         }
         counts.n_s = visited.saturating_sub(1);
+        let best = (best_t < f64::INFINITY).then_some(Hit {
+            id: best_id,
+            t: best_t,
+        });
         counts.hit = if stopped {
             best
         } else {
@@ -392,8 +520,9 @@ impl CellLists for TubeCells<'_> {
             r_max + self.frame.pad(magnitude, r_max) <= self.pieces.reach,
             "cell {cell:?} is too far from the origin for the reach margin"
         );
+        let (lo, hi) = (cb.lo.to_array(), cb.hi.to_array());
         for e in &c.active {
-            if meets(&e.s, &cb, &self.frame, magnitude) {
+            if meets(&e.s, &lo, &hi, &self.frame, magnitude) {
                 c.scratch.push(e.s);
             }
         }
@@ -673,8 +802,7 @@ mod tests {
                 }
                 means.push(m);
             }
-            for i in 0..4 {
-                let ((m1, s1), (m2, s2)) = (means[0][i], means[1][i]);
+            for (i, (&(m1, s1), &(m2, s2))) in means[0].iter().zip(&means[1]).enumerate() {
                 let se = (s1 * s1 + s2 * s2).sqrt();
                 assert!(
                     (m1 - m2).abs() < 4.0 * se,
