@@ -193,6 +193,12 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         fraction: 1.0,
         radius: RadiusDist::Constant(R),
     }];
+    println!(
+        "CPU: {}; ISA: {}; query-grid walk: {:?}; {all} thread(s)",
+        cpu_model(),
+        isa_features(),
+        crate::grid::fast::Walk::detect()
+    );
 
     let (cal_n, cal_rays, cal_rounds) = plan.calibration;
     let (cal_spheres, cal_bounds) = bench_scene(&classes, cal_n, KEY ^ 1);
@@ -267,9 +273,10 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         .map(|(w, ni, ns, t)| format!("[{w}, {ni}, {ns}, {t:e}]"))
         .collect();
     let meta = format!(
-        "[bench]\nquick = {quick}\nthreads = {all}\nhost = \"{}\"\ncpu = \"{}\"\ntransparent_hugepages = \"{}\"\nrounds = {}\nrays_per_round = {}\nwalk = \"{:?}\"\ncommit = \"{}\"\nfinished = \"{}\"\n\n[bench.calibration]\nspheres = {cal_n}\nt_i_s = {:e}\nt_s_s = {:e}\ncell_width = {a}\n# [cell width, N_I, N_S, median seconds per ray]\npoints = [{}]\n",
+        "[bench]\nquick = {quick}\nthreads = {all}\nhost = \"{}\"\ncpu = \"{}\"\nisa = \"{}\"\ntransparent_hugepages = \"{}\"\nrounds = {}\nrays_per_round = {}\nwalk = \"{:?}\"\ncommit = \"{}\"\nfinished = \"{}\"\n\n[bench.calibration]\nspheres = {cal_n}\nt_i_s = {:e}\nt_s_s = {:e}\ncell_width = {a}\n# [cell width, N_I, N_S, median seconds per ray]\npoints = [{}]\n",
         crate::output::meta::host_name(),
         cpu_model(),
+        isa_features(),
         transparent_hugepages(),
         plan.rounds,
         plan.rays_per_round,
@@ -615,17 +622,39 @@ fn bench_scene(classes: &[RadiusClass], n: u64, key: u64) -> (Vec<Sphere>, Aabb)
     )
 }
 
-/// The CPU model (Linux `/proc/cpuinfo`), for the metadata.
+/// The CPU model (Linux `/proc/cpuinfo`) with its family and model numbers, for the metadata:
+/// virtual machines often report only a generic name ("AMD EPYC"), and the numbers tell a Zen 3
+/// (family 25, model 1) from a Zen 4 (family 25, model 17).
 fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown".into())
+    let info = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
+    let field = |key: &str| {
+        info.lines()
+            .find(|l| l.split(':').next().map(str::trim) == Some(key))
+            .and_then(|l| l.split(':').nth(1))
+            .map(|m| m.trim().to_string())
+    };
+    let name = field("model name").unwrap_or_else(|| "unknown".into());
+    match (field("cpu family"), field("model")) {
+        (Some(f), Some(m)) => format!("{name} (family {f}, model {m})"),
+        _ => name,
+    }
+}
+
+/// The vector extensions this CPU offers that raycost's kernels dispatch on.
+fn isa_features() -> String {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let mut found = Vec::new();
+        macro_rules! probe {
+            ($($f:tt),*) => {$(if is_x86_feature_detected!($f) { found.push($f); })*};
+        }
+        probe!("avx512f", "avx512vl", "avx2", "fma", "bmi2");
+        found.join(" ")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        String::new()
+    }
 }
 
 /// The transparent huge page mode (Linux), for the metadata: the grid asks for huge pages with
