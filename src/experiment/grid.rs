@@ -425,13 +425,8 @@ fn make_result(
     // The tests are against the infinite-scene law; in a finite cube that law does not hold
     // (hits are cut off at the faces), so there they are NaN rather than a misleading rejection.
     let infinite = finite.is_none();
-    let survival = |t: f64| {
-        if infinite {
-            th::first_hit_survival(inp, t)
-        } else {
-            f64::NAN
-        }
-    };
+    let law = th::first_hit_survival_fn(inp);
+    let survival = |t: f64| if infinite { law(t) } else { f64::NAN };
     let d = if infinite {
         gof::ks_statistic(&sorted, |t| 1.0 - survival(t))
     } else {
