@@ -59,12 +59,9 @@ pub fn trace<L: CellLists + ?Sized>(
     let mut counts = TraceCounts::default();
     let mut best: Option<Hit> = None;
     mailbox.clear();
-    let mut visited = 0u32;
-    let mut last_exit = 0.0;
-    let mut stopped = false;
+    let mut walk = WalkState::default();
     for (cell, _t_enter, t_exit) in Dda::new(&frame, ray) {
-        visited += 1;
-        last_exit = t_exit;
+        walk.enter(t_exit);
         let magnitude = lists.pad_magnitude(cell);
         let list = lists.list(cell);
         // Most cells of a fine grid list nothing: their box is never needed.
@@ -90,25 +87,62 @@ pub fn trace<L: CellLists + ?Sized>(
                 }
             }
         }
-        if matches!(best, Some(b) if b.t <= t_exit) {
-            stopped = true;
-            break;
-        }
-        if visited > max_steps {
-            counts.truncated = best.is_none();
-            stopped = true;
+        if walk.stops(&best, t_exit, max_steps, &mut counts) {
             break;
         }
     }
-    counts.n_s = visited.saturating_sub(1);
-    // The ray left a finite grid: a sphere entered beyond the last cell (listed because it pokes
-    // into the grid) is outside the indexed region, so it is not this grid's hit.
-    counts.hit = if stopped {
-        best
-    } else {
-        best.filter(|b| b.t <= last_exit)
-    };
+    walk.finish(best, &mut counts);
     counts
+}
+
+/// A walk's bookkeeping and stopping rule, the same in every tracer.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct WalkState {
+    visited: u32,
+    last_exit: f64,
+    stopped: bool,
+}
+
+impl WalkState {
+    /// Records a visited cell, left at `t_exit`.
+    #[inline(always)]
+    pub(crate) fn enter(&mut self, t_exit: f64) {
+        self.visited += 1;
+        self.last_exit = t_exit;
+    }
+
+    /// Whether the walk stops after the cell left at `t_exit`: the nearest hit found lies within
+    /// it (no later cell can hold a nearer one), or `max_steps` cells were visited (truncated if
+    /// nothing was found).
+    #[inline(always)]
+    pub(crate) fn stops(
+        &mut self,
+        best: &Option<Hit>,
+        t_exit: f64,
+        max_steps: u32,
+        counts: &mut TraceCounts,
+    ) -> bool {
+        if matches!(best, Some(b) if b.t <= t_exit) {
+            self.stopped = true;
+        } else if self.visited > max_steps {
+            counts.truncated = best.is_none();
+            self.stopped = true;
+        }
+        self.stopped
+    }
+
+    /// Completes `counts` with N_S and the hit.
+    #[inline(always)]
+    pub(crate) fn finish(&self, best: Option<Hit>, counts: &mut TraceCounts) {
+        counts.n_s = self.visited.saturating_sub(1);
+        // The ray left a finite grid: a sphere entered beyond the last cell (listed because it
+        // pokes into the grid) is outside the indexed region, so it is not this grid's hit.
+        counts.hit = if self.stopped {
+            best
+        } else {
+            best.filter(|b| b.t <= self.last_exit)
+        };
+    }
 }
 
 /// The distance at which `ray` leaves the finite grid of `frame` (as the DDA computes it), or ∞.

@@ -33,7 +33,7 @@
 use glam::DVec3;
 use rand::Rng;
 
-use super::{RadiusClass, RadiusDraw};
+use super::{ClassMarks, RadiusClass, RadiusDraw};
 use crate::geom::Sphere;
 use crate::grid::{Cell, CellLists, GridFrame};
 use crate::sample::{counter::SplitMix64, rng::mix64, rng::stream, PoissonTable};
@@ -59,8 +59,8 @@ pub struct LazyScene {
     draw: RadiusDraw,
     /// Radius of each class when drawn per scene.
     per_scene: Vec<f64>,
-    /// Cumulative class fractions (the mark's draw).
-    cumulative: Vec<f64>,
+    /// The class mark's draw.
+    marks: ClassMarks,
     /// Largest radius over the classes in this realisation.
     r_max: f64,
     /// Block width g and the lattice offset: block `b` spans `off + g·[b, b + 1)` per axis.
@@ -85,18 +85,7 @@ impl LazyScene {
         let mut rng = stream(key);
         let per_scene: Vec<f64> = classes.iter().map(|c| c.radius.sample(&mut rng)).collect();
         let seed: u64 = rng.gen();
-        let mut acc = 0.0;
-        let mut cumulative: Vec<f64> = classes
-            .iter()
-            .map(|c| {
-                acc += c.fraction;
-                acc
-            })
-            .collect();
-        // Fractions are validated to sum to 1; make the last bound catch every draw.
-        if let Some(last) = cumulative.last_mut() {
-            *last = f64::INFINITY;
-        }
+        let marks = ClassMarks::new(classes);
         let reach = |i: usize| match draw {
             RadiusDraw::PerScene => per_scene[i],
             RadiusDraw::PerSphere => classes[i].radius.max(),
@@ -120,7 +109,7 @@ impl LazyScene {
             classes: classes.to_vec(),
             draw,
             per_scene,
-            cumulative,
+            marks,
             r_max,
             g,
             off: -big_r,
@@ -161,15 +150,9 @@ impl LazyScene {
         let n = self.count.sample(&mut rng);
         let g = self.g;
         let lo = DVec3::new(b[0] as f64, b[1] as f64, b[2] as f64) * g + DVec3::splat(self.off);
-        let many = self.classes.len() > 1;
         for k in 0..n {
             let u = DVec3::new(rng.gen(), rng.gen(), rng.gen());
-            let class = if many {
-                let v: f64 = rng.gen();
-                self.cumulative.iter().position(|&c| v < c).unwrap_or(0)
-            } else {
-                0
-            };
+            let class = self.marks.draw(&mut rng);
             let r = match self.draw {
                 RadiusDraw::PerScene => self.per_scene[class],
                 RadiusDraw::PerSphere => self.classes[class].radius.sample(&mut rng),

@@ -29,9 +29,10 @@
 use glam::DVec3;
 use rand::Rng;
 
-use super::{RadiusClass, RadiusDraw};
+use super::{ClassMarks, RadiusClass, RadiusDraw};
 use crate::geom::Ray;
 use crate::geom::Sphere;
+use crate::grid::trace::WalkState;
 use crate::grid::{Cell, CellLists, Dda, GridFrame, Hit, TraceCounts};
 use crate::sample::{counter::SplitMix64, rng::hash_key, PoissonTable};
 
@@ -72,8 +73,8 @@ pub struct TubeScene {
     intensity: f64,
     classes: Vec<RadiusClass>,
     draw: RadiusDraw,
-    /// Cumulative class fractions (the mark's draw), the last one ∞.
-    cumulative: Vec<f64>,
+    /// The class mark's draw.
+    marks: ClassMarks,
     width: f64,
     /// The pieces for per-sphere radii (known before any draw).
     fixed: Option<Pieces>,
@@ -82,17 +83,7 @@ pub struct TubeScene {
 impl TubeScene {
     /// The scene for a grid of cell width `cell_width`.
     pub fn new(intensity: f64, classes: &[RadiusClass], draw: RadiusDraw, cell_width: f64) -> Self {
-        let mut acc = 0.0;
-        let mut cumulative: Vec<f64> = classes
-            .iter()
-            .map(|c| {
-                acc += c.fraction;
-                acc
-            })
-            .collect();
-        if let Some(last) = cumulative.last_mut() {
-            *last = f64::INFINITY;
-        }
+        let marks = ClassMarks::new(classes);
         let fixed = match draw {
             RadiusDraw::PerSphere => {
                 let r_max = classes.iter().map(|c| c.radius.max()).fold(0.0, f64::max);
@@ -104,7 +95,7 @@ impl TubeScene {
             intensity,
             classes: classes.to_vec(),
             draw,
-            cumulative,
+            marks,
             width: cell_width,
             fixed,
         }
@@ -213,17 +204,11 @@ impl TubeCells<'_> {
         }
         let size = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
         let scene = self.scene;
-        let many = scene.classes.len() > 1;
         let active = &mut self.cache.active;
         for _ in 0..n {
             // Three uniforms, then the class, then the radius: the stream's order is the model.
             let u: [f64; 3] = [self.rng.gen(), self.rng.gen(), self.rng.gen()];
-            let class = if many {
-                let v: f64 = self.rng.gen();
-                scene.cumulative.iter().position(|&c| v < c).unwrap_or(0)
-            } else {
-                0
-            };
+            let class = scene.marks.draw(&mut self.rng);
             let r = match scene.draw {
                 RadiusDraw::PerScene => self.radii[class],
                 RadiusDraw::PerSphere => scene.classes[class].radius.sample(&mut self.rng),
@@ -392,14 +377,11 @@ impl TubeCells<'_> {
         let r_max = self.pieces.r_max;
         let mut counts = TraceCounts::default();
         let (mut best_t, mut best_id) = (f64::INFINITY, u64::MAX);
-        let mut visited = 0u32;
-        let mut last_exit = 0.0;
-        let mut stopped = false;
+        let mut walk = WalkState::default();
         let mut dda = Dda::new(&frame, ray);
         let mut entered = None;
         while let Some((cell, _t_enter, t_exit)) = dda.next() {
-            visited += 1;
-            last_exit = t_exit;
+            walk.enter(t_exit);
             let (lo, hi, magnitude) = cell_box(&frame, &cell);
             let reach_lo = [lo[0] - reach, lo[1] - reach, lo[2] - reach];
             let reach_hi = [hi[0] + reach, hi[1] + reach, hi[2] + reach];
@@ -468,27 +450,16 @@ impl TubeCells<'_> {
                 id: best_id,
                 t: best_t,
             });
-            if matches!(best, Some(b) if b.t <= t_exit) {
-                stopped = true;
-                break;
-            }
-            if visited > max_steps {
-                counts.truncated = best.is_none();
-                stopped = true;
+            if walk.stops(&best, t_exit, max_steps, &mut counts) {
                 break;
             }
             entered = Some(dda.last_step());
         }
-        counts.n_s = visited.saturating_sub(1);
         let best = (best_t < f64::INFINITY).then_some(Hit {
             id: best_id,
             t: best_t,
         });
-        counts.hit = if stopped {
-            best
-        } else {
-            best.filter(|b| b.t <= last_exit)
-        };
+        walk.finish(best, &mut counts);
         counts
     }
 }
