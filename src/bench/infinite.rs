@@ -31,7 +31,7 @@ use std::sync::Mutex;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::rounds::{alternate, median};
+use super::rounds::{self, alternate, median};
 use super::{bench_scene, directions, memory, pool, trace_into, KEY, RHO};
 use crate::experiment::grid::BATCH;
 use crate::geom::Ray;
@@ -294,10 +294,7 @@ impl Infinite {
         );
         for r in &self.rows {
             let (ratio, lo, hi) = r.ratio();
-            let (slow, fast) = (
-                r.rays_per_round as f64 / r.secs.iter().copied().fold(0.0, f64::max),
-                r.rays_per_round as f64 / r.secs.iter().copied().fold(f64::INFINITY, f64::min),
-            );
+            let (slow, fast) = rounds::rate_range(r.rays_per_round, &r.secs);
             println!(
                 "{:>6.2} {:>4} {:>11.4e} {:>9.3e}–{:<9.3e} {:>8.1} {:>7.1} {:>7.2} {:>6.3} {:>8.0} {:>8.1} {:>5} {:>11.4} {:>9.4}–{:<9.4}{}",
                 r.cell_width,

@@ -525,10 +525,7 @@ fn print_summary(measured: &[Measured], sizes: &[u64], all: usize) {
         "ns/cell"
     );
     for m in measured {
-        let (lo, hi) = (
-            m.rays_per_round as f64 / m.secs.iter().copied().fold(0.0, f64::max),
-            m.rays_per_round as f64 / m.secs.iter().copied().fold(f64::INFINITY, f64::min),
-        );
+        let (lo, hi) = rounds::rate_range(m.rays_per_round, &m.secs);
         println!(
             "{:<14} {:>9} {:>4} {:>11.4e} {:>9.3e}–{:<9.3e} {:>8.3} {:>8.0} {:>8} {:>6} {:>7.1} {:>7.1} {:>6.1}",
             m.engine,

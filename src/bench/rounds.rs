@@ -34,6 +34,13 @@ pub fn alternate(
     RoundTimes { secs }
 }
 
+/// The slowest and the fastest round's rate, `per_round` items in each round of `secs` seconds.
+pub fn rate_range(per_round: usize, secs: &[f64]) -> (f64, f64) {
+    let slowest = secs.iter().copied().fold(0.0, f64::max);
+    let fastest = secs.iter().copied().fold(f64::INFINITY, f64::min);
+    (per_round as f64 / slowest, per_round as f64 / fastest)
+}
+
 /// The median of `xs` (mean of the two middle values for an even count); NaN if empty.
 pub fn median(xs: &[f64]) -> f64 {
     let mut v = xs.to_vec();

@@ -596,6 +596,13 @@ pub fn best_cell_width(inp: &GridTheoryInput, cost: &QueryCost, lo: f64, hi: f64
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The lognormal radius law of the grid experiments (median 0.1, σ = 0.5, truncated at 0.4).
+    const LOGNORMAL: RadiusDist = RadiusDist::LogNormal {
+        median: 0.1,
+        sigma: 0.5,
+        max: 0.4,
+    };
     use crate::sample::directions::uniform_direction;
     use crate::sample::rng::stream;
     use crate::scene::radius::RadiusDist;
@@ -754,11 +761,7 @@ mod tests {
             },
             RadiusClass {
                 fraction: 0.5,
-                radius: RadiusDist::LogNormal {
-                    median: 0.1,
-                    sigma: 0.5,
-                    max: 0.4,
-                },
+                radius: LOGNORMAL,
             },
         ];
         let (mp, ms) = (
@@ -786,19 +789,11 @@ mod tests {
 
     #[test]
     fn lognormal_integration_converges() {
-        let c = one_class(RadiusDist::LogNormal {
-            median: 0.1,
-            sigma: 0.5,
-            max: 0.4,
-        });
+        let c = one_class(LOGNORMAL);
         let two = [
             RadiusClass {
                 fraction: 0.5,
-                radius: RadiusDist::LogNormal {
-                    median: 0.1,
-                    sigma: 0.5,
-                    max: 0.4,
-                },
+                radius: LOGNORMAL,
             },
             RadiusClass {
                 fraction: 0.5,
