@@ -59,6 +59,13 @@ impl Dda {
         dda
     }
 
+    /// The axis and sign of the step the latest [`Iterator::next`] took: how the walk enters the
+    /// cell the next call returns (the infinite scene draws the slab that step adds).
+    #[inline(always)]
+    pub fn last_step(&self) -> (usize, i64) {
+        (self.axis, self.step[self.axis])
+    }
+
     /// Distance to the face through which the ray leaves the current cell along axis `i`.
     #[inline]
     fn boundary_t(&self, i: usize) -> f64 {
@@ -75,15 +82,6 @@ impl Dda {
                 later((b - self.o[i]) * self.inv_d[i], self.t_enter)
             }
         }
-    }
-}
-
-impl Dda {
-    /// The axis and sign of the step the latest [`Iterator::next`] took: how the walk enters the
-    /// cell the next call returns. (Walkers that keep per-cell state update only that axis.)
-    #[inline(always)]
-    pub fn last_step(&self) -> (usize, i64) {
-        (self.axis, self.step[self.axis])
     }
 }
 
@@ -130,10 +128,13 @@ impl Iterator for Dda {
         // The axis whose face comes first (ties go to the lowest axis; the other axes follow with
         // zero-length cells).
         let t = &self.t_next;
-        // Without branches (which axis comes next is the least predictable thing in a walk):
-        // 0 if t0 ≤ t1 and t0 ≤ t2, else 1 if t1 ≤ t2, else 2.
-        let not_0 = usize::from(t[1] < t[0]) | usize::from(t[2] < t[0]);
-        let axis = not_0 * (1 + usize::from(t[2] < t[1]));
+        let axis = if t[0] <= t[1] && t[0] <= t[2] {
+            0
+        } else if t[1] <= t[2] {
+            1
+        } else {
+            2
+        };
         let t_exit = later(t[axis], self.t_enter);
         let out = (self.cell, self.t_enter, t_exit);
         if t_exit == f64::INFINITY {

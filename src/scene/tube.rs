@@ -235,78 +235,114 @@ impl TubeCells<'_> {
         self.cache.generated += n as usize;
     }
 
-    /// Drops the spheres that fell behind the reach box `[lo, hi]` along `axis` after a step of
-    /// sign `step` (they can never be listed again: the walk is monotone). A stable, branch-free
-    /// compaction: the kept spheres keep their order.
-    #[inline(always)]
-    fn drop_behind(&mut self, axis: usize, step: i64, lo: &[f64; 3], hi: &[f64; 3]) {
+    /// Moves the realisation to `cell`: drops what fell behind, then draws the first cell's
+    /// reach box or the slab a step adds (the fused tracer draws first and drops in its pass over
+    /// the active set; the set and its order are the same).
+    fn advance(&mut self, cell: Cell) {
+        let (lo, hi, _) = cell_box(&self.frame, &cell);
+        let entered = self.last.map(|last| {
+            let axis = (0..3)
+                .find(|&i| cell[i] != last[i])
+                .expect("advance is called on a new cell");
+            let step = cell[axis] - last[axis];
+            assert!(
+                step.abs() == 1 && (0..3).all(|i| i == axis || cell[i] == last[i]),
+                "a tube realisation follows a DDA walk: {last:?} → {cell:?} is not one step"
+            );
+            (axis, step)
+        });
+        let piece = Piece::new(&lo, &hi, self.pieces.reach, self.frame.width, entered);
+        // A stable compaction: the kept spheres keep their order.
         let active = &mut self.cache.active;
         let mut kept = 0;
         for i in 0..active.len() {
             let e = active[i];
-            let c = e.s.c.to_array()[axis];
-            let keep = if step > 0 {
-                c >= lo[axis]
-            } else {
-                c <= hi[axis]
-            };
             active[kept] = e;
-            kept += usize::from(keep);
+            kept += usize::from(piece.keeps(&e.s));
         }
         active.truncate(kept);
-    }
-
-    /// Moves the realisation to `cell`: the first cell's reach box, or the slab a step adds.
-    fn advance(&mut self, cell: Cell) {
-        let cb = self.frame.cell_box(cell);
-        let Some(last) = self.last else {
-            let b = ReachBox::of(&cb, self.pieces.reach);
-            self.draw_box(false, b.lo, b.hi, None);
-            self.last = Some(cell);
-            return;
-        };
-        let axis = (0..3)
-            .find(|&i| cell[i] != last[i])
-            .expect("advance is called on a new cell");
-        let step = cell[axis] - last[axis];
-        assert!(
-            step.abs() == 1 && (0..3).all(|i| i == axis || cell[i] == last[i]),
-            "a tube realisation follows a DDA walk: {last:?} → {cell:?} is not one step"
-        );
-        self.step_into(ReachBox::of(&cb, self.pieces.reach), axis, step);
+        self.draw_box(piece.slab, piece.lo, piece.hi, None);
         self.last = Some(cell);
     }
-
-    /// After a step of sign `step` along `axis` into the cell of reach box `b`: drops what fell
-    /// behind and draws the slab the step adds.
-    #[inline(always)]
-    fn step_into(&mut self, b: ReachBox, axis: usize, step: i64) {
-        self.drop_behind(axis, step, &b.lo, &b.hi);
-        let (mut lo, mut hi) = (b.lo, b.hi);
-        let a = self.frame.width;
-        if step > 0 {
-            lo[axis] = hi[axis] - a;
-        } else {
-            hi[axis] = lo[axis] + a;
-        }
-        self.draw_box(true, lo, hi, None);
-    }
 }
 
-/// A cell's reach box `[lo − R, hi + R]³`, per axis.
+/// What entering a cell changes in the realisation: the piece to draw (the first cell's reach box,
+/// or the slab of width a a step adds on the far side of the reach box) and which spheres stay
+/// (those not behind the reach box along the step's axis: the walk is monotone, so those can
+/// never be listed again).
 #[derive(Clone, Copy, Debug)]
-struct ReachBox {
+struct Piece {
+    /// A slab (else the first reach box): which Poisson law counts its spheres.
+    slab: bool,
     lo: [f64; 3],
     hi: [f64; 3],
+    /// The step's axis, its direction, and the reach box's face behind it.
+    axis: usize,
+    forward: bool,
+    bound: f64,
 }
 
-impl ReachBox {
+impl Piece {
+    /// For the cell `[lo, hi]`, reach `reach`, cell width `a`, entered by the step `(axis, sign)`
+    /// (`None` for the walk's first cell).
     #[inline(always)]
-    fn of(cb: &crate::geom::Aabb, reach: f64) -> Self {
-        let (lo, hi) = (cb.lo.to_array(), cb.hi.to_array());
+    fn new(
+        lo: &[f64; 3],
+        hi: &[f64; 3],
+        reach: f64,
+        a: f64,
+        entered: Option<(usize, i64)>,
+    ) -> Self {
+        let reach_lo = [lo[0] - reach, lo[1] - reach, lo[2] - reach];
+        let reach_hi = [hi[0] + reach, hi[1] + reach, hi[2] + reach];
+        let Some((axis, step)) = entered else {
+            return Self {
+                slab: false,
+                lo: reach_lo,
+                hi: reach_hi,
+                axis: 0,
+                forward: true,
+                bound: f64::NEG_INFINITY,
+            };
+        };
+        // The reach box cut to width a on the step's far side (selects, not a store into one
+        // lane, which the next read of the box would wait for).
+        let cut_lo = |j: usize| {
+            if j == axis && step > 0 {
+                reach_hi[j] - a
+            } else {
+                reach_lo[j]
+            }
+        };
+        let cut_hi = |j: usize| {
+            if j == axis && step < 0 {
+                reach_lo[j] + a
+            } else {
+                reach_hi[j]
+            }
+        };
         Self {
-            lo: [lo[0] - reach, lo[1] - reach, lo[2] - reach],
-            hi: [hi[0] + reach, hi[1] + reach, hi[2] + reach],
+            slab: true,
+            lo: [cut_lo(0), cut_lo(1), cut_lo(2)],
+            hi: [cut_hi(0), cut_hi(1), cut_hi(2)],
+            axis,
+            forward: step > 0,
+            bound: if step > 0 {
+                reach_lo[axis]
+            } else {
+                reach_hi[axis]
+            },
+        }
+    }
+
+    /// Does `s` stay in the active set?
+    #[inline(always)]
+    fn keeps(&self, s: &Sphere) -> bool {
+        let c = s.c.to_array()[self.axis];
+        if self.forward {
+            c >= self.bound
+        } else {
+            c <= self.bound
         }
     }
 }
@@ -326,6 +362,12 @@ fn cell_box(frame: &GridFrame, cell: &Cell) -> ([f64; 3], [f64; 3], f64) {
     let hi = [lo[0] + w, lo[1] + w, lo[2] + w];
     let m = |i: usize| max(lo[i].abs(), hi[i].abs());
     (lo, hi, max(m(0), max(m(1), m(2))))
+}
+
+/// The nearest hit so far, from the fused tracer's (distance, id) pair (∞: none).
+#[inline(always)]
+fn nearest(t: f64, id: u64) -> Option<Hit> {
+    (t < f64::INFINITY).then_some(Hit { id, t })
 }
 
 /// `f64::max` for values that are never NaN (one instruction instead of four).
@@ -383,49 +425,18 @@ impl TubeCells<'_> {
         while let Some((cell, _t_enter, t_exit)) = dda.next() {
             walk.enter(t_exit);
             let (lo, hi, magnitude) = cell_box(&frame, &cell);
-            let reach_lo = [lo[0] - reach, lo[1] - reach, lo[2] - reach];
-            let reach_hi = [hi[0] + reach, hi[1] + reach, hi[2] + reach];
-            match entered {
-                None => self.draw_box(false, reach_lo, reach_hi, Some(ray)),
-                Some((axis, step)) => {
-                    let a = frame.width;
-                    // The slab: the reach box, cut to width a on the step's far side (selects,
-                    // not a store into one lane).
-                    let cut_lo = |j: usize| {
-                        if j == axis && step > 0 {
-                            reach_hi[j] - a
-                        } else {
-                            reach_lo[j]
-                        }
-                    };
-                    let cut_hi = |j: usize| {
-                        if j == axis && step < 0 {
-                            reach_lo[j] + a
-                        } else {
-                            reach_hi[j]
-                        }
-                    };
-                    let slab_lo = [cut_lo(0), cut_lo(1), cut_lo(2)];
-                    let slab_hi = [cut_hi(0), cut_hi(1), cut_hi(2)];
-                    self.draw_box(true, slab_lo, slab_hi, Some(ray));
-                }
-            }
+            let piece = Piece::new(&lo, &hi, reach, frame.width, entered);
+            self.draw_box(piece.slab, piece.lo, piece.hi, Some(ray));
             // One pass over the active set, without a branch: drop what fell behind the reach
-            // box along the step's axis (a stable compaction; the slab's spheres, appended last,
-            // all stay), and count and mailbox the listings of the others. The order and the
-            // set are those of drop-then-draw, so this is the generic walk's list, bit for bit.
-            let (axis, forward, bound) = match entered {
-                None => (0, true, f64::NEG_INFINITY),
-                Some((axis, step)) if step > 0 => (axis, true, reach_lo[axis]),
-                Some((axis, _)) => (axis, false, reach_hi[axis]),
-            };
+            // box (a stable compaction; the piece's spheres, appended last, all stay), and count
+            // and mailbox the listings of the others. The order and the set are those of
+            // drop-then-draw, so this is the generic walk's list, bit for bit.
             let magnitude = magnitude + self.eye_magnitude;
             let active = &mut self.cache.active;
             let mut kept = 0;
             for i in 0..active.len() {
                 let mut e = active[i];
-                let c = e.s.c.to_array()[axis];
-                let keep = if forward { c >= bound } else { c <= bound };
+                let keep = piece.keeps(&e.s);
                 let listed = keep & meets(&e.s, &lo, &hi, &frame, magnitude);
                 let first = listed & !e.seen;
                 counts.n_i += u32::from(listed);
@@ -446,20 +457,12 @@ impl TubeCells<'_> {
                     "cell {cell:?} is too far from the origin for the reach margin"
                 );
             }
-            let best = (best_t < f64::INFINITY).then_some(Hit {
-                id: best_id,
-                t: best_t,
-            });
-            if walk.stops(&best, t_exit, max_steps, &mut counts) {
+            if walk.stops(&nearest(best_t, best_id), t_exit, max_steps, &mut counts) {
                 break;
             }
             entered = Some(dda.last_step());
         }
-        let best = (best_t < f64::INFINITY).then_some(Hit {
-            id: best_id,
-            t: best_t,
-        });
-        walk.finish(best, &mut counts);
+        walk.finish(nearest(best_t, best_id), &mut counts);
         counts
     }
 }
@@ -484,14 +487,13 @@ impl CellLists for TubeCells<'_> {
         if c.active.is_empty() {
             return &c.scratch;
         }
-        let cb = self.frame.cell_box(cell);
-        let magnitude = cb.magnitude() + self.eye_magnitude;
+        let (lo, hi, magnitude) = cell_box(&self.frame, &cell);
+        let magnitude = magnitude + self.eye_magnitude;
         let r_max = self.pieces.r_max;
         assert!(
             r_max + self.frame.pad(magnitude, r_max) <= self.pieces.reach,
             "cell {cell:?} is too far from the origin for the reach margin"
         );
-        let (lo, hi) = (cb.lo.to_array(), cb.hi.to_array());
         for e in &c.active {
             if meets(&e.s, &lo, &hi, &self.frame, magnitude) {
                 c.scratch.push(e.s);
