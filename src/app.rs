@@ -5,36 +5,19 @@ use std::io::Write;
 use anyhow::Context;
 
 use crate::cli::{Cli, Command, EyeArg, TheoryCommand};
+use crate::error::Error;
 use crate::experiment::runner::{self, RunOptions};
-use crate::output::OutputError;
 use crate::scene::{RadiusClass, RadiusDist, RadiusDraw};
-use crate::spec::{Spec, SpecError};
+use crate::spec::Spec;
 use crate::theory::grid::{self as th, Eye, GridTheoryInput};
 
-/// A usage error that clap cannot see (a bad flag value found later).
-#[derive(Debug, thiserror::Error)]
-#[error("{0}")]
-pub struct UsageError(pub String);
-
-/// Exit code for an error chain: 2 when the input is at fault, 1 otherwise.
-pub fn exit_code(e: &anyhow::Error) -> u8 {
-    let bad_input = e
-        .chain()
-        .any(|c| c.is::<SpecError>() || c.is::<OutputError>() || c.is::<UsageError>());
-    if bad_input {
-        2
-    } else {
-        1
-    }
-}
-
 /// Runs a parsed command line.
-pub fn run(cli: Cli) -> anyhow::Result<()> {
+pub fn run(cli: Cli) -> crate::error::Result<()> {
     match cli.command {
         Command::Run(a) => {
             if let Some(n) = a.threads {
                 if n == 0 {
-                    return Err(UsageError("--threads must be at least 1".into()).into());
+                    return Err(Error::Usage("--threads must be at least 1".into()));
                 }
                 rayon::ThreadPoolBuilder::new()
                     .num_threads(n)
@@ -73,10 +56,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                     ("--cell-width", g.cell_width),
                 ] {
                     if !(v.is_finite() && v > 0.0) {
-                        return Err(UsageError(format!(
+                        return Err(Error::Usage(format!(
                             "{name}: got {v}, expected a finite number > 0"
-                        ))
-                        .into());
+                        )));
                     }
                 }
                 let classes = [RadiusClass {
@@ -101,7 +83,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                     if good {
                         Ok(())
                     } else {
-                        Err(UsageError(format!("{name}: got {v}, expected {want}")))
+                        Err(Error::Usage(format!("{name}: got {v}, expected {want}")))
                     }
                 };
                 ok(
@@ -133,10 +115,13 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 Ok(())
             }
         },
-        Command::Bench(b) => crate::bench::run(b.quick, &b.out, b.force),
-        Command::Merge(m) => {
-            crate::output::merge::run(&m.inputs, m.out.as_deref(), m.force, m.quiet)
-        }
+        Command::Bench(b) => Ok(crate::bench::run(b.quick, &b.out, b.force)?),
+        Command::Merge(m) => Ok(crate::output::merge::run(
+            &m.inputs,
+            m.out.as_deref(),
+            m.force,
+            m.quiet,
+        )?),
         Command::Render(r) => {
             let spec = Spec::load(&r.spec, &r.set)?;
             let frames = match (r.frame, r.frames.is_empty()) {
@@ -165,14 +150,13 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
 }
 
 /// An optional point given as X,Y,Z.
-fn vec3(flag: &str, v: &[f64]) -> anyhow::Result<Option<glam::DVec3>> {
+fn vec3(flag: &str, v: &[f64]) -> crate::error::Result<Option<glam::DVec3>> {
     match v {
         [] => Ok(None),
         [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Some(glam::DVec3::new(*x, *y, *z))),
-        _ => Err(UsageError(format!(
+        _ => Err(Error::Usage(format!(
             "{flag}: expected three finite numbers X,Y,Z, got {v:?}"
-        ))
-        .into()),
+        ))),
     }
 }
 

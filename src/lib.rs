@@ -17,6 +17,7 @@ pub mod cli;
 pub mod detp;
 #[cfg(feature = "embree")]
 pub mod embree;
+pub mod error;
 pub mod experiment;
 pub mod geom;
 pub mod grid;

@@ -1,5 +1,5 @@
-//! The `raycost` binary: parse arguments, run, and turn errors into exit codes
-//! (0 success, 2 bad input or usage, 1 internal failure).
+//! The `raycost` binary: parse arguments, run, and turn the error's variant into the exit code
+//! (`raycost::error::Error::exit_code`: 0 success, 2 bad input or usage, 1 failure, 130 Ctrl-C).
 
 use std::process::ExitCode;
 
@@ -12,15 +12,11 @@ fn main() -> ExitCode {
     match app::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            // A closed pipe (`raycost theory … | head`) is not a failure.
-            if e.chain().any(|c| {
-                c.downcast_ref::<std::io::Error>()
-                    .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
-            }) {
-                return ExitCode::SUCCESS;
+            let code = e.exit_code();
+            if code != 0 {
+                eprintln!("error: {e:#}");
             }
-            eprintln!("error: {e:#}");
-            ExitCode::from(app::exit_code(&e))
+            ExitCode::from(code)
         }
     }
 }

@@ -30,7 +30,7 @@
 //! triangles (zero area) are dropped with a counted warning. `k camera` (BART's animated camera)
 //! is kept as [`AffScene::camera_animation`]. Anything else — an unknown directive, a wrong count
 //! of numbers, a non-numeric token, an index out of range, a missing include, an unterminated `{` —
-//! is a [`SceneError`] naming the file at fault, the line and column, and the directive.
+//! is a [`InputError`] naming the file at fault, the line and column, and the directive.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -40,7 +40,7 @@ use glam::{DAffine3, DMat3, DVec3};
 
 use super::shapes::Triangle;
 use super::spline::{self, axis_angle_deg, KbKey, KbTrack, KbTransform, Node};
-use super::{Camera, Light, SceneError, Surface};
+use super::{Camera, InputError, Light, Surface};
 
 /// Where BART scenes live and what they are, for the "file not found" message.
 pub const BART_HINT: &str = "BART scenes come from ../shared/scenes/bart/ (BART: A Benchmark for \
@@ -264,11 +264,11 @@ impl AffScene {
 }
 
 /// Reads an AFF or NFF scene (with its includes).
-pub fn load_aff(path: &Path) -> Result<AffScene, SceneError> {
+pub fn load_aff(path: &Path) -> Result<AffScene, InputError> {
     let name = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| SceneError {
-        path: name.clone(),
-        line: None,
+    let bytes = std::fs::read(path).map_err(|e| InputError {
+        file: name.clone(),
+        at: None,
         key: None,
         message: format!("cannot read the AFF scene file ({e}); {BART_HINT}"),
     })?;
@@ -279,7 +279,7 @@ pub fn load_aff(path: &Path) -> Result<AffScene, SceneError> {
 }
 
 /// Parses AFF text given in memory (`name` labels errors; includes are relative to `dir`).
-pub fn parse_aff(text: &str, name: &Path) -> Result<AffScene, SceneError> {
+pub fn parse_aff(text: &str, name: &Path) -> Result<AffScene, InputError> {
     let root = name.parent().unwrap_or(Path::new("")).to_path_buf();
     let mut ld = Loader::new(root);
     ld.file(name, Rc::from(text.as_bytes()), 0)?;
@@ -460,16 +460,16 @@ struct Ctx<'a> {
 }
 
 impl<'a> Ctx<'a> {
-    fn err_at(&self, at: (usize, usize), message: String) -> SceneError {
-        SceneError {
-            path: self.name.clone(),
-            line: Some(at),
+    fn err_at(&self, at: (usize, usize), message: String) -> InputError {
+        InputError {
+            file: self.name.clone(),
+            at: Some(at),
             key: Some(self.key.to_string()),
             message,
         }
     }
 
-    fn eof(&self, what: &str) -> SceneError {
+    fn eof(&self, what: &str) -> InputError {
         self.err_at(
             self.lx.here(),
             format!(
@@ -479,11 +479,11 @@ impl<'a> Ctx<'a> {
         )
     }
 
-    fn tok(&mut self, what: &str) -> Result<Tok<'a>, SceneError> {
+    fn tok(&mut self, what: &str) -> Result<Tok<'a>, InputError> {
         self.lx.next().ok_or_else(|| self.eof(what))
     }
 
-    fn num(&mut self, what: &str) -> Result<f64, SceneError> {
+    fn num(&mut self, what: &str) -> Result<f64, InputError> {
         let t = self.tok(what)?;
         t.number().ok_or_else(|| {
             self.err_at(
@@ -493,7 +493,7 @@ impl<'a> Ctx<'a> {
         })
     }
 
-    fn vec3(&mut self, what: &str) -> Result<DVec3, SceneError> {
+    fn vec3(&mut self, what: &str) -> Result<DVec3, InputError> {
         Ok(DVec3::new(
             self.num(what)?,
             self.num(what)?,
@@ -502,7 +502,7 @@ impl<'a> Ctx<'a> {
     }
 
     /// A count or an index: a non-negative integer below `limit`.
-    fn int(&mut self, what: &str, limit: usize) -> Result<usize, SceneError> {
+    fn int(&mut self, what: &str, limit: usize) -> Result<usize, InputError> {
         let t = self.tok(what)?;
         let bad = |ctx: &Self, m: String| ctx.err_at((t.line, t.col), m);
         let Some(x) = t.number() else {
@@ -532,7 +532,7 @@ impl<'a> Ctx<'a> {
         Ok(x as usize)
     }
 
-    fn word(&mut self, word: &str) -> Result<(), SceneError> {
+    fn word(&mut self, word: &str) -> Result<(), InputError> {
         let t = self.tok(&format!("`{word}`"))?;
         if t.is(word) {
             Ok(())
@@ -642,7 +642,7 @@ impl Loader {
         self.emit(v);
     }
 
-    fn file(&mut self, path: &Path, bytes: Rc<[u8]>, depth: usize) -> Result<(), SceneError> {
+    fn file(&mut self, path: &Path, bytes: Rc<[u8]>, depth: usize) -> Result<(), InputError> {
         let mut cx = Ctx {
             name: path.display().to_string(),
             lx: Lexer::new(&bytes),
@@ -673,7 +673,7 @@ impl Loader {
         &mut self,
         cx: &mut Ctx,
         frame: impl FnOnce(&mut Self) -> Frame,
-    ) -> Result<(), SceneError> {
+    ) -> Result<(), InputError> {
         let t = cx.tok("`{`")?;
         if !t.is("{") {
             return Err(cx.err_at(
@@ -700,7 +700,7 @@ impl Loader {
         dir: &Path,
         depth: usize,
         base: usize,
-    ) -> Result<(), SceneError> {
+    ) -> Result<(), InputError> {
         const KEYS: [&str; 20] = [
             "b", "v", "am", "l", "f", "fm", "p", "pp", "s", "c", "m", "tt", "ttp", "tpa", "x",
             "xs", "k", "a", "i", "}",
@@ -946,7 +946,7 @@ impl Loader {
         Ok(())
     }
 
-    fn viewpoint(&mut self, cx: &mut Ctx) -> Result<(), SceneError> {
+    fn viewpoint(&mut self, cx: &mut Ctx) -> Result<(), InputError> {
         let (mut from, mut at, mut up, mut angle, mut res) = (None, None, None, None, None);
         const WORDS: [&str; 6] = ["from", "at", "up", "angle", "hither", "resolution"];
         while let Some(t) = cx.lx.peek() {
@@ -1003,7 +1003,7 @@ impl Loader {
         Ok(())
     }
 
-    fn mesh(&mut self, cx: &mut Ctx) -> Result<(), SceneError> {
+    fn mesh(&mut self, cx: &mut Ctx) -> Result<(), InputError> {
         cx.word("vertices")?;
         let nv = cx.int("the number of vertices", MAX_COUNT)?;
         let mut verts = Vec::with_capacity(nv.min(1 << 16));
@@ -1062,7 +1062,7 @@ impl Loader {
         Ok(())
     }
 
-    fn keyframes(&mut self, cx: &mut Ctx) -> Result<(), SceneError> {
+    fn keyframes(&mut self, cx: &mut Ctx) -> Result<(), InputError> {
         let name = cx.tok("the name of the animation")?.show();
         let t = cx.tok("`{`")?;
         if !t.is("{") {
@@ -1462,11 +1462,11 @@ mod tests {
         assert_eq!(s.triangles_at(2.0).len(), 10_668 + 1_024);
     }
 
-    fn parse(text: &str) -> Result<AffScene, SceneError> {
+    fn parse(text: &str) -> Result<AffScene, InputError> {
         parse_aff(text, Path::new("/nonexistent/inline.aff"))
     }
 
-    fn err(text: &str) -> SceneError {
+    fn err(text: &str) -> InputError {
         match parse(text) {
             Ok(_) => panic!("expected an error for {text:?}"),
             Err(e) => {
@@ -1549,46 +1549,43 @@ mod tests {
     #[test]
     fn errors_name_the_line() {
         let e = err("fm 0 0 0 0.5 0.5 0.5 0 0 0 1 0 1\n\nzz 1 2 3\n");
-        assert_eq!((e.line, e.key.as_deref()), (Some((3, 1)), Some("zz")));
+        assert_eq!((e.at, e.key.as_deref()), (Some((3, 1)), Some("zz")));
         assert!(e.message.contains("unknown directive"));
-        assert_eq!(e.path, "/nonexistent/inline.aff");
+        assert_eq!(e.file, "/nonexistent/inline.aff");
 
         let e = err("l 1 2 3\nl 1 2 x3\n");
-        assert_eq!((e.line, e.key.as_deref()), (Some((2, 7)), Some("l")));
+        assert_eq!((e.at, e.key.as_deref()), (Some((2, 7)), Some("l")));
         assert!(e.message.contains("not a number"), "{}", e.message);
 
         // Too few numbers: the next directive is met where a number was expected.
         let e = err("b 0 0 0\nfm 0.1 0.2 0.3\np 3 0 0 0 1 0 0 0 1 0\n");
-        assert_eq!((e.line, e.key.as_deref()), (Some((3, 1)), Some("fm")));
+        assert_eq!((e.at, e.key.as_deref()), (Some((3, 1)), Some("fm")));
         // Too many.
         let e = err("b 0 0 0 1\n");
-        assert_eq!(e.line, Some((1, 9)));
+        assert_eq!(e.at, Some((1, 9)));
 
         let e = err("m\nvertices 3\n0 0 0\n1 0 0\n0 1 0\ntriangles 2\n0 1 2\n0 2 3\n");
-        assert_eq!((e.line, e.key.as_deref()), (Some((8, 5)), Some("m")));
+        assert_eq!((e.at, e.key.as_deref()), (Some((8, 5)), Some("m")));
         assert!(e.message.contains("out of range"), "{}", e.message);
         let e =
             err("m\nvertices 3\n0 0 0\n1 0 0\n0 1 0\nnormals 1 0 0 1\ntriangles 1\n0 1 2 0 0 1\n");
-        assert_eq!(e.line, Some((8, 11)));
+        assert_eq!(e.at, Some((8, 11)));
 
         let e = err("\n\ni 0 not_there.aff\n");
-        assert_eq!((e.line, e.key.as_deref()), (Some((3, 5)), Some("i")));
+        assert_eq!((e.at, e.key.as_deref()), (Some((3, 5)), Some("i")));
         assert!(e.message.contains("not_there.aff"));
 
         let e = err("xs 1 1 1 0 1 0 0 0 0 0\n{\np 3 0 0 0 1 0 0 0 1 0\n");
-        assert_eq!((e.line, e.key.as_deref()), (Some((2, 1)), Some("xs")));
+        assert_eq!((e.at, e.key.as_deref()), (Some((2, 1)), Some("xs")));
         assert!(e.message.contains("unterminated"));
         let e = err("x car {\n}\nk car {\ntransl 2\n0 0 0 0 0 0 0\n");
-        assert_eq!(
-            (e.line.map(|l| l.0), e.key.as_deref()),
-            (Some(6), Some("k"))
-        );
+        assert_eq!((e.at.map(|l| l.0), e.key.as_deref()), (Some(6), Some("k")));
         assert!(e.message.contains("started at line 3"), "{}", e.message);
         let e = err("x car {\n}\nk car {\ntransl 1\n0 0 0 0 0 0 0\n");
-        assert_eq!(e.line, Some((3, 7)));
+        assert_eq!(e.at, Some((3, 7)));
         assert!(e.message.contains("unterminated"), "{}", e.message);
         let e = err("p 3 0 0 0 1 0 0 0 1 0\n}\n");
-        assert_eq!(e.line, Some((2, 1)));
+        assert_eq!(e.at, Some((2, 1)));
         let e = err("x car p 3 0 0 0 1 0 0 0 1 0\n");
         assert!(e.message.contains("expected `{`"));
         let e = err("k car { spin 1 0 0 0 0 }");
@@ -1617,8 +1614,8 @@ mod tests {
         assert_eq!(s.triangles.len(), 2);
         std::fs::write(sub.join("leaf.aff"), "p 3 0 0 0 1 0 0 0 1 0\n\n  bogus\n").unwrap();
         let e = load_aff(&dir.path().join("top.aff")).unwrap_err();
-        assert!(e.path.ends_with("leaf.aff"), "{e}");
-        assert_eq!(e.line, Some((3, 3)));
+        assert!(e.file.ends_with("leaf.aff"), "{e}");
+        assert_eq!(e.at, Some((3, 3)));
         // A cycle is an error, not a stack overflow.
         std::fs::write(sub.join("leaf.aff"), "i 0 mid.aff\n").unwrap();
         let e = load_aff(&dir.path().join("top.aff")).unwrap_err();

@@ -26,31 +26,7 @@ use self::shapes::{Ball, Triangle};
 use crate::geom::Aabb;
 use crate::toml_text::{find_key, line_col};
 
-/// A scene file that cannot be used: where and why (exit code 2 for the CLI).
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub struct SceneError {
-    /// The file at fault (the scene or an OBJ it names).
-    pub path: String,
-    /// 1-based line and column, where known.
-    pub line: Option<(usize, usize)>,
-    /// Dotted key, where known.
-    pub key: Option<String>,
-    /// What is wrong.
-    pub message: String,
-}
-
-impl std::fmt::Display for SceneError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}", self.path)?;
-        if let Some((l, c)) = self.line {
-            write!(f, ":{l}:{c}")?;
-        }
-        if let Some(k) = &self.key {
-            write!(f, ": {k}")?;
-        }
-        write!(f, ": {}", self.message)
-    }
-}
+pub use crate::error::InputError;
 
 /// Material and emission of one surface.
 #[derive(Clone, Debug, PartialEq)]
@@ -202,7 +178,7 @@ pub struct SceneParts {
 impl Scene {
     /// Reads a scene file: TOML (OBJ paths are relative to it), or AFF/NFF (`.aff`, `.nff`: BART
     /// scenes, includes relative to it).
-    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    pub fn load(path: &Path) -> Result<Scene, InputError> {
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
@@ -210,18 +186,18 @@ impl Scene {
         if matches!(ext.as_deref(), Some("aff" | "nff")) {
             let parts = aff::load_aff(path)?.into_parts();
             if parts.lights.is_empty() {
-                return Err(SceneError {
-                    path: path.display().to_string(),
-                    line: None,
+                return Err(InputError {
+                    file: path.display().to_string(),
+                    at: None,
                     key: Some("l".into()),
                     message: "the scene has no light: add a point light `l X Y Z`".into(),
                 });
             }
             return Ok(Self::assemble(parts));
         }
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-            path: path.display().to_string(),
-            line: None,
+        let text = std::fs::read_to_string(path).map_err(|e| InputError {
+            file: path.display().to_string(),
+            at: None,
             key: None,
             message: format!("cannot read the scene file: {e}"),
         })?;
@@ -229,15 +205,15 @@ impl Scene {
     }
 
     /// A TOML scene from its text; `path` names it in errors and anchors relative OBJ paths.
-    pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
+    pub fn parse(text: &str, path: &Path) -> Result<Scene, InputError> {
         let name = path.display().to_string();
         let de = toml::Deserializer::new(text);
         let raw: RawScene = serde_path_to_error::deserialize(de).map_err(|e| {
             let key = e.path().to_string();
             let inner = e.into_inner();
-            SceneError {
-                path: name.clone(),
-                line: inner.span().map(|s| line_col(text, s.start)),
+            InputError {
+                file: name.clone(),
+                at: inner.span().map(|s| line_col(text, s.start)),
                 key: (!key.is_empty() && key != ".").then_some(key),
                 message: inner.message().trim().to_string(),
             }
@@ -245,11 +221,11 @@ impl Scene {
         Self::from_raw(raw, path, text)
     }
 
-    fn from_raw(raw: RawScene, path: &Path, text: &str) -> Result<Scene, SceneError> {
+    fn from_raw(raw: RawScene, path: &Path, text: &str) -> Result<Scene, InputError> {
         let name = path.display().to_string();
-        let err = |key: String, message: String| SceneError {
-            path: name.clone(),
-            line: find_key(text, &key).filter(|_| !key.is_empty()),
+        let err = |key: String, message: String| InputError {
+            file: name.clone(),
+            at: find_key(text, &key).filter(|_| !key.is_empty()),
             key: Some(key),
             message,
         };
@@ -323,9 +299,9 @@ impl Scene {
                             ..Default::default()
                         },
                     )
-                    .map_err(|e| SceneError {
-                        path: file.display().to_string(),
-                        line: None,
+                    .map_err(|e| InputError {
+                        file: file.display().to_string(),
+                        at: None,
                         key: None,
                         message: format!(
                             "cannot read this OBJ (named by {name}, {}): {e}",
@@ -483,7 +459,7 @@ impl Scene {
                     format!("no surface names dynamic = \"{}\"", d.name),
                 ));
             }
-            let unit = |v: Option<[f64; 3]>, f: &str| -> Result<DVec3, SceneError> {
+            let unit = |v: Option<[f64; 3]>, f: &str| -> Result<DVec3, InputError> {
                 let a = DVec3::from_array(v.unwrap_or([0.0, 1.0, 0.0]));
                 if a.length() > 0.0 {
                     Ok(a.normalize())

@@ -14,12 +14,4 @@ pub mod sink;
 pub mod summary;
 pub mod time;
 
-/// A problem with the output location that is the user's to fix (exit code 2).
-#[derive(Debug, thiserror::Error)]
-#[error("{path}: {message}")]
-pub struct OutputError {
-    /// The file or folder at fault.
-    pub path: String,
-    /// What is wrong.
-    pub message: String,
-}
+pub use crate::error::OutputError;

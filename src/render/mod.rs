@@ -22,14 +22,14 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use crate::app::UsageError;
 use crate::detp::quasi_static::QuasiStatic;
+use crate::error::Error;
 use crate::experiment::quasi_static as eq;
 use crate::lt::Camera;
 use crate::output::OutputError;
 use crate::spec::detp::{DynamicEngine, Points, Rays};
 use crate::spec::quasi_static::QuasiStaticConfig;
-use crate::spec::{PointConfig, Spec, SpecError};
+use crate::spec::{InputError, PointConfig, Spec};
 
 use camera::{Pixel, View};
 use encode::Indexed;
@@ -73,7 +73,7 @@ struct Frame {
 fn config(spec: &Spec, point: usize) -> anyhow::Result<(QuasiStaticConfig, Option<u64>)> {
     let n = spec.points.len();
     let Some(p) = spec.points.get(point) else {
-        return Err(UsageError(format!(
+        return Err(Error::Usage(format!(
             "--point: got {point}, the spec has points 0…{}",
             n.saturating_sub(1)
         ))
@@ -114,12 +114,12 @@ fn config(spec: &Spec, point: usize) -> anyhow::Result<(QuasiStaticConfig, Optio
 }
 
 /// A spec error at `key`, located in the spec file when possible.
-fn spec_error(spec: &Spec, key: &str, message: &str) -> SpecError {
+fn spec_error(spec: &Spec, key: &str, message: &str) -> InputError {
     let text = std::fs::read_to_string(&spec.path).unwrap_or_default();
     let last = key.rsplit('.').next().unwrap_or(key);
-    SpecError {
-        source_name: spec.path.clone(),
-        location: crate::toml_text::find_key(&text, key)
+    InputError {
+        file: spec.path.clone(),
+        at: crate::toml_text::find_key(&text, key)
             .or_else(|| crate::toml_text::find_key(&text, last)),
         key: Some(key.to_string()),
         message: message.to_string(),
@@ -158,7 +158,7 @@ pub fn run(spec: &Spec, o: &RenderOptions) -> anyhow::Result<String> {
     let t_all = Instant::now();
     let (cfg, seed) = config(spec, o.point)?;
     if o.frames.is_empty() {
-        return Err(UsageError("--frames: give at least one frame".into()).into());
+        return Err(Error::Usage("--frames: give at least one frame".into()).into());
     }
     if let Some(&f) = o.frames.iter().find(|&&f| f >= cfg.frames) {
         let what = if cfg.frames == 1 {
@@ -166,7 +166,7 @@ pub fn run(spec: &Spec, o: &RenderOptions) -> anyhow::Result<String> {
         } else {
             format!("the spec's frames are 0…{}", cfg.frames - 1)
         };
-        return Err(UsageError(format!("--frame: got {f}, {what}")).into());
+        return Err(Error::Usage(format!("--frame: got {f}, {what}")).into());
     }
     let out = o
         .out
@@ -177,7 +177,7 @@ pub fn run(spec: &Spec, o: &RenderOptions) -> anyhow::Result<String> {
     targets.extend(o.diff.iter());
     for (i, t) in targets.iter().enumerate() {
         if targets[..i].contains(t) {
-            return Err(UsageError(format!("{} is named twice", t.display())).into());
+            return Err(Error::Usage(format!("{} is named twice", t.display())).into());
         }
         if t.exists() && !o.force {
             return Err(OutputError {
@@ -373,13 +373,15 @@ fn aim(mut cam: Camera, o: &RenderOptions) -> anyhow::Result<Camera> {
     }
     if let Some(f) = o.fov {
         if !(f.is_finite() && f > 0.0 && f < 180.0) {
-            return Err(UsageError(format!("--fov: got {f}, expected degrees in (0, 180)")).into());
+            return Err(
+                Error::Usage(format!("--fov: got {f}, expected degrees in (0, 180)")).into(),
+            );
         }
         cam.fov_deg = f;
     }
     let fwd = cam.look_at - cam.eye;
     if fwd.length() == 0.0 || fwd.cross(cam.up).length() <= 1e-12 * fwd.length() * cam.up.length() {
-        return Err(UsageError(
+        return Err(Error::Usage(
             "the camera looks at its own eye or along its up vector (set --eye/--look-at apart, not straight up or down)".into(),
         )
         .into());
@@ -391,7 +393,7 @@ fn aim(mut cam: Camera, o: &RenderOptions) -> anyhow::Result<Camera> {
 fn size(cam: &Camera, width: Option<u32>) -> anyhow::Result<(u32, u32)> {
     match width {
         None => Ok((cam.width.max(1), cam.height.max(1))),
-        Some(0) => Err(UsageError("--width: got 0, expected at least 1 pixel".into()).into()),
+        Some(0) => Err(Error::Usage("--width: got 0, expected at least 1 pixel".into()).into()),
         Some(w) => {
             let h = (f64::from(w) * f64::from(cam.height) / f64::from(cam.width.max(1))).round();
             Ok((w, (h as u32).max(1)))

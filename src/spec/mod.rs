@@ -8,13 +8,12 @@
 
 pub mod config;
 pub mod detp;
-pub mod error;
 pub mod quasi_static;
 pub mod raw;
 pub mod sweep;
 
+pub use crate::error::InputError;
 pub use config::{GridConfig, PointConfig, SceneModel};
 pub use detp::DetpConfig;
-pub use error::SpecError;
 pub use raw::{Kind, RawSpec, DEFAULT_RAYS_PER_SCENE};
 pub use sweep::{Point, Spec};

@@ -9,8 +9,9 @@ use std::path::Path;
 use sha2::{Digest, Sha256};
 
 use super::config::PointConfig;
-use super::error::{find_key, line_col, SpecError};
 use super::raw::RawSpec;
+use crate::error::InputError;
+use crate::toml_text::{find_key, line_col};
 
 /// Largest number of points one spec may expand into.
 pub const MAX_POINTS: usize = 10_000;
@@ -47,11 +48,11 @@ pub struct Spec {
 
 impl Spec {
     /// Loads `path`, applies `--set KEY=VALUE` overrides, validates and expands it.
-    pub fn load(path: &Path, sets: &[String]) -> Result<Spec, SpecError> {
+    pub fn load(path: &Path, sets: &[String]) -> Result<Spec, InputError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SpecError {
-            source_name: name.clone(),
-            location: None,
+        let text = std::fs::read_to_string(path).map_err(|e| InputError {
+            file: name.clone(),
+            at: None,
             key: None,
             message: format!("cannot read the spec: {e}"),
         })?;
@@ -59,11 +60,11 @@ impl Spec {
     }
 
     /// As [`Spec::load`], from text already read (`name` is used in messages).
-    pub fn from_text(name: &str, text: &str, sets: &[String]) -> Result<Spec, SpecError> {
+    pub fn from_text(name: &str, text: &str, sets: &[String]) -> Result<Spec, InputError> {
         let at =
-            |location: Option<(usize, usize)>, key: Option<String>, message: String| SpecError {
-                source_name: name.to_string(),
-                location,
+            |location: Option<(usize, usize)>, key: Option<String>, message: String| InputError {
+                file: name.to_string(),
+                at: location,
                 key,
                 message,
             };
@@ -131,22 +132,22 @@ impl Spec {
         let mut set_flags = Vec::new();
         for s in sets {
             let flag = || format!("--set {s}");
-            let (key, value) = s.split_once('=').ok_or_else(|| SpecError {
-                source_name: flag(),
-                location: None,
+            let (key, value) = s.split_once('=').ok_or_else(|| InputError {
+                file: flag(),
+                at: None,
                 key: None,
                 message: "expected KEY=VALUE".into(),
             })?;
             let key = key.trim().to_string();
-            let value = parse_value(value.trim()).map_err(|m| SpecError {
-                source_name: flag(),
-                location: None,
+            let value = parse_value(value.trim()).map_err(|m| InputError {
+                file: flag(),
+                at: None,
                 key: Some(key.clone()),
                 message: m,
             })?;
-            set_path(&mut tree, &key, value).map_err(|m| SpecError {
-                source_name: flag(),
-                location: None,
+            set_path(&mut tree, &key, value).map_err(|m| InputError {
+                file: flag(),
+                at: None,
                 key: Some(key.clone()),
                 message: m,
             })?;
@@ -173,9 +174,9 @@ impl Spec {
                 .iter()
                 .position(|s| k.starts_with(s.as_str()) || s.starts_with(&k));
             match from_set {
-                Some(i) => SpecError {
-                    source_name: set_flags[i].clone(),
-                    location: None,
+                Some(i) => InputError {
+                    file: set_flags[i].clone(),
+                    at: None,
                     key: Some(k),
                     message: m,
                 },
@@ -223,9 +224,9 @@ impl Spec {
             let config = PointConfig::from_raw(&raw, base_dir).map_err(|(k, m)| {
                 let swept = sweep.iter().find(|(s, _)| *s == k).map(|(s, _)| s.clone());
                 if let Some(i) = set_keys.iter().position(|s| *s == k) {
-                    return SpecError {
-                        source_name: set_flags[i].clone(),
-                        location: None,
+                    return InputError {
+                        file: set_flags[i].clone(),
+                        at: None,
                         key: Some(k.clone()),
                         message: m.clone(),
                     };
@@ -434,7 +435,7 @@ cell_width = 0.5
         let bad = BASE.replace("\"scene.intensity\"", "\"scene.intensty\"");
         let e = Spec::from_text("t.toml", &bad, &[]).expect_err("unknown key");
         assert!(e.to_string().contains("scene.intensty"), "{e}");
-        assert!(e.location.is_some());
+        assert!(e.at.is_some());
     }
 
     #[test]
