@@ -6,9 +6,9 @@ use anyhow::Context;
 
 use crate::cli::{Cli, Command, EyeArg, TheoryCommand};
 use crate::error::Error;
+use crate::experiment::plan::Plan;
 use crate::experiment::runner::{self, RunOptions};
 use crate::scene::{RadiusClass, RadiusDist, RadiusDraw};
-use crate::spec::Spec;
 use crate::theory::grid::{self as th, Eye, GridTheoryInput};
 
 /// Runs a parsed command line.
@@ -24,7 +24,7 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
                     .build_global()
                     .context("could not start the thread pool")?;
             }
-            let spec = Spec::load(&a.spec, &a.set)?;
+            let plan = Plan::load(&a.spec, &a.set)?;
             let opts = RunOptions {
                 out: a.out,
                 force: a.force,
@@ -33,7 +33,7 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
                 shard: a.shard,
                 sets: a.set,
             };
-            let (written, summary) = runner::run(&spec, &opts)?;
+            let (written, summary) = runner::run(&plan, &opts)?;
             if !a.quiet {
                 let mut out = std::io::stdout().lock();
                 write!(out, "{summary}")?;
@@ -44,8 +44,8 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             Ok(())
         }
         Command::Check(a) => {
-            let spec = Spec::load(&a.spec, &a.set)?;
-            write!(std::io::stdout().lock(), "{}", runner::describe(&spec))?;
+            let plan = Plan::load(&a.spec, &a.set)?;
+            write!(std::io::stdout().lock(), "{}", plan.describe())?;
             Ok(())
         }
         Command::Theory(t) => match t.which {
@@ -123,7 +123,7 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             m.quiet,
         )?),
         Command::Render(r) => {
-            let spec = Spec::load(&r.spec, &r.set)?;
+            let plan = Plan::load(&r.spec, &r.set)?;
             let frames = match (r.frame, r.frames.is_empty()) {
                 (Some(f), _) => vec![f],
                 (None, true) => vec![0],
@@ -142,7 +142,7 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
                 look_at: vec3("--look-at", &r.look_at)?,
                 fov: r.fov,
             };
-            let log = crate::render::run(&spec, &opts)?;
+            let log = crate::render::run(&plan, &opts)?;
             write!(std::io::stdout().lock(), "{log}")?;
             Ok(())
         }

@@ -72,11 +72,14 @@ fn quick_bench_writes_every_engine_with_zero_mismatches_and_refuses_to_overwrite
     let grid_rounds = rounds.iter().filter(|r| r[0] == "grid").count();
     let grid_rows = rows.iter().filter(|r| r[engine] == "grid").count();
     assert!(grid_rows > 0 && grid_rounds % grid_rows == 0 && grid_rounds >= 2 * grid_rows);
-    let meta = std::fs::read_to_string(dir.join("bench.meta.toml")).expect("meta");
-    assert!(
-        meta.contains("[bench.calibration]") && meta.contains("t_i_s"),
-        "{meta}"
-    );
+    // Bench writes the same metadata schema as a run, its calibration under `extra.bench`.
+    let meta = raycost::output::meta::Meta::read(&dir.join("bench.meta.toml")).expect("meta");
+    assert_eq!(meta.run.command, "bench");
+    let t_i = meta.extra["bench"]["calibration"]["t_i_s"]
+        .as_float()
+        .expect("T_I");
+    assert!(t_i > 0.0, "{meta:?}");
+    assert!(meta.columns["main"].iter().any(|c| c.name == "rays_per_s"));
 
     // A second run without --force refuses (exit 2) and leaves every file as it was.
     let snapshot = || -> Vec<_> {

@@ -64,13 +64,34 @@ fn run_writes_csv_meta_and_histograms_with_contract_columns() {
     }
     assert_eq!(rows[3][0], "3");
     assert_eq!(rows[3][2], "uniform");
-    let meta = std::fs::read_to_string(out.join("small/small.meta.toml")).expect("meta");
-    assert!(
-        meta.contains("spec_hash")
-            && meta.contains("timing_columns")
-            && meta.contains("git_commit"),
-        "{meta}"
-    );
+    // The metadata declares every column's class: N_S is measured (issue 15: `n_s_mean` was once
+    // taken for a timing by its `_s_mean` suffix), speeds are timings.
+    let meta = raycost::output::meta::Meta::read(&out.join("small/small.meta.toml")).expect("meta");
+    assert!(!meta.run.spec_hash.is_empty() && !meta.raycost.git_commit.is_empty());
+    let class = |name: &str| {
+        meta.columns["main"]
+            .iter()
+            .find(|c| c.name == name)
+            .unwrap_or_else(|| panic!("{name} not declared"))
+            .class
+    };
+    use raycost::output::column::Class;
+    for m in [
+        "n_s_mean",
+        "n_s_se",
+        "n_s_n",
+        "n_i_mean",
+        "n_i_mb_mean",
+        "t_hit_mean",
+    ] {
+        assert_eq!(class(m), Class::Measured, "{m}");
+    }
+    for t in ["rays_per_s", "trace_s"] {
+        assert_eq!(class(t), Class::Timing, "{t}");
+    }
+    let reproducible = meta.reproducible_columns("main");
+    assert!(reproducible.iter().any(|c| c == "n_s_mean"));
+    assert!(!reproducible.iter().any(|c| c == "rays_per_s"));
     let (h, hist) = read_csv(&out.join("small/small.hist.csv"));
     assert_eq!(
         h,

@@ -122,25 +122,21 @@ fn three_shards_merge_to_the_unsharded_table() {
     let list = meta["shards"].as_array().expect("[[shards]]");
     assert_eq!(list.len(), 3);
     for (k, s) in list.iter().enumerate() {
-        assert_eq!(s["shard"].as_str(), Some(format!("{k}/3").as_str()));
-        for key in [
-            "host",
-            "threads",
-            "started",
-            "finished",
-            "wall_s",
-            "point_wall_s",
-        ] {
-            assert!(s.get(key).is_some(), "shard {k} lacks {key}: {s:?}");
+        assert_eq!(s["run"]["shard"].as_str(), Some(format!("{k}/3").as_str()));
+        assert!(s["machine"].get("host").is_some(), "shard {k}: {s:?}");
+        for key in ["threads", "started", "finished", "wall_s", "point_wall_s"] {
+            assert!(s["run"].get(key).is_some(), "shard {k} lacks {key}: {s:?}");
         }
     }
     assert_eq!(
         meta["run"]["point_wall_s"].as_array().map(Vec::len),
         Some(8)
     );
-    assert!(meta["timing_columns"]
-        .as_array()
-        .is_some_and(|c| c.iter().any(|c| c.as_str() == Some("rays_per_s"))));
+    assert!(meta["columns"]["main"].as_array().is_some_and(|c| c
+        .iter()
+        .any(
+            |c| c["name"].as_str() == Some("rays_per_s") && c["class"].as_str() == Some("timing")
+        )));
 
     // Merging again is refused without --force (nothing changes), allowed with it.
     let before = bytes(&dir.join("slurm-sweep.csv"));

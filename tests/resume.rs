@@ -166,10 +166,12 @@ fn fake_partial(dir: &Path, hash: &str) -> Vec<(PathBuf, Vec<u8>)> {
     )
     .expect("write");
     fs::write(d.join("resume-me.hist.csv.partial"), "").expect("write");
-    fs::write(
-        d.join("resume-me.meta.toml.partial"),
-        format!("spec_hash = \"{hash}\"\nstarted = \"2026-01-01T00:00:00Z\"\n"),
-    )
+    fs::write(d.join("resume-me.meta.toml.partial"), {
+        let mut m = raycost::output::meta::Meta::begin("run", Default::default());
+        m.run.spec_hash = hash.to_string();
+        m.run.started = "2026-01-01T00:00:00Z".into();
+        m.render()
+    })
     .expect("write");
     files_below(&d)
         .into_iter()

@@ -31,6 +31,7 @@ use std::sync::Mutex;
 use glam::DVec3;
 use rayon::prelude::*;
 
+use super::columns as bc;
 use super::rounds::{self, alternate, median};
 use super::{bench_scene, directions, memory, pool, trace_into, KEY, RHO};
 use crate::experiment::grid::BATCH;
@@ -52,7 +53,7 @@ pub const WIDTHS: &[f64] = &[0.2, 0.35, 0.5, 0.7, 1.0, 1.5, 2.0];
 /// Cell widths timed by `bench --quick`.
 pub const QUICK_WIDTHS: &[f64] = &[0.35, 0.7, 1.5];
 /// Rays sharing one scene realisation: the experiments' default (`grid.rays_per_scene`).
-pub const RAYS_PER_SCENE: usize = crate::spec::DEFAULT_RAYS_PER_SCENE as usize;
+pub const RAYS_PER_SCENE: usize = crate::experiment::grid::DEFAULT_RAYS_PER_SCENE as usize;
 /// Issue 10's target for the best width: at least this fraction of the finite grid's rays/s.
 pub const TARGET_RATIO: f64 = 1.0 / 3.0;
 /// The experiments' default walk bound (`grid.max_steps`).
@@ -169,39 +170,39 @@ impl InfiniteRow {
         let fold = |f: fn(f64, f64) -> f64, init| self.secs.iter().copied().fold(init, f);
         let (ratio, lo, hi) = self.ratio();
         let mut row = Row::default();
-        row.s("engine", ENGINE)
-            .u("n", 0)
-            .u("threads", self.threads as u64)
-            .f("cell_width", self.cell_width)
-            .u("rays", (self.rays_per_round * self.secs.len()) as u64)
-            .u("rounds", self.secs.len() as u64);
-        row.f("rays_per_s", self.rays_per_s())
-            .f("round_min_s", fold(f64::min, f64::INFINITY))
-            .f("round_median_s", median(&self.secs))
-            .f("round_max_s", fold(f64::max, 0.0))
-            .f("cell_s", self.cell_s())
-            .f("build_s", 0.0)
-            .u("peak_mem_bytes", self.peak_mem_bytes)
-            .u("structure_bytes", 0);
-        row.u("checked", self.checked)
-            .u("mismatches", self.mismatches)
-            .u("f32_ties", 0)
-            .f("t_rel_diff_max", 0.0)
-            .f("n_i_mean", self.n_i)
-            .f("n_s_mean", self.n_s);
-        row.f("n_i_mb_mean", self.n_i_mb)
-            .f("hit_mean", self.hit)
-            .u("truncated", self.truncated)
-            .f("generated_mean", self.generated)
-            .u("rays_per_scene", RAYS_PER_SCENE as u64)
-            .s("eye", "uniform")
-            .u("timed_best", u64::from(self.best))
-            .u("finite_n", self.finite.n)
-            .f("finite_cell_width", self.finite.cell_width)
-            .f("finite_rays_per_s", self.finite.rays_per_s())
-            .f("timed_finite_ratio", ratio)
-            .f("timed_finite_ratio_min", lo)
-            .f("timed_finite_ratio_max", hi);
+        row.put(&bc::ENGINE, ENGINE)
+            .put(&bc::N, 0u64)
+            .put(&bc::THREADS, self.threads as u64)
+            .put(&bc::CELL_WIDTH, self.cell_width)
+            .put(&bc::RAYS, (self.rays_per_round * self.secs.len()) as u64)
+            .put(&bc::ROUNDS, self.secs.len() as u64);
+        row.put(&bc::RAYS_PER_S, self.rays_per_s())
+            .put(&bc::ROUND_MIN_S, fold(f64::min, f64::INFINITY))
+            .put(&bc::ROUND_MEDIAN_S, median(&self.secs))
+            .put(&bc::ROUND_MAX_S, fold(f64::max, 0.0))
+            .put(&bc::CELL_S, self.cell_s())
+            .put(&bc::BUILD_S, 0.0)
+            .put(&bc::PEAK_MEM_BYTES, self.peak_mem_bytes)
+            .put(&bc::STRUCTURE_BYTES, 0u64);
+        row.put(&bc::CHECKED, self.checked)
+            .put(&bc::MISMATCHES, self.mismatches)
+            .put(&bc::F32_TIES, 0u64)
+            .put(&bc::T_REL_DIFF_MAX, 0.0)
+            .put(&bc::N_I_MEAN, self.n_i)
+            .put(&bc::N_S_MEAN, self.n_s);
+        row.put(&bc::N_I_MB_MEAN, self.n_i_mb)
+            .put(&bc::HIT_MEAN, self.hit)
+            .put(&bc::TRUNCATED, self.truncated)
+            .put(&bc::GENERATED_MEAN, self.generated)
+            .put(&bc::RAYS_PER_SCENE, RAYS_PER_SCENE as u64)
+            .put(&bc::EYE, "uniform")
+            .put(&bc::TIMED_BEST, u64::from(self.best))
+            .put(&bc::FINITE_N, self.finite.n)
+            .put(&bc::FINITE_CELL_WIDTH, self.finite.cell_width)
+            .put(&bc::FINITE_RAYS_PER_S, self.finite.rays_per_s())
+            .put(&bc::TIMED_FINITE_RATIO, ratio)
+            .put(&bc::TIMED_FINITE_RATIO_MIN, lo)
+            .put(&bc::TIMED_FINITE_RATIO_MAX, hi);
         row
     }
 
@@ -209,14 +210,14 @@ impl InfiniteRow {
     pub fn round_rows(&self, with_finite: bool) -> Vec<Row> {
         let one = |engine: &str, n: u64, a: f64, rays: usize, r: usize, cells: u64, s: f64| {
             let mut row = Row::default();
-            row.s("engine", engine)
-                .u("n", n)
-                .u("threads", self.threads as u64)
-                .f("cell_width", a)
-                .u("round", r as u64)
-                .u("rays", rays as u64)
-                .u("cells", cells)
-                .f("round_s", s);
+            row.put(&bc::ENGINE, engine)
+                .put(&bc::N, n)
+                .put(&bc::THREADS, self.threads as u64)
+                .put(&bc::CELL_WIDTH, a)
+                .put(&bc::ROUND, r as u64)
+                .put(&bc::RAYS, rays as u64)
+                .put(&bc::CELLS, cells)
+                .put(&bc::ROUND_S, s);
             row
         };
         let f = &self.finite;

@@ -22,6 +22,7 @@
 
 mod agreement;
 mod calibrate;
+pub mod columns;
 pub mod detp;
 mod infinite;
 pub mod memory;
@@ -37,10 +38,12 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use self::agreement::Agreement;
+use self::columns as bc;
 use self::rounds::{alternate, median, paired_ratios, RoundTimes};
 use crate::geom::{Aabb, Ray, Sphere};
 use crate::grid::fast::{FastGrid, FastTrace};
 use crate::grid::{build::frame_around, Hit};
+use crate::output::meta::Meta;
 use crate::output::row::Row;
 use crate::output::sink::{Sink, SinkOptions};
 use crate::sample::{directions::uniform_direction, rng::stream};
@@ -115,29 +118,32 @@ impl Measured {
 
     fn row(&self) -> Row {
         let mut row = Row::default();
-        row.s("engine", self.engine)
-            .u("n", self.n)
-            .u("threads", self.threads as u64)
-            .f("cell_width", self.cell_width)
-            .u("rays", (self.rays_per_round * self.secs.len()) as u64)
-            .u("rounds", self.secs.len() as u64);
-        row.f("rays_per_s", self.rays_per_s())
-            .f(
-                "round_min_s",
+        row.put(&bc::ENGINE, self.engine)
+            .put(&bc::N, self.n)
+            .put(&bc::THREADS, self.threads as u64)
+            .put(&bc::CELL_WIDTH, self.cell_width)
+            .put(&bc::RAYS, (self.rays_per_round * self.secs.len()) as u64)
+            .put(&bc::ROUNDS, self.secs.len() as u64);
+        row.put(&bc::RAYS_PER_S, self.rays_per_s())
+            .put(
+                &bc::ROUND_MIN_S,
                 self.secs.iter().copied().fold(f64::INFINITY, f64::min),
             )
-            .f("round_median_s", median(&self.secs))
-            .f("round_max_s", self.secs.iter().copied().fold(0.0, f64::max))
-            .f("cell_s", self.cell_s())
-            .f("build_s", self.build_s)
-            .u("peak_mem_bytes", self.peak_mem_bytes)
-            .u("structure_bytes", self.structure_bytes);
-        row.u("checked", self.agreement.checked)
-            .u("mismatches", self.agreement.mismatches)
-            .u("f32_ties", self.agreement.f32_ties)
-            .f("t_rel_diff_max", self.agreement.t_rel_diff_max)
-            .f("n_i_mean", self.n_i)
-            .f("n_s_mean", self.n_s);
+            .put(&bc::ROUND_MEDIAN_S, median(&self.secs))
+            .put(
+                &bc::ROUND_MAX_S,
+                self.secs.iter().copied().fold(0.0, f64::max),
+            )
+            .put(&bc::CELL_S, self.cell_s())
+            .put(&bc::BUILD_S, self.build_s)
+            .put(&bc::PEAK_MEM_BYTES, self.peak_mem_bytes)
+            .put(&bc::STRUCTURE_BYTES, self.structure_bytes);
+        row.put(&bc::CHECKED, self.agreement.checked)
+            .put(&bc::MISMATCHES, self.agreement.mismatches)
+            .put(&bc::F32_TIES, self.agreement.f32_ties)
+            .put(&bc::T_REL_DIFF_MAX, self.agreement.t_rel_diff_max)
+            .put(&bc::N_I_MEAN, self.n_i)
+            .put(&bc::N_S_MEAN, self.n_s);
         row
     }
 
@@ -147,12 +153,12 @@ impl Measured {
             .enumerate()
             .map(|(r, &s)| {
                 let mut row = Row::default();
-                row.s("engine", self.engine)
-                    .u("n", self.n)
-                    .u("threads", self.threads as u64)
-                    .u("round", r as u64)
-                    .u("rays", self.rays_per_round as u64)
-                    .f("round_s", s);
+                row.put(&bc::ENGINE, self.engine)
+                    .put(&bc::N, self.n)
+                    .put(&bc::THREADS, self.threads as u64)
+                    .put(&bc::ROUND, r as u64)
+                    .put(&bc::RAYS, self.rays_per_round as u64)
+                    .put(&bc::ROUND_S, s);
                 row
             })
             .collect()
@@ -178,10 +184,12 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
     let plan = Plan::new(quick);
     let all = rayon::current_num_threads();
     // Open (and so refuse to overwrite) the results before spending minutes measuring.
+    let mut meta = Meta::begin("bench", crate::experiment::runner::simd_paths());
+    let t0 = std::time::Instant::now();
     let mut sink = Sink::open(
         &out.join("bench"),
         "bench",
-        "bench",
+        &meta,
         SinkOptions {
             force,
             resume: false,
@@ -195,8 +203,8 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
     }];
     println!(
         "CPU: {}; ISA: {}; query-grid walk: {:?}; {all} thread(s)",
-        cpu_model(),
-        isa_features(),
+        meta.machine.cpu,
+        meta.machine.isa.join(" "),
         crate::grid::fast::Walk::detect()
     );
 
@@ -267,26 +275,33 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         sink.append(row, &side)
             .context("could not append to the bench table")?;
     }
-    let points: Vec<String> = cal
-        .points
-        .iter()
-        .map(|(w, ni, ns, t)| format!("[{w}, {ni}, {ns}, {t:e}]"))
-        .collect();
-    let meta = format!(
-        "[bench]\nquick = {quick}\nthreads = {all}\nhost = \"{}\"\ncpu = \"{}\"\nisa = \"{}\"\ntransparent_hugepages = \"{}\"\nrounds = {}\nrays_per_round = {}\nwalk = \"{:?}\"\ncommit = \"{}\"\nfinished = \"{}\"\n\n[bench.calibration]\nspheres = {cal_n}\nt_i_s = {:e}\nt_s_s = {:e}\ncell_width = {a}\n# [cell width, N_I, N_S, median seconds per ray]\npoints = [{}]\n",
-        crate::output::meta::host_name(),
-        cpu_model(),
-        isa_features(),
-        transparent_hugepages(),
-        plan.rounds,
-        plan.rays_per_round,
-        crate::grid::fast::Walk::detect(),
-        env!("RAYCOST_GIT_COMMIT"),
-        crate::output::time::now_rfc3339(),
-        cal.costs.t_i,
-        cal.costs.t_s,
-        points.join(", "),
+    let mut bench = toml::Table::new();
+    bench.insert("quick".into(), quick.into());
+    bench.insert("rounds".into(), (plan.rounds as i64).into());
+    bench.insert("rays_per_round".into(), (plan.rays_per_round as i64).into());
+    let mut calibration = toml::Table::new();
+    calibration.insert("spheres".into(), (cal_n as i64).into());
+    calibration.insert("t_i_s".into(), cal.costs.t_i.into());
+    calibration.insert("t_s_s".into(), cal.costs.t_s.into());
+    calibration.insert("cell_width".into(), a.into());
+    // [cell width, N_I, N_S, median seconds per ray]
+    calibration.insert(
+        "points".into(),
+        toml::Value::Array(
+            cal.points
+                .iter()
+                .map(|&(w, ni, ns, t)| {
+                    toml::Value::Array(vec![w.into(), ni.into(), ns.into(), t.into()])
+                })
+                .collect(),
+        ),
     );
+    bench.insert("calibration".into(), calibration.into());
+    meta.extra.insert("bench".into(), bench.into());
+    if let Some(r) = table::union_columns(&rows).first() {
+        meta.columns.insert("main".into(), r.columns());
+    }
+    meta.end(t0.elapsed().as_secs_f64());
     for p in sink.finish(&meta)? {
         println!("wrote {}", p.display());
     }
@@ -617,47 +632,4 @@ fn bench_scene(classes: &[RadiusClass], n: u64, key: u64) -> (Vec<Sphere>, Aabb)
         scene.generate(&[key, n]),
         Aabb::new(b.lo - DVec3::splat(R), b.hi + DVec3::splat(R)),
     )
-}
-
-/// The CPU model (Linux `/proc/cpuinfo`) with its family and model numbers, for the metadata:
-/// virtual machines often report only a generic name ("AMD EPYC"), and the numbers tell a Zen 3
-/// (family 25, model 1) from a Zen 4 (family 25, model 17).
-fn cpu_model() -> String {
-    let info = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
-    let field = |key: &str| {
-        info.lines()
-            .find(|l| l.split(':').next().map(str::trim) == Some(key))
-            .and_then(|l| l.split(':').nth(1))
-            .map(|m| m.trim().to_string())
-    };
-    let name = field("model name").unwrap_or_else(|| "unknown".into());
-    match (field("cpu family"), field("model")) {
-        (Some(f), Some(m)) => format!("{name} (family {f}, model {m})"),
-        _ => name,
-    }
-}
-
-/// The vector extensions this CPU offers that raycost's kernels dispatch on.
-fn isa_features() -> String {
-    #[cfg(target_arch = "x86_64")]
-    {
-        let mut found = Vec::new();
-        macro_rules! probe {
-            ($($f:tt),*) => {$(if is_x86_feature_detected!($f) { found.push($f); })*};
-        }
-        probe!("avx512f", "avx512vl", "avx2", "fma", "bmi2");
-        found.join(" ")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        String::new()
-    }
-}
-
-/// The transparent huge page mode (Linux), for the metadata: the grid asks for huge pages with
-/// `madvise`, which works in modes `always` and `madvise`.
-fn transparent_hugepages() -> String {
-    std::fs::read_to_string("/sys/kernel/mm/transparent_hugepage/enabled")
-        .map(|s| s.trim().to_string())
-        .unwrap_or_else(|_| "unavailable".into())
 }

@@ -17,12 +17,13 @@
 use std::path::Path;
 use std::time::Instant;
 
+use super::columns as bc;
 use crate::detp::order::Order;
 use crate::detp::quasi_static::{mismatches, Engine, IndexKind, Params, QuasiStatic};
 use crate::detp::sphere_cache::SphereCacheParams;
+use crate::experiment::quasi_static::apply_ratio;
 use crate::lt::Scene;
 use crate::output::row::Row;
-use crate::spec::quasi_static::apply_ratio;
 
 /// The scene, compiled in so the bench runs anywhere.
 const CORNELL: &str = include_str!("../../experiments/scenes/cornell-bench.toml");
@@ -55,16 +56,16 @@ impl QsRow {
     /// The bench table's row.
     pub fn row(&self) -> Row {
         let mut r = Row::default();
-        r.s("engine", self.engine)
-            .u("n", self.points)
-            .u("threads", rayon::current_num_threads() as u64)
-            .u("rays", self.segments)
-            .f("rays_per_s", self.traced as f64 / self.frame_s)
-            .f("frame_s", self.frame_s)
-            .u("mismatches", self.mismatches)
-            .u("photons_retraced", self.photons_retraced)
-            .u("segments_traced", self.traced)
-            .f("implied_s", self.implied_s);
+        r.put(&bc::ENGINE, self.engine)
+            .put(&bc::N, self.points)
+            .put(&bc::THREADS, rayon::current_num_threads() as u64)
+            .put(&bc::RAYS, self.segments)
+            .put(&bc::RAYS_PER_S, self.traced as f64 / self.frame_s)
+            .put(&bc::FRAME_S, self.frame_s)
+            .put(&bc::MISMATCHES, self.mismatches)
+            .put(&bc::PHOTONS_RETRACED, self.photons_retraced)
+            .put(&bc::SEGMENTS_TRACED, self.traced)
+            .put(&bc::IMPLIED_S, self.implied_s);
         r
     }
 }
@@ -205,7 +206,7 @@ mod tests {
         let mut scene =
             crate::lt::Scene::parse(super::CORNELL, std::path::Path::new("cornell-bench.toml"))
                 .unwrap();
-        crate::spec::quasi_static::apply_ratio(&mut scene, Some(0.1));
+        crate::experiment::quasi_static::apply_ratio(&mut scene, Some(0.1));
         let (_, rows) = super::one_frame(
             scene,
             super::params(20_000, 30.0, 1000),

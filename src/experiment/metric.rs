@@ -3,7 +3,8 @@
 //! terminal summary line (measured ± CI, theory, verdict) follow from that one declaration, so every
 //! kind writes them alike.
 
-use crate::output::row::Row;
+use crate::output::column::{Class, Column, Shape};
+use crate::output::row::{Row, Value};
 use crate::stats::Estimate;
 
 pub use crate::output::summary::SummaryLine;
@@ -24,19 +25,36 @@ pub enum Theory {
     },
 }
 
-/// A measured metric and its theory.
+/// A measured metric and its theory: a declared estimate column ([`Shape::EstimateVsPrediction`] or
+/// [`Shape::EstimateVsBand`]) with its value.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Metric {
-    name: String,
+    column: &'static Column,
+    stem: String,
     est: Estimate,
     theory: Theory,
 }
 
 impl Metric {
-    /// Declares metric `name` with its estimate and theory.
-    pub fn new(name: impl Into<String>, est: Estimate, theory: Theory) -> Self {
+    /// Metric `column` with its estimate and theory.
+    pub fn new(column: &'static Column, est: Estimate, theory: Theory) -> Self {
+        Self::member(column, "", est, theory)
+    }
+
+    /// Member `part` of the metric family `column` (`rays_L{}` → `rays_L3`).
+    pub fn member(column: &'static Column, part: &str, est: Estimate, theory: Theory) -> Self {
+        debug_assert!(
+            matches!(
+                (column.shape, theory),
+                (Shape::EstimateVsPrediction, Theory::Prediction(_))
+                    | (Shape::EstimateVsBand, Theory::Band { .. })
+            ),
+            "{}: the theory does not match the declared shape",
+            column.name
+        );
         Self {
-            name: name.into(),
+            column,
+            stem: column.member(part),
             est,
             theory,
         }
@@ -52,11 +70,12 @@ impl Metric {
 
     /// Appends its columns to `row` and its line to `summary`.
     pub fn write(&self, row: &mut Row, summary: &mut Vec<SummaryLine>) {
-        let m = &self.name;
-        row.estimate(m, &self.est);
+        let m = &self.stem;
+        let unit = self.column.unit;
+        row.estimate_cells(self.column, m, &self.est);
         let text = match self.theory {
             Theory::Prediction(p) => {
-                row.f(format!("{m}_theory"), p);
+                row.derived_cell(m, "_theory", Class::Theory, unit, Value::F(p));
                 format!("{p:.4}")
             }
             Theory::Band {
@@ -64,10 +83,10 @@ impl Metric {
                 lower,
                 upper,
             } => {
-                row.f(format!("{m}_theory"), prediction)
-                    .f(format!("{m}_lower"), lower)
-                    .f(format!("{m}_upper"), upper)
-                    .s(format!("{m}_band"), self.verdict());
+                row.derived_cell(m, "_theory", Class::Theory, unit, Value::F(prediction))
+                    .derived_cell(m, "_lower", Class::Theory, unit, Value::F(lower))
+                    .derived_cell(m, "_upper", Class::Theory, unit, Value::F(upper))
+                    .derived_cell(m, "_band", Class::Check, "1", Value::S(self.verdict()));
                 format!("{prediction:.3} [{lower:.3}, {upper:.3}]")
             }
         };
@@ -150,8 +169,9 @@ mod tests {
     #[test]
     fn a_declared_band_metric_writes_its_columns_and_summary_line() {
         let (mut row, mut summary) = (Row::default(), Vec::new());
+        static N_I: Column = Column::vs_band("n_i", "tests", "ray-sphere tests");
         Metric::new(
-            "n_i",
+            &N_I,
             est(5.0, 0.1, 100),
             Theory::Band {
                 prediction: 5.1,
@@ -160,7 +180,7 @@ mod tests {
             },
         )
         .write(&mut row, &mut summary);
-        let cols: Vec<&str> = row.0.iter().map(|(c, _)| c.as_str()).collect();
+        let cols: Vec<&str> = row.0.iter().map(|c| c.name.as_str()).collect();
         assert_eq!(
             cols,
             [

@@ -1,19 +1,21 @@
-//! Runs a spec: the points of this shard that are not done yet, in index order, each appended to the
-//! sink as soon as it finishes.
+//! Runs a [`Plan`]: the points of this shard that are not done yet, in index order, each appended to
+//! the sink as soon as it finishes. The runner knows kinds only through [`DynKind`]: every kind's
+//! rows get the same `point` and parameter columns, every kind's built-in checks are handled alike
+//! (the table is written, then the run fails with exit 1), and the metadata is one typed schema.
 
+use std::collections::BTreeMap;
+use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::Context;
-
-use super::machine::{self, MachineCosts};
-use super::{run_point, side_tables, PointResult};
-use crate::output::meta::{host_name, Build, MachineInfo, Meta, RunInfo};
+use super::kind::{Check, Context, DynKind, ErasedOutput};
+use super::plan::Plan;
+use crate::error::{Context as _, Error};
+use crate::output::column::{ColumnInfo, POINT};
+use crate::output::meta::Meta;
 use crate::output::progress::progress;
-use crate::output::row::{is_timing_column, Row, Value};
+use crate::output::row::{Row, Value};
 use crate::output::sink::{Sink, SinkOptions};
 use crate::output::summary;
-use crate::output::time::now_rfc3339;
-use crate::spec::{Kind, PointConfig, Spec};
 
 /// A `--shard K/N` selection: points with index ≡ K (mod N). Round robin, because neighbouring points
 /// of a sweep tend to cost alike (the last key varies fastest), so blocks would balance worse.
@@ -50,7 +52,7 @@ impl std::str::FromStr for Shard {
 #[derive(Clone, Debug)]
 pub struct RunOptions {
     /// Results root (`DIR`).
-    pub out: std::path::PathBuf,
+    pub out: PathBuf,
     /// Replace existing results.
     pub force: bool,
     /// Continue a partial run.
@@ -71,19 +73,87 @@ pub fn stem(name: &str, shard: Option<Shard>) -> String {
     }
 }
 
-/// Runs `spec`; returns the written paths and the summary text.
-pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::PathBuf>, String)> {
-    let name = &spec.base.experiment.name;
+/// The SIMD path each kernel takes on this machine (for the metadata).
+pub fn simd_paths() -> BTreeMap<String, String> {
+    let mut m = BTreeMap::new();
+    m.insert(
+        "query_grid_walk".into(),
+        format!("{:?}", crate::grid::fast::Walk::detect()),
+    );
+    m.insert(
+        "sphere_cache_filter".into(),
+        crate::detp::sphere_cache::filter::FilterPath::detect()
+            .name()
+            .to_string(),
+    );
+    m
+}
+
+/// The metadata of a run of `plan` as it starts.
+fn start_meta(plan: &Plan, opts: &RunOptions, warnings: Vec<String>) -> Meta {
+    let mut meta = Meta::begin("run", simd_paths());
+    meta.run.spec_path = plan.spec.path.clone();
+    meta.run.spec_hash = plan.hash.clone();
+    meta.run.seed = plan.spec.experiment.seed;
+    meta.run.shard = opts
+        .shard
+        .map_or("all".into(), |s| format!("{}/{}", s.k, s.n));
+    meta.run.set = opts.sets.clone();
+    meta.run.points_total = plan.points.len();
+    meta.inputs = plan.inputs.clone();
+    meta.warnings = warnings;
+    meta.spec = plan.normalized.clone();
+    meta
+}
+
+/// A point's parameter value as a CSV cell: integers stay integers.
+fn param_value(v: &toml::Value) -> Value {
+    match v {
+        toml::Value::Float(x) => Value::F(*x),
+        toml::Value::Integer(i) => Value::F(*i as f64),
+        toml::Value::String(s) => Value::S(s.clone()),
+        other => Value::S(other.to_string()),
+    }
+}
+
+/// Prepends `point` and the parameter columns to a result row.
+fn with_point_columns(index: usize, params: &[(String, toml::Value)], row: &Row) -> Row {
+    let mut r = Row::default();
+    r.put(&POINT, index as u64);
+    for (k, v) in params {
+        r.param(k, param_value(v));
+    }
+    r.extend(row);
+    r
+}
+
+/// Runs `plan`; returns the written paths and the summary text.
+pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Error> {
+    let kind: &dyn DynKind = plan.kind;
+    let name = &plan.spec.experiment.name;
     let dir = opts.out.join(name);
     let stem = stem(name, opts.shard);
+    let mine: Vec<usize> = (0..plan.points.len())
+        .filter(|i| opts.shard.is_none_or(|s| i % s.n == s.k))
+        .collect();
+    let mut warnings: Vec<String> = Vec::new();
+    for &i in &mine {
+        for w in plan.points[i].warnings() {
+            let w = format!("point {i}: {w}");
+            if !warnings.contains(&w) {
+                warnings.push(w);
+            }
+        }
+    }
+    let mut meta = start_meta(plan, opts, warnings);
     let sink = Sink::open(
         &dir,
         &stem,
-        &spec.hash,
+        &meta,
         SinkOptions {
             force: opts.force,
             resume: opts.resume,
-            tables: side_tables(spec.base.experiment.kind),
+            tables: kind.table_names(),
         },
     )?;
     let Some(mut sink) = sink else {
@@ -94,14 +164,15 @@ pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::Pat
         );
         return Ok((Vec::new(), msg));
     };
-    let started = sink.started().to_string();
+    meta.run.started = sink.started().to_string();
+    if let Some(then) = sink.previous() {
+        meta.columns = then.columns.clone();
+    }
+    // Warnings are printed even with --quiet (which silences progress and the summary only).
+    for w in &meta.warnings {
+        eprintln!("warning: {w}");
+    }
     let t0 = Instant::now();
-    let mine: Vec<usize> = spec
-        .points
-        .iter()
-        .map(|p| p.index)
-        .filter(|i| opts.shard.is_none_or(|s| i % s.n == s.k))
-        .collect();
     let resumed: Vec<usize> = mine
         .iter()
         .copied()
@@ -112,23 +183,29 @@ pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::Pat
         .copied()
         .filter(|i| !sink.done().contains(i))
         .collect();
+    let todo_points: Vec<&dyn super::kind::DynPoint> =
+        todo.iter().map(|&i| plan.points[i].as_ref()).collect();
+    let shared = kind.shared(&todo_points)?;
+    meta.extra = kind.shared_meta(shared.as_ref());
 
-    let machine: Option<MachineCosts> =
-        (spec.base.experiment.kind == Kind::GridCostModel).then(machine::measure);
-    let total_rays: u64 = todo.iter().map(|&i| spec.points[i].config.work()).sum();
-    let bar = progress(total_rays, todo.len(), opts.quiet);
-    let mut finished = Vec::new();
-    let mut walls = Vec::new();
-    let mut timing = Vec::new();
+    let total: u64 = todo_points.iter().map(|p| p.work().units).sum();
+    let unit = todo_points.first().map_or("rays", |p| p.work().unit);
+    let bar = progress(total, unit, todo.len(), opts.quiet);
+    let mut finished: Vec<(usize, String, ErasedOutput, f64)> = Vec::new();
     for (n, &i) in todo.iter().enumerate() {
         bar.point(n, todo.len());
-        let p = &spec.points[i];
+        let p = &plan.spec.points[i];
         let start = Instant::now();
-        let result: PointResult = run_point(&p.config, i as u64, machine, &|k| bar.inc(k))
-            .with_context(|| format!("point {i}"))?;
+        let ctx = Context {
+            index: i as u64,
+            progress: &|k| bar.inc(k),
+        };
+        let out = kind
+            .run(plan.points[i].as_ref(), shared.as_ref(), &ctx)
+            .context_with(|| format!("point {i}"))?;
         let wall = start.elapsed().as_secs_f64();
-        let row = with_point_columns(i, &p.params, &result.row);
-        let side: Vec<(&'static str, Vec<Row>)> = result
+        let row = with_point_columns(i, &p.params, &out.row);
+        let side: Vec<(&'static str, Vec<Row>)> = out
             .tables
             .iter()
             .map(|(name, rows)| {
@@ -136,156 +213,83 @@ pub fn run(spec: &Spec, opts: &RunOptions) -> anyhow::Result<(Vec<std::path::Pat
                 (*name, rows)
             })
             .collect();
-        if timing.is_empty() {
-            timing = row
-                .0
-                .iter()
-                .map(|(c, _)| c.clone())
-                .filter(|c| is_timing_column(c))
-                .collect();
+        record_columns(&mut meta.columns, "main", &row);
+        for (name, rows) in &side {
+            if let Some(r) = rows.first() {
+                record_columns(&mut meta.columns, name, r);
+            }
         }
         sink.append(&row, &side)
-            .with_context(|| format!("could not append point {i} to {}", dir.display()))?;
+            .map_err(|e| Error::Internal(e.into()))
+            .context_with(|| format!("could not append point {i} to {}", dir.display()))?;
+        for w in &out.warnings {
+            let w = format!("point {i}: {w}");
+            eprintln!("warning: {w}");
+            if !meta.warnings.contains(&w) {
+                meta.warnings.push(w);
+            }
+        }
         let params = p
             .params
             .iter()
             .map(|(k, v)| format!("{}={v}", short(k)))
             .collect::<Vec<_>>()
             .join(" ");
-        finished.push((i, params, result, wall));
-        walls.push(wall);
+        meta.run.points.push(i);
+        meta.run.point_wall_s.push(wall);
+        finished.push((i, params, out, wall));
     }
     bar.finish();
 
-    let mut spec_table = toml::Table::new();
-    spec_table.insert(
-        "base".into(),
-        toml::Value::try_from(&spec.base).context("serialising the spec")?,
-    );
-    let mut sw = toml::Table::new();
-    for (k, v) in &spec.sweep {
-        sw.insert(k.clone(), toml::Value::Array(v.clone()));
-    }
-    spec_table.insert("sweep".into(), toml::Value::Table(sw));
-    let meta = Meta {
-        raycost: Build::current(),
-        run: RunInfo {
-            spec_path: spec.path.clone(),
-            spec_hash: spec.hash.clone(),
-            seed: spec.base.experiment.seed,
-            threads: rayon::current_num_threads(),
-            shard: opts
-                .shard
-                .map_or("all".into(), |s| format!("{}/{}", s.k, s.n)),
-            set: opts.sets.clone(),
-            host: host_name(),
-            started,
-            finished: now_rfc3339(),
-            wall_s: t0.elapsed().as_secs_f64(),
-            points_total: spec.points.len(),
-            points: todo.clone(),
-            point_wall_s: walls,
-            resumed_points: resumed,
-        },
-        machine: machine.map(|m| MachineInfo {
-            t_i_s: m.t_i,
-            t_s_s: m.t_s,
-        }),
-        timing_columns: timing,
-        spec: spec_table,
-    };
-    // Every engine must agree with brute force on everything checked (the grid on first hits, the
-    // DETP engines on disc sums); the table is kept as evidence.
-    let disagreements: Vec<String> = finished
+    meta.end(t0.elapsed().as_secs_f64());
+    meta.run.resumed_points = resumed;
+    let failed: Vec<String> = finished
         .iter()
-        .filter_map(|(i, params, r, _)| {
-            let m = ["bf_mismatches", "mismatches"]
+        .flat_map(|(i, params, out, _)| {
+            out.checks
                 .iter()
-                .filter_map(|c| r.row.get(c).and_then(|v| v.as_f64()))
-                .sum::<f64>();
-            (m > 0.0).then(|| format!("point {i} ({params}): {m} disagreements"))
+                .filter(|c| c.failures > 0)
+                .map(move |c| describe_failure(*i, params, c))
         })
         .collect();
     let written = sink
-        .finish(&meta.render())
-        .with_context(|| format!("could not finish the result files in {}", dir.display()))?;
-    if !disagreements.is_empty() {
-        anyhow::bail!(
-            "an engine disagreed with brute force ({}); the table was written to {} for inspection",
-            disagreements.join("; "),
+        .finish(&meta)
+        .map_err(|e| Error::Internal(e.into()))
+        .context_with(|| format!("could not finish the result files in {}", dir.display()))?;
+    if !failed.is_empty() {
+        return Err(Error::CheckFailed(format!(
+            "{}; the tables were written to {} for inspection",
+            failed.join("; "),
             dir.display()
-        );
+        )));
     }
     let shown: Vec<summary::SummaryPoint> = finished
         .iter()
-        .map(|(index, params, r, wall)| summary::SummaryPoint {
+        .map(|(index, params, out, wall)| summary::SummaryPoint {
             index: *index,
             params,
-            lines: &r.summary,
-            rays_per_s: r.rays_per_s,
+            lines: &out.summary,
+            rate: out.rate,
             wall: *wall,
         })
         .collect();
     Ok((written, summary::render(&shown)))
 }
 
+fn describe_failure(i: usize, params: &str, c: &Check) -> String {
+    format!(
+        "point {i} ({params}): {} {} of {} checked ({})",
+        c.name, c.failures, c.checked, c.what
+    )
+}
+
+/// Records the columns of `row` as those of `table` (the first row of a table defines them).
+fn record_columns(columns: &mut BTreeMap<String, Vec<ColumnInfo>>, table: &str, row: &Row) {
+    columns
+        .entry(table.to_string())
+        .or_insert_with(|| row.columns());
+}
+
 fn short(key: &str) -> &str {
     key.rsplit('.').next().unwrap_or(key)
-}
-
-/// Prepends `point` and the parameter columns to a result row.
-fn with_point_columns(index: usize, params: &[(String, toml::Value)], row: &Row) -> Row {
-    let mut r = Row::default();
-    r.u("point", index as u64);
-    for (k, v) in params {
-        let value = match v {
-            toml::Value::Float(x) => Value::F(*x),
-            toml::Value::Integer(i) => Value::F(*i as f64),
-            toml::Value::String(s) => Value::S(s.clone()),
-            other => Value::S(other.to_string()),
-        };
-        r.push(k.clone(), value);
-    }
-    r.0.extend(row.0.iter().cloned());
-    r
-}
-
-/// Validates a spec and describes its points (`raycost check`).
-pub fn describe(spec: &Spec) -> String {
-    let mut s = format!(
-        "{}: kind {}, {} point(s), spec hash {}\n",
-        spec.path,
-        spec.base.experiment.kind.as_str(),
-        spec.points.len(),
-        &spec.hash[..16]
-    );
-    for p in &spec.points {
-        let params = p
-            .params
-            .iter()
-            .map(|(k, v)| format!("{k} = {v}"))
-            .collect::<Vec<_>>()
-            .join(", ");
-        let what = match &p.config {
-            PointConfig::Grid(g) => {
-                let scene = match &g.scene {
-                    crate::spec::SceneModel::Infinite => "infinite scene".to_string(),
-                    crate::spec::SceneModel::Finite(f) => format!(
-                        "finite scene, ~{:.0} spheres, side {:.4}",
-                        f.expected_count(),
-                        f.side()
-                    ),
-                };
-                format!("{scene}, {} rays", g.rays)
-            }
-            PointConfig::Detp(d) => super::detp::describe(d),
-            PointConfig::QuasiStatic(q) => super::quasi_static::describe(q),
-        };
-        s.push_str(&format!(
-            "  point {:>4}: {params}{}{what}\n",
-            p.index,
-            if params.is_empty() { "" } else { "; " },
-        ));
-    }
-    s
 }

@@ -72,6 +72,8 @@ pub struct AffScene {
     pub camera_animation: Option<KbTransform>,
     /// Counted warnings (textures ignored, cones tessellated, degenerate triangles, …).
     pub warnings: Vec<String>,
+    /// The files it included (`i`), sorted: their content is part of the scene.
+    pub includes: Vec<PathBuf>,
 }
 
 /// The geometry under one outermost `x NAME` block.
@@ -259,6 +261,7 @@ impl AffScene {
             analytic: None,
             warnings,
             movers,
+            sources: self.includes.into_iter().map(|p| (p, "aff")).collect(),
         }
     }
 }
@@ -275,7 +278,11 @@ pub fn load_aff(path: &Path) -> Result<AffScene, InputError> {
     let root = path.parent().unwrap_or(Path::new("")).to_path_buf();
     let mut ld = Loader::new(root);
     ld.file(path, Rc::from(bytes), 0)?;
-    Ok(ld.finish())
+    let mut includes: Vec<PathBuf> = ld.cache.keys().cloned().collect();
+    includes.sort();
+    let mut scene = ld.finish();
+    scene.includes = includes;
+    Ok(scene)
 }
 
 /// Parses AFF text given in memory (`name` labels errors; includes are relative to `dir`).

@@ -145,6 +145,8 @@ pub struct Scene {
     pub n_static_tris: usize,
     /// Static spheres: `balls[..n_static_balls]`.
     pub n_static_balls: usize,
+    /// Files read besides the scene file itself (OBJ meshes, AFF includes), with their role.
+    sources: Vec<(PathBuf, &'static str)>,
     /// The movers' pose (normalised time), NaN before the first [`Scene::set_tau`].
     tau: f64,
     bvh: Bvh,
@@ -173,6 +175,8 @@ pub struct SceneParts {
     pub warnings: Vec<String>,
     /// Dynamic objects.
     pub movers: Vec<Mover>,
+    /// Files read besides the scene file itself (OBJ meshes, AFF includes), with their role.
+    pub sources: Vec<(PathBuf, &'static str)>,
 }
 
 impl Scene {
@@ -233,6 +237,7 @@ impl Scene {
         let (mut triangles, mut balls, mut surfaces) = (Vec::new(), Vec::new(), Vec::new());
         let mut warnings = Vec::new();
         let mut lights = Vec::new();
+        let mut sources = Vec::new();
         // Geometry of each [[dynamic]] object, gathered from the surfaces naming it.
         let mut moving: Vec<(Vec<Triangle>, Vec<Ball>)> =
             vec![Default::default(); raw.dynamic.len()];
@@ -291,6 +296,7 @@ impl Scene {
                         return Err(err(key("path"), "an obj surface needs a path".into()));
                     };
                     let file: PathBuf = dir.join(p);
+                    sources.push((file.clone(), "obj"));
                     let (models, _) = tobj::load_obj(
                         &file,
                         &tobj::LoadOptions {
@@ -517,7 +523,14 @@ impl Scene {
             analytic,
             warnings,
             movers,
+            sources,
         }))
+    }
+
+    /// Files read besides the scene file itself (OBJ meshes, AFF includes), with their role
+    /// (`obj`, `aff`): their content is part of the scene a result depends on.
+    pub fn sources(&self) -> Vec<(PathBuf, &'static str)> {
+        self.sources.clone()
     }
 
     /// Builds the hierarchy and bounds over `parts` (static geometry and lights; the movers stay
@@ -532,6 +545,7 @@ impl Scene {
             analytic,
             warnings,
             movers,
+            sources,
         } = parts;
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
@@ -562,6 +576,7 @@ impl Scene {
             analytic,
             warnings,
             movers,
+            sources,
             tau: f64::NAN,
             bvh,
             dyn_bvh: Bvh::default(),

@@ -5,7 +5,7 @@ use super::row::Row;
 /// The header line of rows shaped like `row`.
 pub fn header(row: &Row) -> Vec<u8> {
     let mut w = ::csv::Writer::from_writer(Vec::new());
-    w.write_record(row.0.iter().map(|(c, _)| c.as_str()))
+    w.write_record(row.0.iter().map(|c| c.name.as_str()))
         .expect("writing to memory cannot fail");
     w.into_inner().expect("flush to memory")
 }
@@ -13,7 +13,7 @@ pub fn header(row: &Row) -> Vec<u8> {
 /// One record line; the columns must match the header.
 pub fn record(row: &Row) -> Vec<u8> {
     let mut w = ::csv::Writer::from_writer(Vec::new());
-    w.write_record(row.0.iter().map(|(_, v)| v.render()))
+    w.write_record(row.0.iter().map(|c| c.value.render()))
         .expect("writing to memory cannot fail");
     w.into_inner().expect("flush to memory")
 }
@@ -36,11 +36,16 @@ mod tests {
 
     #[test]
     fn header_and_records_line_up() {
+        use crate::output::column::{Class, Column};
+        const P: Column = Column::value("point", "1", Class::Parameter, "");
+        const M: Column = Column::value("n_i_mean", "1", Class::Measured, "");
+        const B: Column = Column::value("n_i_band", "1", Class::Check, "");
+        const X: Column = Column::value("x", "1", Class::Measured, "");
         let mut r = Row::default();
-        r.u("point", 0)
-            .f("n_i_mean", 1.5)
-            .s("n_i_band", "inside")
-            .f("x", f64::NAN);
+        r.put(&P, 0u64)
+            .put(&M, 1.5)
+            .put(&B, "inside")
+            .put(&X, f64::NAN);
         let text = String::from_utf8(serialize(&[r.clone(), r])).expect("utf8");
         assert_eq!(
             text,

@@ -15,8 +15,7 @@ use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use super::meta::host_name;
-use super::time::now_rfc3339;
+use super::meta::{changed_input, Meta, ShardRecord};
 use super::OutputError;
 
 fn err(path: &Path, message: impl Into<String>) -> OutputError {
@@ -83,6 +82,15 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>, force: bool) -> Result<Merg
             return Err(err(
                 &s.meta_path,
                 format!("written by raycost {}, but {} by raycost {}: rerun the shards with one raycost version", s.version, first.meta_path.display(), first.version),
+            ));
+        }
+        if let Some(file) = changed_input(&first.meta.inputs, &s.meta.inputs) {
+            return Err(err(
+                &s.meta_path,
+                format!(
+                    "was computed from other input files than {}: {file}; rerun the shards on the same inputs",
+                    first.meta_path.display()
+                ),
             ));
         }
         if s.points_total != first.points_total {
@@ -283,7 +291,7 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>, force: bool) -> Result<Merg
     }
     contents.push((
         meta_out.clone(),
-        merged_meta(&shards, total, n).into_bytes(),
+        merged_meta(&shards, total, n).render().into_bytes(),
     ));
     contents.push((main_out.clone(), main_bytes));
     write_all_atomically(&contents)?;
@@ -571,7 +579,7 @@ struct Shard {
     stem: String,
     k: usize,
     meta_path: PathBuf,
-    meta: toml::Table,
+    meta: Meta,
     spec_hash: String,
     version: String,
     points_total: usize,
@@ -581,36 +589,17 @@ struct Shard {
     tables: BTreeMap<String, Table>,
 }
 
-fn get<'a>(t: &'a toml::Table, dotted: &str) -> Option<&'a toml::Value> {
-    let mut parts = dotted.split('.');
-    let mut v = t.get(parts.next()?)?;
-    for p in parts {
-        v = v.as_table()?.get(p)?;
-    }
-    Some(v)
-}
-
 impl Shard {
     fn load(f: ShardFile) -> Result<Shard, OutputError> {
         let meta_path = f.csv.with_file_name(format!("{}.meta.toml", f.stem));
-        let text = fs::read_to_string(&meta_path).map_err(|e| err(&meta_path, format!("cannot read the shard's metadata ({e}); it holds the spec hash the merge checks")))?;
-        let meta: toml::Table = text.parse().map_err(|e: toml::de::Error| {
-            err(&meta_path, format!("is not valid TOML: {}", e.message()))
-        })?;
-        let string = |key: &str| -> Result<String, OutputError> {
-            get(&meta, key)
-                .and_then(|v| v.as_str())
-                .map(str::to_string)
-                .ok_or_else(|| {
-                    err(
-                        &meta_path,
-                        format!("has no {key}: not the metadata of a raycost run"),
-                    )
-                })
-        };
-        let spec_hash = string("run.spec_hash")?;
-        let version = string("raycost.version")?;
-        let shard = string("run.shard")?;
+        if !meta_path.is_file() {
+            return Err(err(
+                &meta_path,
+                "is missing: it holds the spec hash and input hashes the merge checks",
+            ));
+        }
+        let meta = Meta::read(&meta_path)?;
+        let shard = meta.run.shard.clone();
         if shard != format!("{}/{}", f.k, f.n) {
             return Err(err(
                 &meta_path,
@@ -620,26 +609,8 @@ impl Shard {
                 ),
             ));
         }
-        let points_total = match get(&meta, "run.points_total").and_then(toml::Value::as_integer) {
-            Some(p) => usize::try_from(p).map_err(|_| err(&meta_path, "run.points_total is negative"))?,
-            None => match get(&meta, "spec.sweep").and_then(toml::Value::as_table) {
-                Some(sw) => sw.values().map(|v| v.as_array().map_or(1, Vec::len)).product(),
-                None => return Err(err(&meta_path, "has neither run.points_total nor spec.sweep: cannot tell how many points the sweep has")),
-            },
-        };
-        let ints = |key: &str| -> Vec<usize> {
-            get(&meta, key)
-                .and_then(toml::Value::as_array)
-                .map(|a| {
-                    a.iter()
-                        .filter_map(|v| v.as_integer())
-                        .filter_map(|i| usize::try_from(i).ok())
-                        .collect()
-                })
-                .unwrap_or_default()
-        };
-        let mut meta_points = ints("run.points");
-        meta_points.extend(ints("run.resumed_points"));
+        let mut meta_points = meta.run.points.clone();
+        meta_points.extend(meta.run.resumed_points.iter().copied());
 
         let main = read_table(&f.csv)?;
         let mut tables = BTreeMap::new();
@@ -668,10 +639,10 @@ impl Shard {
             stem: f.stem,
             k: f.k,
             meta_path,
+            spec_hash: meta.run.spec_hash.clone(),
+            version: meta.raycost.version.clone(),
+            points_total: meta.run.points_total,
             meta,
-            spec_hash,
-            version,
-            points_total,
             meta_points,
             main,
             tables,
@@ -679,140 +650,57 @@ impl Shard {
     }
 }
 
-/// The merged metadata: the spec and hash, the union of timing columns, every point's wall time,
-/// and one `[[shards]]` entry per shard with its host, threads and times.
-fn merged_meta(shards: &[Shard], total: usize, n: usize) -> String {
-    use toml::Value as V;
+/// The merged metadata: the first shard's build, machine, inputs, columns and spec (checked equal
+/// where it matters), the run as one (earliest start, latest end, every point with its wall time),
+/// and one [`ShardRecord`] per shard with its own machine and run.
+fn merged_meta(shards: &[Shard], total: usize, n: usize) -> Meta {
     let first = &shards[0].meta;
-    let mut root = toml::Table::new();
-
-    let mut timing: Vec<V> = Vec::new();
-    for s in shards {
-        for c in get(&s.meta, "timing_columns")
-            .and_then(V::as_array)
-            .into_iter()
-            .flatten()
-        {
-            if !timing.contains(c) {
-                timing.push(c.clone());
-            }
-        }
-    }
-    root.insert("timing_columns".into(), V::Array(timing));
-
-    let mut build = toml::Table::new();
-    build.insert("version".into(), V::String(shards[0].version.clone()));
-    let commits: BTreeSet<String> = shards
-        .iter()
-        .filter_map(|s| {
-            get(&s.meta, "raycost.git_commit")
-                .and_then(V::as_str)
-                .map(str::to_string)
-        })
-        .collect();
-    build.insert(
-        "git_commit".into(),
-        V::String(commits.into_iter().collect::<Vec<_>>().join(" ")),
-    );
-    root.insert("raycost".into(), V::Table(build));
-
-    let mut run = toml::Table::new();
-    for key in ["spec_path", "spec_hash", "seed", "set"] {
-        if let Some(v) = get(first, &format!("run.{key}")) {
-            run.insert(key.into(), v.clone());
-        }
-    }
-    run.insert("shard".into(), V::String(format!("merged from {n} shards")));
-    let strs = |key: &str| {
-        shards
-            .iter()
-            .filter_map(|s| get(&s.meta, key).and_then(V::as_str).map(str::to_string))
-            .collect::<Vec<_>>()
-    };
-    if let Some(s) = strs("run.started").into_iter().min() {
-        run.insert("started".into(), V::String(s));
-    }
-    if let Some(s) = strs("run.finished").into_iter().max() {
-        run.insert("finished".into(), V::String(s));
-    }
-    run.insert("merged".into(), V::String(now_rfc3339()));
-    run.insert("merged_on".into(), V::String(host_name()));
-    run.insert("points_total".into(), V::Integer(total as i64));
-    run.insert(
-        "points".into(),
-        V::Array((0..total).map(|p| V::Integer(p as i64)).collect()),
-    );
-    // Wall time of each point in point order; NaN where a resumed shard did not record it.
+    let mut merged = first.clone();
     let mut walls = vec![f64::NAN; total];
     for s in shards {
-        let pts = get(&s.meta, "run.points")
-            .and_then(V::as_array)
-            .cloned()
-            .unwrap_or_default();
-        let ws = get(&s.meta, "run.point_wall_s")
-            .and_then(V::as_array)
-            .cloned()
-            .unwrap_or_default();
-        for (p, w) in pts.iter().zip(&ws) {
-            if let (Some(p), Some(w)) = (
-                p.as_integer().and_then(|p| usize::try_from(p).ok()),
-                w.as_float(),
-            ) {
-                if p < total {
-                    walls[p] = w;
-                }
+        for (&p, &w) in s.meta.run.points.iter().zip(&s.meta.run.point_wall_s) {
+            if p < total {
+                walls[p] = w;
+            }
+        }
+        for w in &s.meta.warnings {
+            if !merged.warnings.contains(w) {
+                merged.warnings.push(w.clone());
             }
         }
     }
-    run.insert(
-        "point_wall_s".into(),
-        V::Array(walls.into_iter().map(V::Float).collect()),
-    );
-    root.insert("run".into(), V::Table(run));
-
-    let mut list = Vec::new();
-    for s in shards {
-        let mut t = toml::Table::new();
-        t.insert(
-            "file".into(),
-            V::String(
-                s.csv
-                    .file_name()
-                    .map_or_else(String::new, |f| f.to_string_lossy().into_owned()),
-            ),
-        );
-        if let Some(V::Table(r)) = s.meta.get("run") {
-            for key in [
-                "shard",
-                "host",
-                "threads",
-                "started",
-                "finished",
-                "wall_s",
-                "points",
-                "point_wall_s",
-                "resumed_points",
-                "spec_path",
-                "set",
-            ] {
-                if let Some(v) = r.get(key) {
-                    t.insert(key.into(), v.clone());
-                }
-            }
-        }
-        if let Some(c) = get(&s.meta, "raycost.git_commit") {
-            t.insert("git_commit".into(), c.clone());
-        }
-        if let Some(m) = s.meta.get("machine") {
-            t.insert("machine".into(), m.clone());
-        }
-        list.push(V::Table(t));
-    }
-    root.insert("shards".into(), V::Array(list));
-    if let Some(spec) = first.get("spec") {
-        root.insert("spec".into(), spec.clone());
-    }
-    toml::to_string(&root).expect("metadata serializes")
+    let run = &mut merged.run;
+    run.command = "merge".into();
+    run.shard = format!("merged from {n} shards");
+    run.started = shards
+        .iter()
+        .map(|s| s.meta.run.started.clone())
+        .min()
+        .unwrap_or_default();
+    run.finished = shards
+        .iter()
+        .filter_map(|s| s.meta.run.finished.clone())
+        .max();
+    run.wall_s = None;
+    run.load_start = Vec::new();
+    run.load_end = Vec::new();
+    run.points_total = total;
+    run.points = (0..total).collect();
+    run.point_wall_s = walls;
+    run.resumed_points = Vec::new();
+    merged.shards = shards
+        .iter()
+        .map(|s| ShardRecord {
+            file: s
+                .csv
+                .file_name()
+                .map_or_else(String::new, |f| f.to_string_lossy().into_owned()),
+            raycost: s.meta.raycost.clone(),
+            machine: s.meta.machine.clone(),
+            run: s.meta.run.clone(),
+        })
+        .collect();
+    merged
 }
 
 /// Writes every file to a temporary beside it, then renames them into place in order (the last one

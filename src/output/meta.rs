@@ -1,30 +1,80 @@
-//! `NAME.meta.toml`: provenance of a result table (what ran, where, when, how long).
+//! `STEM.meta.toml`: the provenance of a result table, as one typed schema ([`Meta`], versioned by
+//! [`SCHEMA`]) read and written by one codec ([`Meta::read`], [`Meta::render`]). The runner writes it
+//! (a partial one when a run starts, the whole one when it ends), `--resume` and `raycost merge` read
+//! it back, and `raycost bench` writes the same schema.
+//!
+//! It pins everything a number depends on: the tool (version, git commit and whether the tree was
+//! dirty, rustc), the machine (CPU, its vector extensions and the SIMD paths the kernels took,
+//! memory, load average at start and end), the run (spec and its hash, seed, threads, shard, `--set`
+//! flags, points and their wall times), and a SHA-256 of every file the run read (scene, OBJ, AFF and
+//! its includes, points CSV), so a resume or merge over changed inputs is refused naming the file.
 
-use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::column::ColumnInfo;
+use crate::error::OutputError;
+
+/// Version of the metadata schema; readers refuse other versions by name.
+pub const SCHEMA: u32 = 2;
 
 /// Provenance of one run.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Meta {
-    /// raycost version and build commit.
+    /// [`SCHEMA`].
+    pub schema: u32,
+    /// What built the binary.
     pub raycost: Build,
+    /// The machine the run took place on.
+    pub machine: Machine,
     /// How the run went.
     pub run: RunInfo,
-    /// Machine constants of the cost model, if measured.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub machine: Option<MachineInfo>,
-    /// Columns allowed to differ between two runs of the same spec and seed.
-    pub timing_columns: Vec<String>,
+    /// Every file the run read, with its content hash.
+    #[serde(default)]
+    pub inputs: Vec<InputFile>,
+    /// Counted warnings (scene, points, physics sanity, a busy machine), one line each.
+    #[serde(default)]
+    pub warnings: Vec<String>,
+    /// The columns of each table (`main` for `STEM.csv`, else the side table's name), with classes.
+    #[serde(default)]
+    pub columns: BTreeMap<String, Vec<ColumnInfo>>,
+    /// Kind-specific facts measured once per run (the cost model's T_I and T_S; bench calibration).
+    #[serde(default, skip_serializing_if = "toml::Table::is_empty")]
+    pub extra: toml::Table,
     /// The normalised spec (defaults filled in) and its sweep.
+    #[serde(default)]
     pub spec: toml::Table,
+    /// For a merged table: each shard's own build, machine and run.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub shards: Vec<ShardRecord>,
+}
+
+/// One shard of a merged table.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct ShardRecord {
+    /// The shard's CSV file name.
+    pub file: String,
+    /// What built it.
+    pub raycost: Build,
+    /// Where it ran.
+    pub machine: Machine,
+    /// How it ran.
+    pub run: RunInfo,
 }
 
 /// Build identity.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Build {
     /// Crate version.
     pub version: String,
-    /// Git commit the binary was built from, when known.
+    /// Git commit the binary was built from ("unknown" without git).
     pub git_commit: String,
+    /// Whether tracked files differed from that commit ("true", "false" or "unknown").
+    pub git_dirty: String,
+    /// `rustc --version` of the compiler.
+    pub rustc: String,
 }
 
 impl Build {
@@ -32,53 +82,261 @@ impl Build {
     pub fn current() -> Self {
         Self {
             version: env!("CARGO_PKG_VERSION").into(),
-            git_commit: option_env!("RAYCOST_GIT_COMMIT")
-                .unwrap_or("unknown")
-                .into(),
+            git_commit: env!("RAYCOST_GIT_COMMIT").into(),
+            git_dirty: env!("RAYCOST_GIT_DIRTY").into(),
+            rustc: env!("RAYCOST_RUSTC").into(),
+        }
+    }
+
+    /// `VERSION (COMMIT[, dirty])`, for `--version`.
+    pub fn describe(&self) -> String {
+        let short = &self.git_commit[..self.git_commit.len().min(12)];
+        let dirty = if self.git_dirty == "true" {
+            ", dirty tree"
+        } else {
+            ""
+        };
+        format!("{} (commit {short}{dirty}; {})", self.version, self.rustc)
+    }
+}
+
+/// The machine.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Machine {
+    /// Host name.
+    pub host: String,
+    /// CPU model with family and model numbers (a VM's generic "AMD EPYC" needs them).
+    pub cpu: String,
+    /// Vector extensions the kernels dispatch on that this CPU has.
+    pub isa: Vec<String>,
+    /// The path each SIMD kernel takes here (kernel → path), chosen at run time.
+    #[serde(default)]
+    pub simd: BTreeMap<String, String>,
+    /// Logical CPUs.
+    pub cores: usize,
+    /// Memory available to this process when the run started, bytes.
+    pub memory_available_bytes: u64,
+    /// Transparent huge page mode (the query grid asks for huge pages).
+    pub transparent_hugepages: String,
+}
+
+impl Machine {
+    /// This machine; `simd` names the path each kernel takes (filled by the engines' layers).
+    pub fn current(simd: BTreeMap<String, String>) -> Self {
+        Self {
+            host: host_name(),
+            cpu: cpu_model(),
+            isa: isa_features(),
+            simd,
+            cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            memory_available_bytes: available_memory().unwrap_or(0),
+            transparent_hugepages: std::fs::read_to_string(
+                "/sys/kernel/mm/transparent_hugepage/enabled",
+            )
+            .map(|s| s.trim().to_string())
+            .unwrap_or_else(|_| "unavailable".into()),
         }
     }
 }
 
-/// Run facts.
-#[derive(Clone, Debug, Serialize)]
+/// How a run went.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct RunInfo {
-    /// Spec path as given.
+    /// `run`, `bench` or `merge`.
+    pub command: String,
+    /// Spec path as given (empty for bench).
+    #[serde(default)]
     pub spec_path: String,
-    /// SHA-256 of the normalised spec.
+    /// SHA-256 of the normalised spec (empty for bench).
+    #[serde(default)]
     pub spec_hash: String,
     /// Master seed.
+    #[serde(default)]
     pub seed: u64,
     /// Worker threads.
     pub threads: usize,
     /// `K/N`, or `all`.
+    #[serde(default = "all")]
     pub shard: String,
     /// `--set` overrides.
+    #[serde(default)]
     pub set: Vec<String>,
-    /// Host name.
-    pub host: String,
     /// Start, RFC 3339 UTC.
     pub started: String,
-    /// End, RFC 3339 UTC.
-    pub finished: String,
-    /// Wall seconds of the whole run.
-    pub wall_s: f64,
+    /// End, RFC 3339 UTC (absent while the run goes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub finished: Option<String>,
+    /// Wall seconds of the whole run (absent while the run goes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wall_s: Option<f64>,
+    /// 1-, 5- and 15-minute load averages when the run started.
+    #[serde(default)]
+    pub load_start: Vec<f64>,
+    /// The same when it ended.
+    #[serde(default)]
+    pub load_end: Vec<f64>,
     /// Points of the whole sweep (all shards); `raycost merge` checks coverage against it.
+    #[serde(default)]
     pub points_total: usize,
     /// Points in this file.
+    #[serde(default)]
     pub points: Vec<usize>,
     /// Wall seconds of each point, in the order of `points`.
+    #[serde(default)]
     pub point_wall_s: Vec<f64>,
     /// Points carried over from a resumed partial run (no wall time recorded here).
+    #[serde(default)]
     pub resumed_points: Vec<usize>,
 }
 
-/// Measured T_I, T_S.
-#[derive(Clone, Debug, Serialize)]
-pub struct MachineInfo {
-    /// One ray–sphere test, s.
-    pub t_i_s: f64,
-    /// One cell step, s.
-    pub t_s_s: f64,
+fn all() -> String {
+    "all".into()
+}
+
+/// A file the run read.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Eq, PartialOrd, Ord)]
+pub struct InputFile {
+    /// Its path, as the run resolved it.
+    pub path: String,
+    /// What it is: `scene`, `obj`, `aff`, `points`.
+    pub role: String,
+    /// SHA-256 of its content.
+    pub sha256: String,
+    /// Its size.
+    pub bytes: u64,
+}
+
+impl InputFile {
+    /// Hashes `path` now.
+    pub fn hash(path: &Path, role: &str) -> std::io::Result<Self> {
+        use sha2::{Digest, Sha256};
+        let bytes = std::fs::read(path)?;
+        Ok(Self {
+            path: path.display().to_string(),
+            role: role.into(),
+            sha256: format!("{:x}", Sha256::digest(&bytes)),
+            bytes: bytes.len() as u64,
+        })
+    }
+}
+
+/// The first input of `now` whose content differs from what `then` recorded (or that is new or
+/// gone): the file a resume or merge must name when it refuses.
+pub fn changed_input<'a>(then: &'a [InputFile], now: &'a [InputFile]) -> Option<String> {
+    for t in then {
+        match now.iter().find(|n| n.path == t.path) {
+            None => {
+                return Some(format!(
+                    "{} (read by the earlier run, not by this one)",
+                    t.path
+                ))
+            }
+            Some(n) if n.sha256 != t.sha256 => {
+                return Some(format!(
+                    "{} (content changed: SHA-256 {} then, {} now)",
+                    t.path,
+                    &t.sha256[..12],
+                    &n.sha256[..12]
+                ))
+            }
+            Some(_) => {}
+        }
+    }
+    now.iter()
+        .find(|n| !then.iter().any(|t| t.path == n.path))
+        .map(|n| format!("{} (not read by the earlier run)", n.path))
+}
+
+impl Meta {
+    /// The metadata of a `command` starting now on this machine with this build: the run's own
+    /// facts (spec, points, inputs, columns) are filled in by the caller.
+    pub fn begin(command: &str, simd: BTreeMap<String, String>) -> Meta {
+        Meta {
+            schema: SCHEMA,
+            raycost: Build::current(),
+            machine: Machine::current(simd),
+            run: RunInfo {
+                command: command.into(),
+                spec_path: String::new(),
+                spec_hash: String::new(),
+                seed: 0,
+                threads: rayon::current_num_threads(),
+                shard: all(),
+                set: Vec::new(),
+                started: crate::output::time::now_rfc3339(),
+                finished: None,
+                wall_s: None,
+                load_start: load_average(),
+                load_end: Vec::new(),
+                points_total: 0,
+                points: Vec::new(),
+                point_wall_s: Vec::new(),
+                resumed_points: Vec::new(),
+            },
+            inputs: Vec::new(),
+            warnings: Vec::new(),
+            columns: BTreeMap::new(),
+            extra: toml::Table::new(),
+            spec: toml::Table::new(),
+            shards: Vec::new(),
+        }
+    }
+
+    /// Marks the run finished now, `wall_s` after it started.
+    pub fn end(&mut self, wall_s: f64) {
+        self.run.finished = Some(crate::output::time::now_rfc3339());
+        self.run.wall_s = Some(wall_s);
+        self.run.load_end = load_average();
+    }
+
+    /// TOML text (the one writer).
+    pub fn render(&self) -> String {
+        toml::to_string(self).expect("metadata serializes")
+    }
+
+    /// Reads and checks a metadata file (the one reader). A missing file, text that is not this
+    /// schema, or another schema version is an [`OutputError`] naming the file.
+    pub fn read(path: &Path) -> Result<Meta, OutputError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| OutputError::new(path, format!("cannot read the metadata: {e}")))?;
+        Self::parse(&text).map_err(|m| OutputError::new(path, m))
+    }
+
+    /// Parses metadata text.
+    pub fn parse(text: &str) -> Result<Meta, String> {
+        let table: toml::Table = text
+            .parse()
+            .map_err(|e: toml::de::Error| format!("not TOML: {}", e.message()))?;
+        match table.get("schema").and_then(toml::Value::as_integer) {
+            Some(v) if v == i64::from(SCHEMA) => {}
+            Some(v) => {
+                return Err(format!(
+                    "metadata schema {v}, this raycost reads schema {SCHEMA} (written by another version; rerun)"
+                ))
+            }
+            None => {
+                return Err(format!(
+                    "no metadata schema (written by a raycost older than schema {SCHEMA}; rerun)"
+                ))
+            }
+        }
+        toml::Value::Table(table)
+            .try_into()
+            .map_err(|e: toml::de::Error| format!("unreadable metadata: {}", e.message()))
+    }
+
+    /// The names of the columns of `table` that must agree between runs (everything but timings).
+    pub fn reproducible_columns(&self, table: &str) -> Vec<String> {
+        self.columns
+            .get(table)
+            .map(|cols| {
+                cols.iter()
+                    .filter(|c| c.class.is_reproducible())
+                    .map(|c| c.name.clone())
+                    .collect()
+            })
+            .unwrap_or_default()
+    }
 }
 
 /// Host name from the kernel (no extra dependency).
@@ -89,9 +347,163 @@ pub fn host_name() -> String {
         .unwrap_or_else(|_| "unknown".into())
 }
 
-impl Meta {
-    /// TOML text.
-    pub fn render(&self) -> String {
-        toml::to_string(self).expect("metadata serializes")
+/// The 1-, 5- and 15-minute load averages (Linux `/proc/loadavg`; empty elsewhere).
+pub fn load_average() -> Vec<f64> {
+    std::fs::read_to_string("/proc/loadavg")
+        .map(|s| {
+            s.split_whitespace()
+                .take(3)
+                .filter_map(|x| x.parse().ok())
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// Memory this process can still allocate: the smaller of Linux's `MemAvailable` and the cgroup's
+/// limit minus its usage (a container or Slurm job may allow far less than the machine has).
+pub fn available_memory() -> Option<u64> {
+    let meminfo = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let avail_kib: u64 = meminfo
+        .lines()
+        .find(|l| l.starts_with("MemAvailable:"))?
+        .split_whitespace()
+        .nth(1)?
+        .parse()
+        .ok()?;
+    let mut avail = avail_kib * 1024;
+    let read = |p: &str| {
+        std::fs::read_to_string(p)
+            .ok()
+            .map(|s| s.trim().to_string())
+    };
+    if let (Some(max), Some(cur)) = (
+        read("/sys/fs/cgroup/memory.max"),
+        read("/sys/fs/cgroup/memory.current"),
+    ) {
+        if let (Ok(max), Ok(cur)) = (max.parse::<u64>(), cur.parse::<u64>()) {
+            avail = avail.min(max.saturating_sub(cur));
+        }
+    }
+    Some(avail)
+}
+
+/// The CPU model (Linux `/proc/cpuinfo`) with its family and model numbers: virtual machines often
+/// report only a generic name ("AMD EPYC"), and the numbers tell a Zen 3 (family 25, model 1) from
+/// a Zen 4 (family 25, model 17).
+pub fn cpu_model() -> String {
+    let info = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
+    let field = |key: &str| {
+        info.lines()
+            .find(|l| l.split(':').next().map(str::trim) == Some(key))
+            .and_then(|l| l.split(':').nth(1))
+            .map(|m| m.trim().to_string())
+    };
+    let name = field("model name").unwrap_or_else(|| "unknown".into());
+    match (field("cpu family"), field("model")) {
+        (Some(f), Some(m)) => format!("{name} (family {f}, model {m})"),
+        _ => name,
+    }
+}
+
+/// The vector extensions this CPU offers that raycost's kernels dispatch on.
+pub fn isa_features() -> Vec<String> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let mut found = Vec::new();
+        macro_rules! probe {
+            ($($f:tt),*) => {$(if is_x86_feature_detected!($f) { found.push($f.to_string()); })*};
+        }
+        probe!("avx512f", "avx512vl", "avx2", "fma", "bmi2");
+        found
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        Vec::new()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::output::column::Class;
+
+    fn sample() -> Meta {
+        let mut columns = BTreeMap::new();
+        columns.insert(
+            "main".to_string(),
+            vec![
+                ColumnInfo {
+                    name: "n_s_mean".into(),
+                    class: Class::Measured,
+                    unit: "steps".into(),
+                },
+                ColumnInfo {
+                    name: "trace_s".into(),
+                    class: Class::Timing,
+                    unit: "s".into(),
+                },
+            ],
+        );
+        Meta {
+            schema: SCHEMA,
+            raycost: Build::current(),
+            machine: Machine::current(BTreeMap::new()),
+            run: RunInfo {
+                command: "run".into(),
+                spec_path: "x.toml".into(),
+                spec_hash: "ab".repeat(32),
+                seed: 1,
+                threads: 2,
+                shard: "all".into(),
+                set: vec![],
+                started: "2026-01-01T00:00:00Z".into(),
+                finished: None,
+                wall_s: None,
+                load_start: vec![0.1, 0.2, 0.3],
+                load_end: vec![],
+                points_total: 2,
+                points: vec![0, 1],
+                point_wall_s: vec![0.5, 0.25],
+                resumed_points: vec![],
+            },
+            inputs: vec![InputFile {
+                path: "scene.toml".into(),
+                role: "scene".into(),
+                sha256: "0".repeat(64),
+                bytes: 10,
+            }],
+            warnings: vec![],
+            columns,
+            extra: toml::Table::new(),
+            spec: toml::Table::new(),
+            shards: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn the_codec_round_trips_and_refuses_other_schemas() {
+        let m = sample();
+        let text = m.render();
+        assert_eq!(Meta::parse(&text).expect("round trip"), m);
+        let old = text.replace("schema = 2", "schema = 1");
+        assert!(Meta::parse(&old)
+            .expect_err("schema 1")
+            .contains("schema 1"));
+        let none = text.replace("schema = 2\n", "");
+        assert!(Meta::parse(&none).expect_err("no schema").contains("older"));
+        assert_eq!(m.reproducible_columns("main"), ["n_s_mean"]);
+    }
+
+    #[test]
+    fn a_changed_input_is_named() {
+        let a = sample().inputs;
+        let mut b = a.clone();
+        assert_eq!(changed_input(&a, &b), None);
+        b[0].sha256 = "1".repeat(64);
+        let msg = changed_input(&a, &b).expect("changed");
+        assert!(msg.starts_with("scene.toml (content changed"), "{msg}");
+        assert!(changed_input(&a, &[])
+            .expect("gone")
+            .contains("not by this one"));
     }
 }

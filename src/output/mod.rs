@@ -5,6 +5,7 @@
 //! is never replaced without `--force`, and every check that could refuse a run happens before the
 //! first point is traced.
 
+pub mod column;
 pub mod csv;
 pub mod merge;
 pub mod meta;

@@ -14,7 +14,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 /// State of the log-line display.
 #[derive(Debug)]
 pub struct LogState {
-    /// Rays done.
+    /// What is counted (plural noun: rays, photons, photon-frames).
+    unit: &'static str,
+    /// Units done.
     rays: u64,
     /// Points done.
     points_done: usize,
@@ -43,23 +45,26 @@ pub enum Progress {
     },
 }
 
-/// Builds the progress display for `total` rays over `points` points.
-pub fn progress(total: u64, points: usize, quiet: bool) -> Progress {
+/// Builds the progress display for `total` units of work (`unit`: rays, photons, …) over `points`
+/// points.
+pub fn progress(total: u64, unit: &'static str, points: usize, quiet: bool) -> Progress {
     if quiet {
         return Progress::Hidden;
     }
     if std::io::stderr().is_terminal() {
         let bar = ProgressBar::new(total);
         bar.set_style(
-            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} rays · {per_sec} · eta {eta} · {msg}")
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} {prefix} · {per_sec} · eta {eta} · {msg}")
                 .expect("a valid template")
                 .progress_chars("█▉ "),
         );
+        bar.set_prefix(unit);
         bar.set_message(format!("0/{points} points"));
         Progress::Bar(bar)
     } else {
         let now = Instant::now();
         let state = LogState {
+            unit,
             rays: 0,
             points_done: 0,
             points,
@@ -84,17 +89,17 @@ pub fn log_line(s: &LogState, total: u64, elapsed: Duration) -> String {
         100.0 * s.rays.min(total) as f64 / total as f64
     };
     let (rate, eta) = if s.rays == 0 || el <= 0.0 {
-        ("- rays/s".to_string(), "eta -".to_string())
+        (format!("- {}/s", s.unit), "eta -".to_string())
     } else {
         let rate = s.rays as f64 / el;
         (
-            format!("{rate:.3e} rays/s"),
+            format!("{rate:.3e} {}/s", s.unit),
             format!("eta {:.0} s", total.saturating_sub(s.rays) as f64 / rate),
         )
     };
     format!(
-        "progress: {}/{} points, {}/{} rays ({pct:.1} %), {rate}, {eta}, elapsed {el:.0} s",
-        s.points_done, s.points, s.rays, total
+        "progress: {}/{} points, {}/{} {} ({pct:.1} %), {rate}, {eta}, elapsed {el:.0} s",
+        s.points_done, s.points, s.rays, total, s.unit
     )
 }
 
@@ -154,6 +159,7 @@ mod tests {
     fn log_line_shows_points_rate_and_eta() {
         let now = Instant::now();
         let s = LogState {
+            unit: "rays",
             rays: 1_000,
             points_done: 3,
             points: 8,
@@ -166,6 +172,7 @@ mod tests {
             "progress: 3/8 points, 1000/4000 rays (25.0 %), 5.000e2 rays/s, eta 6 s, elapsed 2 s"
         );
         let s = LogState {
+            unit: "rays",
             rays: 0,
             points_done: 0,
             points: 0,

@@ -4,8 +4,9 @@
 //!
 //! While a run goes, rows are appended to `STEM.csv.partial` (and `.TABLE.csv.partial`) and flushed
 //! after every point, so a killed run keeps every finished point; `--resume` reads them back (after
-//! checking the spec hash recorded in `STEM.meta.toml.partial`), drops a torn last line, and goes on.
-//! Only a finished run renames the partial files into place.
+//! checking that the spec hash and the content hash of every input file recorded in
+//! `STEM.meta.toml.partial` are the same now, naming the file that changed), drops a torn last line,
+//! and goes on. Only a finished run renames the partial files into place.
 
 use std::collections::BTreeSet;
 use std::fs::{self, File, OpenOptions};
@@ -13,6 +14,7 @@ use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use super::csv::{header, record};
+use super::meta::{changed_input, Meta};
 use super::row::Row;
 use super::OutputError;
 
@@ -48,6 +50,19 @@ pub struct Sink {
     csv_has_header: bool,
     done: BTreeSet<usize>,
     started: String,
+    previous: Option<Meta>,
+}
+
+/// Refuses to continue a run whose recorded metadata `then` differs from `now` in the spec or an
+/// input file's content.
+fn same_run(then: &Meta, now: &Meta, what: &Path) -> Result<(), OutputError> {
+    if then.run.spec_hash != now.run.spec_hash {
+        return Err(OutputError::new(what, "was written by a different spec (spec hash differs); --resume cannot continue it. Move it away or pass --force without --resume to start over"));
+    }
+    if let Some(file) = changed_input(&then.inputs, &now.inputs) {
+        return Err(OutputError::new(what, format!("was computed from other input files: {file}; --resume cannot continue it. Pass --force without --resume to start over")));
+    }
+    Ok(())
 }
 
 /// A refusal about `path`: an [`OutputError`] (exit code 2, nothing written).
@@ -77,7 +92,7 @@ impl Sink {
     pub fn open(
         dir: &Path,
         stem: &str,
-        spec_hash: &str,
+        meta: &Meta,
         opts: SinkOptions,
     ) -> anyhow::Result<Option<Sink>> {
         fs::create_dir_all(dir)
@@ -91,12 +106,10 @@ impl Sink {
         let meta_p = Self::partial(dir, stem, "meta.toml");
         let final_csv = Self::path(dir, stem, "csv");
         if final_csv.exists() && opts.resume && !csv_p.exists() {
-            // Finished already: a no-op, but only for the same spec.
-            let meta = fs::read_to_string(Self::path(dir, stem, "meta.toml")).unwrap_or_default();
-            if meta.contains(&format!("spec_hash = \"{spec_hash}\"")) {
-                return Ok(None);
-            }
-            return Err(err(&final_csv, "is a finished result of a different spec (spec hash differs); --resume cannot continue it. Pass --force without --resume to replace it"));
+            // Finished already: a no-op, but only for the same spec and the same input files.
+            let then = Meta::read(&Self::path(dir, stem, "meta.toml"))?;
+            same_run(&then, meta, &final_csv)?;
+            return Ok(None);
         }
         if opts.resume && csv_p.exists() {
             // A run killed inside `finish` has renamed some files already: take them back.
@@ -124,23 +137,15 @@ impl Sink {
             }
         }
         let started: Option<String>;
+        let mut previous = None;
         let mut done = BTreeSet::new();
         let mut csv_has_header = false;
         let mut table_has_header = vec![false; suffixes.len()];
         if csv_p.exists() && opts.resume {
-            let recorded = fs::read_to_string(&meta_p).unwrap_or_default();
-            started = recorded
-                .lines()
-                .find_map(|l| {
-                    l.trim()
-                        .strip_prefix("started = \"")
-                        .and_then(|r| r.strip_suffix('"'))
-                })
-                .map(str::to_string);
-            let want = format!("spec_hash = \"{spec_hash}\"");
-            if !recorded.contains(&want) {
-                return Err(err(&csv_p, "was written by a different spec (spec hash differs); it cannot be resumed. Move it away or pass --force without --resume to start over"));
-            }
+            let then = Meta::read(&meta_p)?;
+            same_run(&then, meta, &csv_p)?;
+            started = Some(then.run.started.clone());
+            previous = Some(then);
             let rows = read_complete(&csv_p).map_err(|e| err(&csv_p, e))?;
             csv_has_header = !rows.is_empty();
             for line in rows.iter().skip(1) {
@@ -192,11 +197,8 @@ impl Sink {
                 let p = Self::partial(dir, stem, suffix);
                 File::create(&p).map_err(|e| err(&p, e.to_string()))?;
             }
-            let mut m = File::create(&meta_p).map_err(|e| err(&meta_p, e.to_string()))?;
-            let now = super::time::now_rfc3339();
-            writeln!(m, "spec_hash = \"{spec_hash}\"\nstarted = \"{now}\"")
-                .map_err(|e| err(&meta_p, e.to_string()))?;
-            started = Some(now);
+            fs::write(&meta_p, meta.render()).map_err(|e| err(&meta_p, e.to_string()))?;
+            started = Some(meta.run.started.clone());
         }
         let open = |p: &Path| {
             OpenOptions::new()
@@ -221,6 +223,7 @@ impl Sink {
             csv_has_header,
             done,
             started: started.unwrap_or_else(super::time::now_rfc3339),
+            previous,
         }))
     }
 
@@ -229,21 +232,26 @@ impl Sink {
         &self.started
     }
 
+    /// The metadata of the partial run being resumed.
+    pub fn previous(&self) -> Option<&Meta> {
+        self.previous.as_ref()
+    }
+
     /// Points already finished (from a resumed partial run).
     pub fn done(&self) -> &BTreeSet<usize> {
         &self.done
     }
 
     /// Appends one point: its rows of each side table first, then its main row, each flushed to
-    /// disk (so a point whose main row is on disk has all its side rows there too). Rows for a table
-    /// the sink was not opened with are a programming error.
+    /// disk (so a point whose main row is on disk has all its side rows there too). Side tables are
+    /// named by the kind's declaration, which is also what the sink was opened with.
     pub fn append(&mut self, row: &Row, side: &[(&'static str, Vec<Row>)]) -> std::io::Result<()> {
         for (name, rows) in side {
-            let t = self
-                .tables
-                .iter_mut()
-                .find(|t| t.name == *name)
-                .unwrap_or_else(|| panic!("side table '{name}' was not declared for this kind"));
+            let Some(t) = self.tables.iter_mut().find(|t| t.name == *name) else {
+                return Err(std::io::Error::other(format!(
+                    "side table '{name}' was not declared for this kind"
+                )));
+            };
             let mut h = Vec::new();
             if !rows.is_empty() && !t.has_header {
                 h.extend(header(&rows[0]));
@@ -266,11 +274,11 @@ impl Sink {
     }
 
     /// Writes the metadata and renames the partial files into place.
-    pub fn finish(self, meta: &str) -> std::io::Result<Vec<PathBuf>> {
+    pub fn finish(self, meta: &Meta) -> std::io::Result<Vec<PathBuf>> {
         let (dir, stem) = (self.dir, self.stem);
         drop(self.csv);
         let meta_p = Self::partial(&dir, &stem, "meta.toml");
-        fs::write(&meta_p, meta)?;
+        fs::write(&meta_p, meta.render())?;
         let mut written = Vec::new();
         for t in self.tables {
             drop(t.file);

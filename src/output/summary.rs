@@ -4,6 +4,15 @@ use std::fmt::Write;
 
 use crate::stats::Estimate;
 
+/// A rate for the summary: `per_s` `unit` per second (e.g. rays/s while tracing).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rate {
+    /// Units per second.
+    pub per_s: f64,
+    /// Of what (plural noun).
+    pub unit: &'static str,
+}
+
 /// One line of the summary: (metric, measured, theory text, verdict).
 pub type SummaryLine = (String, Estimate, String, String);
 
@@ -16,8 +25,8 @@ pub struct SummaryPoint<'a> {
     pub params: &'a str,
     /// Its metrics.
     pub lines: &'a [SummaryLine],
-    /// Rays per second while tracing.
-    pub rays_per_s: f64,
+    /// The point's speed (units per second while working).
+    pub rate: Rate,
     /// Wall seconds of the point.
     pub wall: f64,
 }
@@ -44,7 +53,7 @@ pub fn render(points: &[SummaryPoint]) -> String {
                 (
                     index.to_string(),
                     params.to_string(),
-                    format!("{:.3e}", p.rays_per_s),
+                    format!("{:.3e} {}/s", p.rate.per_s, p.rate.unit),
                     format!("{wall:.2}"),
                 )
             } else {

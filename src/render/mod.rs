@@ -24,12 +24,15 @@ use std::time::Instant;
 
 use crate::detp::quasi_static::QuasiStatic;
 use crate::error::Error;
+use crate::experiment::detp::spec::{DynamicEngine, Points};
+use crate::experiment::detp::DetpKind;
+use crate::experiment::plan::Plan;
 use crate::experiment::quasi_static as eq;
+use crate::experiment::quasi_static::spec::QuasiStaticConfig;
+use crate::experiment::quasi_static::QuasiStaticKind;
 use crate::lt::Camera;
 use crate::output::OutputError;
-use crate::spec::detp::{DynamicEngine, Points, Rays};
-use crate::spec::quasi_static::QuasiStaticConfig;
-use crate::spec::{InputError, PointConfig, Spec};
+use crate::spec::{InputError, KeyError};
 
 use camera::{Pixel, View};
 use encode::Indexed;
@@ -70,26 +73,30 @@ struct Frame {
 }
 
 /// The spec's quasi-static config for the point (a `detp` scene spec becomes a one-frame run).
-fn config(spec: &Spec, point: usize) -> anyhow::Result<(QuasiStaticConfig, Option<u64>)> {
-    let n = spec.points.len();
-    let Some(p) = spec.points.get(point) else {
+fn config(plan: &Plan, point: usize) -> anyhow::Result<(QuasiStaticConfig, Option<u64>)> {
+    let n = plan.points.len();
+    if point >= n {
         return Err(Error::Usage(format!(
             "--point: got {point}, the spec has points 0…{}",
             n.saturating_sub(1)
         ))
         .into());
-    };
-    match &p.config {
-        PointConfig::QuasiStatic(q) => Ok(((**q).clone(), None)),
-        PointConfig::Detp(d) if matches!(d.rays, Rays::Scene(_)) => {
-            let mut detp = d.clone();
-            if !matches!(detp.points, Points::Surface(_)) {
-                // The engine's own sample points are not shown; any spacing will do.
-                detp.points = Points::Surface(4.0 * d.disc_radius);
-            }
+    }
+    if let Some(q) = plan.point::<QuasiStaticKind>(point) {
+        return Ok((q.clone(), None));
+    }
+    match plan.point::<DetpKind>(point) {
+        Some(d) if d.scene().is_some() => {
+            let file = d.scene().expect("checked");
             Ok((
                 QuasiStaticConfig {
-                    detp,
+                    detp: d.clone(),
+                    scene: file.scene.clone(),
+                    // The engine's own sample points are not shown; any spacing will do.
+                    spacing: match d.points {
+                        Points::Surface(s) => s,
+                        _ => 4.0 * d.disc_radius,
+                    },
                     frames: 1,
                     ratio: None,
                     crossover: None,
@@ -105,7 +112,7 @@ fn config(spec: &Spec, point: usize) -> anyhow::Result<(QuasiStaticConfig, Optio
             ))
         }
         _ => Err(spec_error(
-            spec,
+            plan,
             "experiment.kind",
             "raycost render needs kind \"quasi-static\", or kind \"detp\" with detp.source = \"scene\"",
         )
@@ -113,17 +120,9 @@ fn config(spec: &Spec, point: usize) -> anyhow::Result<(QuasiStaticConfig, Optio
     }
 }
 
-/// A spec error at `key`, located in the spec file when possible.
-fn spec_error(spec: &Spec, key: &str, message: &str) -> InputError {
-    let text = std::fs::read_to_string(&spec.path).unwrap_or_default();
-    let last = key.rsplit('.').next().unwrap_or(key);
-    InputError {
-        file: spec.path.clone(),
-        at: crate::toml_text::find_key(&text, key)
-            .or_else(|| crate::toml_text::find_key(&text, last)),
-        key: Some(key.to_string()),
-        message: message.to_string(),
-    }
+/// A spec error at `key`, located in the spec file.
+fn spec_error(plan: &Plan, key: &str, message: &str) -> InputError {
+    plan.spec.locate(None, KeyError::new(key, message))
 }
 
 /// The radiosity of every pixel of `view` from sums `acc` (watts per unit `w`).
@@ -143,20 +142,20 @@ fn radiosity(view: &View, acc: &[i64], watts_per_unit: f64) -> Vec<Radiosity> {
         .collect()
 }
 
-fn default_out(spec: &Spec, frames: &[u32]) -> PathBuf {
+fn default_out(plan: &Plan, frames: &[u32]) -> PathBuf {
     let f: Vec<String> = frames.iter().map(u32::to_string).collect();
     let which = if frames.len() == 1 {
         format!("frame-{}", f[0])
     } else {
         format!("frames-{}", f.join("-"))
     };
-    Path::new("results/render").join(format!("{}.{which}.png", spec.base.experiment.name))
+    Path::new("results/render").join(format!("{}.{which}.png", plan.spec.experiment.name))
 }
 
 /// Renders; returns what to print.
-pub fn run(spec: &Spec, o: &RenderOptions) -> anyhow::Result<String> {
+pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
     let t_all = Instant::now();
-    let (cfg, seed) = config(spec, o.point)?;
+    let (cfg, seed) = config(plan, o.point)?;
     if o.frames.is_empty() {
         return Err(Error::Usage("--frames: give at least one frame".into()).into());
     }
@@ -171,7 +170,7 @@ pub fn run(spec: &Spec, o: &RenderOptions) -> anyhow::Result<String> {
     let out = o
         .out
         .clone()
-        .unwrap_or_else(|| default_out(spec, &o.frames));
+        .unwrap_or_else(|| default_out(plan, &o.frames));
     let mut targets = vec![&out];
     targets.extend(o.gif.iter());
     targets.extend(o.diff.iter());
@@ -188,14 +187,13 @@ pub fn run(spec: &Spec, o: &RenderOptions) -> anyhow::Result<String> {
         }
     }
     // The scene and its camera, before any tracing.
-    let scene = eq::scene(&cfg)?;
-    let Some(cam) = scene.camera.clone() else {
-        let path = match &cfg.detp.rays {
-            Rays::Scene(p) => p.display().to_string(),
-            Rays::Lines => String::new(),
-        };
+    let Some(cam) = cfg.scene.camera.clone() else {
+        let path = cfg
+            .detp
+            .scene()
+            .map_or(String::new(), |f| f.path.display().to_string());
         return Err(spec_error(
-            spec,
+            plan,
             "detp.scene",
             &format!(
                 "the scene {path} has no camera: add a [camera] table (TOML scene) or a `v` view (AFF) to render it"
@@ -214,7 +212,7 @@ pub fn run(spec: &Spec, o: &RenderOptions) -> anyhow::Result<String> {
     writeln!(
         log,
         "render: {} point {}: frame 0 traced ({} photons, {} segments) in {:.3} s",
-        spec.path,
+        plan.spec.path,
         o.point,
         cfg.detp.photons,
         qs.live_segments(),
@@ -407,12 +405,11 @@ fn start(
     seed: Option<u64>,
 ) -> anyhow::Result<(QuasiStatic, crate::detp::quasi_static::FrameStats)> {
     match seed {
-        None => eq::start(cfg),
+        None => Ok(eq::start(cfg)),
         Some(s) => {
-            let scene = eq::scene(cfg)?;
             let mut p = eq::params(cfg, 1.0);
             p.seed = s;
-            Ok(QuasiStatic::start(scene, p))
+            Ok(QuasiStatic::start(cfg.scene.clone(), p))
         }
     }
 }

@@ -1,19 +1,15 @@
-//! Experiment specs: TOML text → validated points.
+//! Experiment specs: TOML text → a tree per sweep point, with every error located.
 //!
-//! Two levels, as ripgrep's low/high args: [`raw::RawSpec`] mirrors the file and rejects unknown keys
-//! and out-of-range values where they are read (with file, line, column and dotted key); then each
-//! sweep point is expanded on the TOML tree, read again, and turned into a [`GridConfig`], the only
-//! thing engines see. Checks that span several keys (one radius source, fractions summing to 1, the
-//! memory a finite grid would need) come last and name the key they blame.
+//! Two levels, as ripgrep's low/high args: this layer reads the file, checks the `[experiment]`
+//! header, and expands `[sweep]` and `--set` into one tree per point ([`Spec`]); the experiment kind
+//! named by `experiment.kind` then reads each tree into its own serde struct (unknown keys and tables
+//! refused, every number range-checked where it is read, with the helpers of [`de`]) and translates
+//! it into the engines' own types. Errors found there come back here to be located ([`Spec::locate`]):
+//! file, line, column and dotted key, or the `--set` flag that set the value.
 
-pub mod config;
-pub mod detp;
-pub mod quasi_static;
-pub mod raw;
+pub mod de;
 pub mod sweep;
 
 pub use crate::error::InputError;
-pub use config::{GridConfig, PointConfig, SceneModel};
-pub use detp::DetpConfig;
-pub use raw::{Kind, RawSpec, DEFAULT_RAYS_PER_SCENE};
-pub use sweep::{Point, Spec};
+pub use de::KeyError;
+pub use sweep::{PointSpec, RawExperiment, SetFlag, Spec, MAX_POINTS};

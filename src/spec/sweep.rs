@@ -1,160 +1,223 @@
-//! Loading a spec and expanding `[sweep]` (and `--set`) into points.
+//! Reading a spec file and expanding `[sweep]` and `--set` into points, on the TOML tree.
 //!
-//! Sweeps and overrides are applied to the TOML tree, and every point is deserialized again from the
-//! edited tree: a swept or set key that does not exist, or a value of the wrong type or range, is
-//! rejected by the same `deny_unknown_fields` and range checks as the file itself.
+//! Every point is the file's tree with its swept values (and the `--set` values) written in; the
+//! experiment kind then deserializes each point with the same `deny_unknown_fields` and range checks
+//! as the file itself, so a swept or set key that does not exist, or a value of the wrong type or
+//! range, is refused like one written in the file. Errors found on a point are located here
+//! ([`Spec::locate`]): at the `[sweep]` entry that produced the value (with the point named), at the
+//! key's line in the file, or at the `--set` flag that set it.
+//!
+//! `--set KEY=VALUE` reads KEY with TOML's own key grammar and VALUE as a TOML value (a bare word is a
+//! string). A key under `sweep` sets a whole sweep axis: `--set 'sweep."grid.cell_width"=[0.3, 0.6]'`
+//! replaces that axis, or adds it as the last (fastest-varying) axis if the file does not sweep it;
+//! any other key sets that value for every point and stops it being swept.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use sha2::{Digest, Sha256};
+use serde::{Deserialize, Serialize};
 
-use super::config::PointConfig;
-use super::raw::RawSpec;
+use super::de::{from_text, from_tree, KeyError, TextError};
 use crate::error::InputError;
 use crate::toml_text::{find_key, line_col};
 
 /// Largest number of points one spec may expand into.
 pub const MAX_POINTS: usize = 10_000;
 
-/// One sweep point: its index, the values of the swept or set keys, and its validated config.
-#[derive(Clone, Debug)]
-pub struct Point {
+/// `[experiment]`: what every spec names, whatever its kind.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawExperiment {
+    /// Result folder and file stem: letters, digits, `-` and `_`.
+    #[serde(deserialize_with = "name")]
+    pub name: String,
+    /// The experiment kind (`raycost doc spec` lists them).
+    pub kind: String,
+    /// Master seed of every random stream.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Rays per sweep point (grid kinds; DETP counts its rays in `detp.photons`).
+    #[serde(
+        default,
+        deserialize_with = "super::de::opt_count",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub rays: Option<u64>,
+    /// Free text copied into the metadata.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+fn name<'de, D: serde::Deserializer<'de>>(d: D) -> Result<String, D::Error> {
+    use serde::de::Error as _;
+    let s = String::deserialize(d)?;
+    if !s.is_empty()
+        && s.len() <= 100
+        && s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+    {
+        Ok(s)
+    } else {
+        Err(D::Error::custom(format!(
+            "got {s:?}, expected 1–100 letters, digits, '-' or '_' (it names files)"
+        )))
+    }
+}
+
+/// The header every spec has; the rest of the file is the kind's.
+#[derive(Deserialize)]
+struct Header {
+    experiment: RawExperiment,
+}
+
+/// One sweep point: its index, the values of its swept or set keys, and its tree.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointSpec {
     /// 0-based index in expansion order (the last swept key varies fastest).
     pub index: usize,
     /// `(dotted key, value)` of every swept or set key, in column order.
     pub params: Vec<(String, toml::Value)>,
-    /// The point's full spec after expansion.
-    pub raw: RawSpec,
-    /// What the engines see.
-    pub config: PointConfig,
+    /// The point's spec tree (the file's, with `--set` and its swept values written in).
+    pub tree: toml::Table,
 }
 
-/// A loaded, validated spec and its points.
+/// A `--set` flag as given, and the key it sets.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SetFlag {
+    /// `--set KEY=VALUE` as given.
+    pub flag: String,
+    /// The dotted key (`grid.cell_width`, or `sweep.grid.cell_width` for an axis).
+    pub key: String,
+}
+
+/// A spec file read and expanded into points (not yet validated by its kind).
 #[derive(Clone, Debug)]
 pub struct Spec {
-    /// Path as given.
+    /// The path as given (names the file in errors and metadata).
     pub path: String,
-    /// The base spec (with `--set` applied and `[sweep]` removed).
-    pub base: RawSpec,
-    /// Swept keys and their values, in file order.
+    /// Its folder: paths in the spec are relative to it.
+    pub dir: PathBuf,
+    /// Its text.
+    pub text: String,
+    /// `[experiment]`, after `--set`.
+    pub experiment: RawExperiment,
+    /// The file's tree with `--set` applied and `[sweep]` removed.
+    pub tree: toml::Table,
+    /// Sweep axes, in file order (axes added by `--set` last): dotted key → values.
     pub sweep: Vec<(String, Vec<toml::Value>)>,
-    /// Keys overridden by `--set`.
-    pub set_keys: Vec<String>,
+    /// The `--set` flags.
+    pub sets: Vec<SetFlag>,
     /// Every point.
-    pub points: Vec<Point>,
-    /// SHA-256 of the normalised spec (base + sweep, as TOML): identifies runs that can be merged.
-    pub hash: String,
+    pub points: Vec<PointSpec>,
 }
 
 impl Spec {
-    /// Loads `path`, applies `--set KEY=VALUE` overrides, validates and expands it.
-    pub fn load(path: &Path, sets: &[String]) -> Result<Spec, InputError> {
+    /// Reads `path` and expands it with the `--set KEY=VALUE` overrides `sets`.
+    pub fn read(path: &Path, sets: &[String]) -> Result<Spec, InputError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| InputError {
-            file: name.clone(),
-            at: None,
-            key: None,
-            message: format!("cannot read the spec: {e}"),
-        })?;
-        Self::from_text(&name, &text, sets)
+        if path.is_dir() {
+            return Err(InputError::new(
+                name,
+                "is a directory; give the spec file (a .toml)",
+            ));
+        }
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| InputError::new(&name, format!("cannot read the spec: {e}")))?;
+        Self::parse(&name, &text, sets)
     }
 
-    /// As [`Spec::load`], from text already read (`name` is used in messages).
-    pub fn from_text(name: &str, text: &str, sets: &[String]) -> Result<Spec, InputError> {
-        let at =
-            |location: Option<(usize, usize)>, key: Option<String>, message: String| InputError {
+    /// As [`Spec::read`], from text already read (`name` is the path in messages; its folder anchors
+    /// relative paths).
+    pub fn parse(name: &str, text: &str, sets: &[String]) -> Result<Spec, InputError> {
+        let file_err =
+            |at: Option<(usize, usize)>, key: Option<String>, message: String| InputError {
                 file: name.to_string(),
-                at: location,
+                at,
                 key,
                 message,
             };
-        // Level 1: the file as written, with line/column for every bad value.
-        let de = toml::Deserializer::new(text);
-        let parsed: Result<RawSpec, _> = serde_path_to_error::deserialize(de);
-        if let Err(e) = parsed {
-            let path = e.path().to_string();
-            let inner = e.into_inner();
-            let loc = inner.span().map(|s| line_col(text, s.start));
-            let key = if path.is_empty() || path == "." {
-                None
-            } else {
-                Some(path)
-            };
-            return Err(at(loc, key, inner.message().trim().to_string()));
-        }
         let mut tree: toml::Table = text.parse().map_err(|e: toml::de::Error| {
-            at(
+            file_err(
                 e.span().map(|s| line_col(text, s.start)),
                 None,
-                e.message().to_string(),
+                e.message().trim().to_string(),
             )
         })?;
+        // The header as written (located by serde), before any --set.
+        from_text::<Header>(text).map_err(|e: TextError| file_err(e.at, e.key, e.message))?;
 
-        // The sweep table, flattened to dotted keys.
+        // The sweep axes, flattened to dotted keys.
+        let mut flat = Vec::new();
+        match tree.remove("sweep") {
+            Some(toml::Value::Table(t)) => flatten("", &t, &mut flat),
+            Some(_) => {
+                return Err(file_err(
+                    find_key(text, "sweep"),
+                    Some("sweep".into()),
+                    "expected a table of dotted keys, each with a list of values".into(),
+                ))
+            }
+            None => {}
+        }
         let mut sweep = Vec::new();
-        if let Some(toml::Value::Table(t)) = tree.remove("sweep") {
-            flatten("", &t, &mut sweep);
+        for (key, value) in flat {
+            check_axis(&key, &value)
+                .map_err(|m| file_err(find_key(text, &key), Some(format!("sweep.{key}")), m))?;
+            sweep.push((key, value.as_array().cloned().unwrap_or_default()));
         }
-        for (key, value) in &sweep {
-            let values = match value {
-                toml::Value::Array(v) if !v.is_empty() => v,
-                _ => {
-                    return Err(at(
-                        find_key(text, key),
-                        Some(format!("sweep.{key}")),
-                        "expected a non-empty array of values to sweep".into(),
-                    ))
-                }
-            };
-            let _ = values;
-            if key.starts_with("experiment.") || key == "sweep" {
-                return Err(at(
-                    find_key(text, key),
-                    Some(format!("sweep.{key}")),
-                    "only scene, grid, histogram, scaling and detp keys can be swept".into(),
-                ));
-            }
-            if key == "detp.engines" {
-                return Err(at(
-                    find_key(text, key),
-                    Some(format!("sweep.{key}")),
-                    "cannot be swept: the engines decide the table's columns, which must be the same for every point".into(),
-                ));
-            }
-        }
-        let mut sweep: Vec<(String, Vec<toml::Value>)> = sweep
-            .into_iter()
-            .map(|(k, v)| (k, v.as_array().cloned().unwrap_or_default()))
-            .collect();
 
-        // --set overrides: a set key is no longer swept.
-        let mut set_keys = Vec::new();
-        let mut set_flags = Vec::new();
+        // --set overrides: an axis under `sweep`, or a value (which is then no longer swept).
+        let mut flags: Vec<SetFlag> = Vec::new();
         for s in sets {
-            let flag = || format!("--set {s}");
-            let (key, value) = s.split_once('=').ok_or_else(|| InputError {
-                file: flag(),
+            let flag = format!("--set {s}");
+            let flag_err = |key: Option<String>, m: String| InputError {
+                file: flag.clone(),
                 at: None,
-                key: None,
-                message: "expected KEY=VALUE".into(),
-            })?;
-            let key = key.trim().to_string();
-            let value = parse_value(value.trim()).map_err(|m| InputError {
-                file: flag(),
-                at: None,
-                key: Some(key.clone()),
+                key,
                 message: m,
-            })?;
-            set_path(&mut tree, &key, value).map_err(|m| InputError {
-                file: flag(),
-                at: None,
-                key: Some(key.clone()),
-                message: m,
-            })?;
-            sweep.retain(|(k, _)| *k != key);
-            set_flags.push(flag());
-            set_keys.push(key);
+            };
+            let (path, value) = parse_set(s).map_err(|m| flag_err(None, m))?;
+            let key = path.join(".");
+            if path.first().map(String::as_str) == Some("sweep") {
+                let axis = path[1..].join(".");
+                if axis.is_empty() {
+                    return Err(flag_err(
+                        Some(key),
+                        "name the swept key: sweep.\"grid.cell_width\"=[…]".into(),
+                    ));
+                }
+                check_axis(&axis, &value).map_err(|m| flag_err(Some(key.clone()), m))?;
+                let values = value.as_array().cloned().unwrap_or_default();
+                match sweep.iter_mut().find(|(k, _)| *k == axis) {
+                    Some(existing) => existing.1 = values,
+                    None => sweep.push((axis.clone(), values)),
+                }
+            } else {
+                set_path(&mut tree, &path, value).map_err(|m| flag_err(Some(key.clone()), m))?;
+                sweep.retain(|(k, _)| *k != key);
+            }
+            flags.push(SetFlag { flag, key });
         }
+        for f in &flags {
+            if let Some(axis) = f.key.strip_prefix("sweep.") {
+                if let Some(other) = flags.iter().find(|g| g.key == axis) {
+                    return Err(InputError::new(
+                        &f.flag,
+                        format!(
+                            "{} sets the same key to one value; give one or the other",
+                            other.flag
+                        ),
+                    )
+                    .key(&f.key));
+                }
+            }
+        }
+
+        // The header again, after --set (experiment.seed or .kind may have been set).
+        let header: Header = from_tree(&tree).map_err(|e| locate_key(name, text, &flags, e))?;
 
         let n_points: usize = sweep
             .iter()
@@ -162,124 +225,167 @@ impl Spec {
             .try_fold(1usize, |acc, n| acc.checked_mul(n))
             .unwrap_or(usize::MAX);
         if n_points > MAX_POINTS {
-            return Err(at(
+            return Err(file_err(
                 find_key(text, "sweep").or(Some((1, 1))),
                 Some("sweep".into()),
                 format!("expands into {n_points} points (at most {MAX_POINTS})"),
             ));
         }
-
-        let base: RawSpec = deserialize_tree(&tree).map_err(|(k, m)| {
-            let from_set = set_keys
-                .iter()
-                .position(|s| k.starts_with(s.as_str()) || s.starts_with(&k));
-            match from_set {
-                Some(i) => InputError {
-                    file: set_flags[i].clone(),
-                    at: None,
-                    key: Some(k),
-                    message: m,
-                },
-                None => at(find_key(text, &k), Some(k), m),
-            }
-        })?;
-
-        let mut points = Vec::with_capacity(n_points);
-        for index in 0..n_points {
-            let mut t = tree.clone();
-            let mut params = Vec::new();
-            let mut rest = index;
-            let mut chosen = vec![0usize; sweep.len()];
-            for (i, (_, values)) in sweep.iter().enumerate().rev() {
-                chosen[i] = rest % values.len();
-                rest /= values.len();
-            }
-            for (i, (key, values)) in sweep.iter().enumerate() {
-                let v = values[chosen[i]].clone();
-                set_path(&mut t, key, v.clone())
-                    .map_err(|m| at(find_key(text, key), Some(format!("sweep.{key}")), m))?;
-                params.push((key.clone(), v));
-            }
-            for k in &set_keys {
-                params.push((
-                    k.clone(),
-                    get_path(&t, k).expect("a set key exists in the tree"),
-                ));
-            }
-            let raw: RawSpec = deserialize_tree(&t).map_err(|(k, m)| {
-                let swept = sweep
-                    .iter()
-                    .find(|(s, _)| k.starts_with(s.as_str()) || s.starts_with(&k))
-                    .map(|(s, _)| s.clone());
-                match swept {
-                    Some(s) => at(
-                        find_key(text, &s),
-                        Some(format!("sweep.{s}")),
-                        format!("{k}: {m} (at sweep point {index})"),
-                    ),
-                    None => at(find_key(text, &k), Some(k), m),
-                }
-            })?;
-            let base_dir = Path::new(name).parent().unwrap_or(Path::new(""));
-            let config = PointConfig::from_raw(&raw, base_dir).map_err(|(k, m)| {
-                let swept = sweep.iter().find(|(s, _)| *s == k).map(|(s, _)| s.clone());
-                if let Some(i) = set_keys.iter().position(|s| *s == k) {
-                    return InputError {
-                        file: set_flags[i].clone(),
-                        at: None,
-                        key: Some(k.clone()),
-                        message: m.clone(),
-                    };
-                }
-                let suffix = if n_points > 1 {
-                    format!(" (at sweep point {index}: {})", describe(&params))
-                } else {
-                    String::new()
-                };
-                match swept {
-                    Some(s) => at(find_key(text, &s), Some(k), format!("{m}{suffix}")),
-                    None => at(find_key(text, &k), Some(k), format!("{m}{suffix}")),
-                }
-            })?;
-            points.push(Point {
-                index,
-                params,
-                raw,
-                config,
-            });
-        }
-
-        let mut normal = toml::Table::new();
-        normal.insert(
-            "base".into(),
-            toml::Value::try_from(&base).expect("a RawSpec serializes"),
-        );
-        let mut sw = toml::Table::new();
-        for (k, v) in &sweep {
-            sw.insert(k.clone(), toml::Value::Array(v.clone()));
-        }
-        normal.insert("sweep".into(), toml::Value::Table(sw));
-        let hash = format!(
-            "{:x}",
-            Sha256::digest(toml::to_string(&normal).expect("serializable").as_bytes())
-        );
-        Ok(Spec {
+        let mut spec = Spec {
             path: name.to_string(),
-            base,
+            dir: Path::new(name)
+                .parent()
+                .map(Path::to_path_buf)
+                .unwrap_or_default(),
+            text: text.to_string(),
+            experiment: header.experiment,
+            tree,
             sweep,
-            set_keys,
-            points,
-            hash,
+            sets: flags,
+            points: Vec::with_capacity(n_points),
+        };
+        for index in 0..n_points {
+            let point = spec.expand(index)?;
+            spec.points.push(point);
+        }
+        Ok(spec)
+    }
+
+    /// Point `index`: the tree with its swept values written in.
+    fn expand(&self, index: usize) -> Result<PointSpec, InputError> {
+        let mut t = self.tree.clone();
+        let mut params = Vec::new();
+        let mut rest = index;
+        let mut chosen = vec![0usize; self.sweep.len()];
+        for (i, (_, values)) in self.sweep.iter().enumerate().rev() {
+            chosen[i] = rest % values.len();
+            rest /= values.len();
+        }
+        for (i, (key, values)) in self.sweep.iter().enumerate() {
+            let v = values[chosen[i]].clone();
+            let path: Vec<String> = key.split('.').map(str::to_string).collect();
+            set_path(&mut t, &path, v.clone()).map_err(|m| self.locate_axis(key, m))?;
+            params.push((key.clone(), v));
+        }
+        for f in self.sets.iter().filter(|f| !f.key.starts_with("sweep.")) {
+            if let Some(v) = get_path(&t, &f.key) {
+                params.push((f.key.clone(), v));
+            }
+        }
+        Ok(PointSpec {
+            index,
+            params,
+            tree: t,
         })
+    }
+
+    /// Locates a problem with key `e.key` found while validating point `point` (or the base tree,
+    /// `None`): at the `--set` flag that set it, at the `[sweep]` entry that produced it (naming the
+    /// point), or at the key in the file.
+    pub fn locate(&self, point: Option<usize>, e: KeyError) -> InputError {
+        let KeyError { key, message } = e;
+        let related = |s: &str| {
+            key == s || key.starts_with(&format!("{s}.")) || s.starts_with(&format!("{key}."))
+        };
+        if let Some(f) = self.sets.iter().find(|f| related(&f.key)) {
+            return InputError::new(&f.flag, message).key(key);
+        }
+        let point = point.and_then(|i| self.points.get(i));
+        let axis = self
+            .sweep
+            .iter()
+            .map(|(k, _)| k)
+            .find(|k| related(k))
+            .filter(|_| point.is_some());
+        let suffix = match point {
+            Some(p) if self.points.len() > 1 => format!(
+                " (at sweep point {}: {})",
+                p.index,
+                p.params
+                    .iter()
+                    .map(|(k, v)| format!("{k} = {v}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            _ => String::new(),
+        };
+        match axis {
+            // The value came from a sweep axis: blame the axis, and say which key it set.
+            Some(a) => InputError {
+                file: self.path.clone(),
+                at: find_key(&self.text, a),
+                key: Some(format!("sweep.{a}")),
+                message: format!("{key}: {message}{suffix}"),
+            },
+            None => InputError {
+                file: self.path.clone(),
+                at: find_key(&self.text, &key).filter(|_| !key.is_empty()),
+                key: (!key.is_empty()).then_some(key),
+                message: format!("{message}{suffix}"),
+            },
+        }
+    }
+
+    /// Locates a problem with the sweep axis `axis` (its `[sweep]` entry, or the flag that set it).
+    pub fn locate_axis(&self, axis: &str, message: String) -> InputError {
+        let flag_key = format!("sweep.{axis}");
+        if let Some(f) = self.sets.iter().find(|f| f.key == flag_key) {
+            return InputError::new(&f.flag, message).key(flag_key);
+        }
+        InputError {
+            file: self.path.clone(),
+            at: find_key(&self.text, axis),
+            key: Some(flag_key),
+            message,
+        }
+    }
+
+    /// Locates a serde error of the file's text (line and column from the parser).
+    pub fn locate_text(&self, e: TextError) -> InputError {
+        InputError {
+            file: self.path.clone(),
+            at: e.at,
+            key: e.key,
+            message: e.message,
+        }
+    }
+
+    /// A path named in the spec, resolved against the spec's folder.
+    pub fn resolve(&self, relative: &str) -> PathBuf {
+        self.dir.join(relative)
     }
 }
 
-fn describe(params: &[(String, toml::Value)]) -> String {
-    params
-        .iter()
-        .map(|(k, v)| format!("{k} = {v}"))
-        .collect::<Vec<_>>()
-        .join(", ")
+/// A `[sweep]` axis must be a non-empty array and may not sweep `[experiment]` (the name and kind
+/// decide the result files; the seed has `--set experiment.seed` for replicas).
+fn check_axis(key: &str, value: &toml::Value) -> Result<(), String> {
+    match value {
+        toml::Value::Array(v) if !v.is_empty() => {}
+        _ => return Err("expected a non-empty array of values to sweep".into()),
+    }
+    if key.starts_with("experiment.") || key == "experiment" || key == "sweep" {
+        return Err(
+            "[experiment] keys cannot be swept (run the spec again with --set experiment.seed=N for another seed)"
+                .into(),
+        );
+    }
+    Ok(())
+}
+
+/// A problem with key `e.key` of the base tree: at the `--set` flag that set it, else in the file.
+fn locate_key(name: &str, text: &str, flags: &[SetFlag], e: KeyError) -> InputError {
+    let related = |s: &str| {
+        e.key == s || e.key.starts_with(&format!("{s}.")) || s.starts_with(&format!("{}.", e.key))
+    };
+    if let Some(f) = flags.iter().find(|f| related(&f.key)) {
+        return InputError::new(&f.flag, e.message).key(e.key);
+    }
+    InputError {
+        file: name.to_string(),
+        at: find_key(text, &e.key),
+        key: (!e.key.is_empty()).then_some(e.key),
+        message: e.message,
+    }
 }
 
 fn flatten(prefix: &str, t: &toml::Table, out: &mut Vec<(String, toml::Value)>) {
@@ -296,37 +402,70 @@ fn flatten(prefix: &str, t: &toml::Table, out: &mut Vec<(String, toml::Value)>) 
     }
 }
 
-/// Reads a `--set` value with TOML value syntax; a bare word is taken as a string.
-fn parse_value(s: &str) -> Result<toml::Value, String> {
-    let doc = format!("v = {s}");
-    match doc.parse::<toml::Table>() {
-        Ok(mut t) => Ok(t.remove("v").expect("the key v was written")),
+/// Splits `KEY=VALUE` at the first `=` outside quotes, reads KEY with TOML's key grammar (bare or
+/// quoted parts joined by dots) and VALUE as a TOML value (a bare word is taken as a string).
+fn parse_set(s: &str) -> Result<(Vec<String>, toml::Value), String> {
+    let mut quote: Option<char> = None;
+    let mut split = None;
+    for (i, c) in s.char_indices() {
+        match (quote, c) {
+            (None, '"' | '\'') => quote = Some(c),
+            (Some(q), c) if c == q => quote = None,
+            (None, '=') => {
+                split = Some(i);
+                break;
+            }
+            _ => {}
+        }
+    }
+    let i = split.ok_or("expected KEY=VALUE")?;
+    let (key, value) = (s[..i].trim(), s[i + 1..].trim());
+    if key.is_empty() {
+        return Err("expected KEY=VALUE: the key is empty".into());
+    }
+    // The key: TOML's grammar, read from `KEY = 0` (whose one leaf is not a table).
+    let keyed: toml::Table = format!("{key} = 0")
+        .parse()
+        .map_err(|e: toml::de::Error| format!("not a TOML key: {}", e.message().trim()))?;
+    let mut path = Vec::new();
+    let mut cur = toml::Value::Table(keyed);
+    while let toml::Value::Table(t) = cur {
+        let (k, v) = t
+            .into_iter()
+            .next()
+            .ok_or("expected KEY=VALUE: the key is empty")?;
+        path.push(k);
+        cur = v;
+    }
+    // The value: TOML value syntax; a bare word is a string.
+    let value = match format!("v = {value}").parse::<toml::Table>() {
+        Ok(mut t) => t.remove("v").expect("the key v was written"),
         Err(_)
-            if !s.is_empty()
-                && s.chars()
+            if !value.is_empty()
+                && value
+                    .chars()
                     .all(|c| c.is_ascii_alphanumeric() || "-_".contains(c)) =>
         {
-            Ok(toml::Value::String(s.into()))
+            toml::Value::String(value.to_string())
         }
-        Err(e) => Err(format!("not a TOML value: {}", e.message())),
-    }
+        Err(e) => return Err(format!("not a TOML value: {}", e.message().trim())),
+    };
+    Ok((path, value))
 }
 
-/// Sets a dotted key (array elements by index, `scene.class.0.fraction`), creating tables as needed.
-fn set_path(tree: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), String> {
-    let parts: Vec<&str> = key.split('.').collect();
-    if parts.iter().any(|p| p.is_empty()) {
+/// Sets a dotted key (array elements by index: `scene.class.0.fraction`), creating tables as needed.
+fn set_path(tree: &mut toml::Table, parts: &[String], value: toml::Value) -> Result<(), String> {
+    if parts.is_empty() || parts.iter().any(String::is_empty) {
         return Err("empty segment in the dotted key".into());
     }
     let mut cur = tree;
     for (i, p) in parts.iter().enumerate() {
-        let last = i + 1 == parts.len();
-        if last {
-            cur.insert((*p).to_string(), value);
+        if i + 1 == parts.len() {
+            cur.insert(p.clone(), value);
             return Ok(());
         }
         let next = cur
-            .entry((*p).to_string())
+            .entry(p.clone())
             .or_insert_with(|| toml::Value::Table(toml::Table::new()));
         cur = match next {
             toml::Value::Table(t) => t,
@@ -344,9 +483,9 @@ fn set_path(tree: &mut toml::Table, key: &str, value: toml::Value) -> Result<(),
                         parts[..=i].join(".")
                     )
                 })?;
-                let rest = parts[i + 2..].join(".");
+                let rest = &parts[i + 2..];
                 return match el {
-                    toml::Value::Table(t) if !rest.is_empty() => set_path(t, &rest, value),
+                    toml::Value::Table(t) if !rest.is_empty() => set_path(t, rest, value),
                     _ if rest.is_empty() => {
                         *el = value;
                         Ok(())
@@ -377,14 +516,6 @@ fn get_path(tree: &toml::Table, key: &str) -> Option<toml::Value> {
     Some(v)
 }
 
-fn deserialize_tree(t: &toml::Table) -> Result<RawSpec, (String, String)> {
-    let v = toml::Value::Table(t.clone());
-    serde_path_to_error::deserialize(v).map_err(|e| {
-        let p = e.path().to_string();
-        (p, e.into_inner().message().trim().to_string())
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -407,55 +538,118 @@ cell_width = 0.5
 "scene.intensity" = [1.0, 2.0]
 "#;
 
+    fn sets(s: &[&str]) -> Vec<String> {
+        s.iter().map(|x| x.to_string()).collect()
+    }
+
     #[test]
     fn sweep_expands_as_a_cartesian_product_last_key_fastest() {
-        let s = Spec::from_text("t.toml", BASE, &[]).expect("valid");
+        let s = Spec::parse("t.toml", BASE, &[]).expect("valid");
         assert_eq!(s.points.len(), 6);
         assert_eq!(s.points[1].params[0].1.as_float(), Some(0.25));
         assert_eq!(s.points[1].params[1].1.as_float(), Some(2.0));
-        assert_eq!(s.points[5].config.grid().unwrap().cell_width, 1.0);
+        assert_eq!(
+            get_path(&s.points[5].tree, "grid.cell_width").and_then(|v| v.as_float()),
+            Some(1.0)
+        );
     }
 
     #[test]
     fn set_overrides_and_unsweeps() {
-        let s = Spec::from_text("t.toml", BASE, &["grid.cell_width=0.7".into()]).expect("valid");
+        let s = Spec::parse("t.toml", BASE, &sets(&["grid.cell_width=0.7"])).expect("valid");
         assert_eq!(s.points.len(), 2);
         assert!(s
             .points
             .iter()
-            .all(|p| p.config.grid().unwrap().cell_width == 0.7));
+            .all(|p| get_path(&p.tree, "grid.cell_width").and_then(|v| v.as_float()) == Some(0.7)));
         assert_eq!(
             s.points[0].params.last().map(|p| p.0.as_str()),
             Some("grid.cell_width")
         );
     }
 
+    /// Issue 15: `--set 'sweep."grid.cell_width"=[0.3, 0.6]'` was accepted and ignored (the spec's
+    /// own four widths ran, plus a constant column named after the flag).
     #[test]
-    fn unknown_sweep_key_is_an_error_naming_it() {
-        let bad = BASE.replace("\"scene.intensity\"", "\"scene.intensty\"");
-        let e = Spec::from_text("t.toml", &bad, &[]).expect_err("unknown key");
-        assert!(e.to_string().contains("scene.intensty"), "{e}");
-        assert!(e.at.is_some());
+    fn set_on_a_sweep_axis_replaces_or_adds_it() {
+        for flag in [
+            "sweep.\"grid.cell_width\"=[0.3, 0.6]",
+            "sweep.grid.cell_width=[0.3, 0.6]",
+        ] {
+            let s = Spec::parse("t.toml", BASE, &sets(&[flag])).expect("valid");
+            assert_eq!(s.points.len(), 4, "{flag}");
+            let widths: Vec<f64> = s
+                .points
+                .iter()
+                .map(|p| p.params[0].1.as_float().expect("a width"))
+                .collect();
+            assert_eq!(widths, [0.3, 0.3, 0.6, 0.6], "{flag}");
+            assert!(s
+                .points
+                .iter()
+                .all(|p| p.params.iter().all(|(k, _)| !k.starts_with("sweep"))));
+        }
+        let s = Spec::parse(
+            "t.toml",
+            BASE,
+            &sets(&["sweep.\"grid.mailbox\"=[true, false]"]),
+        )
+        .expect("valid");
+        assert_eq!(s.points.len(), 12);
+        assert_eq!(s.sweep.last().map(|a| a.0.as_str()), Some("grid.mailbox"));
+        let e = Spec::parse("t.toml", BASE, &sets(&["sweep.\"grid.cell_width\"=0.3"]))
+            .expect_err("not an array");
+        assert!(e.to_string().contains("non-empty array"), "{e}");
+        let e = Spec::parse(
+            "t.toml",
+            BASE,
+            &sets(&["sweep.\"grid.cell_width\"=[0.3]", "grid.cell_width=0.4"]),
+        )
+        .expect_err("both");
+        assert!(e.to_string().contains("one or the other"), "{e}");
     }
 
     #[test]
-    fn bad_set_names_the_flag() {
-        let e = Spec::from_text("t.toml", BASE, &["grid.cel_width=1".into()]).expect_err("unknown");
-        assert!(e.to_string().starts_with("--set grid.cel_width=1"), "{e}");
-        let e = Spec::from_text("t.toml", BASE, &["scene.radius=-1".into()]).expect_err("negative");
-        assert!(e.to_string().contains("scene.radius"), "{e}");
+    fn set_keys_and_values_are_read_as_toml() {
+        assert_eq!(
+            parse_set("detp.order=hilbert").expect("bare word"),
+            (
+                vec!["detp".to_string(), "order".into()],
+                toml::Value::String("hilbert".into())
+            )
+        );
+        assert!(parse_set("a.b").expect_err("no =").contains("KEY=VALUE"));
+        assert!(parse_set("a..b=1")
+            .expect_err("bad key")
+            .contains("TOML key"));
+        assert!(parse_set("a.b=[1,")
+            .expect_err("bad value")
+            .contains("TOML value"));
+        assert_eq!(
+            parse_set("scene.class.0.fraction=0.5").expect("indexed").0,
+            ["scene", "class", "0", "fraction"]
+        );
     }
 
     #[test]
-    fn hash_is_stable_and_sensitive() {
-        let a = Spec::from_text("t.toml", BASE, &[]).expect("valid").hash;
-        let b = Spec::from_text("other.toml", BASE, &[])
-            .expect("valid")
-            .hash;
-        let c = Spec::from_text("t.toml", &BASE.replace("rays = 1000", "rays = 1001"), &[])
-            .expect("valid")
-            .hash;
-        assert_eq!(a, b);
-        assert_ne!(a, c);
+    fn unknown_sweep_key_is_located_at_its_entry() {
+        let s = Spec::parse("t.toml", BASE, &[]).expect("valid");
+        let e = s.locate(Some(1), KeyError::new("scene.intensity", "bad"));
+        assert_eq!(e.at, find_key(BASE, "scene.intensity"));
+        assert!(e.message.contains("at sweep point 1"), "{e}");
+    }
+
+    #[test]
+    fn errors_about_set_keys_name_the_flag() {
+        let s = Spec::parse("t.toml", BASE, &sets(&["scene.radius=-1"])).expect("parses");
+        let e = s.locate(Some(0), KeyError::new("scene.radius", "negative"));
+        assert!(e.to_string().starts_with("--set scene.radius=-1"), "{e}");
+    }
+
+    #[test]
+    fn experiment_keys_cannot_be_swept() {
+        let bad = BASE.replace("\"scene.intensity\"", "\"experiment.seed\"");
+        let e = Spec::parse("t.toml", &bad, &[]).expect_err("seed swept");
+        assert!(e.to_string().contains("experiment.seed"), "{e}");
     }
 }

@@ -60,15 +60,40 @@ pub fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
     (header, rows)
 }
 
-/// The non-timing columns of a CSV (the crate's own rule, `output::row::is_timing_column`).
+/// The reproducible columns of a CSV (every class but timing), as the run's own `meta.toml`
+/// declares them: `DIR/STEM.csv` is table `main` of `DIR/STEM.meta.toml`, `DIR/STEM.T.csv` table `T`.
+/// A header column that the metadata does not declare fails the test.
 pub fn measured_columns(path: &Path) -> Vec<Vec<(String, String)>> {
+    let name = path.file_name().unwrap().to_str().unwrap();
+    let base = name.strip_suffix(".csv").expect("a CSV");
+    let dir = path.parent().unwrap();
+    let (stem, table) = if dir.join(format!("{base}.meta.toml")).exists() {
+        (base.to_string(), "main".to_string())
+    } else {
+        let (stem, table) = base.rsplit_once('.').expect("STEM.TABLE.csv");
+        (stem.to_string(), table.to_string())
+    };
+    let meta = raycost::output::meta::Meta::read(&dir.join(format!("{stem}.meta.toml")))
+        .expect("the run's metadata");
+    let declared: Vec<String> = meta
+        .columns
+        .get(&table)
+        .map_or(Vec::new(), |c| c.iter().map(|c| c.name.clone()).collect());
+    let keep = meta.reproducible_columns(&table);
     let (h, rows) = read_csv(path);
+    for c in &h {
+        assert!(
+            declared.contains(c),
+            "{}: column {c} is not declared in {stem}.meta.toml",
+            path.display()
+        );
+    }
     rows.into_iter()
         .map(|r| {
             h.iter()
                 .cloned()
                 .zip(r)
-                .filter(|(c, _)| !raycost::output::row::is_timing_column(c))
+                .filter(|(c, _)| keep.contains(c))
                 .collect()
         })
         .collect()

@@ -6,12 +6,12 @@ use std::time::Instant;
 use glam::DVec3;
 use rayon::prelude::*;
 
+use super::spec::DetpConfig;
 use super::{RaySet, BATCH};
 use crate::detp::fixed::PowerScale;
 use crate::detp::store::{Segment, SegmentStore};
 use crate::sample::lines::uniform_line;
 use crate::sample::rng::{domain, stream};
-use crate::spec::DetpConfig;
 
 /// μ-random lines through the unit ball (Alg. 4.1/4.2), each a segment with 1 W of power that starts
 /// 1 unit before its entry point and ends 1 unit past its exit, so every disc near the ball (d ≤ 1)

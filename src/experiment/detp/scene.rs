@@ -4,41 +4,29 @@
 
 use std::time::Instant;
 
+use super::spec::{DetpConfig, Points};
 use super::{PointSet, RaySet};
 use crate::detp::disc::Discs;
 use crate::detp::photon::trace_photons;
-use crate::detp::photon_map::{self, Filter};
 use crate::detp::sphere_cache::root_sphere;
-use crate::detp::store::SegmentStore;
-use crate::detp::surface_points::{read_points_csv, surface_points};
+use crate::detp::surface_points::surface_points;
+use crate::error::Error;
 use crate::geom::Aabb;
 use crate::lt::Scene;
 use crate::sample::rng::{domain, hash_key};
-use crate::spec::detp::{FilterChoice, Points, Rays};
-use crate::spec::DetpConfig;
-
-/// The scene of a scene-source point (None for lines).
-pub(super) fn load(cfg: &DetpConfig) -> anyhow::Result<Option<Scene>> {
-    match &cfg.rays {
-        Rays::Lines => Ok(None),
-        Rays::Scene(p) => Scene::load(p).map(Some).map_err(|e| anyhow::anyhow!("{e}")),
-    }
-}
 
 /// Sample points on the scene's surfaces or from a CSV, with the scene's exact irradiance.
-pub(super) fn points(cfg: &DetpConfig, point: u64, scene: &Scene) -> anyhow::Result<PointSet> {
+pub(super) fn points(cfg: &DetpConfig, point: u64, scene: &Scene) -> Result<PointSet, Error> {
     let (centers, normals) = match &cfg.points {
         Points::Surface(spacing) => surface_points(
             scene,
             *spacing,
             hash_key(&[domain::POINTS, cfg.seed, point]),
         ),
-        Points::File(p) => read_points_csv(p).map_err(anyhow::Error::msg)?,
-        Points::Ball(_) => {
-            anyhow::bail!("points uniform in the ball belong to detp.source = \"lines\"")
-        }
+        Points::File(p) => (p.centers.clone(), p.normals.clone()),
+        Points::Ball(_) => unreachable!("the spec check gives a scene surface or file points"),
     };
-    let discs = Discs::new(centers, normals, cfg.disc_radius).map_err(anyhow::Error::msg)?;
+    let discs = Discs::new(centers, normals, cfg.disc_radius).map_err(Error::internal)?;
     let exact = discs
         .centers
         .iter()
@@ -70,19 +58,4 @@ pub(super) fn photons(
         rays_in_root: n,
         trace_s,
     }
-}
-
-/// The photon-map estimate at every disc centre, from the impacts of the same photons.
-pub(super) fn photon_map(cfg: &DetpConfig, store: &SegmentStore, discs: &Discs) -> Vec<f64> {
-    let filter = match cfg.photon_map_filter {
-        FilterChoice::Cone => Filter::Cone,
-        FilterChoice::Disc => Filter::Disc,
-    };
-    photon_map::estimate(
-        store,
-        &discs.centers,
-        &discs.normals,
-        cfg.photon_map_k as usize,
-        filter,
-    )
 }

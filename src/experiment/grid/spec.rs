@@ -1,89 +1,34 @@
-//! The serde mirror of a spec file: every table denies unknown keys, and every number is range-checked
-//! as it is read, so a bad value is reported at its own line and column.
+//! The spec file of the grid kinds (`grid`, `grid-scaling`, `grid-cost-model`): `[scene]` (the
+//! Poisson sphere scene), `[grid]`, `[histogram]` and `[scaling]`. Every table denies unknown keys,
+//! and every number is range-checked as it is read, so a bad value is reported at its own line and
+//! column.
 
 use serde::{de::Error as _, Deserialize, Deserializer, Serialize};
 
-/// A whole spec file.
+use crate::spec::de::{
+    check_positive, count, fraction, opt_count, opt_finite3, opt_positive, positive,
+};
+use crate::spec::RawExperiment;
+
+/// A spec file of a grid kind.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawSpec {
-    /// `[experiment]`: what to run.
+pub struct GridSpec {
+    /// `[experiment]`.
     pub experiment: RawExperiment,
-    /// `[scene]`: the Poisson sphere scene (grid kinds).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub scene: Option<RawScene>,
-    /// `[grid]`: the acceleration structure (grid kinds).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub grid: Option<RawGrid>,
-    /// `[detp]`: rays, points, discs and engines (kind `detp`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub detp: Option<super::detp::RawDetp>,
-    /// `[dynamic]`: frames and dynamic objects (kind `quasi-static`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub dynamic: Option<super::quasi_static::RawDynamicSpec>,
+    /// `[scene]`: the Poisson sphere scene.
+    pub scene: RawScene,
+    /// `[grid]`: the acceleration structure.
+    pub grid: RawGrid,
     /// `[histogram]`: binning of the t* and N_I distributions.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub histogram: Option<RawHistogram>,
     /// `[scaling]`: brute-force comparison and concentration thresholds (kind `grid-scaling`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub scaling: Option<RawScaling>,
-    /// `[sweep]`: dotted key → list of values; checked separately (see `sweep.rs`).
+    /// `[sweep]` (expanded by the spec layer).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sweep: Option<toml::Table>,
-}
-
-/// `[experiment]`.
-#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct RawExperiment {
-    /// Result folder and file stem: letters, digits, `-` and `_`.
-    #[serde(deserialize_with = "name")]
-    pub name: String,
-    /// `grid`, `grid-scaling`, `grid-cost-model`, `detp` or `quasi-static`.
-    pub kind: Kind,
-    /// Master seed of every random stream.
-    #[serde(default = "default_seed")]
-    pub seed: u64,
-    /// Rays per sweep point (grid kinds; DETP counts its rays in `detp.photons`).
-    #[serde(
-        default,
-        deserialize_with = "opt_count",
-        skip_serializing_if = "Option::is_none"
-    )]
-    pub rays: Option<u64>,
-    /// Free text copied into the metadata.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub description: Option<String>,
-}
-
-/// Experiment kinds.
-#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
-pub enum Kind {
-    /// N_I, N_S, t*, hit rate and their laws on one scene model per point.
-    Grid,
-    /// Finite scenes of growing n: counts, time, build cost, brute force, concentration.
-    GridScaling,
-    /// Machine costs T_I and T_S, the model t = N_I·T_I + N_S·T_S, and timed query cost.
-    GridCostModel,
-    /// DETP: a ray store (uniform lines or photons), discs on sample points, and the engines that
-    /// gather the segments crossing each disc (sphere cache, disc index, brute force, photon map).
-    Detp,
-    /// DETP frame by frame as dynamic objects move: incremental recalculation against full.
-    QuasiStatic,
-}
-
-impl Kind {
-    /// The name used in specs.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Kind::Grid => "grid",
-            Kind::GridScaling => "grid-scaling",
-            Kind::GridCostModel => "grid-cost-model",
-            Kind::Detp => "detp",
-            Kind::QuasiStatic => "quasi-static",
-        }
-    }
 }
 
 /// `[scene]`.
@@ -353,9 +298,6 @@ impl Default for RawScaling {
     }
 }
 
-fn default_seed() -> u64 {
-    1
-}
 fn yes() -> bool {
     true
 }
@@ -385,83 +327,4 @@ fn default_bf_n() -> u64 {
 }
 fn default_bf_rays() -> u64 {
     2_000
-}
-
-pub(super) fn check_positive(x: f64) -> Result<f64, String> {
-    if x.is_finite() && x > 0.0 {
-        Ok(x)
-    } else {
-        Err(format!("got {x}, expected a finite number > 0"))
-    }
-}
-
-pub(super) fn number<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    match toml::Value::deserialize(d)? {
-        toml::Value::Float(x) => Ok(x),
-        toml::Value::Integer(i) => Ok(i as f64),
-        other => Err(D::Error::custom(format!("got {other}, expected a number"))),
-    }
-}
-
-pub(super) fn positive<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    check_positive(number(d)?).map_err(D::Error::custom)
-}
-
-pub(super) fn opt_positive<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
-    positive(d).map(Some)
-}
-
-fn fraction<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    let x = number(d)?;
-    if x.is_finite() && x > 0.0 && x <= 1.0 {
-        Ok(x)
-    } else {
-        Err(D::Error::custom(format!(
-            "got {x}, expected a fraction in (0, 1]"
-        )))
-    }
-}
-
-pub(super) fn count<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
-    match toml::Value::deserialize(d)? {
-        toml::Value::Integer(i) if i >= 1 => Ok(i as u64),
-        toml::Value::Float(x) if x.is_finite() && x >= 1.0 && x.fract() == 0.0 && x < 9.0e18 => {
-            Ok(x as u64)
-        }
-        other => Err(D::Error::custom(format!(
-            "got {other}, expected a whole number ≥ 1"
-        ))),
-    }
-}
-
-pub(super) fn opt_count<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
-    count(d).map(Some)
-}
-
-fn opt_finite3<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f64; 3]>, D::Error> {
-    let v: Vec<toml::Value> = Vec::deserialize(d)?;
-    let xs: Vec<f64> = v
-        .iter()
-        .filter_map(|x| x.as_float().or_else(|| x.as_integer().map(|i| i as f64)))
-        .filter(|x| x.is_finite())
-        .collect();
-    if xs.len() != 3 || v.len() != 3 {
-        return Err(D::Error::custom("expected three finite numbers [x, y, z]"));
-    }
-    Ok(Some([xs[0], xs[1], xs[2]]))
-}
-
-fn name<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {
-    let s = String::deserialize(d)?;
-    if !s.is_empty()
-        && s.len() <= 100
-        && s.chars()
-            .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
-    {
-        Ok(s)
-    } else {
-        Err(D::Error::custom(format!(
-            "got {s:?}, expected 1–100 letters, digits, '-' or '_' (it names files)"
-        )))
-    }
 }

@@ -1,16 +1,40 @@
-//! The `[detp]` table of kind `detp`: where the rays come from (μ-random lines through the unit ball,
-//! or photons traced from a scene file), where the discs sit (uniform in the ball, on the scene's
-//! surfaces, or read from a CSV), the disc radius d, the sphere cache's Q, threshold, ordering and list
-//! mode, the disc index, the photon-map baseline, and which engines run.
+//! The `[detp]` table of kinds `detp` and `quasi-static`: where the rays come from (μ-random lines
+//! through the unit ball, or photons traced from a scene file), where the discs sit (uniform in the
+//! ball, on the scene's surfaces, or read from a CSV), the disc radius d, the sphere cache's Q,
+//! threshold, ordering and list mode, the disc index, the photon-map baseline, and which engines run.
 //!
-//! As for the grid tables, every key is range-checked where it is read (so errors carry its line and
-//! column); checks that span keys live in [`DetpConfig::from_raw`] and name the key they blame.
+//! Every key is range-checked where it is read (so errors carry its line and column); checks that
+//! span keys live in [`DetpConfig::from_raw`], which also translates the spec's choices into the
+//! engines' own types once (point order, sphere-cache parameters, index kind) and loads the scene
+//! and points files once through [`Inputs`].
 
-use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use serde::{de::Error as _, Deserialize, Deserializer, Serialize};
 
-use super::raw::{count, opt_count, opt_positive, positive};
+use glam::DVec3;
+
+use crate::detp::order::Order;
+use crate::detp::quasi_static::IndexKind;
+use crate::detp::sphere_cache::{ListMode, SphereCacheParams};
+use crate::experiment::inputs::{Inputs, PointsFile, SceneFile};
+use crate::experiment::kind::{refuse, ConfigError};
+use crate::geom::Aabb;
+use crate::spec::de::{count, open_unit, opt_count, opt_positive, positive};
+use crate::spec::RawExperiment;
+
+/// A spec file of kind `detp`.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct DetpSpec {
+    /// `[experiment]`.
+    pub experiment: RawExperiment,
+    /// `[detp]`.
+    pub detp: RawDetp,
+    /// `[sweep]` (expanded by the spec layer).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sweep: Option<toml::Table>,
+}
 
 /// `[detp]`.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
@@ -109,31 +133,7 @@ pub struct RawDetp {
     pub memory_budget_gib: f64,
 }
 
-macro_rules! choice {
-    ($(#[$m:meta])* $name:ident { $($(#[$vm:meta])* $v:ident => $s:literal),+ $(,)? } default $d:ident) => {
-        $(#[$m])*
-        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-        pub enum $name { $($(#[$vm])* #[allow(missing_docs)] $v),+ }
-        impl $name {
-            /// The spelling in specs and CSV columns.
-            pub fn as_str(self) -> &'static str { match self { $($name::$v => $s),+ } }
-            const ALL: &'static [(&'static str, $name)] = &[$(($s, $name::$v)),+];
-        }
-        impl<'de> Deserialize<'de> for $name {
-            fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-                let s = String::deserialize(d)?;
-                $name::ALL.iter().find(|(k, _)| *k == s).map(|(_, v)| *v).ok_or_else(|| {
-                    let allowed: Vec<String> = $name::ALL.iter().map(|(k, _)| format!("\"{k}\"")).collect();
-                    D::Error::custom(format!("got \"{s}\", expected one of {}", allowed.join(", ")))
-                })
-            }
-        }
-        impl Serialize for $name {
-            fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> { s.serialize_str(self.as_str()) }
-        }
-        impl Default for $name { fn default() -> Self { $name::$d } }
-    };
-}
+use crate::choice;
 
 choice!(
     /// Where the rays come from.
@@ -204,10 +204,10 @@ impl<'de> Deserialize<'de> for DiscRadius {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         match toml::Value::deserialize(d)? {
             toml::Value::String(s) if s == "spacing" => Ok(DiscRadius::Spacing),
-            toml::Value::Float(x) => super::raw::check_positive(x)
+            toml::Value::Float(x) => crate::spec::de::check_positive(x)
                 .map(DiscRadius::Value)
                 .map_err(D::Error::custom),
-            toml::Value::Integer(i) => super::raw::check_positive(i as f64)
+            toml::Value::Integer(i) => crate::spec::de::check_positive(i as f64)
                 .map(DiscRadius::Value)
                 .map_err(D::Error::custom),
             other => Err(D::Error::custom(format!(
@@ -257,17 +257,6 @@ fn default_engines() -> Vec<EngineChoice> {
     vec![EngineChoice::SphereCache]
 }
 
-fn open_unit<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    let x = super::raw::number(d)?;
-    if x.is_finite() && x > 0.0 && x < 1.0 {
-        Ok(x)
-    } else {
-        Err(D::Error::custom(format!(
-            "got {x}, expected a ratio in (0, 1)"
-        )))
-    }
-}
-
 fn bits<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
     let b = count(d)?;
     if b <= 21 {
@@ -280,27 +269,27 @@ fn bits<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
 }
 
 /// The rays of a point.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub enum Rays {
     /// μ-random lines through the unit ball.
     Lines,
-    /// Photons traced from this scene file.
-    Scene(PathBuf),
+    /// Photons traced from this scene (loaded once per run).
+    Scene(Arc<SceneFile>),
 }
 
 /// The sample points of a point.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub enum Points {
     /// n points uniform in the unit ball with uniform normals.
     Ball(u64),
     /// On the scene's surfaces at this spacing.
     Surface(f64),
-    /// Read from this CSV.
-    File(PathBuf),
+    /// Read from a CSV (once per run).
+    File(Arc<PointsFile>),
 }
 
-/// Everything a DETP point needs, validated.
-#[derive(Clone, Debug, PartialEq)]
+/// Everything a DETP point needs, validated, in the engines' own types.
+#[derive(Clone, Debug)]
 pub struct DetpConfig {
     /// Master seed.
     pub seed: u64,
@@ -312,26 +301,16 @@ pub struct DetpConfig {
     pub points: Points,
     /// d.
     pub disc_radius: f64,
-    /// Q.
-    pub q: f64,
-    /// Subdivision threshold.
-    pub threshold: u64,
-    /// Ordering.
-    pub order: OrderChoice,
-    /// Key bits per axis.
+    /// Point order of the sphere cache.
+    pub order: Order,
+    /// Key bits per axis of the order.
     pub order_bits: u32,
-    /// List mode.
-    pub list_mode: ListModeChoice,
-    /// Points per sphere-cache chunk.
-    pub chunk_points: u64,
+    /// The sphere cache's Q, threshold, list mode and chunking (its `law_ball` is set per replica).
+    pub cache: SphereCacheParams,
+    /// The disc index.
+    pub index: IndexKind,
     /// Engines, in spec order.
     pub engines: Vec<EngineChoice>,
-    /// Disc index kind.
-    pub index: IndexChoice,
-    /// Grid index cell width.
-    pub index_cell_width: f64,
-    /// Octree leaf size.
-    pub octree_leaf: u64,
     /// Points checked against brute force.
     pub brute_force_points: u64,
     /// Photon-map k.
@@ -342,59 +321,87 @@ pub struct DetpConfig {
     pub replicas: u64,
     /// Write NAME.points.csv.
     pub write_points: bool,
-}
-
-/// Bytes a lines point needs per ray: the 56-byte segment plus the sphere cache's f32 SoA lists,
-/// which over all levels hold about 1/(1 − Q²) of the rays at 32 bytes each plus a 4-byte index.
-fn bytes_per_ray(q: f64) -> f64 {
-    56.0 + 36.0 / (1.0 - q * q)
+    /// `detp.memory_budget_gib`.
+    pub memory_budget_gib: f64,
 }
 
 impl DetpConfig {
-    /// Cross-key checks of `[detp]`; paths are resolved against `base_dir` (the spec's folder) and
-    /// must exist now, so a missing file is refused before anything is written.
-    pub fn from_raw(
-        seed: u64,
-        d: &RawDetp,
-        base_dir: &Path,
-    ) -> Result<Self, super::config::ConfigError> {
-        let e = |k: &str, m: String| (k.to_string(), m);
-        let resolve = |key: &str, p: &str| -> Result<PathBuf, super::config::ConfigError> {
-            let path = base_dir.join(p);
-            if path.is_file() {
-                Ok(path)
-            } else {
-                let aff = matches!(
-                    path.extension().and_then(|x| x.to_str()),
-                    Some("aff" | "nff")
-                );
-                let hint = if aff {
-                    format!("; {}", crate::lt::aff::BART_HINT)
-                } else {
-                    String::new()
-                };
-                Err(e(key, format!("{}: no such file{hint}", path.display())))
-            }
+    /// Q.
+    pub fn q(&self) -> f64 {
+        self.cache.q
+    }
+
+    /// The scene, for a scene source.
+    pub fn scene(&self) -> Option<&SceneFile> {
+        match &self.rays {
+            Rays::Lines => None,
+            Rays::Scene(s) => Some(s),
+        }
+    }
+
+    /// Cross-key checks of `[detp]`; files are loaded (once per run) through `inputs`, so a missing
+    /// or bad file is refused before anything is written.
+    /// How many sample points the point has (surface points: the sampler's own count, one per
+    /// spacing² of area and at least one per triangle).
+    pub fn point_count(&self) -> u64 {
+        match &self.points {
+            Points::Ball(n) => *n,
+            Points::File(f) => f.centers.len() as u64,
+            Points::Surface(s) => self.scene().map_or(0, |sc| {
+                let tris: f64 = sc
+                    .scene
+                    .triangles
+                    .iter()
+                    .map(|t| (t.area().sqrt() / s).ceil().max(1.0).powi(2))
+                    .sum();
+                let balls: f64 = sc.scene.balls.iter().map(|b| b.area() / (s * s)).sum();
+                (tris + balls).min(u64::MAX as f64) as u64
+            }),
+        }
+    }
+
+    /// A box holding every sample point: the unit ball, the scene, or the file's points.
+    pub fn points_bounds(&self) -> Aabb {
+        match &self.points {
+            Points::Ball(_) => Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)),
+            Points::Surface(_) => self
+                .scene()
+                .map_or(Aabb::new(DVec3::ZERO, DVec3::ZERO), |s| s.scene.bounds()),
+            Points::File(f) => f.centers.iter().fold(
+                Aabb::new(DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+                |b, &c| Aabb::new(b.lo.min(c), b.hi.max(c)),
+            ),
+        }
+    }
+
+    /// Cells of the disc grid (`detp.index = "grid"`) over the discs' bounds, `None` for an octree.
+    pub fn grid_cells(&self) -> Option<f64> {
+        let IndexKind::Grid(w) = self.index else {
+            return None;
         };
+        let b = self.points_bounds();
+        let ext = (b.hi - b.lo).max(DVec3::ZERO) + DVec3::splat(2.0 * self.disc_radius);
+        let dims = (ext / w).ceil().max(DVec3::ONE) + DVec3::ONE;
+        Some(dims.x * dims.y * dims.z)
+    }
+
+    /// Validates `[detp]` (checks that span keys) and translates it into the engines' types, loading
+    /// the scene and points files once through `inputs`.
+    pub fn from_raw(seed: u64, d: &RawDetp, inputs: &mut Inputs) -> Result<Self, ConfigError> {
         let rays = match (d.source, &d.scene) {
             (RaySource::Lines, None) => Rays::Lines,
             (RaySource::Lines, Some(_)) => {
-                return Err(e(
+                return refuse(
                     "detp.scene",
-                    "a scene file needs detp.source = \"scene\" (lines need none)".into(),
-                ))
+                    "a scene file needs detp.source = \"scene\" (lines need none)",
+                )
             }
-            (RaySource::Scene, Some(p)) => {
-                let path = resolve("detp.scene", p)?;
-                // Read it now: a bad scene is bad input, refused before anything is written.
-                crate::lt::Scene::load(&path).map_err(|err| e("detp.scene", err.to_string()))?;
-                Rays::Scene(path)
-            }
+            (RaySource::Scene, Some(p)) => Rays::Scene(inputs.scene("detp.scene", p)?),
             (RaySource::Scene, None) => {
-                return Err(e(
+                return refuse(
                     "detp.scene",
-                    "missing: detp.source = \"scene\" needs a scene file".into(),
-                ))
+                    "missing: detp.source = \"scene\" needs a scene file",
+                )
             }
         };
         let kind = d.point_source.unwrap_or(match rays {
@@ -402,116 +409,90 @@ impl DetpConfig {
             Rays::Scene(_) => PointSourceKind::Surface,
         });
         if kind == PointSourceKind::Ball && matches!(rays, Rays::Scene(_)) {
-            return Err(e(
+            return refuse(
                 "detp.point_source",
-                "points uniform in the unit ball go with lines; a scene takes \"surface\" or \"file\"".into(),
-            ));
+                "points uniform in the unit ball go with lines; a scene takes \"surface\" or \"file\"",
+            );
         }
         let points =
             match kind {
-                PointSourceKind::Ball => Points::Ball(d.points.ok_or_else(|| {
-                    e(
-                        "detp.points",
-                        "missing: points uniform in the ball need a count".into(),
-                    )
-                })?),
+                PointSourceKind::Ball => match d.points {
+                    Some(n) => Points::Ball(n),
+                    None => {
+                        return refuse(
+                            "detp.points",
+                            "missing: points uniform in the ball need a count",
+                        )
+                    }
+                },
                 PointSourceKind::Surface => {
                     if matches!(rays, Rays::Lines) {
-                        return Err(e(
+                        return refuse(
                             "detp.point_source",
-                            "\"surface\" needs a scene (detp.source = \"scene\")".into(),
-                        ));
+                            "\"surface\" needs a scene (detp.source = \"scene\")",
+                        );
                     }
                     Points::Surface(match (d.point_spacing, d.disc_radius) {
                         (Some(s), _) => s,
                         (None, DiscRadius::Value(r)) => 2.0 * r,
-                        (None, DiscRadius::Spacing) => return Err(e(
+                        (None, DiscRadius::Spacing) => return refuse(
                             "detp.point_spacing",
-                            "missing: with disc_radius = \"spacing\" surface points need a spacing"
-                                .into(),
-                        )),
+                            "missing: with disc_radius = \"spacing\" surface points need a spacing",
+                        ),
                     })
                 }
-                PointSourceKind::File => {
-                    let path = resolve(
-                        "detp.points_file",
-                        d.points_file.as_deref().ok_or_else(|| {
-                            e(
-                                "detp.points_file",
-                                "missing: point_source = \"file\" needs a CSV".into(),
-                            )
-                        })?,
-                    )?;
-                    // Read it now: a bad row (a zero normal, not a number) is bad input,
-                    // refused before anything is written.
-                    crate::detp::surface_points::read_points_csv(&path)
-                        .map_err(|m| e("detp.points_file", m))?;
-                    Points::File(path)
-                }
+                PointSourceKind::File => match d.points_file.as_deref() {
+                    Some(p) => Points::File(inputs.points("detp.points_file", p)?),
+                    None => {
+                        return refuse(
+                            "detp.points_file",
+                            "missing: point_source = \"file\" needs a CSV",
+                        )
+                    }
+                },
             };
         if d.points.is_some() && kind != PointSourceKind::Ball {
-            return Err(e(
+            return refuse(
                 "detp.points",
                 format!(
                     "a count belongs to point_source = \"ball\", not \"{}\"",
                     kind.as_str()
                 ),
-            ));
+            );
         }
         if d.points_file.is_some() && kind != PointSourceKind::File {
-            return Err(e(
-                "detp.points_file",
-                "needs detp.point_source = \"file\"".into(),
-            ));
+            return refuse("detp.points_file", "needs detp.point_source = \"file\"");
         }
         if d.engines.is_empty() {
-            return Err(e("detp.engines", "empty: name at least one engine".into()));
+            return refuse("detp.engines", "empty: name at least one engine");
         }
         if d.engines.iter().all(|&x| x == EngineChoice::PhotonMap) {
-            return Err(e(
+            return refuse(
                 "detp.engines",
-                "name a DETP engine (sphere-cache, disc-index or brute-force): the photon map is a baseline beside them".into(),
-            ));
+                "name a DETP engine (sphere-cache, disc-index or brute-force): the photon map is a baseline beside them",
+            );
         }
         for (i, a) in d.engines.iter().enumerate() {
             if d.engines[..i].contains(a) {
-                return Err(e(
+                return refuse(
                     "detp.engines",
                     format!("\"{}\" is listed twice", a.as_str()),
-                ));
+                );
             }
         }
         if d.engines.contains(&EngineChoice::PhotonMap) && matches!(rays, Rays::Lines) {
-            return Err(e(
+            return refuse(
                 "detp.engines",
-                "the photon map needs photon impacts on surfaces: use detp.source = \"scene\""
-                    .into(),
-            ));
+                "the photon map needs photon impacts on surfaces: use detp.source = \"scene\"",
+            );
         }
         if d.photons > 1 << 31 {
-            return Err(e("detp.photons", format!("got {}, at most 2³¹", d.photons)));
+            return refuse("detp.photons", format!("got {}, at most 2³¹", d.photons));
         }
         if let Points::Ball(n) = points {
             if n > 1 << 28 {
-                return Err(e("detp.points", format!("got {n}, at most 2²⁸")));
+                return refuse("detp.points", format!("got {n}, at most 2²⁸"));
             }
-        }
-        let need = d.photons as f64 * bytes_per_ray(d.q)
-            + match points {
-                Points::Ball(n) => n as f64 * 64.0,
-                _ => 0.0,
-            };
-        let budget = d.memory_budget_gib * (1u64 << 30) as f64;
-        if need > budget {
-            return Err(e(
-                "detp.photons",
-                format!(
-                    "{} rays would need about {:.2} GiB, over detp.memory_budget_gib = {} GiB",
-                    d.photons,
-                    need / (1u64 << 30) as f64,
-                    d.memory_budget_gib
-                ),
-            ));
         }
         let disc_radius = match (d.disc_radius, &points) {
             (DiscRadius::Value(r), _) => r,
@@ -520,33 +501,59 @@ impl DetpConfig {
             }
             (DiscRadius::Spacing, Points::Surface(s)) => *s,
             (DiscRadius::Spacing, Points::File(_)) => {
-                return Err(e(
+                return refuse(
                     "detp.disc_radius",
-                    "\"spacing\" is unknown for points from a file: give a radius".into(),
-                ))
+                    "\"spacing\" is unknown for points from a file: give a radius",
+                )
             }
         };
-        Ok(Self {
+        let cfg = Self {
             seed,
             rays,
             photons: d.photons,
             points,
             disc_radius,
-            q: d.q,
-            threshold: d.threshold,
-            order: d.order,
+            order: match d.order {
+                OrderChoice::None => Order::None,
+                OrderChoice::Morton => Order::Morton,
+                OrderChoice::Hilbert => Order::Hilbert,
+            },
             order_bits: d.order_bits as u32,
-            list_mode: d.list_mode,
-            chunk_points: d.chunk_points,
+            cache: SphereCacheParams {
+                q: d.q,
+                threshold: d.threshold as usize,
+                list_mode: match d.list_mode {
+                    ListModeChoice::Exact => ListMode::Exact,
+                    ListModeChoice::Inherited => ListMode::Inherited,
+                },
+                chunk_points: d.chunk_points as usize,
+                law_ball: None,
+            },
+            index: match d.index {
+                IndexChoice::Grid => {
+                    IndexKind::Grid(d.index_cell_width.unwrap_or(2.0 * disc_radius))
+                }
+                IndexChoice::Octree => IndexKind::Octree(d.octree_leaf as usize),
+            },
             engines: d.engines.clone(),
-            index: d.index,
-            index_cell_width: d.index_cell_width.unwrap_or(2.0 * disc_radius),
-            octree_leaf: d.octree_leaf,
             brute_force_points: d.brute_force_points,
             photon_map_k: d.photon_map_k,
             photon_map_filter: d.photon_map_filter,
             replicas: d.replicas,
             write_points: d.write_points,
-        })
+            memory_budget_gib: d.memory_budget_gib,
+        };
+        if let Some(cells) = cfg.grid_cells() {
+            if cells >= (1u64 << 31) as f64 {
+                return refuse(
+                    if d.index_cell_width.is_some() { "detp.index_cell_width" } else { "detp.disc_radius" },
+                    format!(
+                        "a disc grid of cell width {} over the points' bounds would have {cells:.3e} cells (at most 2³¹): widen the cells or use detp.index = \"octree\"",
+                        match cfg.index { IndexKind::Grid(w) => w, IndexKind::Octree(_) => f64::NAN },
+                    ),
+                );
+            }
+        }
+        Ok(cfg)
     }
 }

@@ -1,12 +1,13 @@
-//! The validated configuration of one point: what the engines see, with the checks that span keys.
+//! The validated configuration of one grid point: what the engines see, with the checks that span
+//! keys.
 
 use glam::DVec3;
 
-use super::detp::DetpConfig;
-use super::raw::{Extent, Kind, RawDist, RawDraw, RawRadius, RawSpec};
+use super::spec::{Extent, GridSpec, RawDist, RawDraw, RawRadius};
 use crate::grid::build::estimated_bytes;
 use crate::scene::finite::{FiniteScene, FiniteSize};
 use crate::scene::{RadiusClass, RadiusDist, RadiusDraw};
+use crate::spec::KeyError;
 use crate::theory::grid::Eye;
 
 /// The scene model of a point.
@@ -18,11 +19,33 @@ pub enum SceneModel {
     Finite(FiniteScene),
 }
 
+/// Which of the three grid kinds a point belongs to: what it measures beyond the common counts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variant {
+    /// Kind `grid`: N_I, N_S, t*, hit rate and their laws.
+    Study,
+    /// Kind `grid-scaling`: finite scenes of growing n, brute force, concentration (Prop. 4.1).
+    Scaling,
+    /// Kind `grid-cost-model`: the machine's T_I and T_S and the model t = N_I·T_I + N_S·T_S.
+    CostModel,
+}
+
+impl Variant {
+    /// The kind's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Variant::Study => "grid",
+            Variant::Scaling => "grid-scaling",
+            Variant::CostModel => "grid-cost-model",
+        }
+    }
+}
+
 /// Everything the grid engines need for one point.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GridConfig {
-    /// Experiment kind.
-    pub kind: Kind,
+    /// Which grid kind.
+    pub variant: Variant,
     /// Master seed.
     pub seed: u64,
     /// Rays to trace.
@@ -57,140 +80,16 @@ pub struct GridConfig {
     pub brute_force_rays: u64,
     /// c of Proposition 4.1.
     pub concentration_c: f64,
-}
-
-/// A failed cross-key check: (dotted key to blame, message).
-pub type ConfigError = (String, String);
-
-/// What the engines of one point see: a grid study or a DETP run.
-#[derive(Clone, Debug, PartialEq)]
-pub enum PointConfig {
-    /// Kinds `grid`, `grid-scaling`, `grid-cost-model`.
-    Grid(GridConfig),
-    /// Kind `detp`.
-    Detp(DetpConfig),
-    /// Kind `quasi-static`.
-    QuasiStatic(Box<super::quasi_static::QuasiStaticConfig>),
-}
-
-impl PointConfig {
-    /// Validates a raw point spec for its kind; `base_dir` is the spec's folder (paths in it are
-    /// relative to it).
-    pub fn from_raw(raw: &RawSpec, base_dir: &std::path::Path) -> Result<Self, ConfigError> {
-        let e = |k: &str, m: String| (k.to_string(), m);
-        let kind = raw.experiment.kind;
-        let foreign = |table: &str, present: bool| -> Result<(), ConfigError> {
-            if present {
-                Err(e(
-                    table,
-                    format!(
-                        "the [{table}] table does not belong to kind {}",
-                        kind.as_str()
-                    ),
-                ))
-            } else {
-                Ok(())
-            }
-        };
-        match kind {
-            Kind::QuasiStatic => {
-                for (t, present) in [
-                    ("scene", raw.scene.is_some()),
-                    ("grid", raw.grid.is_some()),
-                    ("histogram", raw.histogram.is_some()),
-                    ("scaling", raw.scaling.is_some()),
-                ] {
-                    foreign(t, present)?;
-                }
-                if raw.experiment.rays.is_some() {
-                    return Err(e(
-                        "experiment.rays",
-                        "kind quasi-static counts its rays in detp.photons".into(),
-                    ));
-                }
-                let d = raw.detp.as_ref().ok_or_else(|| {
-                    e(
-                        "detp",
-                        "missing: kind quasi-static needs a [detp] table".into(),
-                    )
-                })?;
-                let dy = raw.dynamic.as_ref().ok_or_else(|| {
-                    e(
-                        "experiment.kind",
-                        "missing: kind quasi-static needs a [dynamic] table (frames)".into(),
-                    )
-                })?;
-                super::quasi_static::QuasiStaticConfig::from_raw(
-                    raw.experiment.seed,
-                    d,
-                    dy,
-                    base_dir,
-                )
-                .map(|c| PointConfig::QuasiStatic(Box::new(c)))
-            }
-            Kind::Detp => {
-                foreign("dynamic", raw.dynamic.is_some())?;
-                if raw.detp.as_ref().is_some_and(|d| d.engine.is_some()) {
-                    return Err(e(
-                        "detp.engine",
-                        "belongs to kind quasi-static (kind detp runs every engine in detp.engines)"
-                            .into(),
-                    ));
-                }
-                foreign("scene", raw.scene.is_some())?;
-                foreign("grid", raw.grid.is_some())?;
-                foreign("histogram", raw.histogram.is_some())?;
-                foreign("scaling", raw.scaling.is_some())?;
-                if raw.experiment.rays.is_some() {
-                    return Err(e(
-                        "experiment.rays",
-                        "kind detp counts its rays in detp.photons".into(),
-                    ));
-                }
-                let d = raw
-                    .detp
-                    .as_ref()
-                    .ok_or_else(|| e("detp", "missing: kind detp needs a [detp] table".into()))?;
-                DetpConfig::from_raw(raw.experiment.seed, d, base_dir).map(PointConfig::Detp)
-            }
-            Kind::Grid | Kind::GridScaling | Kind::GridCostModel => {
-                foreign("detp", raw.detp.is_some())?;
-                foreign("dynamic", raw.dynamic.is_some())?;
-                GridConfig::from_raw(raw).map(PointConfig::Grid)
-            }
-        }
-    }
-
-    /// The grid config, for grid kinds.
-    pub fn grid(&self) -> Option<&GridConfig> {
-        match self {
-            PointConfig::Grid(g) => Some(g),
-            PointConfig::Detp(_) | PointConfig::QuasiStatic(_) => None,
-        }
-    }
-
-    /// Units of work for progress: rays (grid) or rays × replicas (DETP).
-    pub fn work(&self) -> u64 {
-        match self {
-            PointConfig::Grid(g) => g.rays,
-            PointConfig::Detp(d) => d.photons * d.replicas,
-            PointConfig::QuasiStatic(q) => q.detp.photons * u64::from(q.frames),
-        }
-    }
+    /// Memory the structures of one point may take, GiB (`grid.memory_budget_gib`).
+    pub memory_budget_gib: f64,
 }
 
 impl GridConfig {
-    /// Validates the cross-key rules of a raw point spec of a grid kind.
-    pub fn from_raw(raw: &RawSpec) -> Result<Self, ConfigError> {
-        let e = |k: &str, m: String| (k.to_string(), m);
-        let missing = |k: &str| {
-            e(
-                k,
-                format!("missing: kind {} needs it", raw.experiment.kind.as_str()),
-            )
-        };
-        let s = raw.scene.as_ref().ok_or_else(|| missing("scene"))?;
-        let g = raw.grid.as_ref().ok_or_else(|| missing("grid"))?;
+    /// Validates the cross-key rules of one point's spec of a grid kind.
+    pub fn from_spec(raw: &GridSpec, variant: Variant) -> Result<Self, KeyError> {
+        let e = |k: &str, m: String| KeyError::new(k, m);
+        let missing = |k: &str| e(k, format!("missing: kind {} needs it", variant.name()));
+        let (s, g) = (&raw.scene, &raw.grid);
         let rays = raw
             .experiment
             .rays
@@ -306,16 +205,15 @@ impl GridConfig {
                 ));
             }
         }
-        let kind = raw.experiment.kind;
-        if kind == Kind::GridScaling && scene == SceneModel::Infinite {
+        if variant == Variant::Scaling && scene == SceneModel::Infinite {
             return Err(e("scene.spheres", "kind grid-scaling needs a finite scene: set scene.spheres (or scene.extent to a side)".into()));
         }
-        if raw.scaling.is_some() && kind != Kind::GridScaling {
+        if raw.scaling.is_some() && variant != Variant::Scaling {
             return Err(e(
                 "scaling",
                 format!(
                     "the [scaling] table belongs to kind grid-scaling, not {}",
-                    kind.as_str()
+                    variant.name()
                 ),
             ));
         }
@@ -357,13 +255,13 @@ impl GridConfig {
         if rays > 10_000_000_000 {
             return Err(e("experiment.rays", format!("got {rays}, at most 10¹⁰")));
         }
-        if g.rays_per_scene > crate::experiment::grid::BATCH {
+        if g.rays_per_scene > super::run::BATCH {
             return Err(e(
                 "grid.rays_per_scene",
                 format!(
                     "got {}, at most {} (one batch)",
                     g.rays_per_scene,
-                    crate::experiment::grid::BATCH
+                    super::run::BATCH
                 ),
             ));
         }
@@ -376,7 +274,7 @@ impl GridConfig {
         }
         let sc = raw.scaling.clone().unwrap_or_default();
         Ok(Self {
-            kind,
+            variant,
             seed: raw.experiment.seed,
             rays,
             intensity: s.intensity,
@@ -386,8 +284,8 @@ impl GridConfig {
             cell_width: a,
             mailbox: g.mailbox,
             eye: match g.eye {
-                super::raw::Eye::Corner => Eye::Corner,
-                super::raw::Eye::Uniform => Eye::Uniform,
+                super::spec::Eye::Corner => Eye::Corner,
+                super::spec::Eye::Uniform => Eye::Uniform,
             },
             rays_per_scene: g.rays_per_scene,
             replicas: s.replicas.unwrap_or(1),
@@ -397,6 +295,7 @@ impl GridConfig {
             brute_force_max_n: sc.brute_force_max_n,
             brute_force_rays: sc.brute_force_rays,
             concentration_c: sc.c,
+            memory_budget_gib: g.memory_budget_gib,
         })
     }
 }

@@ -8,11 +8,31 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::config::ConfigError;
-use super::detp::{DetpConfig, DynamicEngine, Points, RawDetp, Rays};
-use super::raw::{count, opt_count};
+use crate::experiment::detp::spec::{DetpConfig, DynamicEngine, Points, RawDetp, Rays};
+use crate::experiment::inputs::{Inputs, SceneFile};
+use crate::experiment::kind::{refuse, ConfigError};
+use crate::lt::Scene;
+use crate::spec::de::{count, count_or_zero, number, opt_count, opt_count_or_zero};
+use crate::spec::RawExperiment;
 
-/// `[dynamic]`.
+/// The spec file of kind `quasi-static`: `[experiment]`, `[detp]`, `[dynamic]` and `[sweep]`.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct QuasiStaticSpec {
+    /// `[experiment]`.
+    pub experiment: RawExperiment,
+    /// `[detp]`.
+    pub detp: RawDetp,
+    /// `[dynamic]` (required; missing is reported at `dynamic`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dynamic: Option<RawDynamicSpec>,
+    /// `[sweep]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sweep: Option<toml::Table>,
+}
+
+/// `[dynamic]`: frames, the objects' r_D/r_0, the hybrid crossover, the full-recalculation check
+/// period, the points table's frame, a reference run and the engine predictor.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawDynamicSpec {
@@ -65,7 +85,7 @@ pub struct RawDynamicSpec {
 
 fn opt_fraction<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
     use serde::de::Error as _;
-    let x = super::raw::number(d)?;
+    let x = number(d)?;
     if x.is_finite() && x > 0.0 && x <= 1.0 {
         Ok(Some(x))
     } else {
@@ -79,24 +99,9 @@ fn one() -> u64 {
     1
 }
 
-fn count_or_zero<'de, D: serde::Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
-    use serde::de::Error as _;
-    let v = toml::Value::deserialize(d)?;
-    match v {
-        toml::Value::Integer(i) if i >= 0 => Ok(i as u64),
-        other => Err(D::Error::custom(format!(
-            "got {other}, expected an integer ≥ 0"
-        ))),
-    }
-}
-
-fn opt_count_or_zero<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
-    count_or_zero(d).map(Some)
-}
-
 fn opt_ratio<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
     use serde::de::Error as _;
-    let x = super::raw::number(d)?;
+    let x = number(d)?;
     if x.is_finite() && x > 0.0 && x < 1.0 {
         Ok(Some(x))
     } else {
@@ -106,11 +111,16 @@ fn opt_ratio<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f64>, D::E
     }
 }
 
-/// A validated quasi-static point.
-#[derive(Clone, Debug, PartialEq)]
+/// A validated quasi-static point, in the engines' own types: the scene loaded once per run and
+/// scaled to this point's r_D/r_0.
+#[derive(Clone, Debug)]
 pub struct QuasiStaticConfig {
-    /// The DETP settings (scene, points, d, Q, threshold, order, octree).
+    /// The DETP settings (scene file, points, d, Q, threshold, order, index).
     pub detp: DetpConfig,
+    /// The scene, its dynamic objects scaled to `ratio`.
+    pub scene: Scene,
+    /// Surface point spacing.
+    pub spacing: f64,
     /// Frames.
     pub frames: u32,
     /// r_D/r_0 of every dynamic object, if the spec sets it.
@@ -133,80 +143,71 @@ pub struct QuasiStaticConfig {
 }
 
 impl QuasiStaticConfig {
-    /// Validates `[detp]` and `[dynamic]` together, loading the scene and checking its motion.
-    pub fn from_raw(
-        seed: u64,
-        d: &RawDetp,
-        dy: &RawDynamicSpec,
-        base_dir: &std::path::Path,
-    ) -> Result<Self, ConfigError> {
-        let e = |k: &str, m: String| (k.to_string(), m);
-        let detp = DetpConfig::from_raw(seed, d, base_dir)?;
-        let Rays::Scene(path) = &detp.rays else {
-            return Err(e(
-                "detp.source",
-                "kind quasi-static traces photons in a scene: set detp.source = \"scene\"".into(),
-            ));
+    /// Validates `[detp]` and `[dynamic]` together, loading the scene (once per run, through
+    /// `inputs`) and checking its motion at this point's scale.
+    pub fn from_raw(raw: &QuasiStaticSpec, inputs: &mut Inputs) -> Result<Self, ConfigError> {
+        let Some(dy) = &raw.dynamic else {
+            return refuse(
+                "experiment.kind",
+                "kind quasi-static needs a [dynamic] table (frames = …); for one frame use kind \"detp\"",
+            );
         };
-        if !matches!(detp.points, Points::Surface(_)) {
-            return Err(e(
+        let d = &raw.detp;
+        let detp = DetpConfig::from_raw(raw.experiment.seed, d, inputs)?;
+        let Rays::Scene(file) = &detp.rays else {
+            return refuse(
+                "detp.source",
+                "kind quasi-static traces photons in a scene: set detp.source = \"scene\"",
+            );
+        };
+        let Points::Surface(spacing) = detp.points else {
+            return refuse(
                 "detp.point_source",
-                "kind quasi-static puts its points on the scene's surfaces (\"surface\")".into(),
-            ));
-        }
+                "kind quasi-static puts its points on the scene's surfaces (\"surface\")",
+            );
+        };
         if detp.replicas != 1 {
-            return Err(e(
+            return refuse(
                 "detp.replicas",
-                "kind quasi-static runs one realisation (frames are its samples)".into(),
-            ));
+                "kind quasi-static runs one realisation (frames are its samples)",
+            );
+        }
+        if detp.engines != [crate::experiment::detp::spec::EngineChoice::SphereCache] {
+            return refuse(
+                "detp.engines",
+                "kind quasi-static chooses its engine per object with detp.engine (hybrid, sphere-cache, disc-index, predicted)",
+            );
         }
         if let Some(n) = dy.reference_photons {
             if n > 1 << 31 {
-                return Err(e(
-                    "dynamic.reference_photons",
-                    format!("got {n}, at most 2³¹"),
-                ));
+                return refuse("dynamic.reference_photons", format!("got {n}, at most 2³¹"));
             }
         }
         if dy.frames > 1 << 20 {
-            return Err(e(
-                "dynamic.frames",
-                format!("got {}, at most 2²⁰", dy.frames),
-            ));
+            return refuse("dynamic.frames", format!("got {}, at most 2²⁰", dy.frames));
         }
         if let Some(f) = dy.points_frame {
             if f >= dy.frames {
-                return Err(e(
+                return refuse(
                     "dynamic.points_frame",
                     format!("got {f}, the frames are 0…{}", dy.frames - 1),
-                ));
+                );
             }
         }
-        let mut scene =
-            crate::lt::Scene::load(path).map_err(|err| e("detp.scene", err.to_string()))?;
-        if dy.ratio.is_some() {
-            if let Some(m) = scene.movers.iter().find(|m| m.is_keyframed()) {
-                return Err(e(
-                    "dynamic.ratio",
-                    format!(
-                        "dynamic object \"{}\" is keyframed (an AFF scene): it keeps its size; r_D/r_0 can be swept for scene-file objects with a path",
-                        m.name
-                    ),
-                ));
-            }
-        }
-        apply_ratio(&mut scene, dy.ratio);
+        let scene = scaled(file, dy.ratio)?;
         // A size or motion problem is the scene's, or the ratio's when the spec rescales.
         let blame = if dy.ratio.is_some() {
             "dynamic.ratio"
         } else {
             "detp.scene"
         };
-        let mut warnings = check_motion(&scene, dy.frames as u32).map_err(|m| e(blame, m))?;
+        let mut warnings = check_motion(&scene, dy.frames as u32, blame)?;
         warnings.extend(scene.warnings.iter().cloned());
-        check_lights(&scene).map_err(|m| e("detp.scene", m))?;
+        check_lights(&scene)?;
         Ok(Self {
             detp,
+            scene,
+            spacing,
             frames: dy.frames as u32,
             ratio: dy.ratio,
             crossover: dy.crossover,
@@ -222,6 +223,25 @@ impl QuasiStaticConfig {
     }
 }
 
+/// The scene of `file` with its dynamic objects scaled to `ratio` r_0 (keyframed AFF objects keep
+/// their size: refused).
+fn scaled(file: &SceneFile, ratio: Option<f64>) -> Result<Scene, ConfigError> {
+    if ratio.is_some() {
+        if let Some(m) = file.scene.movers.iter().find(|m| m.is_keyframed()) {
+            return refuse(
+                "dynamic.ratio",
+                format!(
+                    "dynamic object \"{}\" is keyframed (an AFF scene): it keeps its size; r_D/r_0 can be swept for scene-file objects with a path",
+                    m.name
+                ),
+            );
+        }
+    }
+    let mut scene = file.scene.clone();
+    apply_ratio(&mut scene, ratio);
+    Ok(scene)
+}
+
 /// Scales every dynamic object about its centre to r_D = ratio·r_0 (r_0: the radius of the sphere
 /// around the scene's static box).
 pub fn apply_ratio(scene: &mut crate::lt::Scene, ratio: Option<f64>) {
@@ -235,12 +255,17 @@ pub fn apply_ratio(scene: &mut crate::lt::Scene, ratio: Option<f64>) {
 /// The motion's checks over every frame: a dynamic object at all; none as large as the scene
 /// (r_D < r_0); each inside the scene's box (to 1 % of its diagonal) at every frame; no two
 /// overlapping (posed boxes meet).
-pub fn check_motion(scene: &crate::lt::Scene, frames: u32) -> Result<Vec<String>, String> {
+pub fn check_motion(
+    scene: &crate::lt::Scene,
+    frames: u32,
+    blame: &str,
+) -> Result<Vec<String>, ConfigError> {
     let mut warnings = Vec::new();
     use crate::lt::motion::tau;
     if scene.movers.is_empty() {
-        return Err(
-            "kind quasi-static needs a dynamic object: mark surfaces with dynamic = \"NAME\" and add a [[dynamic]] table (or an AFF animated transform)".into(),
+        return refuse(
+            "detp.scene",
+            "kind quasi-static needs a dynamic object: mark surfaces with dynamic = \"NAME\" and add a [[dynamic]] table (or an AFF animated transform)",
         );
     }
     let b = scene.bounds();
@@ -250,12 +275,15 @@ pub fn check_motion(scene: &crate::lt::Scene, frames: u32) -> Result<Vec<String>
     let slack = 0.01 * (b.hi - b.lo).length();
     for m in &scene.movers {
         if m.radius() >= r0 {
-            return Err(format!(
+            return refuse(
+                blame,
+                format!(
                 "dynamic object \"{}\" has r_D = {:.4} ≥ r_0 = {:.4}: it is larger than the scene",
                 m.name,
                 m.radius(),
                 r0
-            ));
+            ),
+            );
         }
     }
     // Every frame when there are few, else 4096 evenly spaced ones plus the ends (motions are smooth).
@@ -284,7 +312,7 @@ pub fn check_motion(scene: &crate::lt::Scene, frames: u32) -> Result<Vec<String>
             .collect();
         for (m, (lo, hi)) in scene.movers.iter().zip(&boxes) {
             if lo.cmplt(b.lo - slack).any() || hi.cmpgt(b.hi + slack).any() {
-                return Err(format!(
+                return refuse(blame, format!(
                         "dynamic object \"{}\" leaves the scene's box at frame {f} (its box {lo:.3}…{hi:.3}, the scene's {:.3}…{:.3})",
                         m.name, b.lo, b.hi
                     ));
@@ -315,7 +343,7 @@ pub fn check_motion(scene: &crate::lt::Scene, frames: u32) -> Result<Vec<String>
 
 /// Lights shut inside closed geometry light nothing: a point or spot light inside a sphere seen from
 /// outside is refused (`Scene` has no other closed solids it can decide exactly).
-pub fn check_lights(scene: &crate::lt::Scene) -> Result<(), String> {
+pub fn check_lights(scene: &crate::lt::Scene) -> Result<(), ConfigError> {
     use crate::lt::Light;
     let mut enclosed = 0;
     let mut lights = 0;
@@ -335,7 +363,7 @@ pub fn check_lights(scene: &crate::lt::Scene) -> Result<(), String> {
         }
     }
     if lights > 0 && enclosed == lights && lights == scene.lights.len() {
-        return Err(format!(
+        return refuse("detp.scene", format!(
             "every light ({lights}) is inside a closed sphere seen from outside: no photon can leave it"
         ));
     }

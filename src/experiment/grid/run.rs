@@ -13,17 +13,20 @@ use crate::sample::directions::uniform_unit_cube;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::machine::MachineCosts;
-use super::metric::{Metric, Theory};
-use super::{PointResult, Row};
+use super::columns as col;
+use super::config::{GridConfig, SceneModel, Variant};
+use super::GridTables;
+use crate::experiment::kind::{Check, PointOutput, Rate};
+use crate::experiment::machine::MachineCosts;
+use crate::experiment::metric::{Metric, Theory};
 use crate::geom::{Aabb, Ray, Sphere};
 use crate::grid::{
     brute_force, build::frame_around, mailbox::Mailbox, trace, FiniteGrid, TraceCounts,
 };
+use crate::output::row::Row;
 use crate::sample::{directions::uniform_direction, rng::domain, rng::stream};
 use crate::scene::finite::FiniteScene;
 use crate::scene::infinite::{InfiniteCaches, InfiniteScene, Walk};
-use crate::spec::{GridConfig, Kind, SceneModel};
 use crate::stats::{gof, ClusteredMean, Histogram};
 use crate::theory::grid::{self as th, Eye, GridTheoryInput};
 
@@ -36,16 +39,25 @@ const KS_CAP: usize = 1_000_000;
 /// N_I values histogrammed exactly (1..NI_BINS); larger ones pool into an overflow bin.
 const NI_BINS: usize = 4000;
 
+/// The per-ray means of a point, in one array so that batches and replicas merge in one loop.
+#[derive(Clone, Copy, Debug)]
+enum M {
+    NI,
+    NIMb,
+    NS,
+    THit,
+    Hit,
+    PLog,
+    PSqrt,
+}
+
+/// Number of [`M`] means.
+const MEANS: usize = 7;
+
 /// Everything measured at one point, merged over batches in order.
 #[derive(Clone, Debug)]
 struct Acc {
-    n_i: ClusteredMean,
-    n_i_mb: ClusteredMean,
-    n_s: ClusteredMean,
-    t_hit: ClusteredMean,
-    hit: ClusteredMean,
-    p_log: ClusteredMean,
-    p_sqrt: ClusteredMean,
+    means: [ClusteredMean; MEANS],
     hist_t: Histogram,
     ni_mb_counts: Vec<u64>,
     t_samples: Vec<f64>,
@@ -62,13 +74,7 @@ struct Acc {
 impl Acc {
     fn new(t_hi: f64, bins: usize) -> Self {
         Self {
-            n_i: ClusteredMean::default(),
-            n_i_mb: ClusteredMean::default(),
-            n_s: ClusteredMean::default(),
-            t_hit: ClusteredMean::default(),
-            hit: ClusteredMean::default(),
-            p_log: ClusteredMean::default(),
-            p_sqrt: ClusteredMean::default(),
+            means: Default::default(),
             hist_t: Histogram::new(0.0, t_hi, bins),
             ni_mb_counts: vec![0; NI_BINS + 1],
             t_samples: Vec::new(),
@@ -82,57 +88,33 @@ impl Acc {
         }
     }
 
+    fn mean(&self, m: M) -> crate::stats::Estimate {
+        self.means[m as usize].estimate()
+    }
+
+    fn push(&mut self, m: M, x: f64) {
+        self.means[m as usize].push(x);
+    }
+
     fn end_batch(&mut self) {
-        for m in [
-            &mut self.n_i,
-            &mut self.n_i_mb,
-            &mut self.n_s,
-            &mut self.t_hit,
-            &mut self.hit,
-            &mut self.p_log,
-            &mut self.p_sqrt,
-        ] {
-            m.end_batch();
-        }
+        self.means.iter_mut().for_each(ClusteredMean::end_batch);
     }
 
     /// Adds all of `o` (closed batches) into the current open batch: used to make one cluster of a
     /// whole replica.
     fn absorb(&mut self, o: &Acc) {
-        for (m, x) in [
-            (&mut self.n_i, &o.n_i),
-            (&mut self.n_i_mb, &o.n_i_mb),
-            (&mut self.n_s, &o.n_s),
-            (&mut self.t_hit, &o.t_hit),
-            (&mut self.hit, &o.hit),
-            (&mut self.p_log, &o.p_log),
-            (&mut self.p_sqrt, &o.p_sqrt),
-        ] {
+        for (m, x) in self.means.iter_mut().zip(&o.means) {
             m.absorb(x);
         }
         let mut rest = o.clone();
-        for m in [
-            &mut rest.n_i,
-            &mut rest.n_i_mb,
-            &mut rest.n_s,
-            &mut rest.t_hit,
-            &mut rest.hit,
-            &mut rest.p_log,
-            &mut rest.p_sqrt,
-        ] {
-            *m = ClusteredMean::default();
-        }
+        rest.means = Default::default();
         self.merge(&rest);
     }
 
     fn merge(&mut self, o: &Acc) {
-        self.n_i.merge(&o.n_i);
-        self.n_i_mb.merge(&o.n_i_mb);
-        self.n_s.merge(&o.n_s);
-        self.t_hit.merge(&o.t_hit);
-        self.hit.merge(&o.hit);
-        self.p_log.merge(&o.p_log);
-        self.p_sqrt.merge(&o.p_sqrt);
+        for (m, x) in self.means.iter_mut().zip(&o.means) {
+            m.merge(x);
+        }
         self.hist_t.merge(&o.hist_t);
         for (a, b) in self.ni_mb_counts.iter_mut().zip(&o.ni_mb_counts) {
             *a += b;
@@ -149,26 +131,24 @@ impl Acc {
     }
 
     fn record(&mut self, c: &TraceCounts, thresholds: Option<(f64, f64)>) {
-        self.n_i.push(f64::from(c.n_i));
-        self.n_i_mb.push(f64::from(c.n_i_mb));
-        self.n_s.push(f64::from(c.n_s));
+        self.push(M::NI, f64::from(c.n_i));
+        self.push(M::NIMb, f64::from(c.n_i_mb));
+        self.push(M::NS, f64::from(c.n_s));
         self.truncated += u64::from(c.truncated);
         match c.hit {
             Some(h) => {
-                self.hit.push(1.0);
-                self.t_hit.push(h.t);
+                self.push(M::Hit, 1.0);
+                self.push(M::THit, h.t);
                 self.hist_t.push(h.t);
                 self.t_samples.push(h.t);
                 self.ni_mb_counts[(c.n_i_mb as usize).min(NI_BINS)] += 1;
                 self.ni_mb_hit_sum += f64::from(c.n_i_mb);
             }
-            None => self.hit.push(0.0),
+            None => self.push(M::Hit, 0.0),
         }
         if let Some((h_log, h_sqrt)) = thresholds {
-            self.p_log
-                .push(f64::from(u8::from(f64::from(c.n_i) >= h_log)));
-            self.p_sqrt
-                .push(f64::from(u8::from(f64::from(c.n_i) >= h_sqrt)));
+            self.push(M::PLog, f64::from(u8::from(f64::from(c.n_i) >= h_log)));
+            self.push(M::PSqrt, f64::from(u8::from(f64::from(c.n_i) >= h_sqrt)));
         }
     }
 }
@@ -217,7 +197,7 @@ pub fn run_point(
     point: u64,
     machine: Option<MachineCosts>,
     progress: &(dyn Fn(u64) + Sync),
-) -> PointResult {
+) -> PointOutput<GridTables> {
     let inp = theory_input(cfg);
     let mean_t = th::mean_first_hit(&inp);
     let t_hi = cfg.t_max_mfp * mean_t;
@@ -276,12 +256,12 @@ fn run_replica(
         SceneModel::Infinite => DVec3::ZERO,
         SceneModel::Finite(fs) => fs.center,
     };
-    let thresholds = finite.filter(|_| cfg.kind == Kind::GridScaling).map(|f| {
+    let thresholds = finite.filter(|_| cfg.variant == Variant::Scaling).map(|f| {
         let n = (f.spheres.len().max(2)) as f64;
         (cfg.concentration_c * n.ln(), cfg.concentration_c * n.sqrt())
     });
     let brute = replica == 0
-        && cfg.kind == Kind::GridScaling
+        && cfg.variant == Variant::Scaling
         && finite.is_some_and(|f| f.spheres.len() as u64 <= cfg.brute_force_max_n);
     let max_steps = u32::try_from(cfg.max_steps).unwrap_or(u32::MAX);
     let run_batch = |caches: &mut InfiniteCaches, b: u64| -> Acc {
@@ -371,7 +351,7 @@ fn make_result(
     machine: Option<MachineCosts>,
     trace_s: f64,
     mean_t: f64,
-) -> PointResult {
+) -> PointOutput<GridTables> {
     let mut row = Row::default();
     let mut summary = Vec::new();
     let band = th::n_i_band(inp);
@@ -380,44 +360,40 @@ fn make_result(
     let at_least_one = |x: f64| if x >= 1.0 { x } else { f64::NAN };
     let n_i_th = at_least_one(th::n_i_predictor_for_eye(inp, cfg.eye));
     let n_i_mb_th = at_least_one(th::n_i_mb_predictor_for_eye(inp, cfg.eye));
-    let (n_i, n_i_mb, n_s) = (
-        acc.n_i.estimate(),
-        acc.n_i_mb.estimate(),
-        acc.n_s.estimate(),
-    );
+    let (n_i, n_i_mb, n_s) = (acc.mean(M::NI), acc.mean(M::NIMb), acc.mean(M::NS));
     let in_band = |theory| Theory::Band {
         prediction: theory,
         lower: band.lower,
         upper: band.upper,
     };
-    Metric::new("n_i", n_i, in_band(n_i_th)).write(&mut row, &mut summary);
-    Metric::new("n_i_mb", n_i_mb, in_band(n_i_mb_th)).write(&mut row, &mut summary);
-    row.f("n_i_plain_theory", th::n_i_plain_predictor(inp, n_s_th));
+    Metric::new(&col::N_I, n_i, in_band(n_i_th)).write(&mut row, &mut summary);
+    Metric::new(&col::N_I_MB, n_i_mb, in_band(n_i_mb_th)).write(&mut row, &mut summary);
+    row.put(&col::N_I_PLAIN_THEORY, th::n_i_plain_predictor(inp, n_s_th));
     // The sharper predictors are derived for r < a/2 (no overlap of non-adjacent cells' offsets).
     let r_max = cfg
         .classes
         .iter()
         .map(|c| c.radius.max())
         .fold(0.0, f64::max);
-    row.s(
-        "predictor_regime",
+    row.put(
+        &col::PREDICTOR_REGIME,
         if r_max < 0.5 * cfg.cell_width {
             "r<a/2"
         } else {
             "r>=a/2"
         },
     );
-    Metric::new("n_s", n_s, Theory::Prediction(n_s_th)).write(&mut row, &mut summary);
+    Metric::new(&col::N_S, n_s, Theory::Prediction(n_s_th)).write(&mut row, &mut summary);
 
-    let t_hit = acc.t_hit.estimate();
-    let hit = acc.hit.estimate();
+    let t_hit = acc.mean(M::THit);
+    let hit = acc.mean(M::Hit);
     // In a finite cube hits are cut off at the faces: condition the law on hitting inside.
     let (hit_th, mean_t) = match finite {
         None => (1.0, mean_t),
         Some(_) => finite_hit_theory(cfg, inp),
     };
-    Metric::new("t_hit", t_hit, Theory::Prediction(mean_t)).write(&mut row, &mut summary);
-    Metric::new("hit", hit, Theory::Prediction(hit_th)).write(&mut row, &mut summary);
+    Metric::new(&col::T_HIT, t_hit, Theory::Prediction(mean_t)).write(&mut row, &mut summary);
+    Metric::new(&col::HIT, hit, Theory::Prediction(hit_th)).write(&mut row, &mut summary);
 
     // Laws: exponential first-hit distance (KS and χ² on the histogram), geometric N_I.
     let mut sorted = acc.t_samples.clone();
@@ -432,8 +408,8 @@ fn make_result(
     } else {
         f64::NAN
     };
-    row.f("t_hit_ks", d)
-        .f("t_hit_ks_p", gof::ks_p_value(d, sorted.len()));
+    row.put(&col::T_HIT_KS, d)
+        .put(&col::T_HIT_KS_P, gof::ks_p_value(d, sorted.len()));
     let hits = acc.hist_t.total();
     let mut obs: Vec<u64> = acc.hist_t.counts.clone();
     obs.push(acc.hist_t.overflow);
@@ -453,28 +429,22 @@ fn make_result(
             p_value: f64::NAN,
         }
     };
-    row.f("t_hit_chi2", chi_t.statistic)
-        .u("t_hit_chi2_dof", u64::from(chi_t.dof))
-        .f("t_hit_chi2_p", chi_t.p_value);
+    row.put(&col::T_HIT_CHI2, chi_t.statistic)
+        .put(&col::T_HIT_CHI2_DOF, chi_t.dof)
+        .put(&col::T_HIT_CHI2_P, chi_t.p_value);
 
     let mut hist = Vec::new();
     for k in 0..acc.hist_t.counts.len() {
         let (lo, hi) = acc.hist_t.edges(k);
-        let mut r = Row::default();
-        r.s("metric", "t_hit")
-            .f("bin_lo", lo)
-            .f("bin_hi", hi)
-            .u("count", obs[k])
-            .f("expected", exp[k]);
-        hist.push(r);
+        hist.push(hist_row("t_hit", lo, hi, obs[k], exp[k]));
     }
-    let mut r = Row::default();
-    r.s("metric", "t_hit")
-        .f("bin_lo", acc.hist_t.hi)
-        .f("bin_hi", f64::INFINITY)
-        .u("count", acc.hist_t.overflow)
-        .f("expected", *exp.last().expect("overflow bin"));
-    hist.push(r);
+    hist.push(hist_row(
+        "t_hit",
+        acc.hist_t.hi,
+        f64::INFINITY,
+        acc.hist_t.overflow,
+        *exp.last().expect("overflow bin"),
+    ));
 
     // Geometric law of N_I (distinct tests, hitting rays), p fitted by the mean: p = 1/E[N_I].
     let n_hits: u64 = acc.ni_mb_counts.iter().sum();
@@ -495,54 +465,52 @@ fn make_result(
     g_exp.push(n_hits as f64 * (1.0 - p).powi(kmax as i32));
     let chi_g = gof::chi_square(&g_obs, &g_exp, 1);
     let r0 = cfg.classes[0].radius.expect(|r| r);
-    row.f("n_i_geometric_p", p)
-        .f("n_i_cylinder_radius", r0 * (1.0 / p.sqrt() - 1.0));
-    row.f("n_i_mb_chi2", chi_g.statistic)
-        .u("n_i_mb_chi2_dof", u64::from(chi_g.dof))
-        .f("n_i_mb_chi2_p", chi_g.p_value);
+    row.put(&col::N_I_GEOMETRIC_P, p)
+        .put(&col::N_I_CYLINDER_RADIUS, r0 * (1.0 / p.sqrt() - 1.0));
+    row.put(&col::N_I_MB_CHI2, chi_g.statistic)
+        .put(&col::N_I_MB_CHI2_DOF, chi_g.dof)
+        .put(&col::N_I_MB_CHI2_P, chi_g.p_value);
     for (k, (&o, &e)) in g_obs.iter().zip(&g_exp).enumerate() {
-        let mut r = Row::default();
         let lo = (k + 1) as f64;
         let hi = if k + 1 == g_obs.len() {
             f64::INFINITY
         } else {
             lo + 1.0
         };
-        r.s("metric", "n_i_mb")
-            .f("bin_lo", lo)
-            .f("bin_hi", hi)
-            .u("count", o)
-            .f("expected", e);
-        hist.push(r);
+        hist.push(hist_row("n_i_mb", lo, hi, o, e));
     }
 
-    row.u("truncated", acc.truncated);
+    row.put(&col::TRUNCATED, acc.truncated);
     match finite {
         None => {
             let batches = cfg.rays.div_ceil(BATCH);
-            row.f(
-                "generated_spheres_per_batch",
-                acc.generated as f64 / batches as f64,
-            );
+            row.put(&col::GENERATED, acc.generated as f64 / batches as f64);
         }
         Some(f) => {
-            row.u("spheres", f.spheres.len() as u64)
-                .u("grid_cells", f.grid.cells() as u64)
-                .u("grid_listings", f.grid.listings() as u64)
-                .u("grid_bytes", f.grid.bytes());
+            row.put(&col::SPHERES, f.spheres.len())
+                .put(&col::GRID_CELLS, f.grid.cells())
+                .put(&col::GRID_LISTINGS, f.grid.listings())
+                .put(&col::GRID_BYTES, f.grid.bytes());
         }
     }
-    if cfg.kind == Kind::GridScaling {
-        let (pl, ps) = (acc.p_log.estimate(), acc.p_sqrt.estimate());
+    let mut checks = Vec::new();
+    if cfg.variant == Variant::Scaling {
+        let (pl, ps) = (acc.mean(M::PLog), acc.mean(M::PSqrt));
         let n = finite.map_or(2, |f| f.spheres.len().max(2)) as f64;
-        row.f("h_log", cfg.concentration_c * n.ln())
-            .estimate("p_log", &pl);
-        row.f("h_sqrt", cfg.concentration_c * n.sqrt())
-            .estimate("p_sqrt", &ps);
-        row.u("bf_rays", acc.bf_checked)
-            .u("bf_mismatches", acc.bf_mismatches);
-        row.f(
-            "bf_rays_per_s",
+        row.put(&col::H_LOG, cfg.concentration_c * n.ln())
+            .put_estimate(&col::P_LOG, &pl);
+        row.put(&col::H_SQRT, cfg.concentration_c * n.sqrt())
+            .put_estimate(&col::P_SQRT, &ps);
+        row.put(&col::BF_RAYS, acc.bf_checked)
+            .put(&col::BF_MISMATCHES, acc.bf_mismatches);
+        checks.push(Check {
+            name: col::BF_MISMATCHES.name,
+            what: "the grid's first hit ≠ brute force's",
+            failures: acc.bf_mismatches,
+            checked: acc.bf_checked,
+        });
+        row.put(
+            &col::BF_RAYS_PER_S,
             if acc.bf_time > 0.0 {
                 acc.bf_checked as f64 / acc.bf_time
             } else {
@@ -553,31 +521,47 @@ fn make_result(
 
     // Timing columns (the only ones allowed to differ between runs).
     let rays_per_s = cfg.rays as f64 / trace_s;
-    row.f("trace_s", trace_s)
-        .f("rays_per_s", rays_per_s)
-        .f("time_per_ray_s", acc.trace_time / cfg.rays as f64);
+    row.put(&col::TRACE_S, trace_s)
+        .put(&col::RAYS_PER_S, rays_per_s)
+        .put(&col::TIME_PER_RAY_S, acc.trace_time / cfg.rays as f64);
     if let Some(f) = finite {
-        row.f("build_s", f.build_s);
+        row.put(&col::BUILD_S, f.build_s);
     }
     if let Some(m) = machine {
         let tested = if cfg.mailbox { n_i_mb.mean } else { n_i.mean };
         let tested_th = if cfg.mailbox { n_i_mb_th } else { n_i_th };
-        row.f("t_i_s", m.t_i).f("t_s_s", m.t_s);
-        row.f(
-            "time_model_s",
+        row.put(&col::T_I_S, m.t_i).put(&col::T_S_S, m.t_s);
+        row.put(
+            &col::TIME_MODEL_S,
             th::query_time(tested_th, n_s_th, m.t_i, m.t_s),
         );
-        row.f(
-            "time_counts_model_s",
+        row.put(
+            &col::TIME_COUNTS_MODEL_S,
             th::query_time(tested, n_s.mean, m.t_i, m.t_s),
         );
     }
-    PointResult {
+    PointOutput {
         row,
-        tables: vec![("hist", hist)],
+        tables: GridTables { hist },
         summary,
-        rays_per_s,
+        checks,
+        rate: Rate {
+            per_s: rays_per_s,
+            unit: "rays",
+        },
+        warnings: Vec::new(),
     }
+}
+
+/// One row of the histogram table.
+fn hist_row(metric: &str, lo: f64, hi: f64, count: u64, expected: f64) -> Row {
+    let mut r = Row::default();
+    r.put(&col::HIST_METRIC, metric)
+        .put(&col::HIST_BIN_LO, lo)
+        .put(&col::HIST_BIN_HI, hi)
+        .put(&col::HIST_COUNT, count)
+        .put(&col::HIST_EXPECTED, expected);
+    r
 }
 
 /// The exponential law restricted to a finite cube: `(P(hit), E[t* | hit])` for rays from the eye

@@ -1,0 +1,297 @@
+//! Every column kind `detp` writes, declared once. Engine columns are families, one member per
+//! engine in `detp.engines` (`tests_{}` → `tests_sphere_cache`).
+
+use crate::output::column::{Class, Column};
+
+/// Segments in the store.
+pub const SEGMENTS: Column = Column::value(
+    "segments",
+    "segments",
+    Class::Measured,
+    "photon segments (or lines) in the ray store, summed over replicas",
+);
+/// Sample points.
+pub const POINTS: Column =
+    Column::value("points", "points", Class::Measured, "sample points (discs)");
+/// Tracing time.
+pub const TRACE_S: Column = Column::value(
+    "trace_s",
+    "s",
+    Class::Timing,
+    "seconds to generate the lines or trace the photons, summed over replicas",
+);
+/// An engine's counted tests.
+pub const TESTS: Column = Column::value(
+    "tests_{}",
+    "tests",
+    Class::Measured,
+    "the engine's counted ray tests, summed over replicas (sphere cache: ray–sphere + ray–disc; disc index and brute force: ray–disc)",
+);
+/// Theorem 1 for them.
+pub const TESTS_THEORY: Column = Column::value(
+    "tests_{}_theory",
+    "tests",
+    Class::Theory,
+    "Theorem 1's count for the engine (t = u = 1), times the replicas; brute force n_R·n_P",
+);
+/// Sphere cache: ray–sphere tests.
+pub const RAY_SPHERE_TESTS: Column = Column::value(
+    "ray_sphere_tests",
+    "tests",
+    Class::Measured,
+    "sphere cache: ray–sphere tests building lists (T_R's work)",
+);
+/// Their theory.
+pub const RAY_SPHERE_TESTS_THEORY: Column = Column::value(
+    "ray_sphere_tests_theory",
+    "tests",
+    Class::Theory,
+    "Theorem 1's T_R = t·n_R/Q²·(∛n_P − 1)/(1 − Q), times the replicas",
+);
+/// Sphere cache: ray–disc tests.
+pub const RAY_DISC_TESTS: Column = Column::value(
+    "ray_disc_tests",
+    "tests",
+    Class::Measured,
+    "sphere cache: ray–disc tests against the deepest list (T_I's work)",
+);
+/// Their theory.
+pub const RAY_DISC_TESTS_THEORY: Column = Column::value(
+    "ray_disc_tests_theory",
+    "tests",
+    Class::Theory,
+    "Theorem 1's T_I = (4/3)·u·n_R·∛n_P, times the replicas",
+);
+/// An engine's seconds.
+pub const COST_S: Column = Column::value(
+    "cost_{}_s",
+    "s",
+    Class::Timing,
+    "seconds the engine took (after the rays exist), summed over replicas",
+);
+/// Ordering time.
+pub const ORDER_S: Column = Column::value(
+    "order_s",
+    "s",
+    Class::Timing,
+    "sphere cache: seconds to sort the points along the space-filling curve",
+);
+/// Index nodes visited.
+pub const NODES: Column = Column::value(
+    "nodes_{}",
+    "nodes",
+    Class::Measured,
+    "disc index: nodes (octree) or cells (grid) visited by the segments, summed over replicas",
+);
+/// Index build time.
+pub const BUILD_S: Column = Column::value(
+    "build_{}_s",
+    "s",
+    Class::Timing,
+    "disc index: seconds to build it, summed over replicas",
+);
+/// Index size.
+pub const BYTES: Column = Column::value(
+    "bytes_{}",
+    "bytes",
+    Class::Measured,
+    "disc index: bytes of the largest replica's index",
+);
+/// Photon-map RMSE.
+pub const PHOTON_MAP_RMSE: Column = Column::estimate(
+    "photon_map_rmse",
+    "W/m²",
+    "photon map: root-mean-square error against the exact irradiance (where the scene has one), one sample per replica",
+);
+/// Photon-map bias.
+pub const PHOTON_MAP_BIAS: Column = Column::estimate(
+    "photon_map_bias",
+    "W/m²",
+    "photon map: mean error against the exact irradiance, one sample per replica",
+);
+/// Engine disagreements.
+pub const MISMATCHES: Column = Column::value(
+    "mismatches",
+    "discs",
+    Class::Check,
+    "discs whose integer sum differs between DETP engines or from brute force (0 when correct; the run fails otherwise)",
+);
+/// Discs checked by brute force.
+pub const BF_CHECKED: Column = Column::value(
+    "bf_checked",
+    "discs",
+    Class::Check,
+    "discs re-computed by brute force (a keyed subset of detp.brute_force_points, or all)",
+);
+/// Mean irradiance.
+pub const IRRADIANCE: Column = Column::vs_prediction(
+    "irradiance",
+    "W/m²",
+    "mean irradiance over the discs (over those with an exact value, where some have), one sample per replica; theory: the exact mean (NaN without a closed form)",
+);
+/// RMSE.
+pub const IRRADIANCE_RMSE: Column = Column::estimate(
+    "irradiance_rmse",
+    "W/m²",
+    "DETP's root-mean-square error against the exact irradiance, one sample per replica",
+);
+/// Bias.
+pub const IRRADIANCE_BIAS: Column = Column::estimate(
+    "irradiance_bias",
+    "W/m²",
+    "DETP's mean error against the exact irradiance, one sample per replica",
+);
+/// Speed.
+pub const RAYS_PER_S: Column = Column::value(
+    "rays_per_s",
+    "segments/s",
+    Class::Timing,
+    "segments handled per second of engine time",
+);
+
+/// The main table.
+pub const MAIN: &[Column] = &[
+    SEGMENTS,
+    POINTS,
+    TRACE_S,
+    TESTS,
+    TESTS_THEORY,
+    RAY_SPHERE_TESTS,
+    RAY_SPHERE_TESTS_THEORY,
+    RAY_DISC_TESTS,
+    RAY_DISC_TESTS_THEORY,
+    COST_S,
+    ORDER_S,
+    NODES,
+    BUILD_S,
+    BYTES,
+    PHOTON_MAP_RMSE,
+    PHOTON_MAP_BIAS,
+    MISMATCHES,
+    BF_CHECKED,
+    IRRADIANCE,
+    IRRADIANCE_RMSE,
+    IRRADIANCE_BIAS,
+    RAYS_PER_S,
+];
+
+/// Level number.
+pub const LEVEL: Column = Column::value(
+    "level",
+    "1",
+    Class::Measured,
+    "sphere-cache level i (0: the root)",
+);
+/// Its radius.
+pub const RADIUS: Column = Column::value("radius", "length", Class::Theory, "its radius r_0·Q^i");
+/// Builds.
+pub const BUILDS_LEVEL: Column = Column::value(
+    "builds_level",
+    "spheres",
+    Class::Measured,
+    "spheres built at this level, over replicas",
+);
+/// Rays held.
+pub const RAYS_LEVEL: Column = Column::estimate(
+    "rays_level",
+    "rays",
+    "mean rays held by the spheres built at this level (one cluster per replica)",
+);
+/// Its law.
+pub const RAYS_LEVEL_THEORY: Column = Column::value(
+    "rays_level_theory",
+    "rays",
+    Class::Theory,
+    "the uniform-line law n_R·(r_i/r_law)²",
+);
+/// Lens-clipped law.
+pub const RAYS_LEVEL_THEORY_CLIPPED: Column = Column::value(
+    "rays_level_theory_clipped",
+    "rays",
+    Class::Theory,
+    "lines: the law for sphere centres uniform in the ball, clipped where spheres stick out of it",
+);
+/// Spheres inside the law's ball.
+pub const RAYS_LEVEL_INSIDE: Column = Column::estimate(
+    "rays_level_inside",
+    "rays",
+    "lines: mean rays held by the spheres that lie inside the ball (where the law is exact)",
+);
+/// Misses.
+pub const MISSES_LEVEL: Column = Column::value(
+    "misses_level",
+    "spheres",
+    Class::Measured,
+    "cache misses: builds of this level except a chunk's cold start",
+);
+/// Tests.
+pub const RAY_SPHERE_TESTS_LEVEL: Column = Column::value(
+    "ray_sphere_tests_level",
+    "tests",
+    Class::Measured,
+    "ray–sphere tests building this level's lists",
+);
+
+/// `NAME.levels.csv`.
+pub const LEVELS: &[Column] = &[
+    LEVEL,
+    RADIUS,
+    BUILDS_LEVEL,
+    RAYS_LEVEL,
+    RAYS_LEVEL_THEORY,
+    RAYS_LEVEL_THEORY_CLIPPED,
+    RAYS_LEVEL_INSIDE,
+    MISSES_LEVEL,
+    RAY_SPHERE_TESTS_LEVEL,
+];
+
+/// Sample index.
+pub const SAMPLE: Column =
+    Column::value("sample", "1", Class::Measured, "the sample point's index");
+/// Coordinates and normal.
+pub const X: Column = Column::value("x", "length", Class::Measured, "the point");
+/// y.
+pub const Y: Column = Column::value("y", "length", Class::Measured, "the point");
+/// z.
+pub const Z: Column = Column::value("z", "length", Class::Measured, "the point");
+/// Normal x.
+pub const NX: Column = Column::value("nx", "1", Class::Measured, "its unit normal");
+/// Normal y.
+pub const NY: Column = Column::value("ny", "1", Class::Measured, "its unit normal");
+/// Normal z.
+pub const NZ: Column = Column::value("nz", "1", Class::Measured, "its unit normal");
+/// Irradiance at the point.
+pub const POINT_IRRADIANCE_MEAN: Column = Column::value(
+    "irradiance_mean",
+    "W/m²",
+    Class::Measured,
+    "DETP's irradiance at the point (mean over replicas)",
+);
+/// Its SE.
+pub const POINT_IRRADIANCE_SE: Column = Column::value(
+    "irradiance_se",
+    "W/m²",
+    Class::Measured,
+    "its standard error: across replicas, or with one replica the Poisson SE √(E·w̄/πd²)",
+);
+/// Exact value.
+pub const POINT_IRRADIANCE_EXACT: Column = Column::value(
+    "irradiance_exact",
+    "W/m²",
+    Class::Theory,
+    "the scene's closed form at the point (NaN without one)",
+);
+
+/// `NAME.points.csv`.
+pub const POINTS_TABLE: &[Column] = &[
+    SAMPLE,
+    X,
+    Y,
+    Z,
+    NX,
+    NY,
+    NZ,
+    POINT_IRRADIANCE_MEAN,
+    POINT_IRRADIANCE_SE,
+    POINT_IRRADIANCE_EXACT,
+];

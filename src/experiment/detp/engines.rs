@@ -1,0 +1,339 @@
+//! The engines of kind `detp`, one [`Engine`] each: what it runs on a replica's rays and points, and
+//! the columns it writes from all replicas. A new engine is one struct here and one line in
+//! [`engine`]; the point runner (`mod.rs`) treats them all alike.
+//!
+//! DETP engines return their integer sum per disc, which the runner compares across engines and
+//! against brute force; baselines (the photon map) return per-disc estimates instead.
+
+use std::time::Instant;
+
+use super::columns as col;
+use super::spec::{DetpConfig, EngineChoice, FilterChoice};
+use super::{PointSet, RaySet};
+use crate::detp::disc_index::DiscIndex;
+use crate::detp::fixed::Acc;
+use crate::detp::photon_map::{self, Filter};
+use crate::detp::quasi_static::IndexKind;
+use crate::detp::{brute, disc_index, order, sphere_cache};
+use crate::experiment::metric::{z_verdict, SummaryLine};
+use crate::output::row::Row;
+use crate::stats::{ClusteredMean, Estimate};
+use crate::theory::detp as th;
+
+/// What one replica's engine returned.
+pub(super) enum Output {
+    /// Integer sums per disc (a DETP engine: must equal every other DETP engine's, bit for bit).
+    Sums(Vec<Acc>),
+    /// A baseline's estimates (kept by the engine for its own columns; not compared).
+    Baseline,
+}
+
+/// What the point knows when its engines write their columns.
+pub(super) struct Pooled<'a> {
+    /// The point's config.
+    pub cfg: &'a DetpConfig,
+    /// Replicas.
+    pub reps: f64,
+    /// n_R: mean rays per replica meeting the law's ball.
+    pub n_r: f64,
+    /// n_P.
+    pub n_p: f64,
+    /// The exact irradiance per disc (NaN where unknown).
+    pub exact: &'a [f64],
+}
+
+/// One engine (see the module doc).
+pub(super) trait Engine: Send {
+    /// Runs on one replica.
+    fn run(&mut self, cfg: &DetpConfig, rays: &RaySet, pts: &PointSet) -> Output;
+    /// Engine seconds over all replicas so far (for `rays_per_s`).
+    fn seconds(&self) -> f64;
+    /// Writes its columns of the main row.
+    fn write(&self, p: &Pooled, row: &mut Row);
+    /// The levels table and its summary lines (the sphere cache only).
+    fn levels(&self, _p: &Pooled, _law: &Law) -> (Vec<Row>, Vec<SummaryLine>) {
+        (Vec::new(), Vec::new())
+    }
+}
+
+/// What the rays-per-level law needs from the point's rays.
+pub(super) struct Law {
+    /// Root radius r_0.
+    pub root_radius: f64,
+    /// Radius of the ball the rays are μ-random in.
+    pub law_radius: f64,
+    /// Lines (the lens-clipped law applies) or photons.
+    pub lines: bool,
+}
+
+/// The engine for a choice of `detp.engines`.
+pub(super) fn engine(e: EngineChoice) -> Box<dyn Engine> {
+    match e {
+        EngineChoice::SphereCache => Box::new(SphereCache::default()),
+        EngineChoice::DiscIndex => Box::new(Index::default()),
+        EngineChoice::BruteForce => Box::new(BruteForce::default()),
+        EngineChoice::PhotonMap => Box::new(PhotonMap::default()),
+    }
+}
+
+fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
+    let s = Instant::now();
+    let v = f();
+    (v, s.elapsed().as_secs_f64())
+}
+
+/// One estimate from one value per replica (one cluster each).
+pub(super) fn per_replica(values: &[f64]) -> Estimate {
+    let mut m = ClusteredMean::default();
+    for &v in values {
+        m.push_cluster(1, v, v * v);
+    }
+    m.estimate()
+}
+
+/// Root-mean-square error and mean error of `est` against `exact` over the discs that have an exact
+/// value (NaN, NaN if none has).
+pub(super) fn errors(est: &[f64], exact: &[f64]) -> (f64, f64) {
+    let (mut n, mut s, mut s2) = (0u64, 0.0, 0.0);
+    for (e, x) in est.iter().zip(exact) {
+        if x.is_finite() {
+            let d = e - x;
+            n += 1;
+            s += d;
+            s2 += d * d;
+        }
+    }
+    if n == 0 {
+        (f64::NAN, f64::NAN)
+    } else {
+        ((s2 / n as f64).sqrt(), s / n as f64)
+    }
+}
+
+/// The sphere cache.
+#[derive(Default)]
+struct SphereCache {
+    runs: Vec<(sphere_cache::CacheStats, f64, f64)>,
+}
+
+impl Engine for SphereCache {
+    fn run(&mut self, cfg: &DetpConfig, rays: &RaySet, pts: &PointSet) -> Output {
+        let discs = &pts.discs;
+        let (perm, order_s) =
+            timed(|| order::permutation(&discs.centers, cfg.order, cfg.order_bits));
+        let params = sphere_cache::SphereCacheParams {
+            law_ball: rays.law_ball,
+            ..cfg.cache
+        };
+        let mut acc = vec![0; discs.len()];
+        let (stats, s) =
+            timed(|| sphere_cache::run(&rays.store, discs, &perm, rays.root, &params, &mut acc));
+        self.runs.push((stats, s, order_s));
+        Output::Sums(acc)
+    }
+    fn seconds(&self) -> f64 {
+        self.runs.iter().map(|r| r.1).sum()
+    }
+    fn write(&self, p: &Pooled, row: &mut Row) {
+        let (t_r, t_i) = th::sphere_cache_cost(1.0, 1.0, p.n_r, p.n_p, p.cfg.q());
+        let sphere: u64 = self.runs.iter().map(|r| r.0.ray_sphere_tests).sum();
+        let disc: u64 = self.runs.iter().map(|r| r.0.ray_disc_tests).sum();
+        let c = EngineChoice::SphereCache.column();
+        row.put_member(&col::TESTS, c, sphere + disc)
+            .put_member(&col::TESTS_THEORY, c, p.reps * (t_r + t_i))
+            .put(&col::RAY_SPHERE_TESTS, sphere)
+            .put(&col::RAY_SPHERE_TESTS_THEORY, p.reps * t_r)
+            .put(&col::RAY_DISC_TESTS, disc)
+            .put(&col::RAY_DISC_TESTS_THEORY, p.reps * t_i)
+            .put_member(&col::COST_S, c, self.seconds())
+            .put(&col::ORDER_S, self.runs.iter().map(|r| r.2).sum::<f64>());
+    }
+    fn levels(&self, p: &Pooled, law: &Law) -> (Vec<Row>, Vec<SummaryLine>) {
+        let mut rows = Vec::new();
+        let mut lines = Vec::new();
+        let depth = self
+            .runs
+            .iter()
+            .map(|r| r.0.levels.len())
+            .max()
+            .unwrap_or(0);
+        for i in 0..depth {
+            let mut m = ClusteredMean::default();
+            let mut inside = ClusteredMean::default();
+            let (mut builds, mut misses, mut tests) = (0u64, 0u64, 0u64);
+            let mut radius = f64::NAN;
+            for (stats, ..) in &self.runs {
+                let l = stats.levels.get(i).cloned().unwrap_or_default();
+                m.push_cluster(l.builds, l.rays_held as f64, l.rays_held_sq as f64);
+                inside.push_cluster(
+                    l.inside_builds,
+                    l.inside_rays_held as f64,
+                    l.inside_rays_held_sq as f64,
+                );
+                builds += l.builds;
+                misses += l.misses;
+                tests += l.ray_sphere_tests;
+                if l.builds > 0 {
+                    radius = l.radius;
+                }
+            }
+            let e = m.estimate();
+            let ri = law.root_radius * p.cfg.q().powi(i as i32);
+            let theory = p.n_r * (ri / law.law_radius).min(1.0).powi(2);
+            let clipped = match (law.lines, i) {
+                // The root is concentric with the ball and holds it: every line.
+                (true, 0) => p.n_r,
+                (true, _) => th::rays_per_level_uniform_centres(
+                    p.n_r,
+                    law.law_radius,
+                    ri.min(law.law_radius),
+                ),
+                (false, _) => f64::NAN,
+            };
+            let mut r = Row::default();
+            r.put(&col::LEVEL, i as u64)
+                .put(&col::RADIUS, if radius.is_finite() { radius } else { ri })
+                .put(&col::BUILDS_LEVEL, builds)
+                .put_estimate(&col::RAYS_LEVEL, &e)
+                .put(&col::RAYS_LEVEL_THEORY, theory)
+                .put(&col::RAYS_LEVEL_THEORY_CLIPPED, clipped)
+                .put_estimate(&col::RAYS_LEVEL_INSIDE, &inside.estimate())
+                .put(&col::MISSES_LEVEL, misses)
+                .put(&col::RAY_SPHERE_TESTS_LEVEL, tests);
+            rows.push(r);
+            if e.n > 0 {
+                lines.push((
+                    format!("rays L{i}"),
+                    e,
+                    format!("{theory:.4} (n_R·(r_i/r_law)²)"),
+                    z_verdict(&e, theory),
+                ));
+            }
+        }
+        (rows, lines)
+    }
+}
+
+/// The disc index (octree or grid).
+#[derive(Default)]
+struct Index {
+    /// Per replica: stats, build seconds, query seconds, bytes.
+    runs: Vec<(disc_index::IndexStats, f64, f64, usize)>,
+}
+
+impl Engine for Index {
+    fn run(&mut self, cfg: &DetpConfig, rays: &RaySet, pts: &PointSet) -> Output {
+        let discs = &pts.discs;
+        let mut acc = vec![0; discs.len()];
+        let (ix, build_s): (Box<dyn DiscIndex>, f64) = match cfg.index {
+            IndexKind::Octree(leaf) => timed(|| {
+                Box::new(disc_index::Octree::build(discs, leaf, cfg.disc_radius))
+                    as Box<dyn DiscIndex>
+            }),
+            IndexKind::Grid(w) => {
+                timed(|| Box::new(disc_index::GridIndex::build(discs, w)) as Box<dyn DiscIndex>)
+            }
+        };
+        let (stats, s) = timed(|| ix.accumulate(&rays.store, None, 1, &mut acc));
+        self.runs.push((stats, build_s, s, ix.bytes()));
+        Output::Sums(acc)
+    }
+    fn seconds(&self) -> f64 {
+        self.runs.iter().map(|r| r.2).sum()
+    }
+    fn write(&self, p: &Pooled, row: &mut Row) {
+        let c = EngineChoice::DiscIndex.column();
+        row.put_member(
+            &col::TESTS,
+            c,
+            self.runs.iter().map(|r| r.0.ray_disc_tests).sum::<u64>(),
+        )
+        .put_member(
+            &col::TESTS_THEORY,
+            c,
+            p.reps * th::disc_index_cost(1.0, p.n_r, p.n_p),
+        )
+        .put_member(
+            &col::NODES,
+            c,
+            self.runs.iter().map(|r| r.0.nodes_visited).sum::<u64>(),
+        )
+        .put_member(&col::COST_S, c, self.seconds())
+        .put_member(&col::BUILD_S, c, self.runs.iter().map(|r| r.1).sum::<f64>())
+        .put_member(
+            &col::BYTES,
+            c,
+            self.runs.iter().map(|r| r.3).max().unwrap_or(0),
+        );
+    }
+}
+
+/// Brute force: every segment against every disc.
+#[derive(Default)]
+struct BruteForce {
+    runs: Vec<(u64, f64)>,
+}
+
+impl Engine for BruteForce {
+    fn run(&mut self, _cfg: &DetpConfig, rays: &RaySet, pts: &PointSet) -> Output {
+        let mut acc = vec![0; pts.discs.len()];
+        let (tests, s) = timed(|| brute::accumulate(&rays.store, &pts.discs, None, 1, &mut acc));
+        self.runs.push((tests, s));
+        Output::Sums(acc)
+    }
+    fn seconds(&self) -> f64 {
+        self.runs.iter().map(|r| r.1).sum()
+    }
+    fn write(&self, p: &Pooled, row: &mut Row) {
+        let c = EngineChoice::BruteForce.column();
+        row.put_member(&col::TESTS, c, self.runs.iter().map(|r| r.0).sum::<u64>())
+            .put_member(&col::TESTS_THEORY, c, p.reps * p.n_r * p.n_p)
+            .put_member(&col::COST_S, c, self.seconds());
+    }
+}
+
+/// Jensen's photon map over the same photons' impacts (a baseline).
+#[derive(Default)]
+struct PhotonMap {
+    runs: Vec<(Vec<f64>, f64)>,
+}
+
+impl Engine for PhotonMap {
+    fn run(&mut self, cfg: &DetpConfig, rays: &RaySet, pts: &PointSet) -> Output {
+        let filter = match cfg.photon_map_filter {
+            FilterChoice::Cone => Filter::Cone,
+            FilterChoice::Disc => Filter::Disc,
+        };
+        let (e, s) = timed(|| {
+            photon_map::estimate(
+                &rays.store,
+                &pts.discs.centers,
+                &pts.discs.normals,
+                cfg.photon_map_k as usize,
+                filter,
+            )
+        });
+        self.runs.push((e, s));
+        Output::Baseline
+    }
+    fn seconds(&self) -> f64 {
+        // A baseline: not part of the DETP engines' speed.
+        0.0
+    }
+    fn write(&self, p: &Pooled, row: &mut Row) {
+        let errs: Vec<(f64, f64)> = self.runs.iter().map(|r| errors(&r.0, p.exact)).collect();
+        row.put_estimate(
+            &col::PHOTON_MAP_RMSE,
+            &per_replica(&errs.iter().map(|e| e.0).collect::<Vec<_>>()),
+        )
+        .put_estimate(
+            &col::PHOTON_MAP_BIAS,
+            &per_replica(&errs.iter().map(|e| e.1).collect::<Vec<_>>()),
+        )
+        .put_member(
+            &col::COST_S,
+            EngineChoice::PhotonMap.column(),
+            self.runs.iter().map(|r| r.1).sum::<f64>(),
+        );
+    }
+}

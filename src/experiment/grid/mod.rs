@@ -1,0 +1,199 @@
+//! The three grid kinds of the Márton & Szirmay-Kalos study: `grid` (N_I, N_S, t* and the hit rate
+//! against Results 3.1/3.2 and the exponential first-hit law), `grid-scaling` (finite scenes of
+//! growing n: O(1) expected cost, brute force, Proposition 4.1's concentration) and `grid-cost-model`
+//! (the machine's T_I and T_S and the model t = N_I·T_I + N_S·T_S). They share the spec file
+//! (`spec.rs`), the validated point (`config.rs`), the tracer (`run.rs`) and the columns
+//! (`columns.rs`); each kind adds what it measures beyond the common counts.
+
+pub mod columns;
+pub mod config;
+pub mod run;
+pub mod spec;
+
+pub use config::{GridConfig, SceneModel, Variant};
+pub use run::BATCH;
+pub use spec::{GridSpec, DEFAULT_RAYS_PER_SCENE};
+
+use super::inputs::Inputs;
+use super::kind::{ConfigError, Context, Kind, Memory, Need, PointOutput, Work};
+use super::machine::{self, MachineCosts};
+use crate::error::Error;
+use crate::output::column::Column;
+
+crate::side_tables!(
+    /// `NAME.hist.csv`: the t* histogram against the exponential law, and the N_I,mb histogram
+    /// against the fitted geometric law.
+    GridTables { hist }
+);
+
+fn describe(g: &GridConfig) -> String {
+    let scene = match &g.scene {
+        SceneModel::Infinite => "infinite scene".to_string(),
+        SceneModel::Finite(f) => format!(
+            "finite scene, ~{:.0} spheres, side {:.4}",
+            f.expected_count(),
+            f.side()
+        ),
+    };
+    format!("{scene}, {} rays", g.rays)
+}
+
+fn work(g: &GridConfig) -> Work {
+    Work {
+        units: g.rays,
+        unit: "rays",
+    }
+}
+
+/// A finite scene's spheres and cell lists; an infinite scene's per-ray working set: the spheres
+/// drawn for the first cell's reach box, ρ·(a + 2r_max)³ of them (each thread walks one ray at a
+/// time; with shared realisations a batch's block of cells).
+fn memory(g: &GridConfig) -> Memory {
+    let r_max = g.classes.iter().map(|c| c.radius.max()).fold(0.0, f64::max);
+    let threads = rayon::current_num_threads() as f64;
+    let needs = match &g.scene {
+        SceneModel::Infinite => {
+            let per_box = g.intensity * (g.cell_width + 2.0 * r_max).powi(3);
+            let rays_in_flight = threads * (g.rays_per_scene as f64).max(1.0);
+            vec![Need {
+                bytes: per_box * 64.0 * rays_in_flight.max(1.0) * 8.0,
+                key: "scene.intensity",
+                what: format!("{per_box:.3e} spheres per cell reach box"),
+            }]
+        }
+        SceneModel::Finite(f) => {
+            let n = f.expected_count();
+            vec![Need {
+                bytes: n * 40.0 * 2.0,
+                key: "scene.spheres",
+                what: format!("{n:.3e} spheres and their cell listings"),
+            }]
+        }
+    };
+    Memory {
+        needs,
+        budget: Some(("grid.memory_budget_gib", g.memory_budget_gib)),
+    }
+}
+
+fn columns() -> Vec<(&'static str, &'static [Column])> {
+    vec![("main", columns::MAIN), ("hist", columns::HIST)]
+}
+
+fn configure(raw: GridSpec, v: Variant) -> Result<GridConfig, ConfigError> {
+    Ok(GridConfig::from_spec(&raw, v)?)
+}
+
+/// Kind `grid`.
+pub struct GridKind;
+
+impl Kind for GridKind {
+    const NAME: &'static str = "grid";
+    const ABOUT: &'static str = "Rays from an eye through a regular grid (3D-DDA) over Poisson spheres (an infinite scene generated lazily where rays go, or a finite cube): ray–sphere tests N_I (with and without mailboxing) against Result 3.1/3.2's band and raycost's sharper predictors, cell steps N_S against their exact expectation, the first-hit distance t* against the exponential law (KS and χ²), and the hit rate.";
+    type Raw = GridSpec;
+    type Point = GridConfig;
+    type Tables = GridTables;
+    type Shared = ();
+
+    fn columns() -> Vec<(&'static str, &'static [Column])> {
+        columns()
+    }
+    fn configure(raw: GridSpec, _: &mut Inputs) -> Result<GridConfig, ConfigError> {
+        configure(raw, Variant::Study)
+    }
+    fn describe(p: &GridConfig) -> String {
+        describe(p)
+    }
+    fn work(p: &GridConfig) -> Work {
+        work(p)
+    }
+    fn memory(p: &GridConfig) -> Memory {
+        memory(p)
+    }
+    fn shared(_: &[&GridConfig]) -> Result<(), Error> {
+        Ok(())
+    }
+    fn run(p: &GridConfig, _: &(), ctx: &Context) -> Result<PointOutput<GridTables>, Error> {
+        Ok(run::run_point(p, ctx.index, None, ctx.progress))
+    }
+}
+
+/// Kind `grid-scaling`.
+pub struct GridScalingKind;
+
+impl Kind for GridScalingKind {
+    const NAME: &'static str = "grid-scaling";
+    const ABOUT: &'static str = "Finite Poisson scenes of growing sphere count n, several realisations each: N_I and N_S settle on the infinite scene's values (E[t(n)] = O(1)), brute force checks the grid's first hits, memory and build time grow with n, and Proposition 4.1's tails P(N_I ≥ c·ln n) and P(N_I ≥ c·√n) fall with n.";
+    type Raw = GridSpec;
+    type Point = GridConfig;
+    type Tables = GridTables;
+    type Shared = ();
+
+    fn columns() -> Vec<(&'static str, &'static [Column])> {
+        columns()
+    }
+    fn configure(raw: GridSpec, _: &mut Inputs) -> Result<GridConfig, ConfigError> {
+        configure(raw, Variant::Scaling)
+    }
+    fn describe(p: &GridConfig) -> String {
+        describe(p)
+    }
+    fn work(p: &GridConfig) -> Work {
+        work(p)
+    }
+    fn memory(p: &GridConfig) -> Memory {
+        memory(p)
+    }
+    fn shared(_: &[&GridConfig]) -> Result<(), Error> {
+        Ok(())
+    }
+    fn run(p: &GridConfig, _: &(), ctx: &Context) -> Result<PointOutput<GridTables>, Error> {
+        Ok(run::run_point(p, ctx.index, None, ctx.progress))
+    }
+}
+
+/// Kind `grid-cost-model`.
+pub struct GridCostModelKind;
+
+impl Kind for GridCostModelKind {
+    const NAME: &'static str = "grid-cost-model";
+    const ABOUT: &'static str = "The query-time model t = N_I·T_I + N_S·T_S: T_I and T_S measured on this machine once per run, the model's time from the predicted and from the measured counts, beside the timed query.";
+    type Raw = GridSpec;
+    type Point = GridConfig;
+    type Tables = GridTables;
+    type Shared = MachineCosts;
+
+    fn columns() -> Vec<(&'static str, &'static [Column])> {
+        columns()
+    }
+    fn configure(raw: GridSpec, _: &mut Inputs) -> Result<GridConfig, ConfigError> {
+        configure(raw, Variant::CostModel)
+    }
+    fn describe(p: &GridConfig) -> String {
+        describe(p)
+    }
+    fn work(p: &GridConfig) -> Work {
+        work(p)
+    }
+    fn memory(p: &GridConfig) -> Memory {
+        memory(p)
+    }
+    fn shared(_: &[&GridConfig]) -> Result<MachineCosts, Error> {
+        Ok(machine::measure())
+    }
+    fn shared_meta(m: &MachineCosts) -> toml::Table {
+        let mut t = toml::Table::new();
+        t.insert("t_i_s".into(), toml::Value::Float(m.t_i));
+        t.insert("t_s_s".into(), toml::Value::Float(m.t_s));
+        let mut outer = toml::Table::new();
+        outer.insert("cost_model".into(), toml::Value::Table(t));
+        outer
+    }
+    fn run(
+        p: &GridConfig,
+        m: &MachineCosts,
+        ctx: &Context,
+    ) -> Result<PointOutput<GridTables>, Error> {
+        Ok(run::run_point(p, ctx.index, Some(*m), ctx.progress))
+    }
+}

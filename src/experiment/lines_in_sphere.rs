@@ -1,0 +1,153 @@
+//! Kind `lines-in-sphere`: the smallest complete kind, and the template for a new one. μ-random lines
+//! through the unit ball (DETP §4.2) meet a concentric sphere of radius r with probability r²
+//! (Crofton: the measure of lines meeting a convex body is proportional to its surface area). The
+//! sphere cache's rays-per-level law n_R·Q^(2i) is this fact once per level.
+//!
+//! A kind is this one module and one line in [`super::registry::KINDS`]: its spec struct (serde
+//! denies unknown keys, so a mistyped key is refused with its line), its validated point, its
+//! declared columns, and its runner.
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::inputs::Inputs;
+use super::kind::{ConfigError, Context, Kind, NoTables, PointOutput, Rate, Work};
+use super::metric::{Metric, Theory};
+use crate::error::Error;
+use crate::output::column::{Class, Column};
+use crate::output::row::Row;
+use crate::sample::lines::uniform_line;
+use crate::sample::rng::{domain, stream};
+use crate::spec::de::{count, open_unit};
+use crate::spec::RawExperiment;
+use crate::stats::ClusteredMean;
+
+/// The spec file: `[experiment]`, `[lines]` and `[sweep]`.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LinesSpec {
+    /// `[experiment]`.
+    pub experiment: RawExperiment,
+    /// `[lines]`.
+    pub lines: RawLines,
+    /// `[sweep]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sweep: Option<toml::Table>,
+}
+
+/// `[lines]`.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawLines {
+    /// Lines per point.
+    #[serde(deserialize_with = "count")]
+    pub count: u64,
+    /// Radius r of the inner sphere, in (0, 1).
+    #[serde(deserialize_with = "open_unit")]
+    pub inner_radius: f64,
+}
+
+/// A validated point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinesPoint {
+    seed: u64,
+    count: u64,
+    r: f64,
+}
+
+/// Fraction of lines meeting the inner sphere, against r².
+pub const HIT_FRACTION: Column = Column::vs_prediction(
+    "hit_fraction",
+    "1",
+    "fraction of μ-random lines through the unit ball that meet the concentric sphere of radius r; theory r²",
+);
+/// Lines drawn.
+pub const LINES: Column = Column::value("lines", "lines", Class::Measured, "lines drawn");
+/// Speed.
+pub const LINES_PER_S: Column = Column::value(
+    "lines_per_s",
+    "lines/s",
+    Class::Timing,
+    "lines drawn and tested per second",
+);
+
+/// Lines per keyed stream (so the result does not depend on the thread count).
+const BATCH: u64 = 4096;
+
+/// Kind `lines-in-sphere`.
+pub struct LinesInSphereKind;
+
+impl Kind for LinesInSphereKind {
+    const NAME: &'static str = "lines-in-sphere";
+    const ABOUT: &'static str = "μ-random lines through the unit ball meet a concentric sphere of radius r with probability r² (the law behind the sphere cache's rays per level); the smallest kind, a template for new ones.";
+    type Raw = LinesSpec;
+    type Point = LinesPoint;
+    type Tables = NoTables;
+    type Shared = ();
+
+    fn columns() -> Vec<(&'static str, &'static [Column])> {
+        vec![("main", &[LINES, HIT_FRACTION, LINES_PER_S])]
+    }
+    fn configure(raw: LinesSpec, _: &mut Inputs) -> Result<LinesPoint, ConfigError> {
+        Ok(LinesPoint {
+            seed: raw.experiment.seed,
+            count: raw.lines.count,
+            r: raw.lines.inner_radius,
+        })
+    }
+    fn describe(p: &LinesPoint) -> String {
+        format!("{} lines, inner sphere r = {}", p.count, p.r)
+    }
+    fn work(p: &LinesPoint) -> Work {
+        Work {
+            units: p.count,
+            unit: "lines",
+        }
+    }
+    fn shared(_: &[&LinesPoint]) -> Result<(), Error> {
+        Ok(())
+    }
+    fn run(p: &LinesPoint, _: &(), ctx: &Context) -> Result<PointOutput<NoTables>, Error> {
+        let start = std::time::Instant::now();
+        // One cluster per batch: hits and hits² of its lines (a hit is 0 or 1).
+        let hits: Vec<(u64, u64)> = (0..p.count.div_ceil(BATCH))
+            .into_par_iter()
+            .map(|b| {
+                let mut rng = stream(&[domain::LINES, p.seed, ctx.index, b]);
+                let n = BATCH.min(p.count - b * BATCH);
+                let h = (0..n)
+                    .filter(|_| {
+                        let (o, d) = uniform_line(&mut rng);
+                        // Distance of the line from the centre: |o − (o·d)d|.
+                        (o - o.dot(d) * d).length() < p.r
+                    })
+                    .count() as u64;
+                (ctx.progress)(n);
+                (n, h)
+            })
+            .collect();
+        let secs = start.elapsed().as_secs_f64();
+        let mut m = ClusteredMean::default();
+        for (n, h) in hits {
+            m.push_cluster(n, h as f64, h as f64);
+        }
+        let mut row = Row::default();
+        let mut summary = Vec::new();
+        row.put(&LINES, p.count);
+        Metric::new(&HIT_FRACTION, m.estimate(), Theory::Prediction(p.r * p.r))
+            .write(&mut row, &mut summary);
+        let rate = p.count as f64 / secs.max(1e-12);
+        row.put(&LINES_PER_S, rate);
+        Ok(PointOutput {
+            row,
+            tables: NoTables,
+            summary,
+            checks: Vec::new(),
+            rate: Rate {
+                per_s: rate,
+                unit: "lines",
+            },
+            warnings: Vec::new(),
+        })
+    }
+}

@@ -1,0 +1,217 @@
+//! A spec validated by its kind: every point configured, the input files loaded and hashed, the
+//! memory each point needs checked against the spec's budget and the machine — all before anything
+//! is written. `raycost check` prints a plan; `raycost run` runs one.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use sha2::{Digest, Sha256};
+
+use super::inputs::Inputs;
+use super::kind::{ConfigError, DynKind, DynPoint, Kind, PointOf};
+use super::registry;
+use crate::error::InputError;
+use crate::output::meta::{available_memory, InputFile};
+use crate::spec::{KeyError, Spec};
+use crate::toml_text::find_key;
+
+const GIB: f64 = (1u64 << 30) as f64;
+
+/// A validated spec, ready to run.
+pub struct Plan {
+    /// The spec as read and expanded.
+    pub spec: Spec,
+    /// Its kind.
+    pub kind: &'static dyn DynKind,
+    /// Every point, configured (index = point index).
+    pub points: Vec<Box<dyn DynPoint>>,
+    /// Every file the points read, with content hashes.
+    pub inputs: Vec<InputFile>,
+    /// The normalised spec (`base`: the kind's struct with defaults, `sweep`).
+    pub normalized: toml::Table,
+    /// SHA-256 of the normalised spec: identifies runs that can be resumed and merged.
+    pub hash: String,
+}
+
+impl std::fmt::Debug for Plan {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Plan")
+            .field("spec", &self.spec.path)
+            .field("kind", &self.kind.name())
+            .field("points", &self.points.len())
+            .field("hash", &self.hash)
+            .finish()
+    }
+}
+
+impl Plan {
+    /// Reads `path` with the `--set` overrides and validates every point.
+    pub fn load(path: &Path, sets: &[String]) -> Result<Plan, InputError> {
+        Self::from_spec(Spec::read(path, sets)?)
+    }
+
+    /// Validates an expanded spec.
+    pub fn from_spec(spec: Spec) -> Result<Plan, InputError> {
+        let name = spec.experiment.kind.clone();
+        let kind = registry::find(&name).ok_or_else(|| InputError {
+            file: spec.path.clone(),
+            at: find_key(&spec.text, "experiment.kind"),
+            key: Some("experiment.kind".into()),
+            message: format!(
+                "unknown kind \"{name}\", expected one of {}",
+                registry::names()
+            ),
+        })?;
+        // The file as written, by the kind's own struct: unknown keys and tables, wrong types and
+        // out-of-range values, located by line and column.
+        kind.check_text(&spec.text).map_err(|e| {
+            let mut e = spec.locate_text(e);
+            // A table of another kind: say so, rather than serde's "unknown field".
+            if let Some(table) = e.key.clone().filter(|k| !k.contains('.')) {
+                if e.message.starts_with("unknown field") {
+                    e.at = find_key(&spec.text, &table).or(e.at);
+                    e.message = format!(
+                        "the [{table}] table does not belong to kind {} (its tables: {})",
+                        kind.name(),
+                        e.message
+                            .split_once("expected one of ")
+                            .map_or("see raycost doc", |(_, t)| t)
+                    );
+                }
+            }
+            e
+        })?;
+        for (key, why) in kind.fixed() {
+            if spec.sweep.iter().any(|(k, _)| k == key) {
+                return Err(spec.locate_axis(key, format!("cannot be swept: {why}")));
+            }
+        }
+        let base = kind
+            .normalize(&spec.tree)
+            .map_err(|e| spec.locate(None, e))?;
+        let mut inputs = Inputs::new(&spec.dir);
+        let mut points = Vec::with_capacity(spec.points.len());
+        for p in &spec.points {
+            let point = kind.configure(&p.tree, &mut inputs).map_err(|e| match e {
+                ConfigError::Key(k) => spec.locate(Some(p.index), k),
+                ConfigError::Input(i) => i,
+            })?;
+            check_memory(&spec, p.index, point.as_ref())?;
+            points.push(point);
+        }
+        let mut normalized = toml::Table::new();
+        normalized.insert("base".into(), base);
+        let mut sw = toml::Table::new();
+        for (k, v) in &spec.sweep {
+            sw.insert(k.clone(), toml::Value::Array(v.clone()));
+        }
+        normalized.insert("sweep".into(), toml::Value::Table(sw));
+        let hash = format!(
+            "{:x}",
+            Sha256::digest(
+                toml::to_string(&normalized)
+                    .expect("serializable")
+                    .as_bytes()
+            )
+        );
+        Ok(Plan {
+            spec,
+            kind,
+            points,
+            inputs: inputs.files(),
+            normalized,
+            hash,
+        })
+    }
+
+    /// Point `index` as kind `K`'s own type (None if the plan is of another kind).
+    pub fn point<K: Kind>(&self, index: usize) -> Option<&K::Point> {
+        self.points
+            .get(index)
+            .and_then(|p| p.as_any().downcast_ref::<PointOf<K>>())
+            .map(|p| &p.0)
+    }
+
+    /// `raycost check`'s text: the kind, the points with their parameters and what each runs, the
+    /// input files and the warnings.
+    pub fn describe(&self) -> String {
+        let mut s = format!(
+            "{}: kind {}, {} point(s), spec hash {}\n",
+            self.spec.path,
+            self.kind.name(),
+            self.points.len(),
+            &self.hash[..16]
+        );
+        for (p, point) in self.spec.points.iter().zip(&self.points) {
+            let params = p
+                .params
+                .iter()
+                .map(|(k, v)| format!("{k} = {v}"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            let _ = writeln!(
+                s,
+                "  point {:>4}: {params}{}{}",
+                p.index,
+                if params.is_empty() { "" } else { "; " },
+                point.describe()
+            );
+            for w in point.warnings() {
+                let _ = writeln!(s, "      warning: {w}");
+            }
+        }
+        for f in &self.inputs {
+            let _ = writeln!(
+                s,
+                "  input {} ({}, sha256 {})",
+                f.path,
+                f.role,
+                &f.sha256[..16]
+            );
+        }
+        s
+    }
+}
+
+/// Refuses a point whose structures would not fit: over the spec's budget key, or over the memory
+/// this machine has available (the error names the spec key that drives the largest need).
+fn check_memory(spec: &Spec, index: usize, point: &dyn DynPoint) -> Result<(), InputError> {
+    let m = point.memory();
+    let Some(largest) = m.needs.iter().max_by(|a, b| a.bytes.total_cmp(&b.bytes)) else {
+        return Ok(());
+    };
+    let total: f64 = m.needs.iter().map(|n| n.bytes).sum();
+    let listing = m
+        .needs
+        .iter()
+        .map(|n| format!("{} {:.3} GiB", n.what, n.bytes / GIB))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let refuse = |limit: String| {
+        spec.locate(
+            Some(index),
+            KeyError::new(
+                largest.key,
+                format!(
+                    "would need about {:.3} GiB ({listing}), over {limit}; reduce {}",
+                    total / GIB,
+                    largest.key
+                ),
+            ),
+        )
+    };
+    if let Some((key, gib)) = m.budget {
+        if total.is_nan() || total > gib * GIB {
+            return Err(refuse(format!("{key} = {gib} GiB")));
+        }
+    }
+    if let Some(avail) = available_memory() {
+        if total.is_nan() || total > 0.9 * avail as f64 {
+            return Err(refuse(format!(
+                "the {:.2} GiB this machine has available",
+                avail as f64 / GIB
+            )));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,244 @@
+//! Column declarations: every CSV column raycost writes comes from one [`Column`] — its name, unit,
+//! class and meaning — declared once beside the code that fills it. Rows are built only through
+//! declarations ([`super::row::Row::put`]), so the class of a cell is data, never guessed from its
+//! name: the checks that threads, shards and resume leave results unchanged compare every column that
+//! is not [`Class::Timing`], and `raycost doc columns` prints the declarations.
+//!
+//! A declaration may stand for several CSV columns:
+//! - an estimate (`shape = Shape::Estimate`) writes `M_mean`, `M_se`, `M_n`, and with a theory
+//!   `M_theory` (a prediction) or `M_theory, M_lower, M_upper, M_band` (a band and where the 95 % CI
+//!   falls in it);
+//! - a name with `{}` is a family, one column per engine or table (`tests_{}` → `tests_sphere_cache`).
+
+use serde::{Deserialize, Serialize};
+
+/// What a column holds: decides which columns may differ between two runs of one spec and seed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Class {
+    /// The point index or a parameter of the point (a spec key).
+    Parameter,
+    /// A measured count or estimate: identical for the same spec and seed on any machine, thread
+    /// count, shard or resume.
+    Measured,
+    /// Seconds, rates and decisions taken from them: the only columns allowed to differ.
+    Timing,
+    /// A closed form for the point's parameters.
+    Theory,
+    /// A check's outcome or a verdict derived from measured values (mismatches, band position).
+    Check,
+}
+
+impl Class {
+    /// The spelling in metadata and docs.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Class::Parameter => "parameter",
+            Class::Measured => "measured",
+            Class::Timing => "timing",
+            Class::Theory => "theory",
+            Class::Check => "check",
+        }
+    }
+
+    /// Must two runs of the same spec and seed agree on this column?
+    pub fn is_reproducible(self) -> bool {
+        self != Class::Timing
+    }
+}
+
+/// How many CSV columns a declaration expands to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shape {
+    /// One column.
+    Value,
+    /// `_mean`, `_se`, `_n`.
+    Estimate,
+    /// `_mean`, `_se`, `_n`, `_theory`: held against a prediction.
+    EstimateVsPrediction,
+    /// `_mean`, `_se`, `_n`, `_theory`, `_lower`, `_upper`, `_band`: held against a band.
+    EstimateVsBand,
+}
+
+/// One declared column (or family of columns, see the module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Column {
+    /// CSV name (or stem, for estimates); `{}` marks the variable part of a family.
+    pub name: &'static str,
+    /// Unit (`"1"` for a pure number, `"rays"`, `"s"`, `"W/m²"`, …).
+    pub unit: &'static str,
+    /// Class of the value (for estimates: of `_mean` and `_se`).
+    pub class: Class,
+    /// How many columns it expands to.
+    pub shape: Shape,
+    /// What it means, one sentence.
+    pub doc: &'static str,
+}
+
+/// One expanded CSV column: what metadata records and `raycost doc columns` prints.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ColumnInfo {
+    /// CSV name.
+    pub name: String,
+    /// Class.
+    pub class: Class,
+    /// Unit.
+    pub unit: String,
+}
+
+impl Column {
+    /// A single-valued column.
+    pub const fn value(
+        name: &'static str,
+        unit: &'static str,
+        class: Class,
+        doc: &'static str,
+    ) -> Self {
+        Self {
+            name,
+            unit,
+            class,
+            shape: Shape::Value,
+            doc,
+        }
+    }
+
+    /// A measured estimate (`_mean`, `_se`, `_n`).
+    pub const fn estimate(name: &'static str, unit: &'static str, doc: &'static str) -> Self {
+        Self {
+            name,
+            unit,
+            class: Class::Measured,
+            shape: Shape::Estimate,
+            doc,
+        }
+    }
+
+    /// An estimated duration or rate (`_mean`, `_se`, `_n`; timing class).
+    pub const fn timed_estimate(name: &'static str, unit: &'static str, doc: &'static str) -> Self {
+        Self {
+            name,
+            unit,
+            class: Class::Timing,
+            shape: Shape::Estimate,
+            doc,
+        }
+    }
+
+    /// A measured estimate held against a prediction.
+    pub const fn vs_prediction(name: &'static str, unit: &'static str, doc: &'static str) -> Self {
+        Self {
+            name,
+            unit,
+            class: Class::Measured,
+            shape: Shape::EstimateVsPrediction,
+            doc,
+        }
+    }
+
+    /// A measured estimate held against a band (and a prediction inside it).
+    pub const fn vs_band(name: &'static str, unit: &'static str, doc: &'static str) -> Self {
+        Self {
+            name,
+            unit,
+            class: Class::Measured,
+            shape: Shape::EstimateVsBand,
+            doc,
+        }
+    }
+
+    /// Is this a family (`{}` in the name)?
+    pub fn is_family(&self) -> bool {
+        self.name.contains("{}")
+    }
+
+    /// The CSV name of family member `part` (the name itself when not a family).
+    pub fn member(&self, part: &str) -> String {
+        self.name.replacen("{}", part, 1)
+    }
+
+    /// The CSV columns it expands to, with the name stem `stem` (the name, or a family member).
+    pub fn expand(&self, stem: &str) -> Vec<ColumnInfo> {
+        let c = |suffix: &str, class: Class| ColumnInfo {
+            name: format!("{stem}{suffix}"),
+            class,
+            unit: match suffix {
+                "_n" | "_band" => "1".into(),
+                _ => self.unit.into(),
+            },
+        };
+        let est = |v: &mut Vec<ColumnInfo>| {
+            v.push(c("_mean", self.class));
+            v.push(c("_se", self.class));
+            // The number of samples does not depend on the machine, even for a timing estimate.
+            v.push(c("_n", Class::Measured));
+        };
+        let mut v = Vec::new();
+        match self.shape {
+            Shape::Value => v.push(c("", self.class)),
+            Shape::Estimate => est(&mut v),
+            Shape::EstimateVsPrediction => {
+                est(&mut v);
+                v.push(c("_theory", Class::Theory));
+            }
+            Shape::EstimateVsBand => {
+                est(&mut v);
+                v.push(c("_theory", Class::Theory));
+                v.push(c("_lower", Class::Theory));
+                v.push(c("_upper", Class::Theory));
+                v.push(c("_band", Class::Check));
+            }
+        }
+        v
+    }
+}
+
+/// The point index column that starts every table.
+pub const POINT: Column = Column::value(
+    "point",
+    "1",
+    Class::Parameter,
+    "the sweep point's index (0-based, in expansion order)",
+);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn estimates_expand_with_their_classes() {
+        const N_I: Column = Column::vs_band("n_i", "tests", "ray-sphere tests");
+        let names: Vec<(String, Class)> = N_I
+            .expand("n_i")
+            .into_iter()
+            .map(|c| (c.name, c.class))
+            .collect();
+        assert_eq!(
+            names,
+            [
+                ("n_i_mean".to_string(), Class::Measured),
+                ("n_i_se".into(), Class::Measured),
+                ("n_i_n".into(), Class::Measured),
+                ("n_i_theory".into(), Class::Theory),
+                ("n_i_lower".into(), Class::Theory),
+                ("n_i_upper".into(), Class::Theory),
+                ("n_i_band".into(), Class::Check),
+            ]
+        );
+        const FRAME: Column = Column::timed_estimate("frame_s", "s", "seconds per frame");
+        let classes: Vec<Class> = FRAME.expand("frame_s").iter().map(|c| c.class).collect();
+        assert_eq!(classes, [Class::Timing, Class::Timing, Class::Measured]);
+        // N_S is measured whatever its name ends with (issue 15: `n_s_mean` was classed as timing).
+        const N_S: Column = Column::vs_prediction("n_s", "steps", "cell steps");
+        assert!(N_S.expand("n_s").iter().all(|c| c.class != Class::Timing));
+    }
+
+    #[test]
+    fn families_name_their_members() {
+        const TESTS: Column = Column::value("tests_{}", "tests", Class::Measured, "tests");
+        assert!(TESTS.is_family());
+        assert_eq!(TESTS.member("sphere_cache"), "tests_sphere_cache");
+        assert!(!POINT.is_family());
+        assert_eq!(POINT.member("x"), "point");
+    }
+}
