@@ -12,18 +12,13 @@ pub fn sweep_spec() -> PathBuf {
     root().join("tests/specs/slurm-sweep.toml")
 }
 
-/// Timing columns: the only ones allowed to differ between two runs of one spec and seed.
-pub fn is_timing(col: &str) -> bool {
-    col.ends_with("_s") || col == "rays_per_s"
-}
-
 /// Header and rows of a CSV, as text cells.
 pub fn cells(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
     crate::common::read_csv(path)
 }
 
-/// Asserts that two tables have the same columns and, outside timing columns, the same cells,
-/// byte for byte; returns the number of rows.
+/// Asserts that two tables have the same columns and, outside the columns their metadata declares
+/// timings, the same cells, byte for byte; returns the number of rows.
 pub fn assert_same_measured(a: &Path, b: &Path) -> usize {
     let (ha, ra) = cells(a);
     let (hb, rb) = cells(b);
@@ -35,25 +30,28 @@ pub fn assert_same_measured(a: &Path, b: &Path) -> usize {
         a.display(),
         b.display()
     );
-    let measured: Vec<usize> = (0..ha.len()).filter(|&i| !is_timing(&ha[i])).collect();
+    let (ma, mb) = (
+        crate::common::measured_columns(a),
+        crate::common::measured_columns(b),
+    );
     assert!(
-        measured.len() > 10,
+        ma.first().is_some_and(|r| r.len() > 10),
         "too few measured columns in {}",
         a.display()
     );
-    for (n, (x, y)) in ra.iter().zip(&rb).enumerate() {
-        assert_eq!(x.len(), ha.len(), "{} row {n}: wrong width", a.display());
-        assert_eq!(y.len(), hb.len(), "{} row {n}: wrong width", b.display());
-        for &i in &measured {
+    for (n, (x, y)) in ma.iter().zip(&mb).enumerate() {
+        assert_eq!(
+            x.len(),
+            y.len(),
+            "row {n}: the two tables class their columns differently"
+        );
+        for ((c, u), (_, v)) in x.iter().zip(y) {
             assert_eq!(
-                x[i],
-                y[i],
-                "row {n} column {}: {} has {}, {} has {}",
-                ha[i],
+                u,
+                v,
+                "row {n} column {c}: {} has {u}, {} has {v}",
                 a.display(),
-                x[i],
-                b.display(),
-                y[i]
+                b.display()
             );
         }
     }

@@ -11,5 +11,6 @@ mod merge;
 mod oracle;
 mod quasi_static;
 mod render;
+mod reproducible;
 mod resume;
 mod slurm;

@@ -62,6 +62,11 @@ impl Plan {
                 registry::names()
             ),
         })?;
+        Self::with_kind(spec, kind)
+    }
+
+    /// Validates an expanded spec as kind `kind` (the registry's, or a test's own).
+    pub(crate) fn with_kind(spec: Spec, kind: &'static dyn DynKind) -> Result<Plan, InputError> {
         // The file as written, by the kind's own struct: unknown keys and tables, wrong types and
         // out-of-range values, located by line and column.
         kind.check_text(&spec.text).map_err(|e| {

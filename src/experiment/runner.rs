@@ -10,7 +10,7 @@ use std::time::Instant;
 use super::kind::{Check, Context, DynKind, ErasedOutput};
 use super::plan::Plan;
 use crate::error::{Context as _, Error};
-use crate::output::column::{ColumnInfo, POINT};
+use crate::output::column::{declared_class, ColumnInfo, POINT};
 use crate::output::meta::Meta;
 use crate::output::progress::progress;
 use crate::output::row::{Row, Value};
@@ -204,6 +204,12 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
             .run(plan.points[i].as_ref(), shared.as_ref(), &ctx)
             .context_with(|| format!("point {i}"))?;
         let wall = start.elapsed().as_secs_f64();
+        check_declared(kind, "main", &out.row)?;
+        for (name, rows) in &out.tables {
+            for r in rows {
+                check_declared(kind, name, r)?;
+            }
+        }
         let row = with_point_columns(i, &p.params, &out.row);
         let side: Vec<(&'static str, Vec<Row>)> = out
             .tables
@@ -276,6 +282,38 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
     Ok((written, summary::render(&shown)))
 }
 
+/// Every cell of a kind's row must come from the kind's declaration of that table, with the class
+/// declared there (a bug in the kind otherwise: refused before anything of the point is written).
+fn check_declared(kind: &dyn DynKind, table: &str, row: &Row) -> Result<(), Error> {
+    let columns = kind.columns();
+    let declared = columns
+        .iter()
+        .find(|(t, _)| *t == table)
+        .map_or(&[][..], |(_, c)| *c);
+    for cell in &row.0 {
+        match declared_class(declared, &cell.name) {
+            Some(class) if class == cell.class => {}
+            Some(class) => {
+                return Err(Error::internal(format!(
+                    "kind {}: column {table}.{} is written as {} but declared {}",
+                    kind.name(),
+                    cell.name,
+                    cell.class.as_str(),
+                    class.as_str()
+                )))
+            }
+            None => {
+                return Err(Error::internal(format!(
+                    "kind {}: column {table}.{} is not declared",
+                    kind.name(),
+                    cell.name
+                )))
+            }
+        }
+    }
+    Ok(())
+}
+
 fn describe_failure(i: usize, params: &str, c: &Check) -> String {
     format!(
         "point {i} ({params}): {} {} of {} checked ({})",
@@ -292,4 +330,104 @@ fn record_columns(columns: &mut BTreeMap<String, Vec<ColumnInfo>>, table: &str, 
 
 fn short(key: &str) -> &str {
     key.rsplit('.').next().unwrap_or(key)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::experiment::inputs::Inputs;
+    use crate::experiment::kind::{
+        Check, ConfigError, Context, Kind, NoTables, PointOutput, Rate, Registered, Work,
+    };
+    use crate::experiment::lines_in_sphere::LinesSpec;
+    use crate::output::column::{Class, Column};
+
+    /// A kind whose built-in check fails on its second point.
+    struct Failing;
+
+    const VALUE: Column = Column::value("value", "1", Class::Measured, "the point's value");
+    const BAD: Column = Column::value("bad", "1", Class::Check, "failures");
+
+    impl Kind for Failing {
+        const NAME: &'static str = "failing";
+        const ABOUT: &'static str = "a test kind";
+        type Raw = LinesSpec;
+        type Point = f64;
+        type Tables = NoTables;
+        type Shared = ();
+        fn columns() -> Vec<(&'static str, &'static [Column])> {
+            vec![("main", &[VALUE, BAD])]
+        }
+        fn configure(raw: LinesSpec, _: &mut Inputs) -> Result<f64, ConfigError> {
+            Ok(raw.lines.inner_radius)
+        }
+        fn describe(p: &f64) -> String {
+            p.to_string()
+        }
+        fn work(_: &f64) -> Work {
+            Work {
+                units: 1,
+                unit: "points",
+            }
+        }
+        fn shared(_: &[&f64]) -> Result<(), Error> {
+            Ok(())
+        }
+        fn run(p: &f64, _: &(), ctx: &Context) -> Result<PointOutput<NoTables>, Error> {
+            let failures = u64::from(ctx.index == 1);
+            let mut row = Row::default();
+            row.put(&VALUE, *p).put(&BAD, failures);
+            Ok(PointOutput {
+                row,
+                tables: NoTables,
+                summary: Vec::new(),
+                checks: vec![Check {
+                    name: "bad",
+                    what: "a planted failure",
+                    failures,
+                    checked: 1,
+                }],
+                rate: Rate {
+                    per_s: 1.0,
+                    unit: "points",
+                },
+                warnings: Vec::new(),
+            })
+        }
+    }
+
+    static FAILING: Registered<Failing> = Registered::NEW;
+
+    /// Every kind's checks are handled alike (the quasi-static kind once lost its row instead): all
+    /// rows reach the finished table, then the run fails with exit code 1 naming the point.
+    #[test]
+    fn a_failed_check_keeps_every_row_and_fails_the_run() {
+        let dir = tempfile::tempdir().unwrap();
+        let text = "[experiment]\nname = \"f\"\nkind = \"failing\"\n[lines]\ncount = 1\ninner_radius = 0.5\n[sweep]\n\"lines.inner_radius\" = [0.1, 0.2, 0.3]\n";
+        let path = dir.path().join("f.toml");
+        std::fs::write(&path, text).unwrap();
+        let spec = crate::spec::Spec::read(&path, &[]).unwrap();
+        let plan = Plan::with_kind(spec, &FAILING).unwrap();
+        let opts = RunOptions {
+            out: dir.path().join("out"),
+            force: false,
+            resume: false,
+            quiet: true,
+            shard: None,
+            sets: Vec::new(),
+        };
+        let e = run(&plan, &opts).expect_err("the check failed");
+        assert_eq!(e.exit_code(), 1);
+        let msg = e.to_string();
+        assert!(
+            msg.contains("point 1") && msg.contains("a planted failure"),
+            "{msg}"
+        );
+        let csv = std::fs::read_to_string(dir.path().join("out/f/f.csv")).unwrap();
+        assert_eq!(csv.lines().count(), 4, "{csv}");
+        assert!(csv.lines().nth(2).unwrap().ends_with(",1"), "{csv}");
+        let meta = Meta::read(&dir.path().join("out/f/f.meta.toml")).unwrap();
+        assert!(meta.run.finished.is_some());
+        assert!(!meta.reproducible_columns("main").is_empty());
+    }
 }

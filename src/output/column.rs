@@ -193,6 +193,25 @@ impl Column {
     }
 }
 
+/// The declaration among `declared` that CSV column `name` comes from, with the class it declares
+/// for that name. `{}` in a family matches any non-empty part; where several declarations match
+/// (`tests_{}` and `tests_{}_theory` both match `tests_grid_theory`), the most specific wins: an exact
+/// name, else the pattern with the most fixed characters.
+pub fn declared_class(declared: &[Column], name: &str) -> Option<Class> {
+    declared
+        .iter()
+        .flat_map(|c| c.expand(c.name))
+        .filter_map(|info| match info.name.split_once("{}") {
+            None => (info.name == name).then_some((usize::MAX, info.class)),
+            Some((pre, post)) => (name.len() > pre.len() + post.len()
+                && name.starts_with(pre)
+                && name.ends_with(post))
+            .then_some((pre.len() + post.len(), info.class)),
+        })
+        .max_by_key(|(specificity, _)| *specificity)
+        .map(|(_, class)| class)
+}
+
 /// The point index column that starts every table.
 pub const POINT: Column = Column::value(
     "point",
@@ -240,5 +259,28 @@ mod tests {
         assert_eq!(TESTS.member("sphere_cache"), "tests_sphere_cache");
         assert!(!POINT.is_family());
         assert_eq!(POINT.member("x"), "point");
+    }
+}
+
+#[cfg(test)]
+mod declared_tests {
+    use super::*;
+
+    #[test]
+    fn the_most_specific_declaration_wins() {
+        const TESTS: Column = Column::value("tests_{}", "tests", Class::Measured, "");
+        const THEORY: Column = Column::value("tests_{}_theory", "tests", Class::Theory, "");
+        const N_S: Column = Column::vs_prediction("n_s", "steps", "");
+        const SPEED: Column = Column::value("rays_per_s", "rays/s", Class::Timing, "");
+        let d = [TESTS, THEORY, N_S, SPEED];
+        assert_eq!(declared_class(&d, "tests_grid"), Some(Class::Measured));
+        assert_eq!(declared_class(&d, "tests_grid_theory"), Some(Class::Theory));
+        // N_S is measured whatever its suffix looks like; its theory is theory.
+        assert_eq!(declared_class(&d, "n_s_mean"), Some(Class::Measured));
+        assert_eq!(declared_class(&d, "n_s_se"), Some(Class::Measured));
+        assert_eq!(declared_class(&d, "n_s_theory"), Some(Class::Theory));
+        assert_eq!(declared_class(&d, "rays_per_s"), Some(Class::Timing));
+        assert_eq!(declared_class(&d, "tests_"), None);
+        assert_eq!(declared_class(&d, "n_i_mean"), None);
     }
 }
