@@ -90,6 +90,24 @@ impl OutputError {
     }
 }
 
+/// A value that is out of range or inconsistent, said in words; the caller locates it (a spec key, a
+/// line of a scene file, a metadata file).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct Invalid(pub String);
+
+impl From<String> for Invalid {
+    fn from(s: String) -> Self {
+        Invalid(s)
+    }
+}
+
+impl From<&str> for Invalid {
+    fn from(s: &str) -> Self {
+        Invalid(s.to_string())
+    }
+}
+
 /// Every way raycost can fail; the variant decides the exit code ([`Error::exit_code`]).
 #[derive(Debug, thiserror::Error)]
 pub enum Error {

@@ -34,25 +34,25 @@ pub struct Discs {
 impl Discs {
     /// Discs from points and normals; normals are normalised here. Fails on a zero or non-finite
     /// normal, a non-finite point, or d ≤ 0.
-    pub fn new(centers: Vec<DVec3>, normals: Vec<DVec3>, radius: f64) -> Result<Self, String> {
+    pub fn new(
+        centers: Vec<DVec3>,
+        normals: Vec<DVec3>,
+        radius: f64,
+    ) -> Result<Self, crate::error::Invalid> {
         if !(radius.is_finite() && radius > 0.0) {
-            return Err(format!("disc radius must be finite and > 0, got {radius}"));
+            return Err(format!("disc radius must be finite and > 0, got {radius}").into());
         }
         if centers.len() != normals.len() {
-            return Err(format!(
-                "{} points but {} normals",
-                centers.len(),
-                normals.len()
-            ));
+            return Err(format!("{} points but {} normals", centers.len(), normals.len()).into());
         }
         let mut unit = Vec::with_capacity(normals.len());
         for (i, (c, n)) in centers.iter().zip(&normals).enumerate() {
             if !c.is_finite() {
-                return Err(format!("point {i} is not finite: {c}"));
+                return Err(format!("point {i} is not finite: {c}").into());
             }
             let l = n.length();
             if !(l.is_finite() && l > 0.0) {
-                return Err(format!("point {i} has a zero or non-finite normal: {n}"));
+                return Err(format!("point {i} has a zero or non-finite normal: {n}").into());
             }
             unit.push(*n / l);
         }

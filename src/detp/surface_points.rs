@@ -11,6 +11,8 @@ use std::path::Path;
 
 use glam::DVec3;
 
+use crate::error::InputError;
+
 use crate::lt::shapes::{Ball, Triangle};
 use crate::lt::{Scene, Surface};
 
@@ -73,48 +75,63 @@ pub fn points_on(
     (pts, nrm)
 }
 
-/// Reads `x, y, z, nx, ny, nz` rows (a header line naming those columns). Errors name the file and
-/// line: a missing column, a value that is not a finite number, a zero normal.
-pub fn read_points_csv(path: &Path) -> Result<(Vec<DVec3>, Vec<DVec3>), String> {
-    let name = path.display();
-    let mut r = csv::Reader::from_path(path).map_err(|e| format!("{name}: {e}"))?;
-    let header = r.headers().map_err(|e| format!("{name}: {e}"))?.clone();
+/// Reads `x, y, z, nx, ny, nz` rows (a header line naming those columns). Errors are located in the
+/// file (line, and the column's name as the key): a missing column, a value that is not a finite
+/// number, a zero normal, no rows.
+pub fn read_points_csv(path: &Path) -> Result<(Vec<DVec3>, Vec<DVec3>), InputError> {
+    let err = |line: Option<usize>, key: Option<&str>, m: String| {
+        let e = InputError::new(path.display().to_string(), m).at(line.map(|l| (l, 1)));
+        match key {
+            Some(k) => e.key(k),
+            None => e,
+        }
+    };
+    let mut r = csv::Reader::from_path(path).map_err(|e| err(None, None, e.to_string()))?;
+    let header = r
+        .headers()
+        .map_err(|e| err(Some(1), None, e.to_string()))?
+        .clone();
     let cols: Vec<usize> = ["x", "y", "z", "nx", "ny", "nz"]
         .iter()
         .map(|c| {
-            header
-                .iter()
-                .position(|h| h.trim() == *c)
-                .ok_or_else(|| format!("{name}:1: missing column {c} (need x, y, z, nx, ny, nz)"))
+            header.iter().position(|h| h.trim() == *c).ok_or_else(|| {
+                err(
+                    Some(1),
+                    None,
+                    format!("missing column {c} (need x, y, z, nx, ny, nz)"),
+                )
+            })
         })
         .collect::<Result<_, _>>()?;
     let (mut pts, mut nrm) = (Vec::new(), Vec::new());
     for (i, rec) in r.records().enumerate() {
         let line = i + 2;
-        let rec = rec.map_err(|e| format!("{name}:{line}: {e}"))?;
+        let rec = rec.map_err(|e| err(Some(line), None, e.to_string()))?;
         let mut v = [0.0; 6];
         for (k, &c) in cols.iter().enumerate() {
             let cell = rec.get(c).unwrap_or("").trim();
+            let name = header.get(c).unwrap_or("?");
             v[k] = cell
                 .parse::<f64>()
                 .ok()
                 .filter(|x| x.is_finite())
                 .ok_or_else(|| {
-                    format!(
-                        "{name}:{line}: {}: got {cell:?}, expected a finite number",
-                        header.get(c).unwrap_or("?")
+                    err(
+                        Some(line),
+                        Some(name),
+                        format!("got {cell:?}, expected a finite number"),
                     )
                 })?;
         }
         let n = DVec3::new(v[3], v[4], v[5]);
         if n.length_squared() == 0.0 {
-            return Err(format!("{name}:{line}: the normal is zero"));
+            return Err(err(Some(line), None, "the normal is zero".into()));
         }
         pts.push(DVec3::new(v[0], v[1], v[2]));
         nrm.push(n.normalize());
     }
     if pts.is_empty() {
-        return Err(format!("{name}: no points"));
+        return Err(err(None, None, "no points".into()));
     }
     Ok((pts, nrm))
 }

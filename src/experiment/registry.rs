@@ -5,9 +5,9 @@ use super::kind::{DynKind, Registered};
 
 /// Every kind, in the order `raycost doc` lists them.
 pub static KINDS: &[&dyn DynKind] = &[
-    &Registered::<super::grid::GridKind>::NEW,
-    &Registered::<super::grid::GridScalingKind>::NEW,
-    &Registered::<super::grid::GridCostModelKind>::NEW,
+    &Registered::<super::grid::Grid<super::grid::Study>>::NEW,
+    &Registered::<super::grid::Grid<super::grid::Scaling>>::NEW,
+    &Registered::<super::grid::Grid<super::grid::CostModel>>::NEW,
     &Registered::<super::lines_in_sphere::LinesInSphereKind>::NEW,
     &Registered::<super::detp::DetpKind>::NEW,
     &Registered::<super::quasi_static::QuasiStaticKind>::NEW,

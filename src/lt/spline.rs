@@ -185,7 +185,7 @@ impl<T: KbValue> KbTrack<T> {
     /// files break that (the robots' `gun_rot` tracks jump back from 48 to 42), so decreasing times
     /// are accepted and evaluated as the reference code does: the first segment whose end time lies
     /// after `t` is used (see [`KbTrack::monotonic`]).
-    pub fn new(mut keys: Vec<KbKey<T>>) -> Result<Self, String> {
+    pub fn new(mut keys: Vec<KbKey<T>>) -> Result<Self, crate::error::Invalid> {
         if keys.is_empty() {
             return Err("a keyframe track needs at least one key".into());
         }

@@ -299,11 +299,11 @@ impl Meta {
     pub fn read(path: &Path) -> Result<Meta, OutputError> {
         let text = std::fs::read_to_string(path)
             .map_err(|e| OutputError::new(path, format!("cannot read the metadata: {e}")))?;
-        Self::parse(&text).map_err(|m| OutputError::new(path, m))
+        Self::parse(&text).map_err(|m| OutputError::new(path, m.0))
     }
 
     /// Parses metadata text.
-    pub fn parse(text: &str) -> Result<Meta, String> {
+    pub fn parse(text: &str) -> Result<Meta, crate::error::Invalid> {
         let table: toml::Table = text
             .parse()
             .map_err(|e: toml::de::Error| format!("not TOML: {}", e.message()))?;
@@ -312,17 +312,19 @@ impl Meta {
             Some(v) => {
                 return Err(format!(
                     "metadata schema {v}, this raycost reads schema {SCHEMA} (written by another version; rerun)"
-                ))
+                )
+                .into())
             }
             None => {
                 return Err(format!(
                     "no metadata schema (written by a raycost older than schema {SCHEMA}; rerun)"
-                ))
+                )
+                .into())
             }
         }
         toml::Value::Table(table)
             .try_into()
-            .map_err(|e: toml::de::Error| format!("unreadable metadata: {}", e.message()))
+            .map_err(|e: toml::de::Error| format!("unreadable metadata: {}", e.message()).into())
     }
 
     /// The names of the columns of `table` that must agree between runs (everything but timings).
@@ -488,9 +490,13 @@ mod tests {
         let old = text.replace("schema = 2", "schema = 1");
         assert!(Meta::parse(&old)
             .expect_err("schema 1")
+            .0
             .contains("schema 1"));
         let none = text.replace("schema = 2\n", "");
-        assert!(Meta::parse(&none).expect_err("no schema").contains("older"));
+        assert!(Meta::parse(&none)
+            .expect_err("no schema")
+            .0
+            .contains("older"));
         assert_eq!(m.reproducible_columns("main"), ["n_s_mean"]);
     }
 

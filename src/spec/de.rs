@@ -68,11 +68,11 @@ pub fn from_tree<T: DeserializeOwned>(tree: &toml::Table) -> Result<T, KeyError>
 }
 
 /// `Ok(x)` when x is finite and > 0, else "got x, expected a finite number > 0".
-pub fn check_positive(x: f64) -> Result<f64, String> {
+pub fn check_positive(x: f64) -> Result<f64, crate::error::Invalid> {
     if x.is_finite() && x > 0.0 {
         Ok(x)
     } else {
-        Err(format!("got {x}, expected a finite number > 0"))
+        Err(format!("got {x}, expected a finite number > 0").into())
     }
 }
 

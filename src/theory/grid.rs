@@ -59,12 +59,14 @@ pub struct GridTheoryInput<'a> {
     pub cell_width: f64,
 }
 
-/// Where the eye sits relative to the grid.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Where the eye sits relative to the grid (also the spec's `grid.eye`, spelled in kebab case).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Eye {
     /// Exactly at a cell corner (the floor effect lowers N_S slightly).
     Corner,
-    /// Uniformly distributed inside its cell.
+    /// Uniformly distributed inside its cell (a fresh position per ray).
+    #[default]
     Uniform,
 }
 

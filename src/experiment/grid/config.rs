@@ -283,10 +283,7 @@ impl GridConfig {
             scene,
             cell_width: a,
             mailbox: g.mailbox,
-            eye: match g.eye {
-                super::spec::Eye::Corner => Eye::Corner,
-                super::spec::Eye::Uniform => Eye::Uniform,
-            },
+            eye: g.eye,
             rays_per_scene: g.rays_per_scene,
             replicas: s.replicas.unwrap_or(1),
             max_steps: g.max_steps,

@@ -38,13 +38,6 @@ fn describe(g: &GridConfig) -> String {
     format!("{scene}, {} rays", g.rays)
 }
 
-fn work(g: &GridConfig) -> Work {
-    Work {
-        units: g.rays,
-        unit: "rays",
-    }
-}
-
 /// A finite scene's spheres and cell lists; an infinite scene's per-ray working set: the spheres
 /// drawn for the first cell's reach box, ρ·(a + 2r_max)³ of them (each thread walks one ray at a
 /// time; with shared realisations a batch's block of cells).
@@ -76,124 +69,110 @@ fn memory(g: &GridConfig) -> Memory {
     }
 }
 
-fn columns() -> Vec<(&'static str, &'static [Column])> {
-    vec![("main", columns::MAIN), ("hist", columns::HIST)]
+/// What distinguishes the three grid kinds: name, description, [`Variant`], and what a run measures
+/// once (the cost model's machine constants).
+pub trait GridVariant: Send + Sync + 'static {
+    /// `experiment.kind`.
+    const NAME: &'static str;
+    /// Description.
+    const ABOUT: &'static str;
+    /// The variant of the shared tracer.
+    const VARIANT: Variant;
+    /// Measured once per run.
+    type Shared: Send + Sync + 'static;
+    /// Measures it.
+    fn shared() -> Self::Shared;
+    /// The machine constants, if this variant has them.
+    fn machine(s: &Self::Shared) -> Option<MachineCosts>;
 }
 
-fn configure(raw: GridSpec, v: Variant) -> Result<GridConfig, ConfigError> {
-    Ok(GridConfig::from_spec(&raw, v)?)
-}
+/// A grid kind: one impl of [`Kind`] for all three variants.
+pub struct Grid<V>(std::marker::PhantomData<V>);
 
-/// Kind `grid`.
-pub struct GridKind;
-
-impl Kind for GridKind {
-    const NAME: &'static str = "grid";
-    const ABOUT: &'static str = "Rays from an eye through a regular grid (3D-DDA) over Poisson spheres (an infinite scene generated lazily where rays go, or a finite cube): ray–sphere tests N_I (with and without mailboxing) against Result 3.1/3.2's band and raycost's sharper predictors, cell steps N_S against their exact expectation, the first-hit distance t* against the exponential law (KS and χ²), and the hit rate.";
+impl<V: GridVariant> Kind for Grid<V> {
+    const NAME: &'static str = V::NAME;
+    const ABOUT: &'static str = V::ABOUT;
     type Raw = GridSpec;
     type Point = GridConfig;
     type Tables = GridTables;
-    type Shared = ();
+    type Shared = V::Shared;
 
     fn columns() -> Vec<(&'static str, &'static [Column])> {
-        columns()
+        vec![("main", columns::MAIN), ("hist", columns::HIST)]
     }
     fn configure(raw: GridSpec, _: &mut Inputs) -> Result<GridConfig, ConfigError> {
-        configure(raw, Variant::Study)
+        Ok(GridConfig::from_spec(&raw, V::VARIANT)?)
     }
     fn describe(p: &GridConfig) -> String {
         describe(p)
     }
     fn work(p: &GridConfig) -> Work {
-        work(p)
+        Work {
+            units: p.rays,
+            unit: "rays",
+        }
     }
     fn memory(p: &GridConfig) -> Memory {
         memory(p)
     }
-    fn shared(_: &[&GridConfig]) -> Result<(), Error> {
-        Ok(())
+    fn shared(_: &[&GridConfig]) -> Result<V::Shared, Error> {
+        Ok(V::shared())
     }
-    fn run(p: &GridConfig, _: &(), ctx: &Context) -> Result<PointOutput<GridTables>, Error> {
-        Ok(run::run_point(p, ctx.index, None, ctx.progress))
+    fn shared_meta(s: &V::Shared) -> toml::Table {
+        let mut outer = toml::Table::new();
+        if let Some(m) = V::machine(s) {
+            let mut t = toml::Table::new();
+            t.insert("t_i_s".into(), toml::Value::Float(m.t_i));
+            t.insert("t_s_s".into(), toml::Value::Float(m.t_s));
+            outer.insert("cost_model".into(), toml::Value::Table(t));
+        }
+        outer
+    }
+    fn run(p: &GridConfig, s: &V::Shared, ctx: &Context) -> Result<PointOutput<GridTables>, Error> {
+        Ok(run::run_point(p, ctx.index, V::machine(s), ctx.progress))
+    }
+}
+
+/// Kind `grid`.
+pub struct Study;
+
+impl GridVariant for Study {
+    const NAME: &'static str = "grid";
+    const ABOUT: &'static str = "Rays from an eye through a regular grid (3D-DDA) over Poisson spheres (an infinite scene generated lazily where rays go, or a finite cube): ray–sphere tests N_I (with and without mailboxing) against Result 3.1/3.2's band and raycost's sharper predictors, cell steps N_S against their exact expectation, the first-hit distance t* against the exponential law (KS and χ²), and the hit rate.";
+    const VARIANT: Variant = Variant::Study;
+    type Shared = ();
+    fn shared() {}
+    fn machine(_: &()) -> Option<MachineCosts> {
+        None
     }
 }
 
 /// Kind `grid-scaling`.
-pub struct GridScalingKind;
+pub struct Scaling;
 
-impl Kind for GridScalingKind {
+impl GridVariant for Scaling {
     const NAME: &'static str = "grid-scaling";
     const ABOUT: &'static str = "Finite Poisson scenes of growing sphere count n, several realisations each: N_I and N_S settle on the infinite scene's values (E[t(n)] = O(1)), brute force checks the grid's first hits, memory and build time grow with n, and Proposition 4.1's tails P(N_I ≥ c·ln n) and P(N_I ≥ c·√n) fall with n.";
-    type Raw = GridSpec;
-    type Point = GridConfig;
-    type Tables = GridTables;
+    const VARIANT: Variant = Variant::Scaling;
     type Shared = ();
-
-    fn columns() -> Vec<(&'static str, &'static [Column])> {
-        columns()
-    }
-    fn configure(raw: GridSpec, _: &mut Inputs) -> Result<GridConfig, ConfigError> {
-        configure(raw, Variant::Scaling)
-    }
-    fn describe(p: &GridConfig) -> String {
-        describe(p)
-    }
-    fn work(p: &GridConfig) -> Work {
-        work(p)
-    }
-    fn memory(p: &GridConfig) -> Memory {
-        memory(p)
-    }
-    fn shared(_: &[&GridConfig]) -> Result<(), Error> {
-        Ok(())
-    }
-    fn run(p: &GridConfig, _: &(), ctx: &Context) -> Result<PointOutput<GridTables>, Error> {
-        Ok(run::run_point(p, ctx.index, None, ctx.progress))
+    fn shared() {}
+    fn machine(_: &()) -> Option<MachineCosts> {
+        None
     }
 }
 
 /// Kind `grid-cost-model`.
-pub struct GridCostModelKind;
+pub struct CostModel;
 
-impl Kind for GridCostModelKind {
+impl GridVariant for CostModel {
     const NAME: &'static str = "grid-cost-model";
     const ABOUT: &'static str = "The query-time model t = N_I·T_I + N_S·T_S: T_I and T_S measured on this machine once per run, the model's time from the predicted and from the measured counts, beside the timed query.";
-    type Raw = GridSpec;
-    type Point = GridConfig;
-    type Tables = GridTables;
+    const VARIANT: Variant = Variant::CostModel;
     type Shared = MachineCosts;
-
-    fn columns() -> Vec<(&'static str, &'static [Column])> {
-        columns()
+    fn shared() -> MachineCosts {
+        machine::measure()
     }
-    fn configure(raw: GridSpec, _: &mut Inputs) -> Result<GridConfig, ConfigError> {
-        configure(raw, Variant::CostModel)
-    }
-    fn describe(p: &GridConfig) -> String {
-        describe(p)
-    }
-    fn work(p: &GridConfig) -> Work {
-        work(p)
-    }
-    fn memory(p: &GridConfig) -> Memory {
-        memory(p)
-    }
-    fn shared(_: &[&GridConfig]) -> Result<MachineCosts, Error> {
-        Ok(machine::measure())
-    }
-    fn shared_meta(m: &MachineCosts) -> toml::Table {
-        let mut t = toml::Table::new();
-        t.insert("t_i_s".into(), toml::Value::Float(m.t_i));
-        t.insert("t_s_s".into(), toml::Value::Float(m.t_s));
-        let mut outer = toml::Table::new();
-        outer.insert("cost_model".into(), toml::Value::Table(t));
-        outer
-    }
-    fn run(
-        p: &GridConfig,
-        m: &MachineCosts,
-        ctx: &Context,
-    ) -> Result<PointOutput<GridTables>, Error> {
-        Ok(run::run_point(p, ctx.index, Some(*m), ctx.progress))
+    fn machine(m: &MachineCosts) -> Option<MachineCosts> {
+        Some(*m)
     }
 }

@@ -190,15 +190,15 @@ pub enum RawDist {
 }
 
 impl RawDist {
-    fn check(&self) -> Result<(), String> {
+    fn check(&self) -> Result<(), crate::error::Invalid> {
         match *self {
             RawDist::Uniform { lo, hi } => {
                 check_positive(lo)?;
                 check_positive(hi)?;
                 if hi < lo {
-                    return Err(format!(
-                        "uniform radius needs lo ≤ hi, got lo = {lo}, hi = {hi}"
-                    ));
+                    return Err(
+                        format!("uniform radius needs lo ≤ hi, got lo = {lo}, hi = {hi}").into(),
+                    );
                 }
             }
             RawDist::Lognormal { median, sigma, max } => {
@@ -206,7 +206,7 @@ impl RawDist {
                 check_positive(sigma)?;
                 check_positive(max)?;
                 if max < median * (-6.0 * sigma).exp() {
-                    return Err(format!("lognormal max = {max} cuts away almost all of the law (median {median}, sigma {sigma})"));
+                    return Err(format!("lognormal max = {max} cuts away almost all of the law (median {median}, sigma {sigma})").into());
                 }
             }
         }
@@ -241,16 +241,7 @@ pub struct RawGrid {
     pub max_steps: u64,
 }
 
-/// Eye placement.
-#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
-pub enum Eye {
-    /// Exactly on a cell corner.
-    Corner,
-    /// Uniform inside its cell (a fresh position per ray).
-    #[default]
-    Uniform,
-}
+pub use crate::theory::grid::Eye;
 
 /// `[histogram]`.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
