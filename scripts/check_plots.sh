@@ -60,7 +60,7 @@ for name in lines-rays-per-level lines-cache-misses sphere-cache-q detp-engines-
 done
 
 # The quasi-static plot scripts on small fresh runs of their specs (few photons and frames, coarse
-# points); the kitchen ones read ../shared/scenes/bart/ as the committed runs do.
+# points); the kitchen ones read the vendored experiments/scenes/bart/.
 for name in quasi-static-frames quasi-static-crossover quasi-static-static-points real-scene-levels speed-vs-error \
             predict-engine quasi-static-robots; do
     case "$name" in

@@ -254,6 +254,12 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
     print_detp(&detp_rows);
     println!("\nQuasi-static DETP (one frame, incremental vs full):");
     let qs_rows = quasi_static::run(quick)?;
+    if quasi_static::find_kitchen().is_none() {
+        meta.warnings.push(format!(
+            "the BART kitchen ({}) was not found: the kitchen-* rows are missing",
+            quasi_static::KITCHEN
+        ));
+    }
     let rows: Vec<Row> = measured
         .iter()
         .map(Measured::row)

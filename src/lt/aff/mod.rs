@@ -52,8 +52,9 @@ use super::spline::{self, KbTrack, KbTransform, Node};
 use super::{Camera, InputError, Light, Surface};
 
 /// Where BART scenes live and what they are, for the "file not found" message.
-pub const BART_HINT: &str = "BART scenes come from ../shared/scenes/bart/ (BART: A Benchmark for \
-Animated Ray Tracing, Lext, Assarsson & Möller 2001), e.g. ../shared/scenes/bart/kitchen/kitchen.aff";
+pub const BART_HINT: &str = "BART scenes come with raycost in experiments/scenes/bart/ (BART: A \
+Benchmark for Animated Ray Tracing, Lext, Assarsson & Möller 2001), e.g. \
+experiments/scenes/bart/kitchen/kitchen.aff";
 
 /// A scene read from an AFF/NFF file.
 #[derive(Clone, Debug, Default)]
@@ -302,14 +303,12 @@ mod tests {
     use super::build::ROUND;
     use super::*;
 
-    const BART: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/scenes/bart");
+    /// The vendored BART scenes (experiments/scenes/bart/README.md).
+    const BART: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/experiments/scenes/bart");
 
     fn bart(rel: &str) -> Option<AffScene> {
         let p = Path::new(BART).join(rel);
-        if !p.is_file() {
-            eprintln!("note: {} absent, BART scene test skipped", p.display());
-            return None;
-        }
+        assert!(p.is_file(), "{} is vendored with raycost", p.display());
         let t0 = std::time::Instant::now();
         let s = load_aff(&p).unwrap_or_else(|e| panic!("{e}"));
         eprintln!(
@@ -591,7 +590,7 @@ mod tests {
     #[test]
     fn missing_file_points_to_bart() {
         let e = load_aff(Path::new("/nonexistent/kitchen.aff")).unwrap_err();
-        assert!(e.message.contains("../shared/scenes/bart/") && e.message.contains("Lext"));
+        assert!(e.message.contains("experiments/scenes/bart/") && e.message.contains("Lext"));
     }
 
     #[test]
