@@ -19,6 +19,15 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
                 if n == 0 {
                     return Err(Error::Usage("--threads must be at least 1".into()));
                 }
+                // More threads than 8 per CPU only add scheduling cost (and a huge count costs
+                // minutes to start): refused.
+                let cpus = std::thread::available_parallelism().map_or(1, |c| c.get());
+                if n > 8 * cpus {
+                    return Err(Error::Usage(format!(
+                        "--threads: got {n}, this machine has {cpus} logical CPU(s); at most {}",
+                        8 * cpus
+                    )));
+                }
                 rayon::ThreadPoolBuilder::new()
                     .num_threads(n)
                     .build_global()

@@ -54,7 +54,7 @@ pub fn interrupt(spec: &Path, out: &Path, signal: &str) -> usize {
         .arg(out)
         .arg("--quiet")
         .stdout(Stdio::null())
-        .stderr(Stdio::null())
+        .stderr(Stdio::piped())
         .spawn()
         .expect("start raycost");
     let partial = out.join("resume-me/resume-me.csv.partial");
@@ -80,8 +80,20 @@ pub fn interrupt(spec: &Path, out: &Path, signal: &str) -> usize {
         .status()
         .expect("run kill");
     assert!(ok.success(), "kill {signal} {pid} failed");
-    let status = child.wait().expect("wait");
+    let o = child.wait_with_output().expect("wait");
+    let status = o.status;
     assert!(!status.success(), "the run was not interrupted: {status}");
+    if signal == "-INT" {
+        // Ctrl-C says in one line what was kept and how to continue (exit code 130).
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(status.code(), Some(130), "{err}");
+        assert!(
+            err.contains("interrupted:")
+                && err.contains("resume-me.csv.partial")
+                && err.contains("--resume"),
+            "{err}"
+        );
+    }
     assert!(
         !out.join("resume-me/resume-me.csv").exists(),
         "an interrupted run renamed its table into place"

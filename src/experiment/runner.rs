@@ -10,7 +10,7 @@ use std::time::Instant;
 use super::kind::{Check, Context, DynKind, ErasedOutput};
 use super::plan::Plan;
 use crate::error::{Context as _, Error};
-use crate::output::column::{declared_class, ColumnInfo, POINT};
+use crate::output::column::{declaration, ColumnInfo, POINT};
 use crate::output::meta::Meta;
 use crate::output::progress::progress;
 use crate::output::row::{Row, Value};
@@ -127,6 +127,51 @@ fn with_point_columns(index: usize, params: &[(String, toml::Value)], row: &Row)
     r
 }
 
+/// What Ctrl-C says: the points kept so far and the command that resumes (updated after every
+/// point; the handler prints it and exits with 130).
+static ON_INTERRUPT: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
+
+/// Installs the Ctrl-C handler once per process.
+fn catch_interrupt() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let _ = ctrlc::set_handler(|| {
+            let msg = ON_INTERRUPT
+                .lock()
+                .ok()
+                .and_then(|m| m.clone())
+                .unwrap_or_else(|| "interrupted before any point finished".into());
+            eprintln!("\ninterrupted: {msg}");
+            std::process::exit(130);
+        });
+    });
+}
+
+/// The line Ctrl-C prints after `done` of `total` points are in `partial`.
+fn interrupt_line(
+    plan: &Plan,
+    opts: &RunOptions,
+    partial: &std::path::Path,
+    done: usize,
+    total: usize,
+) -> String {
+    let mut cmd = format!(
+        "raycost run {} --resume --out {}",
+        plan.spec.path,
+        opts.out.display()
+    );
+    if let Some(s) = opts.shard {
+        cmd.push_str(&format!(" --shard {}/{}", s.k, s.n));
+    }
+    for s in &opts.sets {
+        cmd.push_str(&format!(" --set '{s}'"));
+    }
+    format!(
+        "{done} of {total} point(s) kept in {} (the point in progress is lost); continue with: {cmd}",
+        partial.display()
+    )
+}
+
 /// Runs `plan`; returns the written paths and the summary text.
 pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Error> {
     let kind: &dyn DynKind = plan.kind;
@@ -191,6 +236,17 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
     let total: u64 = todo_points.iter().map(|p| p.work().units).sum();
     let unit = todo_points.first().map_or("rays", |p| p.work().unit);
     let bar = progress(total, unit, todo.len(), opts.quiet);
+    let partial = dir.join(format!("{stem}.csv.partial"));
+    if let Ok(mut m) = ON_INTERRUPT.lock() {
+        *m = Some(interrupt_line(
+            plan,
+            opts,
+            &partial,
+            resumed.len(),
+            mine.len(),
+        ));
+    }
+    catch_interrupt();
     let mut finished: Vec<(usize, String, ErasedOutput, f64)> = Vec::new();
     for (n, &i) in todo.iter().enumerate() {
         bar.point(n, todo.len());
@@ -243,9 +299,24 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
             .join(" ");
         meta.run.points.push(i);
         meta.run.point_wall_s.push(wall);
+        if let Ok(mut m) = ON_INTERRUPT.lock() {
+            *m = Some(interrupt_line(
+                plan,
+                opts,
+                &partial,
+                resumed.len() + n + 1,
+                mine.len(),
+            ));
+        }
         finished.push((i, params, out, wall));
     }
     bar.finish();
+    if let Ok(mut m) = ON_INTERRUPT.lock() {
+        *m = Some(
+            "the run was finishing its files; run the same command with --resume to complete it"
+                .into(),
+        );
+    }
 
     meta.end(t0.elapsed().as_secs_f64());
     meta.run.resumed_points = resumed;
@@ -283,7 +354,10 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
 }
 
 /// Every cell of a kind's row must come from the kind's declaration of that table, with the class
-/// declared there (a bug in the kind otherwise: refused before anything of the point is written).
+/// declared there (a bug in the kind otherwise), and no result is ever written as ±∞ unless its
+/// column is declared open-ended (a histogram's last edge): an overflow fails the run naming the
+/// column, before anything of the point is written. NaN stays: it means "no value" (the standard
+/// error of one sample, a theory without a closed form).
 fn check_declared(kind: &dyn DynKind, table: &str, row: &Row) -> Result<(), Error> {
     let columns = kind.columns();
     let declared = columns
@@ -291,9 +365,17 @@ fn check_declared(kind: &dyn DynKind, table: &str, row: &Row) -> Result<(), Erro
         .find(|(t, _)| *t == table)
         .map_or(&[][..], |(_, c)| *c);
     for cell in &row.0 {
-        match declared_class(declared, &cell.name) {
-            Some(class) if class == cell.class => {}
-            Some(class) => {
+        match declaration(declared, &cell.name) {
+            Some((column, class)) if class == cell.class => {
+                if matches!(cell.value, Value::F(x) if x.is_infinite()) && !column.infinite_ok {
+                    return Err(Error::internal(format!(
+                        "column {table}.{} overflowed to {} (the inputs' magnitudes exceed f64 arithmetic); nothing of this point was written",
+                        cell.name,
+                        cell.value.render()
+                    )));
+                }
+            }
+            Some((_, class)) => {
                 return Err(Error::internal(format!(
                     "kind {}: column {table}.{} is written as {} but declared {}",
                     kind.name(),

@@ -457,6 +457,19 @@ impl Scene {
             height: c.height,
         });
         let mut movers = Vec::new();
+        for (k, d) in raw.dynamic.iter().enumerate() {
+            if let Some(first) = raw.dynamic[..k].iter().position(|e| e.name == d.name) {
+                return Err(err(
+                    format!("dynamic[{k}].name"),
+                    format!(
+                        "\"{}\" names two [[dynamic]] tables (the {} and the {}); each object needs its own name",
+                        d.name,
+                        ordinal(first),
+                        ordinal(k)
+                    ),
+                ));
+            }
+        }
         for (k, (d, (tris, bls))) in raw.dynamic.iter().zip(moving).enumerate() {
             let key = |f: &str| format!("dynamic[{k}].{f}");
             if tris.is_empty() && bls.is_empty() {
@@ -717,4 +730,17 @@ impl Scene {
             }
         }
     }
+}
+
+/// "1st", "2nd", … for the k-th (0-based) table.
+fn ordinal(k: usize) -> String {
+    let n = k + 1;
+    let suffix = match (n % 10, n % 100) {
+        (1, 11) | (2, 12) | (3, 13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("{n}{suffix}")
 }

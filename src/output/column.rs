@@ -73,6 +73,9 @@ pub struct Column {
     pub shape: Shape,
     /// What it means, one sentence.
     pub doc: &'static str,
+    /// Whether ±∞ is a legitimate value (an open histogram edge); elsewhere an infinite value is an
+    /// overflow and is never written.
+    pub infinite_ok: bool,
 }
 
 /// One expanded CSV column: what metadata records and `raycost doc columns` prints.
@@ -100,6 +103,7 @@ impl Column {
             class,
             shape: Shape::Value,
             doc,
+            infinite_ok: false,
         }
     }
 
@@ -111,6 +115,7 @@ impl Column {
             class: Class::Measured,
             shape: Shape::Estimate,
             doc,
+            infinite_ok: false,
         }
     }
 
@@ -122,6 +127,7 @@ impl Column {
             class: Class::Timing,
             shape: Shape::Estimate,
             doc,
+            infinite_ok: false,
         }
     }
 
@@ -133,6 +139,7 @@ impl Column {
             class: Class::Measured,
             shape: Shape::EstimateVsPrediction,
             doc,
+            infinite_ok: false,
         }
     }
 
@@ -144,6 +151,15 @@ impl Column {
             class: Class::Measured,
             shape: Shape::EstimateVsBand,
             doc,
+            infinite_ok: false,
+        }
+    }
+
+    /// The same column, with ±∞ allowed (an open-ended bin edge).
+    pub const fn open_ended(self) -> Self {
+        Self {
+            infinite_ok: true,
+            ..self
         }
     }
 
@@ -198,18 +214,24 @@ impl Column {
 /// (`tests_{}` and `tests_{}_theory` both match `tests_grid_theory`), the most specific wins: an exact
 /// name, else the pattern with the most fixed characters.
 pub fn declared_class(declared: &[Column], name: &str) -> Option<Class> {
+    declaration(declared, name).map(|(_, class)| class)
+}
+
+/// The declaration among `declared` that CSV column `name` comes from, and the class it declares for
+/// that name (see [`declared_class`]).
+pub fn declaration<'a>(declared: &'a [Column], name: &str) -> Option<(&'a Column, Class)> {
     declared
         .iter()
-        .flat_map(|c| c.expand(c.name))
-        .filter_map(|info| match info.name.split_once("{}") {
-            None => (info.name == name).then_some((usize::MAX, info.class)),
+        .flat_map(|c| c.expand(c.name).into_iter().map(move |info| (c, info)))
+        .filter_map(|(c, info)| match info.name.split_once("{}") {
+            None => (info.name == name).then_some((usize::MAX, c, info.class)),
             Some((pre, post)) => (name.len() > pre.len() + post.len()
                 && name.starts_with(pre)
                 && name.ends_with(post))
-            .then_some((pre.len() + post.len(), info.class)),
+            .then_some((pre.len() + post.len(), c, info.class)),
         })
-        .max_by_key(|(specificity, _)| *specificity)
-        .map(|(_, class)| class)
+        .max_by_key(|(specificity, ..)| *specificity)
+        .map(|(_, c, class)| (c, class))
 }
 
 /// The point index column that starts every table.

@@ -389,14 +389,35 @@ fn aim(mut cam: Camera, o: &RenderOptions) -> anyhow::Result<Camera> {
 
 /// The image size: the camera's, or `width` wide with the camera's aspect ratio.
 fn size(cam: &Camera, width: Option<u32>) -> anyhow::Result<(u32, u32)> {
-    match width {
-        None => Ok((cam.width.max(1), cam.height.max(1))),
-        Some(0) => Err(Error::Usage("--width: got 0, expected at least 1 pixel".into()).into()),
+    let (w, h) = match width {
+        None => (cam.width.max(1), cam.height.max(1)),
+        Some(0) => {
+            return Err(Error::Usage("--width: got 0, expected at least 1 pixel".into()).into())
+        }
         Some(w) => {
             let h = (f64::from(w) * f64::from(cam.height) / f64::from(cam.width.max(1))).round();
-            Ok((w, (h as u32).max(1)))
+            (w, (h.min(f64::from(u32::MAX)) as u32).max(1))
         }
+    };
+    // Per pixel: its disc (centre, normal), its sum, radiosity, the indexed image and a diff: about
+    // PIXEL_BYTES. Refused before anything is traced when it does not fit.
+    const PIXEL_BYTES: f64 = 160.0;
+    let need = f64::from(w) * f64::from(h) * PIXEL_BYTES;
+    let avail = crate::output::meta::available_memory().map_or(f64::INFINITY, |a| 0.5 * a as f64);
+    if need > avail {
+        let flag = if width.is_some() {
+            "--width"
+        } else {
+            "the scene camera's resolution"
+        };
+        return Err(Error::Usage(format!(
+            "{flag}: a {w}×{h} image needs about {:.1} GiB, over half the {:.1} GiB this machine has available; render smaller",
+            need / f64::from(1u32 << 30),
+            2.0 * avail / f64::from(1u32 << 30)
+        ))
+        .into());
     }
+    Ok((w, h))
 }
 
 /// Frame 0 of the run (`seed`: overrides the quasi-static photon seed, for `detp` specs).

@@ -396,7 +396,21 @@ impl DetpConfig {
                     "a scene file needs detp.source = \"scene\" (lines need none)",
                 )
             }
-            (RaySource::Scene, Some(p)) => Rays::Scene(inputs.scene("detp.scene", p)?),
+            (RaySource::Scene, Some(p)) => {
+                let s = inputs.scene("detp.scene", p)?;
+                // Irradiance and its Poisson error multiply powers: beyond 1e100 W in total they
+                // overflow f64 and a result would be written as inf.
+                let total = s.scene.total_power();
+                if !(total.is_finite() && total <= 1e100) {
+                    return refuse(
+                        "detp.scene",
+                        format!(
+                            "the scene emits {total:e} W in total: above 1e100 W the irradiance and its standard error overflow; rescale its powers"
+                        ),
+                    );
+                }
+                Rays::Scene(s)
+            }
             (RaySource::Scene, None) => {
                 return refuse(
                     "detp.scene",
@@ -507,6 +521,26 @@ impl DetpConfig {
                 )
             }
         };
+        // A disc must be small against the space the rays cover: d ≤ 1 for lines through the unit
+        // ball (each line is a segment reaching 1 beyond the ball), d ≤ the scene's diagonal for
+        // photons. Larger discs lose precision in the crossing test (d² at 1e200 overflows).
+        let reach = match &rays {
+            Rays::Lines => (
+                1.0,
+                "the unit ball's radius (lines are segments reaching 1 beyond it)".to_string(),
+            ),
+            Rays::Scene(s) => {
+                let b = s.scene.bounds();
+                let diag = (b.hi - b.lo).length();
+                (diag, format!("the scene's diagonal {diag:.4}"))
+            }
+        };
+        if !(disc_radius * disc_radius).is_finite() || disc_radius > reach.0 {
+            return refuse(
+                if matches!(d.disc_radius, DiscRadius::Spacing) { "detp.point_spacing" } else { "detp.disc_radius" },
+                format!("d = {disc_radius:e} is larger than {}: a tangent disc must be small against the scene", reach.1),
+            );
+        }
         let cfg = Self {
             seed,
             rays,

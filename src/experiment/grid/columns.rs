@@ -299,7 +299,8 @@ pub const HIST_BIN_HI: Column = Column::value(
     "length or tests",
     Class::Measured,
     "bin end (inf for the overflow bin)",
-);
+)
+.open_ended();
 /// Count.
 pub const HIST_COUNT: Column = Column::value("count", "rays", Class::Measured, "rays in the bin");
 /// Expected.

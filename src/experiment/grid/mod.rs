@@ -48,9 +48,19 @@ fn memory(g: &GridConfig) -> Memory {
         SceneModel::Infinite => {
             let per_box = g.intensity * (g.cell_width + 2.0 * r_max).powi(3);
             let rays_in_flight = threads * (g.rays_per_scene as f64).max(1.0);
+            // Blame the factor of ρ·(a + 2r)³ that drives it.
+            let logs = [
+                (g.intensity.ln(), "scene.intensity"),
+                (3.0 * (2.0 * r_max).ln(), "scene.radius"),
+                (3.0 * g.cell_width.ln(), "grid.cell_width"),
+            ];
+            let key = logs
+                .iter()
+                .max_by(|a, b| a.0.total_cmp(&b.0))
+                .map_or("scene.intensity", |l| l.1);
             vec![Need {
                 bytes: per_box * 64.0 * rays_in_flight.max(1.0) * 8.0,
-                key: "scene.intensity",
+                key,
                 what: format!("{per_box:.3e} spheres per cell reach box"),
             }]
         }
