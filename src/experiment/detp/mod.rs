@@ -318,6 +318,14 @@ pub fn run_point(
             tables.points.push(r);
         }
     }
+    let mut warnings = Vec::new();
+    if !discs.is_empty() && irr.iter().all(|e| e.iter().all(|&x| x == 0.0)) {
+        warnings.push(format!(
+            "no photon crossed any of the {} discs: the irradiance is 0 everywhere (do the lights face the points? is d too small for {} photons?)",
+            discs.len(),
+            cfg.photons
+        ));
+    }
     Ok(PointOutput {
         row,
         tables,
@@ -332,7 +340,7 @@ pub fn run_point(
             per_s: rays_per_s,
             unit: "segments",
         },
-        warnings: Vec::new(),
+        warnings,
     })
 }
 
@@ -395,7 +403,13 @@ pub fn memory(cfg: &DetpConfig) -> Memory {
         },
         Need {
             bytes: n_p * 128.0,
-            key: "detp.points",
+            key: match cfg.points {
+                Points::Ball(_) => "detp.points",
+                Points::File(_) => "detp.points_file",
+                // Surface points: one per spacing² (the spacing defaults to 2d).
+                Points::Surface(_) if cfg.spacing_given => "detp.point_spacing",
+                Points::Surface(_) => "detp.disc_radius",
+            },
             what: format!("{n_p:.3e} discs and their sums"),
         },
     ];
@@ -468,6 +482,9 @@ impl Kind for DetpKind {
     }
     fn memory(p: &DetpConfig) -> Memory {
         memory(p)
+    }
+    fn warnings(p: &DetpConfig) -> Vec<String> {
+        p.warnings()
     }
     fn shared(_: &[&DetpConfig]) -> Result<(), Error> {
         Ok(())

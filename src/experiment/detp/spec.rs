@@ -323,6 +323,8 @@ pub struct DetpConfig {
     pub write_points: bool,
     /// `detp.memory_budget_gib`.
     pub memory_budget_gib: f64,
+    /// Whether the spec gave `detp.point_spacing` (else surface points are 2d apart).
+    pub spacing_given: bool,
 }
 
 impl DetpConfig {
@@ -341,6 +343,76 @@ impl DetpConfig {
 
     /// Cross-key checks of `[detp]`; files are loaded (once per run) through `inputs`, so a missing
     /// or bad file is refused before anything is written.
+    /// Counted warnings known before running: the scene's own (degenerate triangles, non-planar
+    /// quads), points outside the unit ball for lines (no exact value there, and the lines are not
+    /// μ-random), and for a points file with a scene, points farther than d from every surface along
+    /// their normal and normals facing into the surface the point lies on.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        if let Some(s) = self.scene() {
+            w.extend(s.scene.warnings.iter().cloned());
+        }
+        let Points::File(f) = &self.points else {
+            return w;
+        };
+        match self.scene() {
+            None => {
+                let out = f
+                    .centers
+                    .iter()
+                    .filter(|c| c.length() + self.disc_radius > 1.0)
+                    .count();
+                if out > 0 {
+                    w.push(format!(
+                        "{out} of {} points of {} reach outside the unit ball (|c| + d > 1): the lines are μ-random inside it only, and those points have no exact irradiance",
+                        f.centers.len(),
+                        f.path.display()
+                    ));
+                }
+            }
+            Some(s) => {
+                let d = self.disc_radius;
+                let (mut off, mut inward) = (0usize, 0usize);
+                let sc = &s.scene;
+                for (&c, &n) in f.centers.iter().zip(&f.normals) {
+                    // The surface a point lies on: met within 2d by a ray from d before the point,
+                    // from either side. Its light-receiving side is its winding normal (triangles)
+                    // or the sphere's normal, the convention of surface points.
+                    let on = [n, -n].into_iter().find_map(|dir| {
+                        let (hit, _) = sc.first_two_hits(c + dir * d, -dir, 0.0, None);
+                        hit.filter(|h| h.t <= 2.0 * d).map(|h| match h.prim {
+                            crate::lt::Prim::Triangle(t) => sc.triangles[t as usize].normal(),
+                            crate::lt::Prim::Ball(b) => {
+                                let p = c + dir * d - dir * h.t;
+                                sc.balls[b as usize].normal_at(p)
+                            }
+                        })
+                    });
+                    match on {
+                        None => off += 1,
+                        Some(g) if g.dot(n) < 0.0 => inward += 1,
+                        Some(_) => {}
+                    }
+                }
+                if off > 0 {
+                    w.push(format!(
+                        "{off} of {} points of {} are farther than d = {d} from every surface (along their normal): they gather light in mid-air",
+                        f.centers.len(),
+                        f.path.display()
+                    ));
+                }
+                if inward > 0 {
+                    w.push(format!(
+                        "{inward} of {} points of {} have a normal facing into the surface they lie on (against its light-receiving side): DETP counts crossings from the normal's side only",
+                        f.centers.len(),
+                        f.path.display()
+                    ));
+                }
+            }
+        }
+        w
+    }
+
     /// How many sample points the point has (surface points: the sampler's own count, one per
     /// spacing² of area and at least one per triangle).
     pub fn point_count(&self) -> u64 {
@@ -576,6 +648,7 @@ impl DetpConfig {
             replicas: d.replicas,
             write_points: d.write_points,
             memory_budget_gib: d.memory_budget_gib,
+            spacing_given: d.point_spacing.is_some(),
         };
         if let Some(cells) = cfg.grid_cells() {
             if cells >= (1u64 << 31) as f64 {
