@@ -304,3 +304,55 @@ fn resume_recovers_a_run_killed_while_finishing() {
         .iter()
         .any(|p| p.to_string_lossy().ends_with(".partial")));
 }
+
+/// Issue 16: `--threads 100000` once ran for minutes on a 0.2 s job; more than 8 threads per CPU is
+/// refused as a usage error, and nothing is written.
+#[test]
+fn absurd_thread_counts_are_refused() {
+    let tmp = tempfile::tempdir().expect("temp");
+    let o = raycost()
+        .arg("run")
+        .arg(root().join("experiments/quickstart.toml"))
+        .args(["--threads", "100000", "--out"])
+        .arg(tmp.path())
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--threads: got 100000") && err.contains("logical CPU"),
+        "{err}"
+    );
+    assert!(files_below(tmp.path()).is_empty());
+}
+
+/// Issue 16: 3·10⁷ photons under a 2 GB memory limit once aborted after 37 s ("memory allocation
+/// failed"); the budget now takes the memory this process may use (MemAvailable, the cgroup limit,
+/// `ulimit -v`), and the run is refused before anything is allocated, naming the key.
+#[test]
+fn a_run_over_the_processes_memory_limit_is_refused_before_allocating() {
+    let tmp = tempfile::tempdir().expect("temp");
+    let spec = write_spec(
+        tmp.path(),
+        "big",
+        "[experiment]\nname = \"big\"\nkind = \"detp\"\n[detp]\nphotons = 30_000_000\npoints = 1000\ndisc_radius = 0.01\n",
+    );
+    let bin = assert_cmd::cargo::cargo_bin("raycost");
+    let o = std::process::Command::new("bash")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v 2000000 && exec {} run {} --quiet --out {}",
+            bin.display(),
+            spec.display(),
+            tmp.path().join("out").display()
+        ))
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("detp.photons: would need about") && err.contains("available"),
+        "{err}"
+    );
+    assert!(!tmp.path().join("out").exists());
+}

@@ -211,3 +211,23 @@ engines = ["disc-index"]
         .expect("runs");
     assert_eq!(o.status.code(), Some(2), "kind detp has frame 0 only");
 }
+
+/// Issue 16: `--width 100000` once aborted allocating 640 GB; now it is refused before anything is
+/// traced, naming the flag, and nothing is written.
+#[test]
+fn an_image_larger_than_memory_is_refused_before_tracing() {
+    let tmp = tempfile::tempdir().expect("temp");
+    let out = tmp.path().join("big.png");
+    let o = raycost()
+        .arg("render")
+        .arg(tiny())
+        .args(["--width", "100000"])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--width") && err.contains("GiB"), "{err}");
+    assert!(!out.exists());
+}

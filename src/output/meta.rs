@@ -386,6 +386,28 @@ pub fn available_memory() -> Option<u64> {
             avail = avail.min(max.saturating_sub(cur));
         }
     }
+    // An address-space limit (`ulimit -v`, a batch system's): what is left of it.
+    #[cfg(target_os = "linux")]
+    {
+        let mut lim = libc::rlimit {
+            rlim_cur: 0,
+            rlim_max: 0,
+        };
+        // SAFETY: getrlimit writes the struct it is given and nothing else.
+        let ok = unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut lim) } == 0;
+        if ok && lim.rlim_cur != libc::RLIM_INFINITY {
+            let used_kib: u64 = std::fs::read_to_string("/proc/self/status")
+                .ok()
+                .and_then(|s| {
+                    s.lines()
+                        .find(|l| l.starts_with("VmSize:"))
+                        .and_then(|l| l.split_whitespace().nth(1))
+                        .and_then(|v| v.parse().ok())
+                })
+                .unwrap_or(0);
+            avail = avail.min((lim.rlim_cur as u64).saturating_sub(used_kib * 1024));
+        }
+    }
     Some(avail)
 }
 

@@ -420,6 +420,13 @@ pub fn memory(cfg: &DetpConfig) -> Memory {
             what: "sphere-cache ray lists (n_R/(1 − Q²) per thread)".into(),
         });
     }
+    if cfg.engines.contains(&EngineChoice::PhotonMap) {
+        needs.push(Need {
+            bytes: segs * 48.0,
+            key: "detp.photons",
+            what: "photon-map k-d tree of the impacts".into(),
+        });
+    }
     if let (true, Some(cells)) = (
         cfg.engines.contains(&EngineChoice::DiscIndex),
         cfg.grid_cells(),

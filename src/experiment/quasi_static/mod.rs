@@ -424,8 +424,18 @@ impl Kind for QuasiStaticKind {
             unit: "photon-frames",
         }
     }
+    /// DETP's needs, and the segment index of the incremental frames: about segments/64 cubic cells
+    /// (64 to 2¹⁸), each segment listed in the cells its piece pierces (≈ 1.5·∛cells).
     fn memory(p: &QuasiStaticConfig) -> Memory {
-        super::detp::memory(&p.detp)
+        let mut m = super::detp::memory(&p.detp);
+        let segs = m.needs.first().map_or(0.0, |n| n.bytes / 56.0);
+        let cells = (segs / 64.0).clamp(64.0, f64::from(1u32 << 18));
+        m.needs.push(super::kind::Need {
+            bytes: segs * 4.0 * 1.5 * cells.cbrt() + cells * 24.0,
+            key: "detp.photons",
+            what: format!("segment index ({cells:.0} cells)"),
+        });
+        m
     }
     fn warnings(p: &QuasiStaticConfig) -> Vec<String> {
         p.warnings.clone()
