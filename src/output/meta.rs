@@ -405,7 +405,7 @@ pub fn available_memory() -> Option<u64> {
                         .and_then(|v| v.parse().ok())
                 })
                 .unwrap_or(0);
-            avail = avail.min((lim.rlim_cur as u64).saturating_sub(used_kib * 1024));
+            avail = avail.min(lim.rlim_cur.saturating_sub(used_kib * 1024));
         }
     }
     Some(avail)
