@@ -6,9 +6,22 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::experiment::runner::Shard;
 
+/// `--version`: the crate version, the git commit it was built from (and whether the tree was
+/// dirty), and the compiler, as `meta.toml` records them.
+const VERSION: &str = concat!(
+    env!("CARGO_PKG_VERSION"),
+    " (commit ",
+    env!("RAYCOST_GIT_COMMIT"),
+    ", dirty tree: ",
+    env!("RAYCOST_GIT_DIRTY"),
+    "; ",
+    env!("RAYCOST_RUSTC"),
+    ")"
+);
+
 /// Measure what ray-tracing acceleration structures really cost, against closed-form theory.
 #[derive(Debug, Parser)]
-#[command(name = "raycost", version, about, long_about = None, propagate_version = true)]
+#[command(name = "raycost", version = VERSION, about, long_about = None, propagate_version = true)]
 pub struct Cli {
     /// What to do.
     #[command(subcommand)]

@@ -356,3 +356,12 @@ fn a_run_over_the_processes_memory_limit_is_refused_before_allocating() {
     );
     assert!(!tmp.path().join("out").exists());
 }
+
+/// `--version` names the commit the binary was built from, as `meta.toml` does.
+#[test]
+fn version_names_the_commit() {
+    let o = raycost().arg("--version").output().expect("runs");
+    let text = String::from_utf8_lossy(&o.stdout);
+    let meta = raycost::output::meta::Build::current();
+    assert!(text.contains(&meta.git_commit) && text.contains("rustc"), "{text}");
+}
