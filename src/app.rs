@@ -124,6 +124,14 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
                 Ok(())
             }
         },
+        Command::Doc(d) => {
+            let text = match d.what {
+                crate::cli::DocTopic::Kinds => crate::experiment::reference::kinds(),
+                crate::cli::DocTopic::Columns => crate::experiment::reference::columns(),
+            };
+            write!(std::io::stdout().lock(), "{text}")?;
+            Ok(())
+        }
         Command::Bench(b) => Ok(crate::bench::run(b.quick, &b.out, b.force)?),
         Command::Merge(m) => Ok(crate::output::merge::run(
             &m.inputs,

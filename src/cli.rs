@@ -43,6 +43,25 @@ pub enum Command {
     Merge(MergeArgs),
     /// Render the DETP irradiance of a quasi-static spec's frame(s), seen from the scene's camera.
     Render(RenderArgs),
+    /// Print reference documentation generated from the code, as Markdown.
+    Doc(DocArgs),
+}
+
+/// `raycost doc`.
+#[derive(Debug, Args)]
+pub struct DocArgs {
+    /// What to print.
+    #[arg(value_enum)]
+    pub what: DocTopic,
+}
+
+/// A reference topic.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum DocTopic {
+    /// The experiment kinds: what each measures and its tables (docs/kinds.md).
+    Kinds,
+    /// Every CSV column of every kind: unit, class and meaning (docs/columns.md).
+    Columns,
 }
 
 /// `raycost render`.

@@ -363,5 +363,8 @@ fn version_names_the_commit() {
     let o = raycost().arg("--version").output().expect("runs");
     let text = String::from_utf8_lossy(&o.stdout);
     let meta = raycost::output::meta::Build::current();
-    assert!(text.contains(&meta.git_commit) && text.contains("rustc"), "{text}");
+    assert!(
+        text.contains(&meta.git_commit) && text.contains("rustc"),
+        "{text}"
+    );
 }

@@ -97,8 +97,13 @@ import csv, sys, tomllib
 merged, local, mhist, lhist, mmeta, shards, points = sys.argv[1:]
 shards, points = int(shards), int(points)
 
+with open(mmeta, "rb") as f:
+    meta = tomllib.load(f)
+# Column classes come from the run's metadata (declared with each column), never from a name.
+classes = {c["name"]: c["class"] for c in meta["columns"]["main"]}
+
 def timing(col):
-    return col.endswith("_s") or col == "rays_per_s"
+    return classes[col] == "timing"
 
 def table(path):
     with open(path, newline="") as f:
@@ -122,12 +127,10 @@ if [r[0] for r in rm] != [str(i) for i in range(points)]:
 with open(mhist, "rb") as a, open(lhist, "rb") as b:
     if a.read() != b.read():
         sys.exit("slurm: FAIL: merged hist table differs from the local one")
-with open(mmeta, "rb") as f:
-    meta = tomllib.load(f)
-got = [s["shard"] for s in meta["shards"]]
+got = [s["run"]["shard"] for s in meta["shards"]]
 if got != [f"{k}/{shards}" for k in range(shards)]:
     sys.exit(f"slurm: FAIL: merged metadata lists shards {got}")
 print(f"slurm: {len(keep)} measured columns of {len(hm)} compared byte for byte; hist table identical; "
-      f"merged meta lists {shards} shards on {sorted({s['host'] for s in meta['shards']})}")
+      f"merged meta lists {shards} shards on {sorted({s['machine']['host'] for s in meta['shards']})}")
 print(f"slurm: merged table identical to local run ({points} points)")
 EOF

@@ -11,6 +11,7 @@ pub mod machine;
 pub mod metric;
 pub mod plan;
 pub mod quasi_static;
+pub mod reference;
 pub mod registry;
 pub mod runner;
 
