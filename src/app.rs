@@ -15,24 +15,7 @@ use crate::theory::grid::{self as th, Eye, GridTheoryInput};
 pub fn run(cli: Cli) -> crate::error::Result<()> {
     match cli.command {
         Command::Run(a) => {
-            if let Some(n) = a.threads {
-                if n == 0 {
-                    return Err(Error::Usage("--threads must be at least 1".into()));
-                }
-                // More threads than 8 per CPU only add scheduling cost (and a huge count costs
-                // minutes to start): refused.
-                let cpus = std::thread::available_parallelism().map_or(1, |c| c.get());
-                if n > 8 * cpus {
-                    return Err(Error::Usage(format!(
-                        "--threads: got {n}, this machine has {cpus} logical CPU(s); at most {}",
-                        8 * cpus
-                    )));
-                }
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(n)
-                    .build_global()
-                    .context("could not start the thread pool")?;
-            }
+            thread_pool(a.threads)?;
             let plan = Plan::load(&a.spec, &a.set)?;
             let opts = RunOptions {
                 out: a.out,
@@ -132,7 +115,10 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             write!(std::io::stdout().lock(), "{text}")?;
             Ok(())
         }
-        Command::Bench(b) => Ok(crate::bench::run(b.quick, &b.out, b.force)?),
+        Command::Bench(b) => {
+            thread_pool(b.threads)?;
+            Ok(crate::bench::run(b.quick, &b.out, b.force)?)
+        }
         Command::Merge(m) => Ok(crate::output::merge::run(
             &m.inputs,
             m.out.as_deref(),
@@ -140,6 +126,7 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             m.quiet,
         )?),
         Command::Render(r) => {
+            thread_pool(r.threads)?;
             let plan = Plan::load(&r.spec, &r.set)?;
             let frames = match (r.frame, r.frames.is_empty()) {
                 (Some(f), _) => vec![f],
@@ -164,6 +151,27 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             Ok(())
         }
     }
+}
+
+/// Starts the global thread pool with `n` threads (`--threads`), refusing 0 and more than 8 per
+/// CPU (which only add scheduling cost, and a huge count takes minutes to start).
+fn thread_pool(n: Option<usize>) -> crate::error::Result<()> {
+    let Some(n) = n else { return Ok(()) };
+    if n == 0 {
+        return Err(Error::Usage("--threads must be at least 1".into()));
+    }
+    let cpus = std::thread::available_parallelism().map_or(1, |c| c.get());
+    if n > 8 * cpus {
+        return Err(Error::Usage(format!(
+            "--threads: got {n}, this machine has {cpus} logical CPU(s); at most {}",
+            8 * cpus
+        )));
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build_global()
+        .context("could not start the thread pool")?;
+    Ok(())
 }
 
 /// An optional point given as X,Y,Z.

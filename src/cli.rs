@@ -69,6 +69,9 @@ pub enum DocTopic {
 pub struct RenderArgs {
     /// A kind quasi-static spec (or kind detp with detp.source = "scene": frame 0 only).
     pub spec: PathBuf,
+    /// Worker threads (default: all cores; at most 8 per CPU).
+    #[arg(long)]
+    pub threads: Option<usize>,
     /// Override a spec key; repeatable.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
@@ -245,6 +248,9 @@ pub struct BenchArgs {
     /// Small sizes only (for CI): n up to 10⁵.
     #[arg(long)]
     pub quick: bool,
+    /// Largest thread count measured (default: all cores; at most 8 per CPU).
+    #[arg(long)]
+    pub threads: Option<usize>,
     /// Results root.
     #[arg(long, default_value = "results")]
     pub out: PathBuf,

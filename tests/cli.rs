@@ -324,6 +324,27 @@ fn absurd_thread_counts_are_refused() {
         "{err}"
     );
     assert!(files_below(tmp.path()).is_empty());
+    // render and bench take the same flag, with the same limit.
+    for args in [
+        vec![
+            "render",
+            "experiments/render-cornell.toml",
+            "--threads",
+            "100000",
+        ],
+        vec!["bench", "--quick", "--threads", "100000"],
+    ] {
+        let o = raycost()
+            .current_dir(root())
+            .args(&args)
+            .arg("--out")
+            .arg(tmp.path().join("x"))
+            .output()
+            .expect("runs");
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert!(String::from_utf8_lossy(&o.stderr).contains("--threads: got 100000"));
+    }
+    assert!(files_below(tmp.path()).is_empty());
 }
 
 /// Issue 16: 3·10⁷ photons under a 2 GB memory limit once aborted after 37 s ("memory allocation

@@ -199,6 +199,12 @@ fn set_on_a_sweep_axis_replaces_the_axis() {
         .expect("the axis");
     let values: Vec<&str> = rows.iter().map(|r| r[w].as_str()).collect();
     assert_eq!(values, ["0.3", "0.6"]);
+    // A set integer is written as an integer, not 2000.0.
+    let r = h
+        .iter()
+        .position(|c| c == "experiment.rays")
+        .expect("the set key");
+    assert!(rows.iter().all(|row| row[r] == "2000"), "{rows:?}");
     let meta = raycost::output::meta::Meta::read(&out.join("small/small.meta.toml")).unwrap();
     let sweep = meta.spec["sweep"].as_table().expect("[spec.sweep]");
     assert_eq!(sweep.len(), 1, "{sweep:?}");

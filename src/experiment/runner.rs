@@ -110,6 +110,7 @@ fn start_meta(plan: &Plan, opts: &RunOptions, warnings: Vec<String>) -> Meta {
 fn param_value(v: &toml::Value) -> Value {
     match v {
         toml::Value::Float(x) => Value::F(*x),
+        toml::Value::Integer(i) if *i >= 0 => Value::U(*i as u64),
         toml::Value::Integer(i) => Value::F(*i as f64),
         toml::Value::String(s) => Value::S(s.clone()),
         other => Value::S(other.to_string()),
