@@ -261,11 +261,9 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
             .run(plan.points[i].as_ref(), shared.as_ref(), &ctx)
             .context_with(|| format!("point {i}"))?;
         let wall = start.elapsed().as_secs_f64();
-        check_declared(kind, "main", &out.row)?;
+        check_declared(kind, "main", std::slice::from_ref(&out.row))?;
         for (name, rows) in &out.tables {
-            for r in rows {
-                check_declared(kind, name, r)?;
-            }
+            check_declared(kind, name, rows)?;
         }
         let row = with_point_columns(i, &p.params, &out.row);
         let side: Vec<(&'static str, Vec<Row>)> = out
@@ -354,43 +352,54 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
     Ok((written, summary::render(&shown)))
 }
 
-/// Every cell of a kind's row must come from the kind's declaration of that table, with the class
-/// declared there (a bug in the kind otherwise), and no result is ever written as ±∞ unless its
-/// column is declared open-ended (a histogram's last edge): an overflow fails the run naming the
-/// column, before anything of the point is written. NaN stays: it means "no value" (the standard
-/// error of one sample, a theory without a closed form).
-fn check_declared(kind: &dyn DynKind, table: &str, row: &Row) -> Result<(), Error> {
+/// Every cell of a kind's rows of `table` must come from the kind's declaration of that table, with
+/// the class declared there (a bug in the kind otherwise), and no result is ever written as ±∞
+/// unless its column is declared open-ended (a histogram's last edge): an overflow fails the run
+/// naming the column, before anything of the point is written. NaN stays: it means "no value" (the
+/// standard error of one sample, a theory without a closed form). Declarations are looked up once
+/// per distinct column name, so a points table of 10⁵ rows costs a pass over its values.
+fn check_declared(kind: &dyn DynKind, table: &str, rows: &[Row]) -> Result<(), Error> {
     let columns = kind.columns();
     let declared = columns
         .iter()
         .find(|(t, _)| *t == table)
         .map_or(&[][..], |(_, c)| *c);
-    for cell in &row.0 {
-        match declaration(declared, &cell.name) {
-            Some((column, class)) if class == cell.class => {
-                if matches!(cell.value, Value::F(x) if x.is_infinite()) && !column.infinite_ok {
-                    return Err(Error::internal(format!(
-                        "column {table}.{} overflowed to {} (the inputs' magnitudes exceed f64 arithmetic); nothing of this point was written",
-                        cell.name,
-                        cell.value.render()
-                    )));
+    // Column name → may it be infinite.
+    let mut checked: std::collections::HashMap<&str, bool> = std::collections::HashMap::new();
+    for row in rows {
+        for cell in &row.0 {
+            let infinite_ok = match checked.get(cell.name.as_str()) {
+                Some(&ok) => ok,
+                None => {
+                    let ok = match declaration(declared, &cell.name) {
+                        Some((column, class)) if class == cell.class => column.infinite_ok,
+                        Some((_, class)) => {
+                            return Err(Error::internal(format!(
+                                "kind {}: column {table}.{} is written as {} but declared {}",
+                                kind.name(),
+                                cell.name,
+                                cell.class.as_str(),
+                                class.as_str()
+                            )))
+                        }
+                        None => {
+                            return Err(Error::internal(format!(
+                                "kind {}: column {table}.{} is not declared",
+                                kind.name(),
+                                cell.name
+                            )))
+                        }
+                    };
+                    checked.insert(cell.name.as_str(), ok);
+                    ok
                 }
-            }
-            Some((_, class)) => {
+            };
+            if !infinite_ok && matches!(cell.value, Value::F(x) if x.is_infinite()) {
                 return Err(Error::internal(format!(
-                    "kind {}: column {table}.{} is written as {} but declared {}",
-                    kind.name(),
+                    "column {table}.{} overflowed to {} (the inputs' magnitudes exceed f64 arithmetic); nothing of this point was written",
                     cell.name,
-                    cell.class.as_str(),
-                    class.as_str()
-                )))
-            }
-            None => {
-                return Err(Error::internal(format!(
-                    "kind {}: column {table}.{} is not declared",
-                    kind.name(),
-                    cell.name
-                )))
+                    cell.value.render()
+                )));
             }
         }
     }
@@ -480,6 +489,92 @@ mod tests {
     }
 
     static FAILING: Registered<Failing> = Registered::NEW;
+
+    /// A kind whose second point overflows (an undeclared ∞), or, with r > 0.35, writes an
+    /// undeclared column.
+    struct Sloppy;
+
+    impl Kind for Sloppy {
+        const NAME: &'static str = "sloppy";
+        const ABOUT: &'static str = "a test kind";
+        type Raw = LinesSpec;
+        type Point = f64;
+        type Tables = NoTables;
+        type Shared = ();
+        fn columns() -> Vec<(&'static str, &'static [Column])> {
+            vec![("main", &[VALUE])]
+        }
+        fn configure(raw: LinesSpec, _: &mut Inputs) -> Result<f64, ConfigError> {
+            Ok(raw.lines.inner_radius)
+        }
+        fn describe(p: &f64) -> String {
+            p.to_string()
+        }
+        fn work(_: &f64) -> Work {
+            Work {
+                units: 1,
+                unit: "points",
+            }
+        }
+        fn shared(_: &[&f64]) -> Result<(), Error> {
+            Ok(())
+        }
+        fn run(p: &f64, _: &(), ctx: &Context) -> Result<PointOutput<NoTables>, Error> {
+            let mut row = Row::default();
+            match ctx.index {
+                1 if *p > 0.35 => row.put(&BAD, 0u64),
+                1 => row.put(&VALUE, f64::INFINITY),
+                _ => row.put(&VALUE, *p),
+            };
+            Ok(PointOutput {
+                row,
+                tables: NoTables,
+                summary: Vec::new(),
+                checks: Vec::new(),
+                rate: Rate {
+                    per_s: 1.0,
+                    unit: "points",
+                },
+                warnings: Vec::new(),
+            })
+        }
+    }
+
+    static SLOPPY: Registered<Sloppy> = Registered::NEW;
+
+    /// An overflow is never written (the run stops before the point's row), and neither is a column
+    /// the kind did not declare.
+    #[test]
+    fn overflows_and_undeclared_columns_never_reach_a_table() {
+        for (sweep, want) in [
+            ("[0.1, 0.2]", "main.value overflowed to inf"),
+            ("[0.1, 0.4]", "column main.bad is not declared"),
+        ] {
+            let dir = tempfile::tempdir().unwrap();
+            let text = format!("[experiment]\nname = \"s\"\nkind = \"sloppy\"\n[lines]\ncount = 1\ninner_radius = 0.5\n[sweep]\n\"lines.inner_radius\" = {sweep}\n");
+            let path = dir.path().join("s.toml");
+            std::fs::write(&path, text).unwrap();
+            let spec = crate::spec::Spec::read(&path, &[]).unwrap();
+            let plan = Plan::with_kind(spec, &SLOPPY).unwrap();
+            let opts = RunOptions {
+                out: dir.path().join("out"),
+                force: false,
+                resume: false,
+                quiet: true,
+                shard: None,
+                sets: Vec::new(),
+            };
+            let msg = run(&plan, &opts).expect_err("refused").to_string();
+            assert!(msg.contains(want), "{msg}");
+            let partial = std::fs::read_to_string(dir.path().join("out/s/s.csv.partial")).unwrap();
+            assert_eq!(
+                partial.lines().count(),
+                2,
+                "only point 0 is written: {partial}"
+            );
+            assert!(!partial.contains("inf"));
+        }
+    }
 
     /// Every kind's checks are handled alike (the quasi-static kind once lost its row instead): all
     /// rows reach the finished table, then the run fails with exit code 1 naming the point.
