@@ -52,7 +52,7 @@ pub struct RawDetp {
     /// n_P for points uniform in the unit ball.
     #[serde(
         default,
-        deserialize_with = "opt_count",
+        deserialize_with = "point_count",
         skip_serializing_if = "Option::is_none"
     )]
     pub points: Option<u64>,
@@ -255,6 +255,16 @@ fn default_budget() -> f64 {
 }
 fn default_engines() -> Vec<EngineChoice> {
     vec![EngineChoice::SphereCache]
+}
+
+/// `detp.points`: a count; a file name gets a hint to the keys that read one.
+fn point_count<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
+    match toml::Value::deserialize(d)? {
+        toml::Value::String(s) => Err(D::Error::custom(format!(
+            "got \"{s}\", a count of points uniform in the ball; to read points from a CSV write point_source = \"file\" and points_file = \"{s}\""
+        ))),
+        v => opt_count(v).map_err(D::Error::custom),
+    }
 }
 
 fn bits<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
