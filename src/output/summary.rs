@@ -69,6 +69,42 @@ pub fn render(points: &[SummaryPoint]) -> String {
     out
 }
 
+/// `mean ± half-width`; an exact count (zero half-width) as an integer; no `±` where there is no
+/// standard error (one independent sample: one replica, one cluster).
 fn measured(e: &Estimate) -> String {
-    format!("{:.4} ± {:.4}", e.mean, e.half_width(0.95))
+    let h = e.half_width(0.95);
+    let integral = e.mean.fract() == 0.0 && e.mean.abs() < 1e15;
+    if integral && h == 0.0 {
+        format!("{:.0}", e.mean)
+    } else if h.is_finite() {
+        format!("{:.4} ± {:.4}", e.mean, h)
+    } else {
+        format!("{:.4} (no CI: 1 indep. sample)", e.mean)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn measured_values_read_right() {
+        let e = |mean, se, n| Estimate {
+            mean,
+            se,
+            n,
+            clusters: n,
+        };
+        assert_eq!(measured(&e(177_800.0, 0.0, 10)), "177800");
+        assert_eq!(
+            measured(&e(2.5, f64::NAN, 1)),
+            "2.5000 (no CI: 1 indep. sample)"
+        );
+        // An integral mean without a standard error is not an exact count.
+        assert_eq!(
+            measured(&e(188.0, f64::NAN, 1)),
+            "188.0000 (no CI: 1 indep. sample)"
+        );
+        assert!(measured(&e(2.5, 0.1, 100)).starts_with("2.5000 ± 0.19"));
+    }
 }
