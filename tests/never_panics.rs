@@ -97,6 +97,17 @@ fn toml_files(dir: &Path) -> Vec<PathBuf> {
     v
 }
 
+/// Every file of `paths` with its text.
+fn read_all(paths: Vec<PathBuf>) -> Vec<(PathBuf, String)> {
+    paths
+        .into_iter()
+        .map(|p| {
+            let t = std::fs::read_to_string(&p).unwrap();
+            (p, t)
+        })
+        .collect()
+}
+
 /// Validates spec text as `raycost check` does (the spec named as if it sat at `path`).
 fn check_spec(path: &Path, text: &str) {
     if let Ok(spec) = raycost::spec::Spec::parse(&path.display().to_string(), text, &[]) {
@@ -108,13 +119,7 @@ fn check_spec(path: &Path, text: &str) {
 fn mutated_specs_never_panic() {
     let mut specs = toml_files(&root().join("experiments"));
     specs.extend(toml_files(&root().join("tests/specs")));
-    let texts: Vec<(PathBuf, String)> = specs
-        .into_iter()
-        .map(|p| {
-            let t = std::fs::read_to_string(&p).unwrap();
-            (p, t)
-        })
-        .collect();
+    let texts = read_all(specs);
     let n = texts.len();
     proptest!(Config { cases: cases(), failure_persistence: None, ..Config::default() },
     |(which in 0..n, line in 0usize..64, value in proptest::sample::select(NASTY), how in 0u8..4)| {
@@ -125,14 +130,7 @@ fn mutated_specs_never_panic() {
 
 #[test]
 fn mutated_scenes_never_panic() {
-    let scenes = toml_files(&root().join("experiments/scenes"));
-    let texts: Vec<(PathBuf, String)> = scenes
-        .into_iter()
-        .map(|p| {
-            let t = std::fs::read_to_string(&p).unwrap();
-            (p, t)
-        })
-        .collect();
+    let texts = read_all(toml_files(&root().join("experiments/scenes")));
     let n = texts.len();
     proptest!(Config { cases: cases(), failure_persistence: None, ..Config::default() },
     |(which in 0..n, line in 0usize..256, value in proptest::sample::select(NASTY), how in 0u8..4)| {

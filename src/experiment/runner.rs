@@ -454,14 +454,17 @@ mod tests {
     use crate::experiment::lines_in_sphere::LinesSpec;
     use crate::output::column::{Class, Column};
 
-    /// A kind whose built-in check fails on its second point.
-    struct Failing;
-
     const VALUE: Column = Column::value("value", "1", Class::Measured, "the point's value");
     const BAD: Column = Column::value("bad", "1", Class::Check, "failures");
+    const UNDECLARED: Column = Column::value("stray", "1", Class::Measured, "not in the table");
 
-    impl Kind for Failing {
-        const NAME: &'static str = "failing";
+    /// A test kind whose point misbehaves as its parameter `lines.inner_radius` says: 0.2 fails its
+    /// built-in check, 0.3 overflows to ∞, 0.4 writes a column the table does not declare; any
+    /// other value is a good point.
+    struct Planted;
+
+    impl Kind for Planted {
+        const NAME: &'static str = "planted";
         const ABOUT: &'static str = "a test kind";
         type Raw = LinesSpec;
         type Point = f64;
@@ -485,10 +488,14 @@ mod tests {
         fn shared(_: &[&f64]) -> Result<(), Error> {
             Ok(())
         }
-        fn run(p: &f64, _: &(), ctx: &Context) -> Result<PointOutput<NoTables>, Error> {
-            let failures = u64::from(ctx.index == 1);
+        fn run(p: &f64, _: &(), _: &Context) -> Result<PointOutput<NoTables>, Error> {
+            let failures = u64::from(*p == 0.2);
             let mut row = Row::default();
-            row.put(&VALUE, *p).put(&BAD, failures);
+            row.put(&VALUE, if *p == 0.3 { f64::INFINITY } else { *p })
+                .put(&BAD, failures);
+            if *p == 0.4 {
+                row.put(&UNDECLARED, 1u64);
+            }
             Ok(PointOutput {
                 row,
                 tables: NoTables,
@@ -508,104 +515,17 @@ mod tests {
         }
     }
 
-    static FAILING: Registered<Failing> = Registered::NEW;
+    static PLANTED: Registered<Planted> = Registered::NEW;
 
-    /// A kind whose second point overflows (an undeclared ∞), or, with r > 0.35, writes an
-    /// undeclared column.
-    struct Sloppy;
-
-    impl Kind for Sloppy {
-        const NAME: &'static str = "sloppy";
-        const ABOUT: &'static str = "a test kind";
-        type Raw = LinesSpec;
-        type Point = f64;
-        type Tables = NoTables;
-        type Shared = ();
-        fn columns() -> Vec<(&'static str, &'static [Column])> {
-            vec![("main", &[VALUE])]
-        }
-        fn configure(raw: LinesSpec, _: &mut Inputs) -> Result<f64, ConfigError> {
-            Ok(raw.lines.inner_radius)
-        }
-        fn describe(p: &f64) -> String {
-            p.to_string()
-        }
-        fn work(_: &f64) -> Work {
-            Work {
-                units: 1,
-                unit: "points",
-            }
-        }
-        fn shared(_: &[&f64]) -> Result<(), Error> {
-            Ok(())
-        }
-        fn run(p: &f64, _: &(), ctx: &Context) -> Result<PointOutput<NoTables>, Error> {
-            let mut row = Row::default();
-            match ctx.index {
-                1 if *p > 0.35 => row.put(&BAD, 0u64),
-                1 => row.put(&VALUE, f64::INFINITY),
-                _ => row.put(&VALUE, *p),
-            };
-            Ok(PointOutput {
-                row,
-                tables: NoTables,
-                summary: Vec::new(),
-                checks: Vec::new(),
-                rate: Rate {
-                    per_s: 1.0,
-                    unit: "points",
-                },
-                warnings: Vec::new(),
-            })
-        }
-    }
-
-    static SLOPPY: Registered<Sloppy> = Registered::NEW;
-
-    /// An overflow is never written (the run stops before the point's row), and neither is a column
-    /// the kind did not declare.
-    #[test]
-    fn overflows_and_undeclared_columns_never_reach_a_table() {
-        for (sweep, want) in [
-            ("[0.1, 0.2]", "main.value overflowed to inf"),
-            ("[0.1, 0.4]", "column main.bad is not declared"),
-        ] {
-            let dir = tempfile::tempdir().unwrap();
-            let text = format!("[experiment]\nname = \"s\"\nkind = \"sloppy\"\n[lines]\ncount = 1\ninner_radius = 0.5\n[sweep]\n\"lines.inner_radius\" = {sweep}\n");
-            let path = dir.path().join("s.toml");
-            std::fs::write(&path, text).unwrap();
-            let spec = crate::spec::Spec::read(&path, &[]).unwrap();
-            let plan = Plan::with_kind(spec, &SLOPPY).unwrap();
-            let opts = RunOptions {
-                out: dir.path().join("out"),
-                force: false,
-                resume: false,
-                quiet: true,
-                shard: None,
-                sets: Vec::new(),
-            };
-            let msg = run(&plan, &opts).expect_err("refused").to_string();
-            assert!(msg.contains(want), "{msg}");
-            let partial = std::fs::read_to_string(dir.path().join("out/s/s.csv.partial")).unwrap();
-            assert_eq!(
-                partial.lines().count(),
-                2,
-                "only point 0 is written: {partial}"
-            );
-            assert!(!partial.contains("inf"));
-        }
-    }
-
-    /// Every kind's checks are handled alike (the quasi-static kind once lost its row instead): all
-    /// rows reach the finished table, then the run fails with exit code 1 naming the point.
-    #[test]
-    fn a_failed_check_keeps_every_row_and_fails_the_run() {
+    /// Runs kind `planted` over `lines.inner_radius` = `sweep`; returns its error and the lines of
+    /// the main table (finished or partial).
+    fn run_planted(sweep: &str) -> (Error, Vec<String>) {
         let dir = tempfile::tempdir().unwrap();
-        let text = "[experiment]\nname = \"f\"\nkind = \"failing\"\n[lines]\ncount = 1\ninner_radius = 0.5\n[sweep]\n\"lines.inner_radius\" = [0.1, 0.2, 0.3]\n";
-        let path = dir.path().join("f.toml");
+        let text = format!("[experiment]\nname = \"p\"\nkind = \"planted\"\n[lines]\ncount = 1\ninner_radius = 0.5\n[sweep]\n\"lines.inner_radius\" = {sweep}\n");
+        let path = dir.path().join("p.toml");
         std::fs::write(&path, text).unwrap();
         let spec = crate::spec::Spec::read(&path, &[]).unwrap();
-        let plan = Plan::with_kind(spec, &FAILING).unwrap();
+        let plan = Plan::with_kind(spec, &PLANTED).unwrap();
         let opts = RunOptions {
             out: dir.path().join("out"),
             force: false,
@@ -614,18 +534,42 @@ mod tests {
             shard: None,
             sets: Vec::new(),
         };
-        let e = run(&plan, &opts).expect_err("the check failed");
+        let e = run(&plan, &opts).expect_err("a planted fault");
+        let table = ["out/p/p.csv", "out/p/p.csv.partial"]
+            .iter()
+            .find_map(|f| std::fs::read_to_string(dir.path().join(f)).ok())
+            .unwrap_or_default();
+        (e, table.lines().map(str::to_string).collect())
+    }
+
+    /// Every kind's checks are handled alike (the quasi-static kind once lost its row instead): all
+    /// rows reach the finished table, then the run fails with exit code 1 naming the point.
+    #[test]
+    fn a_failed_check_keeps_every_row_and_fails_the_run() {
+        let (e, table) = run_planted("[0.1, 0.2, 0.5]");
         assert_eq!(e.exit_code(), 1);
         let msg = e.to_string();
         assert!(
             msg.contains("point 1") && msg.contains("a planted failure"),
             "{msg}"
         );
-        let csv = std::fs::read_to_string(dir.path().join("out/f/f.csv")).unwrap();
-        assert_eq!(csv.lines().count(), 4, "{csv}");
-        assert!(csv.lines().nth(2).unwrap().ends_with(",1"), "{csv}");
-        let meta = Meta::read(&dir.path().join("out/f/f.meta.toml")).unwrap();
-        assert!(meta.run.finished.is_some());
-        assert!(!meta.reproducible_columns("main").is_empty());
+        assert_eq!(table.len(), 4, "header and three rows: {table:?}");
+        assert!(table[2].ends_with(",1"), "{table:?}");
+    }
+
+    /// An overflow is never written (the run stops before the point's row), and neither is a column
+    /// the kind did not declare.
+    #[test]
+    fn overflows_and_undeclared_columns_never_reach_a_table() {
+        for (sweep, want) in [
+            ("[0.1, 0.3]", "main.value overflowed to inf"),
+            ("[0.1, 0.4]", "column main.stray is not declared"),
+        ] {
+            let (e, table) = run_planted(sweep);
+            let msg = e.to_string();
+            assert!(msg.contains(want), "{msg}");
+            assert_eq!(table.len(), 2, "only point 0 is written: {table:?}");
+            assert!(!table.iter().any(|l| l.contains("inf")));
+        }
     }
 }
