@@ -426,9 +426,9 @@ fn start(
     seed: Option<u64>,
 ) -> anyhow::Result<(QuasiStatic, crate::detp::quasi_static::FrameStats)> {
     match seed {
-        None => Ok(eq::start(cfg)),
+        None => Ok(eq::start(cfg, 0)),
         Some(s) => {
-            let mut p = eq::params(cfg, 1.0);
+            let mut p = eq::params(cfg, 1.0, 0);
             p.seed = s;
             Ok(QuasiStatic::start(cfg.scene.clone(), p))
         }

@@ -166,12 +166,6 @@ impl QuasiStaticConfig {
                 "kind quasi-static puts its points on the scene's surfaces (\"surface\")",
             );
         };
-        if detp.replicas != 1 {
-            return refuse(
-                "detp.replicas",
-                "kind quasi-static runs one realisation (frames are its samples)",
-            );
-        }
         if detp.engines != [crate::experiment::detp::spec::EngineChoice::SphereCache] {
             return refuse(
                 "detp.engines",
