@@ -238,6 +238,12 @@ pub const MISSES_LEVEL: Column = Column::value(
     Class::Measured,
     "cache misses: builds of this level except a chunk's cold start",
 );
+/// Rays held by the spheres of this level that hold fewer than the threshold (never subdivided).
+pub const RAYS_LEVEL_LEAF: Column = Column::estimate(
+    "rays_level_leaf",
+    "segments",
+    "rays held per sphere of this level that holds fewer than detp.threshold (a sphere never subdivided): mean over those builds, SE clustered by replica, builds",
+);
 /// Misses per replica.
 pub const MISSES_LEVEL_PER_REPLICA: Column = Column::estimate(
     "misses_level_per_replica",
@@ -261,6 +267,7 @@ pub const LEVELS: &[Column] = &[
     RAYS_LEVEL_THEORY,
     RAYS_LEVEL_THEORY_CLIPPED,
     RAYS_LEVEL_INSIDE,
+    RAYS_LEVEL_LEAF,
     MISSES_LEVEL,
     MISSES_LEVEL_PER_REPLICA,
     RAY_SPHERE_TESTS_LEVEL,

@@ -174,6 +174,7 @@ impl Engine for SphereCache {
         for i in 0..depth {
             let mut m = ClusteredMean::default();
             let mut inside = ClusteredMean::default();
+            let mut leaf = ClusteredMean::default();
             let (mut builds, mut misses, mut tests) = (0u64, 0u64, 0u64);
             let mut misses_per_replica = Vec::with_capacity(self.runs.len());
             let mut radius = f64::NAN;
@@ -184,6 +185,11 @@ impl Engine for SphereCache {
                     l.inside_builds,
                     l.inside_rays_held as f64,
                     l.inside_rays_held_sq as f64,
+                );
+                leaf.push_cluster(
+                    l.leaf_builds,
+                    l.leaf_rays_held as f64,
+                    l.leaf_rays_held_sq as f64,
                 );
                 builds += l.builds;
                 misses += l.misses;
@@ -214,6 +220,7 @@ impl Engine for SphereCache {
                 .put(&col::RAYS_LEVEL_THEORY, theory)
                 .put(&col::RAYS_LEVEL_THEORY_CLIPPED, clipped)
                 .put_estimate(&col::RAYS_LEVEL_INSIDE, &inside.estimate())
+                .put_estimate(&col::RAYS_LEVEL_LEAF, &leaf.estimate())
                 .put(&col::MISSES_LEVEL, misses)
                 .put_estimate(
                     &col::MISSES_LEVEL_PER_REPLICA,
