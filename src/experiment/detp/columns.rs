@@ -239,10 +239,10 @@ pub const MISSES_LEVEL: Column = Column::value(
     "cache misses: builds of this level except a chunk's cold start",
 );
 /// Rays held by the spheres of this level that hold fewer than the threshold (never subdivided).
-pub const RAYS_LEVEL_LEAF: Column = Column::estimate(
+pub const RAYS_LEVEL_LEAF: Column = Column::vs_prediction(
     "rays_level_leaf",
     "segments",
-    "rays held per sphere of this level that holds fewer than detp.threshold (a sphere never subdivided): mean over those builds, SE clustered by replica, builds",
+    "rays held per sphere of this level that holds fewer than detp.threshold (a sphere never subdivided): mean over those builds, SE clustered by replica, builds; theory: E[X | X < threshold] for X ~ Poisson(rays_level_theory)",
 );
 /// Misses per replica.
 pub const MISSES_LEVEL_PER_REPLICA: Column = Column::estimate(

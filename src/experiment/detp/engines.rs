@@ -15,7 +15,7 @@ use crate::detp::fixed::Acc;
 use crate::detp::photon_map::{self, Filter};
 use crate::detp::quasi_static::IndexKind;
 use crate::detp::{brute, disc_index, order, sphere_cache};
-use crate::experiment::metric::{z_verdict, SummaryLine};
+use crate::experiment::metric::{z_verdict, Metric, SummaryLine, Theory};
 use crate::output::row::Row;
 use crate::stats::{ClusteredMean, Estimate};
 use crate::theory::detp as th;
@@ -220,13 +220,19 @@ impl Engine for SphereCache {
                 .put(&col::RAYS_LEVEL_THEORY, theory)
                 .put(&col::RAYS_LEVEL_THEORY_CLIPPED, clipped)
                 .put_estimate(&col::RAYS_LEVEL_INSIDE, &inside.estimate())
-                .put_estimate(&col::RAYS_LEVEL_LEAF, &leaf.estimate())
                 .put(&col::MISSES_LEVEL, misses)
                 .put_estimate(
                     &col::MISSES_LEVEL_PER_REPLICA,
                     &per_replica(&misses_per_replica),
                 )
                 .put(&col::RAY_SPHERE_TESTS_LEVEL, tests);
+            // The leaf mean's line is not summarised (one per level would drown the rays' lines).
+            Metric::new(
+                &col::RAYS_LEVEL_LEAF,
+                leaf.estimate(),
+                Theory::Prediction(th::poisson_mean_below(theory, p.cfg.cache.threshold as u64)),
+            )
+            .write(&mut r, &mut Vec::new());
             rows.push(r);
             if e.n > 0 {
                 lines.push((
