@@ -10,28 +10,10 @@ parametric bootstrap. Left: frame 0 per engine; middle: update per frame; right:
 import math
 
 import raycost_plot as rp
-from raycost_stats import bootstrap, t95
+from raycost_stats import bootstrap, break_even, frame0, t95
 
 NAME = "quasi-static-amortisation"
 REQUIRED = ["detp.engine", "static_s_mean", "static_s_se", "static_s_n", "frame0_s"]
-
-
-def break_even(x):
-    f0_di, f0_sc, s_di, s_sc = x
-    extra = f0_di - f0_sc
-    saving = s_sc - s_di
-    if extra <= 0:
-        return 0.0
-    if saving <= 0:
-        return math.inf
-    return extra / saving
-
-
-def frame0(frames, point):
-    v = [r["frame_s"] for r in frames if r["point"] == point and r["frame"] == 0]
-    m = sum(v) / len(v)
-    se = math.sqrt(sum((x - m) ** 2 for x in v) / (len(v) - 1) / len(v)) if len(v) > 1 else float("nan")
-    return m, se, len(v)
 
 
 def plot(args):

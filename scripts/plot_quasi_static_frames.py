@@ -11,7 +11,7 @@ path is no slower at frame 0). The CI of that figure: quasi-static-amortisation.
 """
 
 import raycost_plot as rp
-from plot_quasi_static_amortisation import break_even
+from raycost_stats import break_even
 
 NAME = "quasi-static-frames"
 REQUIRED = ["dynamic.ratio", "detp.engine", "frame_s_mean", "full_frame_s_mean", "retraced_rays_mean",

@@ -64,6 +64,7 @@ def optimum_q(rows):
 
 
 def solve3(a, b):
+    """The solution of the 3×3 system a·x = b (Gaussian elimination with pivoting), None if singular."""
     m = [row[:] + [v] for row, v in zip(a, b)]
     for c in range(3):
         p = max(range(c, 3), key=lambda r: abs(m[r][c]))
@@ -75,3 +76,25 @@ def solve3(a, b):
                 f = m[r][c] / m[c][c]
                 m[r] = [x - f * y for x, y in zip(m[r], m[c])]
     return [m[i][3] / m[i][i] for i in range(3)]
+
+
+def break_even(x):
+    """Frames until the static disc index has paid for itself, frame 0 included, from
+    x = (frame 0 with the index, frame 0 without, update per frame with, update without): 0 when the
+    index path is no slower at frame 0, infinity when it never saves."""
+    f0_di, f0_sc, s_di, s_sc = x
+    extra = f0_di - f0_sc
+    saving = s_sc - s_di
+    if extra <= 0:
+        return 0.0
+    if saving <= 0:
+        return math.inf
+    return extra / saving
+
+
+def frame0(frames, point):
+    """Mean, SE and count of frame 0's seconds of `point` over its replicas (NAME.frames.csv rows)."""
+    v = [r["frame_s"] for r in frames if r["point"] == point and r["frame"] == 0]
+    m = sum(v) / len(v)
+    se = math.sqrt(sum((x - m) ** 2 for x in v) / (len(v) - 1) / len(v)) if len(v) > 1 else float("nan")
+    return m, se, len(v)
