@@ -245,18 +245,7 @@ fn from_table(
         }
     };
     if t.has(&format!("{col}_mean")) {
-        let n = t.number(row, &format!("{col}_n"));
-        let n = if n.is_finite() && n >= 0.0 {
-            n as u64
-        } else {
-            0
-        };
-        let est = Estimate {
-            mean: t.number(row, &format!("{col}_mean")),
-            se: t.number(row, &format!("{col}_se")),
-            n,
-            clusters: n,
-        };
+        let est = super::verdicts::estimate(t, row, col);
         Ok((est, measured(&est)))
     } else if t.has(col) {
         // One value, no standard error: judged as an exact value (SE 0; the cluster count does

@@ -51,7 +51,7 @@ pub fn folders(results: &Path, skip: Option<&Path>) -> Result<Vec<Folder>, Input
             continue;
         }
         let canon = path.canonicalize().unwrap_or(path);
-        if skip.is_some_and(|s| s == canon) {
+        if skip.is_some_and(|s| s == canon) || is_report(&canon) {
             continue;
         }
         dirs.push(canon);
@@ -98,6 +98,17 @@ pub fn folders(results: &Path, skip: Option<&Path>) -> Result<Vec<Folder>, Input
         out.push(folder);
     }
     Ok(out)
+}
+
+/// Whether `dir` holds a page this command made (another report's output folder, such as a
+/// committed `results/report/`): its `index.html` names raycost report as its generator.
+fn is_report(dir: &Path) -> bool {
+    use std::io::Read;
+    let mut head = [0u8; 512];
+    let n = std::fs::File::open(dir.join("index.html"))
+        .and_then(|mut f| f.read(&mut head))
+        .unwrap_or(0);
+    String::from_utf8_lossy(&head[..n]).contains(super::page::GENERATOR)
 }
 
 /// Width and height from a PNG's IHDR or a GIF's logical screen descriptor.
@@ -162,9 +173,15 @@ mod tests {
         std::fs::create_dir_all(r.join(".hidden")).expect("mkdir");
         std::fs::create_dir_all(r.join("report")).expect("mkdir");
         let skip = r.join("report").canonicalize().expect("canon");
+        // An older report elsewhere in RESULTS is skipped too; a folder with another index.html is not.
+        let page = format!("<!DOCTYPE html>{}", crate::report::page::GENERATOR);
+        for (dir, text) in [("old-report", page.as_str()), ("site", "<html>")] {
+            std::fs::create_dir_all(r.join(dir)).expect("mkdir");
+            std::fs::write(r.join(dir).join("index.html"), text).expect("write");
+        }
         let f = folders(r, Some(&skip)).expect("folders");
         let names: Vec<&str> = f.iter().map(|x| x.name.as_str()).collect();
-        assert_eq!(names, ["a", "b"]);
+        assert_eq!(names, ["a", "b", "site"]);
         let b = &f[1];
         assert!(b.meta.is_some() && b.main_table.is_some());
         assert_eq!(b.tables.len(), 2);

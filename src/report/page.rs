@@ -31,15 +31,20 @@ figcaption, .note { color: #555; font-size: 13px; }
 .files a { margin-right: 1em; white-space: nowrap; }
 ";
 
+/// The `generator` tag, near the top of the page: how a later report recognises an earlier one's
+/// folder inside RESULTS and leaves it out.
+pub const GENERATOR: &str = "<meta name=\"generator\" content=\"raycost report\">";
+
 /// How to read the claims tables, once at the top.
 const READING: &str = "<p class=\"note\">Each experiment's claims are read back from its table \
 (NAME.csv: the M_mean, M_se, M_n columns beside M_theory, or M_lower and M_upper for a band) and \
 judged by the rules of the terminal summary: against a prediction, &ldquo;ok (99% CI)&rdquo; when \
 the prediction lies within the 99% confidence interval, else the distance in standard errors; \
 against a band, where the 95% interval falls (below, inside, above); n/a without a standard error \
-or a finite theory. The tables do not record how many independent clusters stand behind M_se, so \
-the interval here uses M_n; with few clusters (a quasi-static run's 16 batches of frames) the \
-run's own interval was wider, and a distance of about 3 SE may have read &ldquo;ok&rdquo; there. \
+or a finite theory. The tables do not record how many independent clusters stand behind M_se \
+(unless they have an M_clusters column), so the interval here uses M_n; with few clusters (a grid \
+kind's finite-scene replicas, a quasi-static run's 16 batches of frames) the run's own interval was \
+wider, and a distance of about 3 SE may have read &ldquo;ok&rdquo; there. \
 A single value against a cost model has no standard error: its ratio is shown, with no verdict. \
 Details: docs/report.md.</p>\n";
 
@@ -50,7 +55,7 @@ pub fn render(r: &Report) -> String {
         s,
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
          <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n\
-         <title>raycost results</title>\n<link rel=\"icon\" href=\"data:,\">\n\
+         {GENERATOR}\n<title>raycost results</title>\n<link rel=\"icon\" href=\"data:,\">\n\
          <style>{CSS}</style>\n</head>\n<body>\n<h1>raycost results</h1>\n\
          <p>{} experiment(s) in <code>{}</code>; page made by raycost {}.</p>\n",
         r.experiments.len(),

@@ -5,9 +5,11 @@
 //! A metric is a `M_mean` column with a `M_theory` beside it (a prediction), or also `M_lower` and
 //! `M_upper` (a band) — the columns [`crate::experiment::metric::Metric`] writes. The CSV records the
 //! sample count `M_n` but not the number of independent clusters behind `M_se`, which the Student-t
-//! interval needs; the report takes the cluster count to be `M_n`. That is exact for per-replica
-//! estimates and within 0.2 % of the run's interval for batched ones (hundreds of batches or more),
-//! but narrower than the run's when a metric had few clusters and many samples. So where the run
+//! interval needs; the report takes the cluster count from a `M_clusters` column where a table has
+//! one, else it takes `M_n`. That is exact for per-replica estimates and within 0.2 % of the run's
+//! interval for batched ones (hundreds of batches or more), but narrower than the run's when a
+//! metric had few clusters and many samples (a grid kind's finite scene with several replicas: one
+//! cluster each; a quasi-static run of more than 32 frames: 16 batches of frames). So where the run
 //! wrote its own band verdict (`M_band`) and it differs, the page shows both.
 //!
 //! A single measured value with a `_theory` column and no `_mean` (an exact count against a cost
@@ -113,23 +115,28 @@ fn metric_stems(t: &Table) -> Vec<Stem> {
         .collect()
 }
 
+/// The estimate of metric `m` in row `r`: `M_mean`, `M_se`, `M_n`, and as the cluster count
+/// `M_clusters` where the table has it, else `M_n` (see the module doc).
+pub fn estimate(t: &Table, r: usize, m: &str) -> Estimate {
+    let count = |suffix: &str| {
+        let x = t.number(r, &format!("{m}{suffix}"));
+        (x.is_finite() && x >= 0.0).then_some(x as u64)
+    };
+    let n = count("_n").unwrap_or(0);
+    Estimate {
+        mean: t.number(r, &format!("{m}_mean")),
+        se: t.number(r, &format!("{m}_se")),
+        n,
+        clusters: count("_clusters").unwrap_or(n),
+    }
+}
+
 /// The claim of stem `s` in row `r`.
 fn claim(t: &Table, r: usize, s: &Stem) -> Claim {
     match s {
         Stem::Estimate(m) => {
             let num = |suffix: &str| t.number(r, &format!("{m}{suffix}"));
-            let n = num("_n");
-            let n = if n.is_finite() && n >= 0.0 {
-                n as u64
-            } else {
-                0
-            };
-            let est = Estimate {
-                mean: num("_mean"),
-                se: num("_se"),
-                n,
-                clusters: n,
-            };
+            let est = estimate(t, r, m);
             let theory = if t.has(&format!("{m}_lower")) && t.has(&format!("{m}_upper")) {
                 Theory::Band {
                     prediction: num("_theory"),
@@ -204,6 +211,19 @@ n_s_mean,n_s_se,n_s_n,n_s_theory,trace_s,tests,tests_theory\n\
             "no verdict (one value; measured/theory = 1.250)"
         );
         assert_eq!(p[1].claims[2].verdict, "n/a", "theory 0: no ratio");
+    }
+
+    #[test]
+    fn a_cluster_count_column_widens_the_interval_like_the_run() {
+        // 2.9 SE: outside the normal 99 % CI (2.58), inside Student-t with 15 dof (2.95).
+        let csv = "point,m_mean,m_se,m_n,m_theory\n0,2.9,1.0,400,0.0\n";
+        let t = Table::parse(csv).expect("csv");
+        assert_eq!(claims(&t, &[])[0].claims[0].verdict, "+2.9 SE");
+        let with = csv
+            .replace("m_theory\n", "m_theory,m_clusters\n")
+            .replace(",0.0\n", ",0.0,16\n");
+        let t = Table::parse(&with).expect("csv");
+        assert_eq!(claims(&t, &[])[0].claims[0].verdict, "ok (99% CI)");
     }
 
     #[test]
