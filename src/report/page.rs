@@ -16,7 +16,8 @@ const CSS: &str = "
 body { font: 15px/1.45 system-ui, -apple-system, 'Segoe UI', sans-serif; color: #1b1b1b;
        max-width: 1180px; margin: 0 auto; padding: 0 1.2em 4em; }
 h1 { margin-top: 1em; } h2 { border-bottom: 2px solid #ddd; padding-bottom: .2em; margin-top: 2.2em; }
-code, .mono { font-family: ui-monospace, 'DejaVu Sans Mono', monospace; font-size: 90%; }
+td.name { white-space: nowrap; }
+code, .mono, td.name { font-family: ui-monospace, 'DejaVu Sans Mono', monospace; font-size: 90%; }
 nav ul { columns: 3; padding-left: 1.2em; }
 dl.meta { display: grid; grid-template-columns: max-content 1fr; gap: .1em 1em; }
 dl.meta dt { color: #555; } dl.meta dd { margin: 0; overflow-wrap: anywhere; }
@@ -158,7 +159,7 @@ fn bench(s: &mut String, b: &BenchSection) {
                 let class = if c.parse::<f64>().is_ok() || c.is_empty() {
                     "num"
                 } else {
-                    "mono"
+                    "name"
                 };
                 let _ = write!(s, "<td class=\"{class}\">{}</td>", text(c));
             }
