@@ -12,6 +12,7 @@ mod never_panics;
 mod oracle;
 mod quasi_static;
 mod render;
+mod report;
 mod reproducible;
 mod resume;
 mod sanity;
