@@ -627,15 +627,12 @@ def render_toml(claims):
         lines.append("reference = %s" % toml_str(c["reference"]))
         lines.append("paper = %s" % toml_str(c["paper"]))
         lines.append("source = %s" % toml_str(c["source"]))
-        if c.get("value") is not None and c["value"] == c["value"]:
-            lines.append("measured = %r" % float("%.6g" % c["value"]))
-            if c.get("ci") is not None and c["ci"] == c["ci"]:
-                lines.append("ci = %r" % float("%.3g" % c["ci"]))
-        else:
-            lines.append("measured = nan")
+        # The measurement as the table states it (its CI inside the text), and the number alone
+        # for tools, where there is one.
+        lines.append("measured = %s" % toml_str(c["measured"]))
         lines.append("verdict = %s" % toml_str(c["verdict"]))
-        note = c["measured"] + (". " + c["note"] if c["note"] else "")
-        lines.append("note = %s" % toml_str(note))
+        if c["note"]:
+            lines.append("note = %s" % toml_str(c["note"]))
         lines.append("")
     return "\n".join(lines)
 

@@ -9,7 +9,8 @@
 //! source = "grid-first-hit/grid-first-hit.csv"            # relative to RESULTS; must exist
 //! column = "n_s"                       # read M_mean, M_se, M_n (or the value M) from source …
 //! point = 0                            # … in the row whose `point` is this
-//! # or, instead of column/point: measured = 190.6, ci = 0.58 (95 % half-width)
+//! # or, instead of column/point: measured = 190.6, ci = 0.58 (95 % half-width),
+//! # or a text that states its own uncertainty: measured = "40 of 40 points inside"
 //! unit = "steps"                       # optional
 //! verdict = "ok (99% CI)"              # optional with `column` and a numeric `paper`
 //! note = "…"                           # optional
@@ -65,7 +66,7 @@ struct Entry {
     #[serde(default)]
     point: Option<u64>,
     #[serde(default)]
-    measured: Option<f64>,
+    measured: Option<NumberOrText>,
     #[serde(default)]
     ci: Option<f64>,
     #[serde(default)]
@@ -163,7 +164,7 @@ fn resolve(e: Entry, results: &Path) -> Result<PaperClaim, (&'static str, String
         NumberOrText::Text(s) => s.clone(),
     };
     let unit = e.unit.as_deref().map_or(String::new(), |u| format!(" {u}"));
-    let (measured_text, est) = match (&e.column, e.measured) {
+    let (measured_text, est) = match (&e.column, e.measured.clone()) {
         (Some(_), Some(_)) => {
             return Err((
                 "measured",
@@ -175,7 +176,17 @@ fn resolve(e: Entry, results: &Path) -> Result<PaperClaim, (&'static str, String
             "missing: give `column` (and `point`) to read it from the source table, or `measured`"
                 .into(),
         )),
-        (None, Some(m)) => {
+        (None, Some(NumberOrText::Text(t))) => {
+            if e.point.is_some() || e.ci.is_some() {
+                return Err((
+                    "measured",
+                    "a measurement given as text carries its own uncertainty: no `point` or `ci`"
+                        .into(),
+                ));
+            }
+            (format!("{t}{unit}"), None)
+        }
+        (None, Some(NumberOrText::Number(m))) => {
             if e.point.is_some() {
                 return Err(("point", "`point` needs `column`".into()));
             }
@@ -316,6 +327,12 @@ verdict = "agrees"
             (c[1].paper.as_str(), c[1].verdict.as_str()),
             ("≈ 0.35", "agrees")
         );
+        // A measurement given as text is shown as written; it carries no separate `ci`.
+        let t = "[[claim]]\nclaim = \"x\"\npaper = \"0.35\"\nsource = \"a/a.csv\"\nmeasured = \"0.12 [0.10, 0.15]\"\nverdict = \"differs\"\n";
+        let c = parse(t, d.path()).expect("text");
+        assert_eq!(c[0].measured, "0.12 [0.10, 0.15]");
+        let e = parse(&format!("{t}ci = 0.1\n"), d.path()).expect_err("ci with text");
+        assert_eq!(e.1.as_deref(), Some("claim[0].measured"));
     }
 
     #[test]
