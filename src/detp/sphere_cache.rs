@@ -54,10 +54,24 @@ use crate::geom::Aabb;
 /// Where a new level takes its list from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ListMode {
-    /// The deepest ancestor that encloses the child (exact lists; the default).
+    /// The deepest ancestor that encloses the child (exact lists: raycost's variant).
     Exact,
-    /// The parent (the paper's literal rule).
+    /// The parent (the paper's rule, §3; the default).
     Inherited,
+}
+
+/// Which levels a new point keeps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PopRule {
+    /// Keep the chain of levels that all contain the disc: drop the first level (from the root)
+    /// that does not, and everything below it (the default; exact with either list mode).
+    Chain,
+    /// The paper's rule: pop the deepest level while it does not contain the disc, keep everything
+    /// above the first that does. Exact lists make it exact as it stands (every list holds exactly
+    /// the segments meeting its sphere, whatever its ancestors); with inherited lists a kept level
+    /// that does not contain the disc may have dropped crossing segments, so there the chain is cut
+    /// as [`PopRule::Chain`] cuts it (a *repair*, counted in [`CacheStats::pop_repairs`]).
+    Paper,
 }
 
 /// Parameters of one sphere-cache run.
@@ -69,6 +83,8 @@ pub struct SphereCacheParams {
     pub threshold: usize,
     /// Where a new list comes from.
     pub list_mode: ListMode,
+    /// Which levels a new point keeps.
+    pub pop_rule: PopRule,
     /// Points per independent cache (the unit of parallel work).
     pub chunk_points: usize,
     /// The ball the rays are μ-random in, when they are (centre, radius): builds of spheres that lie
@@ -82,7 +98,8 @@ impl Default for SphereCacheParams {
         Self {
             q: 2.0 / 3.0,
             threshold: 100,
-            list_mode: ListMode::Exact,
+            list_mode: ListMode::Inherited,
+            pop_rule: PopRule::Chain,
             chunk_points: 4096,
             law_ball: None,
         }
@@ -98,7 +115,7 @@ pub struct LevelStats {
     pub builds: u64,
     /// Builds except those for a chunk's first point.
     pub misses: u64,
-    /// Σ list length over builds.
+    /// Σ list length over builds: the segments copied into this level's lists.
     pub rays_held: u64,
     /// Σ (list length)² over builds, for a standard error.
     pub rays_held_sq: u128,
@@ -137,9 +154,22 @@ pub struct CacheStats {
     pub ray_disc_tests: u64,
     /// Segment–sphere tests over all levels.
     pub ray_sphere_tests: u64,
+    /// [`PopRule::Paper`]: points whose kept chain held a level not containing the disc (with
+    /// inherited lists the chain was then cut there; with exact lists nothing needed doing).
+    pub pop_repairs: u64,
 }
 
 impl CacheStats {
+    /// Spheres built over all levels (the root's one build included).
+    pub fn builds(&self) -> u64 {
+        self.levels.iter().map(|l| l.builds).sum()
+    }
+
+    /// Segments copied into lists over all levels (the root's list included).
+    pub fn rays_copied(&self) -> u64 {
+        self.levels.iter().map(|l| l.rays_held).sum()
+    }
+
     /// Adds `other`'s counts to these (levels aligned by index; a level's radius is the same
     /// wherever it was built, and unset where it never was).
     pub fn merge(&mut self, other: &CacheStats) {
@@ -162,6 +192,7 @@ impl CacheStats {
         }
         self.ray_disc_tests += other.ray_disc_tests;
         self.ray_sphere_tests += other.ray_sphere_tests;
+        self.pop_repairs += other.pop_repairs;
     }
 
     fn level(&mut self, i: usize, radius: f64) -> &mut LevelStats {
@@ -300,10 +331,28 @@ impl<'a> Ctx<'a> {
                 stats.ray_disc_tests += segs.len() as u64;
                 continue;
             }
-            let keep = 1 + stack[1..]
+            // The chain: up to the first level (below the root) not containing the disc.
+            let chain = 1 + stack[1..]
                 .iter()
                 .position(|l| !l.contains(c, d))
                 .unwrap_or(stack.len() - 1);
+            let keep = match self.params.pop_rule {
+                PopRule::Chain => chain,
+                PopRule::Paper => {
+                    // Up to the deepest level containing the disc (the root always does).
+                    let paper = (1..stack.len())
+                        .rev()
+                        .find(|&j| stack[j].contains(c, d))
+                        .map_or(1, |j| j + 1);
+                    if paper > chain {
+                        stats.pop_repairs += 1;
+                    }
+                    match self.params.list_mode {
+                        ListMode::Exact => paper,
+                        ListMode::Inherited => chain,
+                    }
+                }
+            };
             stack.truncate(keep);
             while stack.last().map_or(0, |l| l.list.len()) >= self.params.threshold
                 && stack.len() <= MAX_LEVEL

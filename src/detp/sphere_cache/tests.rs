@@ -29,6 +29,14 @@ fn oracle(store: &SegmentStore, discs: &Discs) -> Vec<Acc> {
 
 const UNIT: (DVec3, f64) = (DVec3::ZERO, 1.0);
 
+/// Every list mode with every pop rule.
+const MODES: [(ListMode, PopRule); 4] = [
+    (ListMode::Exact, PopRule::Chain),
+    (ListMode::Exact, PopRule::Paper),
+    (ListMode::Inherited, PopRule::Chain),
+    (ListMode::Inherited, PopRule::Paper),
+];
+
 #[test]
 fn both_list_modes_every_order_and_filter_path_equal_brute_force() {
     let store = lines(20_000, 1);
@@ -39,20 +47,21 @@ fn both_list_modes_every_order_and_filter_path_equal_brute_force() {
         "a test that could not fail"
     );
     for (q, threshold, chunk) in [(2.0 / 3.0, 100, 128), (0.5, 20, 1000), (0.9, 300, 7)] {
-        for mode in [ListMode::Exact, ListMode::Inherited] {
+        for (mode, pop) in MODES {
             for order in [Order::None, Order::Morton, Order::Hilbert] {
                 let perm = permutation(&discs.centers, order, 10);
                 let params = SphereCacheParams {
                     q,
                     threshold,
                     list_mode: mode,
+                    pop_rule: pop,
                     chunk_points: chunk,
                     law_ball: Some((DVec3::ZERO, 1.0)),
                 };
                 for path in FilterPath::all_available() {
                     let mut acc = vec![0; discs.len()];
                     let s = run_with(&store, &discs, &perm, UNIT, &params, &mut acc, path);
-                    assert_eq!(acc, want, "Q {q} {mode:?} {order:?} {path:?}");
+                    assert_eq!(acc, want, "Q {q} {mode:?} {pop:?} {order:?} {path:?}");
                     assert!(
                         s.levels.len() > 3,
                         "the cache must go deep: {:?}",
