@@ -137,6 +137,7 @@ fn exact_lists_follow_the_area_law_for_concentric_spheres() {
     let discs = Discs::new(vec![DVec3::ZERO], vec![DVec3::Z], 1e-3).unwrap();
     let params = SphereCacheParams {
         threshold: 1,
+        list_mode: ListMode::Exact,
         ..Default::default()
     };
     let mut acc = vec![0; 1];
@@ -220,6 +221,7 @@ fn spheres_inside_the_law_ball_follow_the_area_law_at_every_level() {
     let params = SphereCacheParams {
         q: 0.7,
         law_ball: Some(UNIT),
+        list_mode: ListMode::Exact,
         ..Default::default()
     };
     let mut acc = vec![0; discs.len()];
@@ -278,4 +280,42 @@ fn curve_orders_cut_the_misses() {
         hilbert * 2 < none && morton * 2 < none,
         "none {none} morton {morton} hilbert {hilbert}"
     );
+}
+
+/// The paper's pop rule keeps levels the chain rule drops (a protruding child's parent), so with
+/// exact lists it rebuilds less; with inherited lists it is cut back to the chain wherever it kept a
+/// level not containing the disc, which makes it the chain rule exactly (repairs counted).
+#[test]
+fn the_paper_pop_rule_rebuilds_less_with_exact_lists_and_is_the_chain_with_inherited() {
+    let store = lines(1 << 15, 12);
+    let discs = ball_points(4000, 1.0, 5e-3, 13);
+    let perm = permutation(&discs.centers, Order::Hilbert, 10);
+    let stats = |list_mode, pop_rule| {
+        let params = SphereCacheParams {
+            q: 0.6,
+            threshold: 20,
+            list_mode,
+            pop_rule,
+            chunk_points: 1 << 20,
+            law_ball: None,
+        };
+        let mut acc = vec![0; discs.len()];
+        run(&store, &discs, &perm, UNIT, &params, &mut acc)
+    };
+    let exact_chain = stats(ListMode::Exact, PopRule::Chain);
+    let exact_paper = stats(ListMode::Exact, PopRule::Paper);
+    assert_eq!(exact_chain.pop_repairs, 0);
+    assert!(exact_paper.pop_repairs > 0, "no level was ever kept");
+    assert!(
+        exact_paper.builds() < exact_chain.builds(),
+        "paper {} vs chain {} builds",
+        exact_paper.builds(),
+        exact_chain.builds()
+    );
+    assert!(exact_paper.rays_copied() < exact_chain.rays_copied());
+    let inh_chain = stats(ListMode::Inherited, PopRule::Chain);
+    let mut inh_paper = stats(ListMode::Inherited, PopRule::Paper);
+    assert!(inh_paper.pop_repairs > 0);
+    inh_paper.pop_repairs = 0;
+    assert_eq!(inh_paper, inh_chain);
 }

@@ -59,6 +59,7 @@ pub fn params(cfg: &QuasiStaticConfig, n_dynamic_points: f64) -> Params {
         cache: d.cache,
         order: d.order,
         index: d.index,
+        feed: cfg.feed,
     }
 }
 
@@ -304,6 +305,14 @@ fn frame_row(st: &FrameStats, full: Option<(f64, u64)>) -> Row {
         .put(&col::STATIC_SPHERE_TESTS, st.static_sphere_tests)
         .put(&col::DYNAMIC_DISC_TESTS, st.dynamic_disc_tests)
         .put(&c::DYNAMIC_SPHERE_TESTS, st.dynamic_sphere_tests)
+        .put(&c::STATIC_TRAVERSAL, st.static_traversal)
+        .put(&c::STATIC_RAYS_COPIED, st.static_rays_copied)
+        .put(&c::STATIC_COUNTED_COST, st.static_counted_cost())
+        .put(&c::DYNAMIC_TRAVERSAL, st.dynamic_traversal)
+        .put(&c::DYNAMIC_RAYS_COPIED, st.dynamic_rays_copied)
+        .put(&c::DYNAMIC_SPHERES_BUILT, st.dynamic_spheres_built)
+        .put(&c::DYNAMIC_FEED, st.dynamic_feed)
+        .put(&c::DYNAMIC_COUNTED_COST, st.dynamic_counted_cost())
         .put(&col::ENGINE_USED, used.join("+"))
         .put(&c::SEARCH_S, st.search_s)
         .put(&c::RETRACE_S, st.retrace_s)
