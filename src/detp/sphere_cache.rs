@@ -2,10 +2,14 @@
 //!
 //! Level i is a sphere of radius r_i = r_0·Q^i holding a list of segments. Points are visited in
 //! the given order (a space-filling-curve permutation). For each point:
-//! 1. **Keep only the chain of levels that all contain the disc** (`|c − s| + d ≤ r`, computed),
-//!    dropping the first level that does not and everything below it. The paper's "pop until a
-//!    sphere contains the disc" is wrong when a child sticks out of its parent: a disc inside a
-//!    deep sphere can lie outside an ancestor whose dropped rays are then missing.
+//! 1. **Pop** ([`PopRule`]). [`PopRule::Chain`] (the default) keeps only the chain of levels
+//!    that all contain the disc (`|c − s| + d ≤ r`, computed), dropping the first level that does
+//!    not and everything below it. [`PopRule::Paper`] pops the deepest level while it does not
+//!    contain the disc, as the paper does; with inherited lists that is wrong when a child sticks
+//!    out of its parent (a disc inside a deep sphere can lie outside an ancestor whose dropped rays
+//!    are then missing), so there the chain is cut back as the chain rule cuts it (counted as a
+//!    repair); with exact lists every list is exact whatever its ancestors, and the paper's rule
+//!    stands as it is.
 //! 2. While the deepest level holds at least `threshold` rays and r_{i+1} ≥ d, build level i+1
 //!    centred on the point (it then contains the disc: `|c − c| + d = d ≤ r_{i+1}`). Its list is
 //!    the segments of a source list that meet it ([`filter::meets`]): in [`ListMode::Exact`] the
@@ -15,10 +19,13 @@
 //!    rule, cheaper, but a protruding child holds fewer rays than meet it).
 //! 3. Test the deepest list against the disc with [`crate::detp::disc::crosses`].
 //!
+//! Defaults: inherited lists and the chain rule — the paper's cache with the one repair that keeps
+//! every disc's answer exact (THEORY.md §2: test the paper's claims with the paper's cache).
+//!
 //! # Why no crossing is lost
 //! A segment crossing the disc meets every sphere that contains the disc (filter module doc,
-//! fact 1). Inherited: the deepest list is the segments that passed every sphere of the chain,
-//! which all contain the disc. Exact: by induction each list is exactly {segments meeting the root
+//! fact 1). Inherited (always with the chain, see 1.): the deepest list is the segments that passed
+//! every sphere of the chain, which all contain the disc. Exact: by induction each list is exactly {segments meeting the root
 //! and the sphere}, because the source encloses the child (fact 2: meeting the child implies
 //! meeting the source); the disc lies in the root and the deepest sphere. A disc outside the root
 //! (a root that does not hold the scene) is tested against every segment.
@@ -32,11 +39,13 @@
 //!
 //! # The paper's §4.2 numbers, with this convention
 //! 2²⁰ uniform lines, 10⁵ points uniform in the unit ball (d = 0.002, root radius 1 + d), Morton
-//! order, Q = 0.6, threshold 100, exact lists: level 9 holds 106.7 rays on average (SE 0.03;
-//! n_R·(r_9/1)² = 106.9), not the paper's 94.6; inherited lists hold 103.9. Misses rise with the
-//! level up to level 9 (98 222 of 10⁵ points) and drop at level 10 (75 313), which is built only
-//! when level 9 holds ≥ 100 rays. Spheres smaller than the point spacing (0.035 here) are rebuilt
-//! for nearly every point, so m_i saturates at n_P instead of growing as Q^(−3i).
+//! order, Q = 0.6, threshold 100, seed 1, one replica (`raycost run` on a `kind = "detp"` spec with
+//! exactly these keys, `brute_force_points = 64`, swept over `detp.list_mode`; 0 mismatches):
+//! exact lists hold 106.92 rays on average at level 9 (n_R·(r_9/1)² = 106.92), not the paper's
+//! 94.6; inherited lists hold 104.05. Misses rise with the level up to level 9 (exact 98 292,
+//! inherited 98 272 of 10⁵ points) and drop at level 10 (exact 75 963, inherited 66 167), which is
+//! built only when level 9 holds ≥ 100 rays. Spheres smaller than the point spacing (0.035 here)
+//! are rebuilt for nearly every point, so m_i saturates at n_P instead of growing as Q^(−3i).
 
 pub mod filter;
 

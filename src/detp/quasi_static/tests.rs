@@ -188,8 +188,5 @@ fn every_feed_gives_both_engines_the_same_sums() {
     }
     // Paper and all: every segment traverses the index; segment-index: only those fed.
     assert_eq!(traversal[0], traversal[2]);
-    assert!(
-        traversal[1] * 2 < traversal[2],
-        "traversal {traversal:?}"
-    );
+    assert!(traversal[1] * 2 < traversal[2], "traversal {traversal:?}");
 }

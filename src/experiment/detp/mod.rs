@@ -391,9 +391,11 @@ pub fn describe(cfg: &DetpConfig) -> String {
     };
     let engines: Vec<&str> = cfg.engines.iter().map(|e| e.as_str()).collect();
     format!(
-        "{rays}, {pts}, d = {}, Q = {}, order {:?}, engines {}, {} replica(s)",
+        "{rays}, {pts}, d = {}, Q = {}, {:?} lists, {:?} pop, order {:?}, engines {}, {} replica(s)",
         cfg.disc_radius,
         cfg.q(),
+        cfg.cache.list_mode,
+        cfg.cache.pop_rule,
         cfg.order,
         engines.join("+"),
         cfg.replicas

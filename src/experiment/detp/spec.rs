@@ -554,12 +554,10 @@ impl DetpConfig {
                 },
                 PointSourceKind::Grid => match d.points {
                     Some(n) => Points::Grid(lattice_side(n)),
-                    None => {
-                        return refuse(
-                            "detp.points",
-                            "missing: points on a lattice need a count (k = round(∛points) per side)",
-                        )
-                    }
+                    None => return refuse(
+                        "detp.points",
+                        "missing: points on a lattice need a count (k = round(∛points) per side)",
+                    ),
                 },
                 PointSourceKind::Surface => {
                     if matches!(rays, Rays::Lines) {
@@ -626,7 +624,11 @@ impl DetpConfig {
             return refuse("detp.photons", format!("got {}, at most 2³¹", d.photons));
         }
         if let Points::Ball(n) | Points::Grid(n) = points {
-            let n = if let Points::Grid(k) = points { k.pow(3) } else { n };
+            let n = if let Points::Grid(k) = points {
+                k.pow(3)
+            } else {
+                n
+            };
             if n > 1 << 28 {
                 return refuse("detp.points", format!("got {n}, at most 2²⁸"));
             }

@@ -8,10 +8,10 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::detp::quasi_static::Feed;
 use crate::experiment::detp::spec::{DetpConfig, DynamicEngine, Points, RawDetp, Rays};
 use crate::experiment::inputs::{Inputs, SceneFile};
 use crate::experiment::kind::{refuse, ConfigError};
-use crate::detp::quasi_static::Feed;
 use crate::lt::Scene;
 use crate::spec::de::{count, count_or_zero, number, opt_count, opt_count_or_zero};
 use crate::spec::RawExperiment;
