@@ -173,10 +173,10 @@ fn every_feed_gives_both_engines_the_same_sums() {
             }
             let (full, ..) = qs.full_recalculation();
             assert_eq!(mismatches(&qs.sums(), &full), 0, "{feed:?} {engine:?}");
-            let fed_expected = match (feed, engine) {
-                (Feed::All, _) | (Feed::Paper, Engine::DiscIndex) => false,
-                _ => true,
-            };
+            let fed_expected = !matches!(
+                (feed, engine),
+                (Feed::All, _) | (Feed::Paper, Engine::DiscIndex)
+            );
             assert_eq!(fed > 0, fed_expected, "{feed:?} {engine:?}: feed {fed}");
             if engine == Engine::DiscIndex {
                 traversal.push(trav);
