@@ -500,15 +500,25 @@ impl QuasiStatic {
                         Used::SphereCache => self.params.feed != Feed::All,
                         Used::DiscIndex => self.params.feed == Feed::SegmentIndex,
                     };
-                let ids = fed.then(|| {
+                let ids = if fed {
                     let live = |id: u32| !is_dead(&self.store.segments[id as usize]);
                     let mut seen = vec![false; store.len()];
                     let (ids, st) =
                         self.index
                             .query(&store.segments, root.0, root.1, &live, &mut seen);
                     counts.feed = st.cells + st.tested;
-                    ids
-                });
+                    Some(ids)
+                } else if indexed && self.dead > 0 {
+                    // Every live segment: the slots emptied by re-traces (up to half the store
+                    // before it is compacted, and all of them near the object) are no segments.
+                    Some(
+                        (0..store.len() as u32)
+                            .filter(|&i| !is_dead(&store.segments[i as usize]))
+                            .collect(),
+                    )
+                } else {
+                    None
+                };
                 match used {
                     Used::SphereCache => {
                         let perm = permutation(&discs.centers, self.params.order, 10);
