@@ -14,7 +14,7 @@ use raycost::detp::disc_index::{DiscIndex, GridIndex, Octree};
 use raycost::detp::fixed::{Acc, PowerScale};
 use raycost::detp::order::{permutation, Order};
 use raycost::detp::sphere_cache::filter::FilterPath;
-use raycost::detp::sphere_cache::{root_sphere, run_with, ListMode, SphereCacheParams};
+use raycost::detp::sphere_cache::{root_sphere, run_with, ListMode, PopRule, SphereCacheParams};
 use raycost::detp::store::{Segment, SegmentStore};
 use raycost::sample::lines::{uniform_line, uniform_on_sphere};
 use raycost::sample::rng::{stream, Stream};
@@ -59,13 +59,19 @@ fn all_engines_agree(label: &str, st: &SegmentStore, discs: &Discs, every_path: 
         vec![FilterPath::detect()]
     };
     for (q, threshold, chunk) in [(2.0 / 3.0, 100, 64), (0.5, 8, 1_000_000), (0.85, 30, 5)] {
-        for mode in [ListMode::Exact, ListMode::Inherited] {
+        for (mode, pop) in [
+            (ListMode::Exact, PopRule::Chain),
+            (ListMode::Exact, PopRule::Paper),
+            (ListMode::Inherited, PopRule::Chain),
+            (ListMode::Inherited, PopRule::Paper),
+        ] {
             for order in [Order::None, Order::Morton, Order::Hilbert] {
                 let perm = permutation(&discs.centers, order, 10);
                 let params = SphereCacheParams {
                     q,
                     threshold,
                     list_mode: mode,
+                    pop_rule: pop,
                     chunk_points: chunk,
                     law_ball: None,
                 };
@@ -74,7 +80,7 @@ fn all_engines_agree(label: &str, st: &SegmentStore, discs: &Discs, every_path: 
                     run_with(st, discs, &perm, root, &params, &mut acc, path);
                     assert_eq!(
                         acc, want,
-                        "{label}: sphere cache Q {q} {mode:?} {order:?} {path:?}"
+                        "{label}: sphere cache Q {q} {mode:?} {pop:?} {order:?} {path:?}"
                     );
                 }
             }

@@ -19,7 +19,7 @@ use std::time::Instant;
 
 use super::columns as bc;
 use crate::detp::order::Order;
-use crate::detp::quasi_static::{mismatches, Engine, IndexKind, Params, QuasiStatic};
+use crate::detp::quasi_static::{mismatches, Engine, Feed, IndexKind, Params, QuasiStatic};
 use crate::detp::sphere_cache::SphereCacheParams;
 use crate::experiment::quasi_static::apply_ratio;
 use crate::lt::Scene;
@@ -95,6 +95,7 @@ fn params(photons: u64, spacing: f64, frames: u32) -> Params {
         cache: SphereCacheParams::default(),
         order: Order::Hilbert,
         index: IndexKind::Grid(2.0 * spacing),
+        feed: Feed::Paper,
     }
 }
 

@@ -2,10 +2,14 @@
 //!
 //! Level i is a sphere of radius r_i = r_0·Q^i holding a list of segments. Points are visited in
 //! the given order (a space-filling-curve permutation). For each point:
-//! 1. **Keep only the chain of levels that all contain the disc** (`|c − s| + d ≤ r`, computed),
-//!    dropping the first level that does not and everything below it. The paper's "pop until a
-//!    sphere contains the disc" is wrong when a child sticks out of its parent: a disc inside a
-//!    deep sphere can lie outside an ancestor whose dropped rays are then missing.
+//! 1. **Pop** ([`PopRule`]). [`PopRule::Chain`] (the default) keeps only the chain of levels
+//!    that all contain the disc (`|c − s| + d ≤ r`, computed), dropping the first level that does
+//!    not and everything below it. [`PopRule::Paper`] pops the deepest level while it does not
+//!    contain the disc, as the paper does; with inherited lists that is wrong when a child sticks
+//!    out of its parent (a disc inside a deep sphere can lie outside an ancestor whose dropped rays
+//!    are then missing), so there the chain is cut back as the chain rule cuts it (counted as a
+//!    repair); with exact lists every list is exact whatever its ancestors, and the paper's rule
+//!    stands as it is.
 //! 2. While the deepest level holds at least `threshold` rays and r_{i+1} ≥ d, build level i+1
 //!    centred on the point (it then contains the disc: `|c − c| + d = d ≤ r_{i+1}`). Its list is
 //!    the segments of a source list that meet it ([`filter::meets`]): in [`ListMode::Exact`] the
@@ -15,10 +19,13 @@
 //!    rule, cheaper, but a protruding child holds fewer rays than meet it).
 //! 3. Test the deepest list against the disc with [`crate::detp::disc::crosses`].
 //!
+//! Defaults: inherited lists and the chain rule — the paper's cache with the one repair that keeps
+//! every disc's answer exact (THEORY.md §2: test the paper's claims with the paper's cache).
+//!
 //! # Why no crossing is lost
 //! A segment crossing the disc meets every sphere that contains the disc (filter module doc,
-//! fact 1). Inherited: the deepest list is the segments that passed every sphere of the chain,
-//! which all contain the disc. Exact: by induction each list is exactly {segments meeting the root
+//! fact 1). Inherited (always with the chain, see 1.): the deepest list is the segments that passed
+//! every sphere of the chain, which all contain the disc. Exact: by induction each list is exactly {segments meeting the root
 //! and the sphere}, because the source encloses the child (fact 2: meeting the child implies
 //! meeting the source); the disc lies in the root and the deepest sphere. A disc outside the root
 //! (a root that does not hold the scene) is tested against every segment.
@@ -32,11 +39,13 @@
 //!
 //! # The paper's §4.2 numbers, with this convention
 //! 2²⁰ uniform lines, 10⁵ points uniform in the unit ball (d = 0.002, root radius 1 + d), Morton
-//! order, Q = 0.6, threshold 100, exact lists: level 9 holds 106.7 rays on average (SE 0.03;
-//! n_R·(r_9/1)² = 106.9), not the paper's 94.6; inherited lists hold 103.9. Misses rise with the
-//! level up to level 9 (98 222 of 10⁵ points) and drop at level 10 (75 313), which is built only
-//! when level 9 holds ≥ 100 rays. Spheres smaller than the point spacing (0.035 here) are rebuilt
-//! for nearly every point, so m_i saturates at n_P instead of growing as Q^(−3i).
+//! order, Q = 0.6, threshold 100, seed 1, one replica (`raycost run` on a `kind = "detp"` spec with
+//! exactly these keys, `brute_force_points = 64`, swept over `detp.list_mode`; 0 mismatches):
+//! exact lists hold 106.92 rays on average at level 9 (n_R·(r_9/1)² = 106.92), not the paper's
+//! 94.6; inherited lists hold 104.05. Misses rise with the level up to level 9 (exact 98 292,
+//! inherited 98 272 of 10⁵ points) and drop at level 10 (exact 75 963, inherited 66 167), which is
+//! built only when level 9 holds ≥ 100 rays. Spheres smaller than the point spacing (0.035 here)
+//! are rebuilt for nearly every point, so m_i saturates at n_P instead of growing as Q^(−3i).
 
 pub mod filter;
 
@@ -54,10 +63,24 @@ use crate::geom::Aabb;
 /// Where a new level takes its list from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ListMode {
-    /// The deepest ancestor that encloses the child (exact lists; the default).
+    /// The deepest ancestor that encloses the child (exact lists: raycost's variant).
     Exact,
-    /// The parent (the paper's literal rule).
+    /// The parent (the paper's rule, §3; the default).
     Inherited,
+}
+
+/// Which levels a new point keeps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PopRule {
+    /// Keep the chain of levels that all contain the disc: drop the first level (from the root)
+    /// that does not, and everything below it (the default; exact with either list mode).
+    Chain,
+    /// The paper's rule: pop the deepest level while it does not contain the disc, keep everything
+    /// above the first that does. Exact lists make it exact as it stands (every list holds exactly
+    /// the segments meeting its sphere, whatever its ancestors); with inherited lists a kept level
+    /// that does not contain the disc may have dropped crossing segments, so there the chain is cut
+    /// as [`PopRule::Chain`] cuts it (a *repair*, counted in [`CacheStats::pop_repairs`]).
+    Paper,
 }
 
 /// Parameters of one sphere-cache run.
@@ -69,6 +92,8 @@ pub struct SphereCacheParams {
     pub threshold: usize,
     /// Where a new list comes from.
     pub list_mode: ListMode,
+    /// Which levels a new point keeps.
+    pub pop_rule: PopRule,
     /// Points per independent cache (the unit of parallel work).
     pub chunk_points: usize,
     /// The ball the rays are μ-random in, when they are (centre, radius): builds of spheres that lie
@@ -82,7 +107,8 @@ impl Default for SphereCacheParams {
         Self {
             q: 2.0 / 3.0,
             threshold: 100,
-            list_mode: ListMode::Exact,
+            list_mode: ListMode::Inherited,
+            pop_rule: PopRule::Chain,
             chunk_points: 4096,
             law_ball: None,
         }
@@ -98,7 +124,7 @@ pub struct LevelStats {
     pub builds: u64,
     /// Builds except those for a chunk's first point.
     pub misses: u64,
-    /// Σ list length over builds.
+    /// Σ list length over builds: the segments copied into this level's lists.
     pub rays_held: u64,
     /// Σ (list length)² over builds, for a standard error.
     pub rays_held_sq: u128,
@@ -144,9 +170,22 @@ pub struct CacheStats {
     pub ray_disc_tests: u64,
     /// Segment–sphere tests over all levels.
     pub ray_sphere_tests: u64,
+    /// [`PopRule::Paper`]: points whose kept chain held a level not containing the disc (with
+    /// inherited lists the chain was then cut there; with exact lists nothing needed doing).
+    pub pop_repairs: u64,
 }
 
 impl CacheStats {
+    /// Spheres built over all levels (the root's one build included).
+    pub fn builds(&self) -> u64 {
+        self.levels.iter().map(|l| l.builds).sum()
+    }
+
+    /// Segments copied into lists over all levels (the root's list included).
+    pub fn rays_copied(&self) -> u64 {
+        self.levels.iter().map(|l| l.rays_held).sum()
+    }
+
     /// Adds `other`'s counts to these (levels aligned by index; a level's radius is the same
     /// wherever it was built, and unset where it never was).
     pub fn merge(&mut self, other: &CacheStats) {
@@ -172,6 +211,7 @@ impl CacheStats {
         }
         self.ray_disc_tests += other.ray_disc_tests;
         self.ray_sphere_tests += other.ray_sphere_tests;
+        self.pop_repairs += other.pop_repairs;
     }
 
     fn level(&mut self, i: usize, radius: f64) -> &mut LevelStats {
@@ -310,10 +350,28 @@ impl<'a> Ctx<'a> {
                 stats.ray_disc_tests += segs.len() as u64;
                 continue;
             }
-            let keep = 1 + stack[1..]
+            // The chain: up to the first level (below the root) not containing the disc.
+            let chain = 1 + stack[1..]
                 .iter()
                 .position(|l| !l.contains(c, d))
                 .unwrap_or(stack.len() - 1);
+            let keep = match self.params.pop_rule {
+                PopRule::Chain => chain,
+                PopRule::Paper => {
+                    // Up to the deepest level containing the disc (the root always does).
+                    let paper = (1..stack.len())
+                        .rev()
+                        .find(|&j| stack[j].contains(c, d))
+                        .map_or(1, |j| j + 1);
+                    if paper > chain {
+                        stats.pop_repairs += 1;
+                    }
+                    match self.params.list_mode {
+                        ListMode::Exact => paper,
+                        ListMode::Inherited => chain,
+                    }
+                }
+            };
             stack.truncate(keep);
             while stack.last().map_or(0, |l| l.list.len()) >= self.params.threshold
                 && stack.len() <= MAX_LEVEL

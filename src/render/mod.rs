@@ -105,6 +105,7 @@ fn config(plan: &Plan, point: usize) -> anyhow::Result<(QuasiStaticConfig, Optio
                     points_frame: None,
                     reference_photons: None,
                     predict: None,
+                    feed: crate::detp::quasi_static::Feed::default(),
                     warnings: Vec::new(),
                 },
                 // Replica 0's photons of a `detp` run.

@@ -6,7 +6,7 @@
 
 use glam::DVec3;
 
-use super::{clip, DiscIndex, LocalDiscs, Mailbox, Reach};
+use super::{clip, DiscIndex, LocalDiscs, Mailbox, Reach, Walk};
 use crate::detp::disc::Discs;
 use crate::detp::store::Segment;
 use crate::geom::{Aabb, Ray, Sphere};
@@ -94,24 +94,28 @@ impl DiscIndex for GridIndex {
         &self.reach
     }
 
-    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, f: &mut dyn FnMut(u32)) -> u64 {
+    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, f: &mut dyn FnMut(u32)) -> Walk {
         mailbox.clear();
         let v = seg.d();
         let len = v.length();
         let dir = v / len;
         let o = seg.o();
         // In units of distance along `dir`.
+        let mut walk = Walk {
+            box_tests: 1,
+            ..Walk::default()
+        };
         let Some((t0, t1)) = clip(o, dir, &self.grid_box(), 0.0, seg.t_end() * len) else {
-            return 0;
+            return walk;
         };
         let ray = Ray::new(o + dir * t0, dir);
         let stop = t1 - t0 + self.reach.pad;
-        let mut visited = 0;
         for (cell, t_enter, _) in Dda::new(&self.frame, &ray) {
             if t_enter > stop {
                 break;
             }
-            visited += 1;
+            walk.entered += 1;
+            walk.steps += 1;
             let s = ((cell[2] * self.dims[1] + cell[1]) * self.dims[0] + cell[0]) as usize;
             for &i in &self.items[self.offsets[s] as usize..self.offsets[s + 1] as usize] {
                 if mailbox.insert(i) {
@@ -119,7 +123,7 @@ impl DiscIndex for GridIndex {
                 }
             }
         }
-        visited
+        walk
     }
 
     fn bytes(&self) -> usize {

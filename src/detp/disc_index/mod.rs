@@ -36,20 +36,50 @@ use crate::geom::Aabb;
 pub use grid::GridIndex;
 pub use octree::Octree;
 
+/// What one segment's walk through an index cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Walk {
+    /// Grid cells or octree nodes entered.
+    pub entered: u64,
+    /// Segment–box slab tests ([`clip`]): one per octree node tested, one per segment clipped to
+    /// the grid's box.
+    pub box_tests: u64,
+    /// 3D-DDA steps (grid cells stepped through; 0 in an octree, whose steps are its box tests).
+    pub steps: u64,
+}
+
 /// Counters of one traversal run, exact integers (the same for any thread count).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct IndexStats {
     /// Grid cells or octree nodes the segments entered (far-origin segments enter none).
     pub nodes_visited: u64,
+    /// Segment–box slab tests (octree nodes tested, or segments clipped to the grid's box).
+    pub box_tests: u64,
+    /// 3D-DDA steps through grid cells (0 for an octree).
+    pub dda_steps: u64,
     /// Segment–disc tests, each distinct (segment, disc) pair once.
     pub ray_disc_tests: u64,
 }
 
 impl IndexStats {
-    fn merge(mut self, o: Self) -> Self {
+    /// Adds `o`'s counts.
+    pub fn merge(mut self, o: Self) -> Self {
         self.nodes_visited += o.nodes_visited;
+        self.box_tests += o.box_tests;
+        self.dda_steps += o.dda_steps;
         self.ray_disc_tests += o.ray_disc_tests;
         self
+    }
+
+    /// The traversal's counted steps, weight 1 each: box tests plus DDA steps (what Theorem 1
+    /// charges beside the ray–disc tests; `docs/detp-costs.md`).
+    pub fn traversal(&self) -> u64 {
+        self.box_tests + self.dda_steps
+    }
+
+    /// Counted cost, weight 1 per box test, DDA step and ray–disc test.
+    pub fn counted_cost(&self) -> u64 {
+        self.traversal() + self.ray_disc_tests
     }
 }
 
@@ -62,9 +92,8 @@ pub trait DiscIndex: Sync {
     fn reach(&self) -> &Reach;
 
     /// Calls `f` with every candidate disc of `seg` (each once, thanks to `mailbox`, which is
-    /// started afresh here) and returns the cells or nodes entered. Only for segments within the
-    /// reach.
-    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, f: &mut dyn FnMut(u32)) -> u64;
+    /// started afresh here) and returns what the walk cost. Only for segments within the reach.
+    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, f: &mut dyn FnMut(u32)) -> Walk;
 
     /// Bytes held by the index (discs included).
     fn bytes(&self) -> usize;
@@ -105,7 +134,10 @@ pub trait DiscIndex: Sync {
                         }
                     };
                     if self.reach().holds(s.o()) {
-                        st.nodes_visited += self.candidates(s, &mut mb, &mut test);
+                        let w = self.candidates(s, &mut mb, &mut test);
+                        st.nodes_visited += w.entered;
+                        st.box_tests += w.box_tests;
+                        st.dda_steps += w.steps;
                     } else {
                         (0..discs.len() as u32).for_each(test);
                     }

@@ -10,7 +10,7 @@
 
 use glam::DVec3;
 
-use super::{clip, DiscIndex, LocalDiscs, Mailbox, Reach};
+use super::{clip, DiscIndex, LocalDiscs, Mailbox, Reach, Walk};
 use crate::detp::disc::Discs;
 use crate::detp::store::Segment;
 use crate::geom::Aabb;
@@ -145,19 +145,20 @@ impl DiscIndex for Octree {
         &self.reach
     }
 
-    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, f: &mut dyn FnMut(u32)) -> u64 {
+    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, f: &mut dyn FnMut(u32)) -> Walk {
         mailbox.clear();
         let (o, v, t_end) = (seg.o(), seg.d(), seg.t_end());
-        let mut visited = 0;
+        let mut walk = Walk::default();
         let mut stack = [0u32; 8 * MAX_DEPTH as usize + 8];
         let mut top = 1;
         while top > 0 {
             top -= 1;
             let n = self.nodes[stack[top] as usize];
+            walk.box_tests += 1;
             if clip(o, v, &Aabb::new(n.lo, n.hi), 0.0, t_end).is_none() {
                 continue;
             }
-            visited += 1;
+            walk.entered += 1;
             if n.count == INNER {
                 for k in 0..8 {
                     stack[top] = n.first + k;
@@ -171,7 +172,7 @@ impl DiscIndex for Octree {
                 }
             }
         }
-        visited
+        walk
     }
 
     fn bytes(&self) -> usize {

@@ -74,6 +74,31 @@ impl Used {
     }
 }
 
+/// Which segments a mover's dynamic points are gathered from (both engines give the same sums
+/// whatever the feed: a segment crossing a dynamic disc meets the mover's sphere padded by d).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Feed {
+    /// Theorem 2's model: the sphere cache gets the segment index's answer (the segments meeting
+    /// the mover's bounding sphere padded by d, f_R of them), the disc index traverses every segment.
+    #[default]
+    Paper,
+    /// Both engines get the segment index's answer.
+    SegmentIndex,
+    /// Both engines get every segment.
+    All,
+}
+
+impl Feed {
+    /// The spelling in specs.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Feed::Paper => "paper",
+            Feed::SegmentIndex => "segment-index",
+            Feed::All => "all",
+        }
+    }
+}
+
 /// Settings of a quasi-static run.
 #[derive(Clone, Debug)]
 pub struct Params {
@@ -97,6 +122,8 @@ pub struct Params {
     pub order: Order,
     /// The static points' disc index (and the dynamic points' when a disc index does them).
     pub index: IndexKind,
+    /// Which segments the dynamic points' engines get.
+    pub feed: Feed,
 }
 
 /// Which disc index.
@@ -144,6 +171,18 @@ pub struct FrameStats {
     pub dynamic_disc_tests: u64,
     /// Dynamic points: ray–sphere tests (sphere cache only).
     pub dynamic_sphere_tests: u64,
+    /// Dynamic points: the disc index's traversal (box tests + DDA steps).
+    pub dynamic_traversal: u64,
+    /// Dynamic points: segments copied into the sphere cache's lists.
+    pub dynamic_rays_copied: u64,
+    /// Dynamic points: spheres the sphere cache built.
+    pub dynamic_spheres_built: u64,
+    /// Dynamic points: the segment-index queries that fed them (cells read + segments tested).
+    pub dynamic_feed: u64,
+    /// Static points: the disc index's traversal (box tests + DDA steps).
+    pub static_traversal: u64,
+    /// Static points: segments copied into the sphere cache's lists (sphere cache only).
+    pub static_rays_copied: u64,
     /// Engine used per mover.
     pub used: Vec<Used>,
     /// Seconds: search, re-trace, static update, dynamic points, and the whole frame.
@@ -321,8 +360,7 @@ impl QuasiStatic {
         };
         let ((acc, t), s) = timed(|| qs.static_sums(&qs.store, None));
         qs.static_acc = acc;
-        stats.static_disc_tests = t.0;
-        stats.static_sphere_tests = t.1;
+        t.add_static(&mut stats);
         stats.static_s = s;
         let (dynamic, s) = timed(|| qs.dynamic_sums(&qs.store, true));
         stats.dynamic_s = s;
@@ -366,9 +404,9 @@ impl QuasiStatic {
     }
 
     /// Static points' sums from `store` (all its segments, or the listed ones): by the disc index,
-    /// or by a sphere cache over those segments when the spec forces it. Returns the sums and (disc
-    /// tests, sphere tests).
-    fn static_sums(&self, store: &SegmentStore, only: Option<&[u32]>) -> (Vec<Acc>, (u64, u64)) {
+    /// or by a sphere cache over those segments when the spec forces it. Returns the sums and the
+    /// engine's counts.
+    fn static_sums(&self, store: &SegmentStore, only: Option<&[u32]>) -> (Vec<Acc>, Counts) {
         let mut acc = vec![0; self.static_discs.len()];
         if self.params.engine == Engine::SphereCache {
             let sub;
@@ -387,10 +425,10 @@ impl QuasiStatic {
                 &self.params.cache,
                 &mut acc,
             );
-            (acc, (st.ray_disc_tests, st.ray_sphere_tests))
+            (acc, Counts::cache(&st))
         } else {
             let st: IndexStats = self.static_index.accumulate(store, only, 1, &mut acc);
-            (acc, (st.ray_disc_tests, 0))
+            (acc, Counts::index(&st))
         }
     }
 
@@ -424,19 +462,20 @@ impl QuasiStatic {
         &self,
         store: &SegmentStore,
         indexed: bool,
-    ) -> Vec<(Discs, Vec<Acc>, Used, CacheStats, IndexStats)> {
+    ) -> Vec<(Discs, Vec<Acc>, Used, Counts)> {
         self.dynamic_sums_with(store, indexed, None, None)
     }
 
     /// [`Self::dynamic_sums`] with every mover's engine forced to `force` (when given), for every
-    /// mover or `only` one.
+    /// mover or `only` one. With `indexed`, the engines get the segments [`Params::feed`] names;
+    /// otherwise (a fresh store, or the predictor) every segment of `store`.
     fn dynamic_sums_with(
         &self,
         store: &SegmentStore,
         indexed: bool,
         force: Option<Used>,
         only: Option<usize>,
-    ) -> Vec<(Discs, Vec<Acc>, Used, CacheStats, IndexStats)> {
+    ) -> Vec<(Discs, Vec<Acc>, Used, Counts)> {
         let t = self.scene.tau();
         self.dynamic
             .iter()
@@ -445,65 +484,78 @@ impl QuasiStatic {
                 let discs = dp.posed(&self.scene, t, self.params.disc_radius);
                 let mut acc = vec![0; discs.len()];
                 let used = force.unwrap_or_else(|| self.engine_for(dp.mover));
-                let (mut cs, mut is) = (CacheStats::default(), IndexStats::default());
+                let mut counts = Counts::default();
                 if discs.is_empty() {
-                    return (discs, acc, used, cs, is);
+                    return (discs, acc, used, counts);
                 }
+                let (c, r) = self.spheres[dp.mover];
+                // The mover's sphere padded by d (and the index's pad): every segment crossing one
+                // of its discs meets it.
+                let root = (
+                    c,
+                    (r + self.params.disc_radius) * (1.0 + 1e-9) + self.index.pad(),
+                );
+                let fed = indexed
+                    && match used {
+                        Used::SphereCache => self.params.feed != Feed::All,
+                        Used::DiscIndex => self.params.feed == Feed::SegmentIndex,
+                    };
+                let ids = if fed {
+                    let live = |id: u32| !is_dead(&self.store.segments[id as usize]);
+                    let mut seen = vec![false; store.len()];
+                    let (ids, st) =
+                        self.index
+                            .query(&store.segments, root.0, root.1, &live, &mut seen);
+                    counts.feed = st.cells + st.tested;
+                    Some(ids)
+                } else if indexed && self.dead > 0 {
+                    // Every live segment: the slots emptied by re-traces (up to half the store
+                    // before it is compacted, and all of them near the object) are no segments.
+                    Some(
+                        (0..store.len() as u32)
+                            .filter(|&i| !is_dead(&store.segments[i as usize]))
+                            .collect(),
+                    )
+                } else {
+                    None
+                };
                 match used {
                     Used::SphereCache => {
-                        let (c, r) = self.spheres[dp.mover];
-                        let root = (
-                            c,
-                            (r + self.params.disc_radius) * (1.0 + 1e-9) + self.index.pad(),
-                        );
                         let perm = permutation(&discs.centers, self.params.order, 10);
-                        if indexed {
-                            let live = |id: u32| !is_dead(&self.store.segments[id as usize]);
-                            let mut seen = vec![false; store.len()];
-                            let (ids, _) =
-                                self.index
-                                    .query(&store.segments, root.0, root.1, &live, &mut seen);
-                            let sub = subset(store, &ids);
-                            cs = sphere_cache::run(
-                                &sub,
-                                &discs,
-                                &perm,
-                                root,
-                                &self.params.cache,
-                                &mut acc,
-                            );
-                        } else {
-                            cs = sphere_cache::run(
-                                store,
-                                &discs,
-                                &perm,
-                                root,
-                                &self.params.cache,
-                                &mut acc,
-                            );
-                        }
+                        let sub;
+                        let s = match &ids {
+                            Some(ids) => {
+                                sub = subset(store, ids);
+                                &sub
+                            }
+                            None => store,
+                        };
+                        let cs =
+                            sphere_cache::run(s, &discs, &perm, root, &self.params.cache, &mut acc);
+                        counts.merge(&Counts::cache(&cs));
                     }
                     Used::DiscIndex => {
                         let idx = self.params.index.build(&discs, self.params.disc_radius);
-                        is = idx.accumulate(store, None, 1, &mut acc);
+                        let is = idx.accumulate(store, ids.as_deref(), 1, &mut acc);
+                        counts.merge(&Counts::index(&is));
                     }
                 }
-                (discs, acc, used, cs, is)
+                (discs, acc, used, counts)
             })
             .collect()
     }
 
-    fn apply_dynamic(
-        &mut self,
-        out: Vec<(Discs, Vec<Acc>, Used, CacheStats, IndexStats)>,
-        stats: &mut FrameStats,
-    ) {
-        for (dp, (discs, acc, used, cs, is)) in self.dynamic.iter_mut().zip(out) {
+    fn apply_dynamic(&mut self, out: Vec<(Discs, Vec<Acc>, Used, Counts)>, stats: &mut FrameStats) {
+        for (dp, (discs, acc, used, k)) in self.dynamic.iter_mut().zip(out) {
             dp.discs = discs;
             dp.acc = acc;
             stats.used.push(used);
-            stats.dynamic_disc_tests += cs.ray_disc_tests + is.ray_disc_tests;
-            stats.dynamic_sphere_tests += cs.ray_sphere_tests;
+            stats.dynamic_disc_tests += k.disc_tests;
+            stats.dynamic_sphere_tests += k.sphere_tests;
+            stats.dynamic_traversal += k.traversal;
+            stats.dynamic_rays_copied += k.rays_copied;
+            stats.dynamic_spheres_built += k.spheres_built;
+            stats.dynamic_feed += k.feed;
         }
     }
 
@@ -601,8 +653,8 @@ impl QuasiStatic {
             for ((a, m), p) in self.static_acc.iter_mut().zip(minus).zip(plus) {
                 *a += p - m;
             }
-            stats.static_disc_tests = t1.0 + t2.0;
-            stats.static_sphere_tests = t1.1 + t2.1;
+            t1.add_static(&mut stats);
+            t2.add_static(&mut stats);
         });
         stats.static_s = s;
         // 4. Dynamic points, afresh.
@@ -745,6 +797,72 @@ impl QuasiStatic {
             sums.extend(acc);
         }
         (sums, store, t.elapsed().as_secs_f64())
+    }
+}
+
+/// What one engine counted on one set of points (both engines' counters in one shape).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counts {
+    /// Ray–disc tests.
+    pub disc_tests: u64,
+    /// Ray–sphere tests (sphere cache).
+    pub sphere_tests: u64,
+    /// Box tests + DDA steps (disc index).
+    pub traversal: u64,
+    /// Segments copied into lists (sphere cache).
+    pub rays_copied: u64,
+    /// Spheres built (sphere cache).
+    pub spheres_built: u64,
+    /// Segment-index cells read + segments tested to feed the engine.
+    pub feed: u64,
+}
+
+impl Counts {
+    fn cache(s: &CacheStats) -> Self {
+        Self {
+            disc_tests: s.ray_disc_tests,
+            sphere_tests: s.ray_sphere_tests,
+            rays_copied: s.rays_copied(),
+            spheres_built: s.builds(),
+            ..Self::default()
+        }
+    }
+
+    fn index(s: &IndexStats) -> Self {
+        Self {
+            disc_tests: s.ray_disc_tests,
+            traversal: s.traversal(),
+            ..Self::default()
+        }
+    }
+
+    fn merge(&mut self, o: &Self) {
+        self.disc_tests += o.disc_tests;
+        self.sphere_tests += o.sphere_tests;
+        self.traversal += o.traversal;
+        self.rays_copied += o.rays_copied;
+        self.spheres_built += o.spheres_built;
+        self.feed += o.feed;
+    }
+
+    fn add_static(&self, st: &mut FrameStats) {
+        st.static_disc_tests += self.disc_tests;
+        st.static_sphere_tests += self.sphere_tests;
+        st.static_traversal += self.traversal;
+        st.static_rays_copied += self.rays_copied;
+    }
+}
+
+impl FrameStats {
+    /// The dynamic points' counted cost, weight 1 per ray–sphere test, ray–disc test, box test and
+    /// DDA step (the feed's query and the copies are counted apart; `docs/detp-costs.md`).
+    pub fn dynamic_counted_cost(&self) -> u64 {
+        self.dynamic_disc_tests + self.dynamic_sphere_tests + self.dynamic_traversal
+    }
+
+    /// The static points' counted cost, same weights.
+    pub fn static_counted_cost(&self) -> u64 {
+        self.static_disc_tests + self.static_sphere_tests + self.static_traversal
     }
 }
 

@@ -31,6 +31,7 @@ fn params(engine: Engine, photons: u64, frames: u32) -> Params {
         } else {
             IndexKind::Grid(40.0)
         },
+        feed: Feed::Paper,
     }
 }
 
@@ -142,4 +143,50 @@ fn the_predictor_picks_a_measured_engine_and_stays_exact() {
     assert_eq!(st.used, preds.iter().map(|p| p.pick).collect::<Vec<_>>());
     let (full, ..) = qs.full_recalculation();
     assert_eq!(mismatches(&qs.sums(), &full), 0);
+}
+
+/// Every feed gives both engines the same sums (incremental = full, and sphere cache = disc index
+/// on every point), and the feed changes what the disc index traverses: the segment index's answer
+/// is a fraction of all segments.
+#[test]
+fn every_feed_gives_both_engines_the_same_sums() {
+    let frames = 5;
+    let mut traversal = Vec::new();
+    for feed in [Feed::Paper, Feed::SegmentIndex, Feed::All] {
+        let mut sums = Vec::new();
+        for engine in [Engine::SphereCache, Engine::DiscIndex] {
+            let p = Params {
+                feed,
+                ..params(engine, 3000, frames)
+            };
+            let (mut qs, _) = QuasiStatic::start(scene(), p);
+            let (mut trav, mut fed) = (0, 0);
+            for f in 1..frames {
+                let st = qs.step(f);
+                trav += st.dynamic_traversal;
+                fed += st.dynamic_feed;
+                if engine == Engine::DiscIndex {
+                    assert!(st.dynamic_traversal > 0 && st.dynamic_sphere_tests == 0);
+                } else {
+                    assert!(st.dynamic_rays_copied > 0 && st.dynamic_traversal == 0);
+                }
+            }
+            let (full, ..) = qs.full_recalculation();
+            assert_eq!(mismatches(&qs.sums(), &full), 0, "{feed:?} {engine:?}");
+            let fed_expected = !matches!(
+                (feed, engine),
+                (Feed::All, _) | (Feed::Paper, Engine::DiscIndex)
+            );
+            assert_eq!(fed > 0, fed_expected, "{feed:?} {engine:?}: feed {fed}");
+            if engine == Engine::DiscIndex {
+                traversal.push(trav);
+            }
+            sums.push(qs.sums());
+        }
+        assert_eq!(sums[0], sums[1], "{feed:?}: the engines disagree");
+        assert!(sums[0].iter().any(|&a| a != 0));
+    }
+    // Paper and all: every segment traverses the index; segment-index: only those fed.
+    assert_eq!(traversal[0], traversal[2]);
+    assert!(traversal[1] * 2 < traversal[2], "traversal {traversal:?}");
 }

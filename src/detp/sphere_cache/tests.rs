@@ -29,6 +29,14 @@ fn oracle(store: &SegmentStore, discs: &Discs) -> Vec<Acc> {
 
 const UNIT: (DVec3, f64) = (DVec3::ZERO, 1.0);
 
+/// Every list mode with every pop rule.
+const MODES: [(ListMode, PopRule); 4] = [
+    (ListMode::Exact, PopRule::Chain),
+    (ListMode::Exact, PopRule::Paper),
+    (ListMode::Inherited, PopRule::Chain),
+    (ListMode::Inherited, PopRule::Paper),
+];
+
 #[test]
 fn both_list_modes_every_order_and_filter_path_equal_brute_force() {
     let store = lines(20_000, 1);
@@ -39,20 +47,21 @@ fn both_list_modes_every_order_and_filter_path_equal_brute_force() {
         "a test that could not fail"
     );
     for (q, threshold, chunk) in [(2.0 / 3.0, 100, 128), (0.5, 20, 1000), (0.9, 300, 7)] {
-        for mode in [ListMode::Exact, ListMode::Inherited] {
+        for (mode, pop) in MODES {
             for order in [Order::None, Order::Morton, Order::Hilbert] {
                 let perm = permutation(&discs.centers, order, 10);
                 let params = SphereCacheParams {
                     q,
                     threshold,
                     list_mode: mode,
+                    pop_rule: pop,
                     chunk_points: chunk,
                     law_ball: Some((DVec3::ZERO, 1.0)),
                 };
                 for path in FilterPath::all_available() {
                     let mut acc = vec![0; discs.len()];
                     let s = run_with(&store, &discs, &perm, UNIT, &params, &mut acc, path);
-                    assert_eq!(acc, want, "Q {q} {mode:?} {order:?} {path:?}");
+                    assert_eq!(acc, want, "Q {q} {mode:?} {pop:?} {order:?} {path:?}");
                     assert!(
                         s.levels.len() > 3,
                         "the cache must go deep: {:?}",
@@ -128,6 +137,7 @@ fn exact_lists_follow_the_area_law_for_concentric_spheres() {
     let discs = Discs::new(vec![DVec3::ZERO], vec![DVec3::Z], 1e-3).unwrap();
     let params = SphereCacheParams {
         threshold: 1,
+        list_mode: ListMode::Exact,
         ..Default::default()
     };
     let mut acc = vec![0; 1];
@@ -211,6 +221,7 @@ fn spheres_inside_the_law_ball_follow_the_area_law_at_every_level() {
     let params = SphereCacheParams {
         q: 0.7,
         law_ball: Some(UNIT),
+        list_mode: ListMode::Exact,
         ..Default::default()
     };
     let mut acc = vec![0; discs.len()];
@@ -269,4 +280,42 @@ fn curve_orders_cut_the_misses() {
         hilbert * 2 < none && morton * 2 < none,
         "none {none} morton {morton} hilbert {hilbert}"
     );
+}
+
+/// The paper's pop rule keeps levels the chain rule drops (a protruding child's parent), so with
+/// exact lists it rebuilds less; with inherited lists it is cut back to the chain wherever it kept a
+/// level not containing the disc, which makes it the chain rule exactly (repairs counted).
+#[test]
+fn the_paper_pop_rule_rebuilds_less_with_exact_lists_and_is_the_chain_with_inherited() {
+    let store = lines(1 << 15, 12);
+    let discs = ball_points(4000, 1.0, 5e-3, 13);
+    let perm = permutation(&discs.centers, Order::Hilbert, 10);
+    let stats = |list_mode, pop_rule| {
+        let params = SphereCacheParams {
+            q: 0.6,
+            threshold: 20,
+            list_mode,
+            pop_rule,
+            chunk_points: 1 << 20,
+            law_ball: None,
+        };
+        let mut acc = vec![0; discs.len()];
+        run(&store, &discs, &perm, UNIT, &params, &mut acc)
+    };
+    let exact_chain = stats(ListMode::Exact, PopRule::Chain);
+    let exact_paper = stats(ListMode::Exact, PopRule::Paper);
+    assert_eq!(exact_chain.pop_repairs, 0);
+    assert!(exact_paper.pop_repairs > 0, "no level was ever kept");
+    assert!(
+        exact_paper.builds() < exact_chain.builds(),
+        "paper {} vs chain {} builds",
+        exact_paper.builds(),
+        exact_chain.builds()
+    );
+    assert!(exact_paper.rays_copied() < exact_chain.rays_copied());
+    let inh_chain = stats(ListMode::Inherited, PopRule::Chain);
+    let mut inh_paper = stats(ListMode::Inherited, PopRule::Paper);
+    assert!(inh_paper.pop_repairs > 0);
+    inh_paper.pop_repairs = 0;
+    assert_eq!(inh_paper, inh_chain);
 }

@@ -74,6 +74,34 @@ pub const RAY_DISC_TESTS_THEORY: Column = Column::value(
     Class::Theory,
     "Theorem 1's T_I = (4/3)·u·n_R·∛n_P, times the replicas",
 );
+/// Sphere cache: segments copied into lists.
+pub const RAYS_COPIED: Column = Column::value(
+    "rays_copied",
+    "segments",
+    Class::Measured,
+    "sphere cache: segments copied into lists while building them (the root's list once per replica, included), summed over replicas; weight 0 in counted_cost_sphere_cache (each copy follows a counted ray–sphere test)",
+);
+/// Sphere cache: spheres built.
+pub const SPHERES_BUILT: Column = Column::value(
+    "spheres_built",
+    "spheres",
+    Class::Measured,
+    "sphere cache: spheres built over all levels (the root once per replica, included), summed over replicas",
+);
+/// Sphere cache: paper pop repairs.
+pub const POP_REPAIRS: Column = Column::value(
+    "pop_repairs",
+    "points",
+    Class::Measured,
+    "sphere cache, detp.pop_rule = \"paper\": points whose kept chain held a level not containing the disc (inherited lists: cut back to the chain there to stay exact; exact lists: harmless); 0 for \"chain\"",
+);
+/// Engine's counted cost.
+pub const COUNTED_COST: Column = Column::value(
+    "counted_cost_{}",
+    "tests",
+    Class::Measured,
+    "the engine's total counted cost, weight 1 per ray–sphere test, ray–disc test, segment–box slab test and DDA step, 0 per segment copied (sphere cache: ray_sphere_tests + ray_disc_tests; disc index: tests + box_tests + dda_steps; brute force: tests), summed over replicas",
+);
 /// An engine's seconds.
 pub const COST_S: Column = Column::value(
     "cost_{}_s",
@@ -94,6 +122,20 @@ pub const NODES: Column = Column::value(
     "nodes",
     Class::Measured,
     "disc index: nodes (octree) or cells (grid) visited by the segments, summed over replicas",
+);
+/// Index box tests.
+pub const BOX_TESTS: Column = Column::value(
+    "box_tests_{}",
+    "tests",
+    Class::Measured,
+    "disc index: segment–box slab tests (octree: every node tested; grid: each segment clipped to the grid's box), summed over replicas",
+);
+/// Index DDA steps.
+pub const DDA_STEPS: Column = Column::value(
+    "dda_steps_{}",
+    "steps",
+    Class::Measured,
+    "disc index: 3D-DDA steps through grid cells (0 for an octree, whose steps are its box tests), summed over replicas",
 );
 /// Index build time.
 pub const BUILD_S: Column = Column::value(
@@ -172,9 +214,15 @@ pub const MAIN: &[Column] = &[
     RAY_SPHERE_TESTS_THEORY,
     RAY_DISC_TESTS,
     RAY_DISC_TESTS_THEORY,
+    RAYS_COPIED,
+    SPHERES_BUILT,
+    POP_REPAIRS,
+    COUNTED_COST,
     COST_S,
     ORDER_S,
     NODES,
+    BOX_TESTS,
+    DDA_STEPS,
     BUILD_S,
     BYTES,
     PHOTON_MAP_RMSE,
@@ -250,6 +298,20 @@ pub const MISSES_LEVEL_PER_REPLICA: Column = Column::estimate(
     "builds",
     "misses at this level in one replica: mean, standard error across replicas, replicas",
 );
+/// The paper's rebuild model.
+pub const MISSES_LEVEL_THEORY: Column = Column::value(
+    "misses_level_theory",
+    "spheres",
+    Class::Theory,
+    "the paper's rebuild model m_i ≈ Q^(−3i) (one rebuild per region of S_i's size the sorted points visit; THEORY §2), times the replicas",
+);
+/// Rays copied per level.
+pub const RAYS_COPIED_LEVEL: Column = Column::value(
+    "rays_copied_level",
+    "segments",
+    Class::Measured,
+    "segments copied into this level's lists (Σ list length over its builds), over replicas",
+);
 /// Tests.
 pub const RAY_SPHERE_TESTS_LEVEL: Column = Column::value(
     "ray_sphere_tests_level",
@@ -270,6 +332,8 @@ pub const LEVELS: &[Column] = &[
     RAYS_LEVEL_LEAF,
     MISSES_LEVEL,
     MISSES_LEVEL_PER_REPLICA,
+    MISSES_LEVEL_THEORY,
+    RAYS_COPIED_LEVEL,
     RAY_SPHERE_TESTS_LEVEL,
 ];
 

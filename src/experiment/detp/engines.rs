@@ -152,6 +152,19 @@ impl Engine for SphereCache {
             .put(&col::RAY_SPHERE_TESTS_THEORY, p.reps * t_r)
             .put(&col::RAY_DISC_TESTS, disc)
             .put(&col::RAY_DISC_TESTS_THEORY, p.reps * t_i)
+            .put(
+                &col::RAYS_COPIED,
+                self.runs.iter().map(|r| r.0.rays_copied()).sum::<u64>(),
+            )
+            .put(
+                &col::SPHERES_BUILT,
+                self.runs.iter().map(|r| r.0.builds()).sum::<u64>(),
+            )
+            .put(
+                &col::POP_REPAIRS,
+                self.runs.iter().map(|r| r.0.pop_repairs).sum::<u64>(),
+            )
+            .put_member(&col::COUNTED_COST, c, sphere + disc)
             .put_member(&col::COST_S, c, self.seconds())
             .put(&col::ORDER_S, self.runs.iter().map(|r| r.2).sum::<f64>());
         let tests: Vec<f64> = self
@@ -175,7 +188,7 @@ impl Engine for SphereCache {
             let mut m = ClusteredMean::default();
             let mut inside = ClusteredMean::default();
             let mut leaf = ClusteredMean::default();
-            let (mut builds, mut misses, mut tests) = (0u64, 0u64, 0u64);
+            let (mut builds, mut misses, mut tests, mut copied) = (0u64, 0u64, 0u64, 0u64);
             let mut misses_per_replica = Vec::with_capacity(self.runs.len());
             let mut radius = f64::NAN;
             for (stats, ..) in &self.runs {
@@ -195,6 +208,7 @@ impl Engine for SphereCache {
                 misses += l.misses;
                 misses_per_replica.push(l.misses as f64);
                 tests += l.ray_sphere_tests;
+                copied += l.rays_held;
                 if l.builds > 0 {
                     radius = l.radius;
                 }
@@ -225,6 +239,11 @@ impl Engine for SphereCache {
                     &col::MISSES_LEVEL_PER_REPLICA,
                     &per_replica(&misses_per_replica),
                 )
+                .put(
+                    &col::MISSES_LEVEL_THEORY,
+                    p.reps * p.cfg.q().powi(-3 * i as i32),
+                )
+                .put(&col::RAYS_COPIED_LEVEL, copied)
                 .put(&col::RAY_SPHERE_TESTS_LEVEL, tests);
             // The leaf mean's line is not summarised (one per level would drown the rays' lines).
             Metric::new(
@@ -276,6 +295,13 @@ impl Engine for Index {
     }
     fn write(&self, p: &Pooled, row: &mut Row) {
         let c = EngineChoice::DiscIndex.column();
+        let total = self
+            .runs
+            .iter()
+            .fold(disc_index::IndexStats::default(), |a, r| a.merge(r.0));
+        row.put_member(&col::BOX_TESTS, c, total.box_tests)
+            .put_member(&col::DDA_STEPS, c, total.dda_steps)
+            .put_member(&col::COUNTED_COST, c, total.counted_cost());
         row.put_member(
             &col::TESTS,
             c,
@@ -326,7 +352,9 @@ impl Engine for BruteForce {
     }
     fn write(&self, p: &Pooled, row: &mut Row) {
         let c = EngineChoice::BruteForce.column();
-        row.put_member(&col::TESTS, c, self.runs.iter().map(|r| r.0).sum::<u64>())
+        let tests = self.runs.iter().map(|r| r.0).sum::<u64>();
+        row.put_member(&col::TESTS, c, tests)
+            .put_member(&col::COUNTED_COST, c, tests)
             .put_member(&col::TESTS_THEORY, c, p.reps * p.n_r * p.n_p)
             .put_member(&col::COST_S, c, self.seconds());
         let tests: Vec<f64> = self.runs.iter().map(|r| r.0 as f64).collect();

@@ -94,6 +94,7 @@ pub(crate) fn points(cfg: &DetpConfig, point: u64) -> Result<PointSet, Error> {
                 .collect();
             pairs.into_iter().unzip()
         }
+        Points::Grid(k) => lattice(cfg.seed, point, *k),
         Points::File(p) => (p.centers.clone(), p.normals.clone()),
         Points::Surface(_) => {
             return Err(Error::internal(
@@ -108,6 +109,28 @@ pub(crate) fn points(cfg: &DetpConfig, point: u64) -> Result<PointSet, Error> {
         .map(|&c| lines::exact(cfg.photons, c, cfg.disc_radius))
         .collect();
     Ok(PointSet { discs, exact })
+}
+
+/// Eq. 4's layout: k³ points at the cell centres of a k-per-side lattice filling the cube inscribed
+/// in the unit ball (spacing 2/(√3·k), so r_0 = √3·spacing·k/2 = 1), with uniform normals drawn
+/// from the same keyed streams as points in the ball.
+fn lattice(seed: u64, point: u64, k: u64) -> (Vec<DVec3>, Vec<DVec3>) {
+    let s = spec::lattice_spacing(k);
+    let a = 1.0 / 3f64.sqrt();
+    let n = k.pow(3);
+    let at = move |i: u64| -a + s * (i as f64 + 0.5);
+    let pairs: Vec<(DVec3, DVec3)> = (0..n.div_ceil(BATCH))
+        .into_par_iter()
+        .flat_map_iter(|b| {
+            let mut rng = stream(&[domain::POINTS, seed, point, b]);
+            let lo = b * BATCH;
+            (lo..(lo + BATCH).min(n)).map(move |i| {
+                let c = DVec3::new(at(i % k), at(i / k % k), at(i / (k * k)));
+                (c, crate::sample::directions::uniform_direction(&mut rng))
+            })
+        })
+        .collect();
+    pairs.into_iter().unzip()
 }
 
 /// The rays of one replica.
@@ -358,14 +381,21 @@ pub fn describe(cfg: &DetpConfig) -> String {
     };
     let pts = match &cfg.points {
         Points::Ball(n) => format!("{n} points in the unit ball"),
+        Points::Grid(k) => format!(
+            "{} points on a {k}³ lattice of spacing {:.6} in the unit ball",
+            k.pow(3),
+            spec::lattice_spacing(*k)
+        ),
         Points::Surface(s) => format!("surface points at spacing {s}"),
         Points::File(p) => format!("{} points from {}", p.centers.len(), p.path.display()),
     };
     let engines: Vec<&str> = cfg.engines.iter().map(|e| e.as_str()).collect();
     format!(
-        "{rays}, {pts}, d = {}, Q = {}, order {:?}, engines {}, {} replica(s)",
+        "{rays}, {pts}, d = {}, Q = {}, {:?} lists, {:?} pop, order {:?}, engines {}, {} replica(s)",
         cfg.disc_radius,
         cfg.q(),
+        cfg.cache.list_mode,
+        cfg.cache.pop_rule,
         cfg.order,
         engines.join("+"),
         cfg.replicas
@@ -404,7 +434,7 @@ pub fn memory(cfg: &DetpConfig) -> Memory {
         Need {
             bytes: n_p * 128.0,
             key: match cfg.points {
-                Points::Ball(_) => "detp.points",
+                Points::Ball(_) | Points::Grid(_) => "detp.points",
                 Points::File(_) => "detp.points_file",
                 // Surface points: one per spacing² (the spacing defaults to 2d).
                 Points::Surface(_) if cfg.spacing_given => "detp.point_spacing",

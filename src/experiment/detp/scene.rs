@@ -24,7 +24,9 @@ pub(super) fn points(cfg: &DetpConfig, point: u64, scene: &Scene) -> Result<Poin
             hash_key(&[domain::POINTS, cfg.seed, point]),
         ),
         Points::File(p) => (p.centers.clone(), p.normals.clone()),
-        Points::Ball(_) => unreachable!("the spec check gives a scene surface or file points"),
+        Points::Ball(_) | Points::Grid(_) => {
+            unreachable!("the spec check gives a scene surface or file points")
+        }
     };
     let discs = Discs::new(centers, normals, cfg.disc_radius).map_err(Error::internal)?;
     let exact = discs

@@ -16,7 +16,7 @@ use glam::DVec3;
 
 use crate::detp::order::Order;
 use crate::detp::quasi_static::IndexKind;
-use crate::detp::sphere_cache::{ListMode, SphereCacheParams};
+use crate::detp::sphere_cache::{ListMode, PopRule, SphereCacheParams};
 use crate::experiment::inputs::{Inputs, PointsFile, SceneFile};
 use crate::experiment::kind::{refuse, ConfigError};
 use crate::geom::Aabb;
@@ -56,8 +56,10 @@ pub struct RawDetp {
         skip_serializing_if = "Option::is_none"
     )]
     pub points: Option<u64>,
-    /// `"ball"` (uniform in the unit ball, uniform normals), `"surface"` (on the scene's surfaces)
-    /// or `"file"` (a CSV of x, y, z, nx, ny, nz). Default: ball for lines, surface for a scene.
+    /// `"ball"` (uniform in the unit ball, uniform normals), `"grid"` (eq. 4's layout: a cubic
+    /// lattice of k = round(∛points) per side filling the cube inscribed in the unit ball, spacing
+    /// 2/(√3·k), uniform normals), `"surface"` (on the scene's surfaces) or `"file"` (a CSV of x, y,
+    /// z, nx, ny, nz). Default: ball for lines, surface for a scene.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub point_source: Option<PointSourceKind>,
     /// The CSV of `point_source = "file"`, relative to the spec's folder.
@@ -85,10 +87,16 @@ pub struct RawDetp {
     /// Bits per axis of the ordering keys (1–21).
     #[serde(default = "ten", deserialize_with = "bits")]
     pub order_bits: u64,
-    /// `"exact"`: every list holds exactly the rays meeting its sphere; `"inherited"`: the parent's
-    /// rays meeting it (the paper's literal rule).
+    /// `"inherited"` (default): a new list is the parent's rays meeting the new sphere (the paper's
+    /// rule, §3); `"exact"`: it comes from the deepest enclosing ancestor, so every list holds
+    /// exactly the rays meeting its sphere (raycost's variant for the rays-per-level law).
     #[serde(default)]
     pub list_mode: ListModeChoice,
+    /// `"chain"` (default): a point keeps the levels that all contain its disc; `"paper"`: the
+    /// paper's rule, popping the deepest level while it does not contain the disc (with inherited
+    /// lists cut back to the chain where that would lose rays; see `docs/detp-costs.md`).
+    #[serde(default)]
+    pub pop_rule: PopRuleChoice,
     /// Points per independent sphere-cache run (chunks run in parallel; a spec value, never the
     /// thread count, so counters do not depend on threads).
     #[serde(default = "default_chunk", deserialize_with = "count")]
@@ -141,7 +149,7 @@ choice!(
 );
 choice!(
     /// Where the sample points come from.
-    PointSourceKind { Ball => "ball", Surface => "surface", File => "file" } default Ball
+    PointSourceKind { Ball => "ball", Grid => "grid", Surface => "surface", File => "file" } default Ball
 );
 choice!(
     /// Point ordering.
@@ -149,7 +157,11 @@ choice!(
 );
 choice!(
     /// Sphere-cache list mode.
-    ListModeChoice { Exact => "exact", Inherited => "inherited" } default Exact
+    ListModeChoice { Exact => "exact", Inherited => "inherited" } default Inherited
+);
+choice!(
+    /// Sphere-cache pop rule.
+    PopRuleChoice { Chain => "chain", Paper => "paper" } default Chain
 );
 choice!(
     /// An irradiance engine.
@@ -267,6 +279,17 @@ fn point_count<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error>
     }
 }
 
+/// Points per side of eq. 4's lattice for a target count: round(∛n), at least 1.
+pub fn lattice_side(n: u64) -> u64 {
+    ((n as f64).cbrt().round() as u64).max(1)
+}
+
+/// Spacing of eq. 4's lattice with `k` points per side: its cube (side k·spacing) is inscribed in
+/// the unit ball, r_0 = √3·d·k/2 = 1.
+pub fn lattice_spacing(k: u64) -> f64 {
+    2.0 / (3f64.sqrt() * k as f64)
+}
+
 fn bits<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
     let b = count(d)?;
     if b <= 21 {
@@ -292,6 +315,8 @@ pub enum Rays {
 pub enum Points {
     /// n points uniform in the unit ball with uniform normals.
     Ball(u64),
+    /// k³ points on eq. 4's lattice (k per side, spacing 2/(√3·k)) with uniform normals.
+    Grid(u64),
     /// On the scene's surfaces at this spacing.
     Surface(f64),
     /// Read from a CSV (once per run).
@@ -428,6 +453,7 @@ impl DetpConfig {
     pub fn point_count(&self) -> u64 {
         match &self.points {
             Points::Ball(n) => *n,
+            Points::Grid(k) => k.pow(3),
             Points::File(f) => f.centers.len() as u64,
             Points::Surface(s) => self.scene().map_or(0, |sc| {
                 let tris: f64 = sc
@@ -445,7 +471,7 @@ impl DetpConfig {
     /// A box holding every sample point: the unit ball, the scene, or the file's points.
     pub fn points_bounds(&self) -> Aabb {
         match &self.points {
-            Points::Ball(_) => Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)),
+            Points::Ball(_) | Points::Grid(_) => Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)),
             Points::Surface(_) => self
                 .scene()
                 .map_or(Aabb::new(DVec3::ZERO, DVec3::ZERO), |s| s.scene.bounds()),
@@ -504,10 +530,15 @@ impl DetpConfig {
             Rays::Lines => PointSourceKind::Ball,
             Rays::Scene(_) => PointSourceKind::Surface,
         });
-        if kind == PointSourceKind::Ball && matches!(rays, Rays::Scene(_)) {
+        if matches!(kind, PointSourceKind::Ball | PointSourceKind::Grid)
+            && matches!(rays, Rays::Scene(_))
+        {
             return refuse(
                 "detp.point_source",
-                "points uniform in the unit ball go with lines; a scene takes \"surface\" or \"file\"",
+                format!(
+                    "\"{}\" points in the unit ball go with lines; a scene takes \"surface\" or \"file\"",
+                    kind.as_str()
+                ),
             );
         }
         let points =
@@ -520,6 +551,13 @@ impl DetpConfig {
                             "missing: points uniform in the ball need a count",
                         )
                     }
+                },
+                PointSourceKind::Grid => match d.points {
+                    Some(n) => Points::Grid(lattice_side(n)),
+                    None => return refuse(
+                        "detp.points",
+                        "missing: points on a lattice need a count (k = round(∛points) per side)",
+                    ),
                 },
                 PointSourceKind::Surface => {
                     if matches!(rays, Rays::Lines) {
@@ -547,11 +585,11 @@ impl DetpConfig {
                     }
                 },
             };
-        if d.points.is_some() && kind != PointSourceKind::Ball {
+        if d.points.is_some() && !matches!(kind, PointSourceKind::Ball | PointSourceKind::Grid) {
             return refuse(
                 "detp.points",
                 format!(
-                    "a count belongs to point_source = \"ball\", not \"{}\"",
+                    "a count belongs to point_source = \"ball\" or \"grid\", not \"{}\"",
                     kind.as_str()
                 ),
             );
@@ -585,7 +623,12 @@ impl DetpConfig {
         if d.photons > 1 << 31 {
             return refuse("detp.photons", format!("got {}, at most 2³¹", d.photons));
         }
-        if let Points::Ball(n) = points {
+        if let Points::Ball(n) | Points::Grid(n) = points {
+            let n = if let Points::Grid(k) = points {
+                k.pow(3)
+            } else {
+                n
+            };
             if n > 1 << 28 {
                 return refuse("detp.points", format!("got {n}, at most 2²⁸"));
             }
@@ -595,6 +638,7 @@ impl DetpConfig {
             (DiscRadius::Spacing, Points::Ball(n)) => {
                 crate::theory::detp::ball_spacing(1.0, *n as f64)
             }
+            (DiscRadius::Spacing, Points::Grid(k)) => lattice_spacing(*k),
             (DiscRadius::Spacing, Points::Surface(s)) => *s,
             (DiscRadius::Spacing, Points::File(_)) => {
                 return refuse(
@@ -641,6 +685,10 @@ impl DetpConfig {
                 list_mode: match d.list_mode {
                     ListModeChoice::Exact => ListMode::Exact,
                     ListModeChoice::Inherited => ListMode::Inherited,
+                },
+                pop_rule: match d.pop_rule {
+                    PopRuleChoice::Chain => PopRule::Chain,
+                    PopRuleChoice::Paper => PopRule::Paper,
                 },
                 chunk_points: d.chunk_points as usize,
                 law_ball: None,

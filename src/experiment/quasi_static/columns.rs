@@ -124,6 +124,54 @@ pub const DYNAMIC_SPHERE_TESTS: Column = Column::estimate(
     "tests",
     "ray–sphere tests of the dynamic points' sphere cache, per frame",
 );
+/// disc-index traversal updating the static points, per frame.
+pub const STATIC_TRAVERSAL: Column = Column::estimate(
+    "static_traversal",
+    "steps",
+    "disc-index traversal updating the static points: segment–box slab tests + DDA steps (0 when a sphere cache does them), per frame",
+);
+/// segments copied into sphere-cache lists updating the static points (0 with the disc index), per frame.
+pub const STATIC_RAYS_COPIED: Column = Column::estimate(
+    "static_rays_copied",
+    "segments",
+    "segments copied into sphere-cache lists updating the static points (0 with the disc index), per frame",
+);
+/// the static points' counted cost, per frame.
+pub const STATIC_COUNTED_COST: Column = Column::estimate(
+    "static_counted_cost",
+    "tests",
+    "the static points' counted cost: ray–disc + ray–sphere tests + box tests + DDA steps, weight 1 each, per frame",
+);
+/// disc-index traversal of the dynamic points, per frame.
+pub const DYNAMIC_TRAVERSAL: Column = Column::estimate(
+    "dynamic_traversal",
+    "steps",
+    "disc-index traversal of the dynamic points: segment–box slab tests + DDA steps (0 with the sphere cache), per frame",
+);
+/// segments copied into the dynamic points' sphere-cache lists, root list included (0 with the disc index), per frame.
+pub const DYNAMIC_RAYS_COPIED: Column = Column::estimate(
+    "dynamic_rays_copied",
+    "segments",
+    "segments copied into the dynamic points' sphere-cache lists, root list included (0 with the disc index), per frame",
+);
+/// spheres the dynamic points' sphere cache built, root included (0 with the disc index), per frame.
+pub const DYNAMIC_SPHERES_BUILT: Column = Column::estimate(
+    "dynamic_spheres_built",
+    "spheres",
+    "spheres the dynamic points' sphere cache built, root included (0 with the disc index), per frame",
+);
+/// segment-index cells read + segments tested to feed the dynamic points' engine (dynamic.feed; 0 when it gets every segment); not in dynamic_counted_cost, per frame.
+pub const DYNAMIC_FEED: Column = Column::estimate(
+    "dynamic_feed",
+    "steps",
+    "segment-index cells read + segments tested to feed the dynamic points' engine (dynamic.feed; 0 when it gets every segment); not in dynamic_counted_cost, per frame",
+);
+/// the dynamic points' counted cost with the engine used, per frame.
+pub const DYNAMIC_COUNTED_COST: Column = Column::estimate(
+    "dynamic_counted_cost",
+    "tests",
+    "the dynamic points' counted cost with the engine used: ray–disc + ray–sphere tests + box tests + DDA steps, weight 1 each (copies and the feed apart), per frame",
+);
 /// Search seconds.
 pub const SEARCH_S: Column = Column::timed_estimate(
     "search_s",
@@ -167,6 +215,14 @@ pub const PER_FRAME: &[(Column, FrameValue)] = &[
     }),
     (DYNAMIC_TESTS, |s| s.dynamic_disc_tests as f64),
     (DYNAMIC_SPHERE_TESTS, |s| s.dynamic_sphere_tests as f64),
+    (STATIC_TRAVERSAL, |s| s.static_traversal as f64),
+    (STATIC_RAYS_COPIED, |s| s.static_rays_copied as f64),
+    (STATIC_COUNTED_COST, |s| s.static_counted_cost() as f64),
+    (DYNAMIC_TRAVERSAL, |s| s.dynamic_traversal as f64),
+    (DYNAMIC_RAYS_COPIED, |s| s.dynamic_rays_copied as f64),
+    (DYNAMIC_SPHERES_BUILT, |s| s.dynamic_spheres_built as f64),
+    (DYNAMIC_FEED, |s| s.dynamic_feed as f64),
+    (DYNAMIC_COUNTED_COST, |s| s.dynamic_counted_cost() as f64),
     (SEARCH_S, |s| s.search_s),
     (RETRACE_S, |s| s.retrace_s),
     (STATIC_S, |s| s.static_s),
@@ -309,6 +365,14 @@ pub const MAIN: &[Column] = &[
     STATIC_TESTS,
     DYNAMIC_TESTS,
     DYNAMIC_SPHERE_TESTS,
+    STATIC_TRAVERSAL,
+    STATIC_RAYS_COPIED,
+    STATIC_COUNTED_COST,
+    DYNAMIC_TRAVERSAL,
+    DYNAMIC_RAYS_COPIED,
+    DYNAMIC_SPHERES_BUILT,
+    DYNAMIC_FEED,
+    DYNAMIC_COUNTED_COST,
     SEARCH_S,
     RETRACE_S,
     STATIC_S,
@@ -411,6 +475,54 @@ pub mod frame {
         "tests",
         "ray–sphere tests of the dynamic points",
     );
+    /// disc-index traversal updating the static points.
+    pub const STATIC_TRAVERSAL: Column = measured(
+        "static_traversal",
+        "steps",
+        "disc-index traversal updating the static points: segment–box slab tests + DDA steps (0 when a sphere cache does them)",
+    );
+    /// segments copied into sphere-cache lists updating the static points (0 with the disc index).
+    pub const STATIC_RAYS_COPIED: Column = measured(
+        "static_rays_copied",
+        "segments",
+        "segments copied into sphere-cache lists updating the static points (0 with the disc index)",
+    );
+    /// the static points' counted cost.
+    pub const STATIC_COUNTED_COST: Column = measured(
+        "static_counted_cost",
+        "tests",
+        "the static points' counted cost: ray–disc + ray–sphere tests + box tests + DDA steps, weight 1 each",
+    );
+    /// disc-index traversal of the dynamic points.
+    pub const DYNAMIC_TRAVERSAL: Column = measured(
+        "dynamic_traversal",
+        "steps",
+        "disc-index traversal of the dynamic points: segment–box slab tests + DDA steps (0 with the sphere cache)",
+    );
+    /// segments copied into the dynamic points' sphere-cache lists, root list included (0 with the disc index).
+    pub const DYNAMIC_RAYS_COPIED: Column = measured(
+        "dynamic_rays_copied",
+        "segments",
+        "segments copied into the dynamic points' sphere-cache lists, root list included (0 with the disc index)",
+    );
+    /// spheres the dynamic points' sphere cache built, root included (0 with the disc index).
+    pub const DYNAMIC_SPHERES_BUILT: Column = measured(
+        "dynamic_spheres_built",
+        "spheres",
+        "spheres the dynamic points' sphere cache built, root included (0 with the disc index)",
+    );
+    /// segment-index cells read + segments tested to feed the dynamic points' engine (dynamic.feed; 0 when it gets every segment); not in dynamic_counted_cost.
+    pub const DYNAMIC_FEED: Column = measured(
+        "dynamic_feed",
+        "steps",
+        "segment-index cells read + segments tested to feed the dynamic points' engine (dynamic.feed; 0 when it gets every segment); not in dynamic_counted_cost",
+    );
+    /// the dynamic points' counted cost with the engine used.
+    pub const DYNAMIC_COUNTED_COST: Column = measured(
+        "dynamic_counted_cost",
+        "tests",
+        "the dynamic points' counted cost with the engine used: ray–disc + ray–sphere tests + box tests + DDA steps, weight 1 each (copies and the feed apart)",
+    );
     /// Search seconds.
     pub const SEARCH_S: Column = timing("search_s", "s", "seconds finding the affected segments");
     /// Re-trace seconds.
@@ -453,6 +565,14 @@ pub const FRAMES_TABLE: &[Column] = &[
     STATIC_SPHERE_TESTS,
     DYNAMIC_DISC_TESTS,
     frame::DYNAMIC_SPHERE_TESTS,
+    frame::STATIC_TRAVERSAL,
+    frame::STATIC_RAYS_COPIED,
+    frame::STATIC_COUNTED_COST,
+    frame::DYNAMIC_TRAVERSAL,
+    frame::DYNAMIC_RAYS_COPIED,
+    frame::DYNAMIC_SPHERES_BUILT,
+    frame::DYNAMIC_FEED,
+    frame::DYNAMIC_COUNTED_COST,
     ENGINE_USED,
     frame::SEARCH_S,
     frame::RETRACE_S,

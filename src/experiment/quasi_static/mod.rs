@@ -9,7 +9,9 @@
 //! consecutive frames are correlated, so the standard error is over batches of consecutive frames):
 //! `retraced_rays` (segments meeting an object at its old or new pose) and `rays_meeting_object` (at
 //! the new pose) beside f_R = n_R·Σ(r_D/r_0)² (`retraced_rays_theory`), photons and segments
-//! re-traced, the search's tests, the static and dynamic points' tests, each phase's seconds,
+//! re-traced, the search's tests, the static and dynamic points' tests, the disc index's traversal,
+//! the sphere cache's list building, the feed's query and each side's counted cost (weights and the
+//! `dynamic.feed` choices in `docs/detp-costs.md`), each phase's seconds,
 //! `frame_s` and `full_frame_s`; the theory of Theorem 2 for the same n: the static points' costs
 //! (2 vs 8.08·t·f_R·∛n_S) and the dynamic points' (sphere cache vs disc index). Side tables: `frames`
 //! (one row per frame) and, with `detp.write_points`, `points` (the irradiance at one frame).
@@ -56,6 +58,7 @@ pub fn params(cfg: &QuasiStaticConfig, n_dynamic_points: f64, replica: u64) -> P
         cache: d.cache,
         order: d.order,
         index: d.index,
+        feed: cfg.feed,
     }
 }
 
@@ -390,6 +393,14 @@ fn frame_row(replica: u64, st: &FrameStats, full: Option<(f64, u64)>) -> Row {
         .put(&col::STATIC_SPHERE_TESTS, st.static_sphere_tests)
         .put(&col::DYNAMIC_DISC_TESTS, st.dynamic_disc_tests)
         .put(&c::DYNAMIC_SPHERE_TESTS, st.dynamic_sphere_tests)
+        .put(&c::STATIC_TRAVERSAL, st.static_traversal)
+        .put(&c::STATIC_RAYS_COPIED, st.static_rays_copied)
+        .put(&c::STATIC_COUNTED_COST, st.static_counted_cost())
+        .put(&c::DYNAMIC_TRAVERSAL, st.dynamic_traversal)
+        .put(&c::DYNAMIC_RAYS_COPIED, st.dynamic_rays_copied)
+        .put(&c::DYNAMIC_SPHERES_BUILT, st.dynamic_spheres_built)
+        .put(&c::DYNAMIC_FEED, st.dynamic_feed)
+        .put(&c::DYNAMIC_COUNTED_COST, st.dynamic_counted_cost())
         .put(&col::ENGINE_USED, used.join("+"))
         .put(&c::SEARCH_S, st.search_s)
         .put(&c::RETRACE_S, st.retrace_s)
@@ -463,12 +474,13 @@ pub fn describe(cfg: &QuasiStaticConfig) -> String {
         .map(|w| format!("\n      warning: {w}"))
         .collect();
     format!(
-        "{}; {} frames, r_D/r_0 {}, engine {}, full check every {} frame(s){warnings}",
+        "{}; {} frames, r_D/r_0 {}, engine {}, feed {}, full check every {} frame(s){warnings}",
         super::detp::describe(&cfg.detp),
         cfg.frames,
         cfg.ratio
             .map_or("as in the scene".to_string(), |r| format!("{r}")),
         cfg.engine.as_str(),
+        cfg.feed.as_str(),
         cfg.check_every
     )
 }

@@ -8,6 +8,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::detp::quasi_static::Feed;
 use crate::experiment::detp::spec::{DetpConfig, DynamicEngine, Points, RawDetp, Rays};
 use crate::experiment::inputs::{Inputs, SceneFile};
 use crate::experiment::kind::{refuse, ConfigError};
@@ -81,7 +82,18 @@ pub struct RawDynamicSpec {
         skip_serializing_if = "Option::is_none"
     )]
     pub predict: Option<f64>,
+    /// Which segments the dynamic points' engines get: `"paper"` (default; Theorem 2's model: the
+    /// sphere cache gets the segment index's answer for the object's sphere padded by d, the disc
+    /// index every segment), `"segment-index"` (both get that answer) or `"all"` (both get every
+    /// segment).
+    #[serde(default)]
+    pub feed: FeedChoice,
 }
+
+crate::choice!(
+    /// `dynamic.feed`.
+    FeedChoice { Paper => "paper", SegmentIndex => "segment-index", All => "all" } default Paper
+);
 
 fn opt_fraction<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
     use serde::de::Error as _;
@@ -137,6 +149,8 @@ pub struct QuasiStaticConfig {
     pub reference_photons: Option<u64>,
     /// The predictor's fraction of photons (set, or 0.05 when the engine is "predicted").
     pub predict: Option<f64>,
+    /// Which segments the dynamic points' engines get.
+    pub feed: Feed,
     /// Counted warnings about the scene and its motion (shown by `check`, printed and counted by
     /// `run`).
     pub warnings: Vec<String>,
@@ -209,6 +223,11 @@ impl QuasiStaticConfig {
             engine: d.engine.unwrap_or_default(),
             points_frame: dy.points_frame.map(|f| f as u32),
             reference_photons: dy.reference_photons,
+            feed: match dy.feed {
+                FeedChoice::Paper => Feed::Paper,
+                FeedChoice::SegmentIndex => Feed::SegmentIndex,
+                FeedChoice::All => Feed::All,
+            },
             predict: dy
                 .predict
                 .or((d.engine == Some(DynamicEngine::Predicted)).then_some(0.05)),
