@@ -47,10 +47,10 @@ fn put(root: &Path, rel: &str, bytes: &[u8]) {
 /// A results folder: a schema-1 experiment with a hostile name, a schema-2 one, a bench, a render
 /// folder without metadata, and a claims file.
 fn results(root: &Path) {
-    let old_meta = format!(
-        "[raycost]\nversion = \"0.1.0\"\ngit_commit = \"abc123\"\n\n[run]\nspec_hash = \"feed\"\n\
-         threads = 2\n\n[spec.base.experiment]\nname = \"x\"\nkind = \"grid\"\n\
-         description = \"<script>alert('x')</script> & more\"\n\n[spec.sweep]\n\"grid.cell_width\" = [0.5, 1.0]\n"
+    let old_meta = concat!(
+        "[raycost]\nversion = \"0.1.0\"\ngit_commit = \"abc123\"\n\n[run]\nspec_hash = \"feed\"\n",
+        "threads = 2\n\n[spec.base.experiment]\nname = \"x\"\nkind = \"grid\"\n",
+        "description = \"<script>alert('x')</script> & more\"\n\n[spec.sweep]\n\"grid.cell_width\" = [0.5, 1.0]\n"
     );
     put(
         root,
