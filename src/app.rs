@@ -111,6 +111,8 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             let text = match d.what {
                 crate::cli::DocTopic::Kinds => crate::experiment::reference::kinds(),
                 crate::cli::DocTopic::Columns => crate::experiment::reference::columns(),
+                crate::cli::DocTopic::Spec => crate::experiment::reference::spec(),
+                crate::cli::DocTopic::Scene => crate::experiment::reference::scene(),
             };
             write!(std::io::stdout().lock(), "{text}")?;
             Ok(())

@@ -62,6 +62,10 @@ pub enum DocTopic {
     Kinds,
     /// Every CSV column of every kind: unit, class and meaning (docs/columns.md).
     Columns,
+    /// Every spec key: type, unit, default, allowed values, kinds, meaning (docs/spec.md).
+    Spec,
+    /// Every scene-file key and the scene conventions (docs/scene.md).
+    Scene,
 }
 
 /// `raycost render`.
