@@ -156,3 +156,74 @@ fn theory_json_has_the_table_numbers() {
     );
     assert_eq!(levels[0]["rays"], 1e6);
 }
+
+/// A DETP run on the closed sphere (exact E = 2π) with one replica: the mean irradiance gets a
+/// Poisson SE and a verdict against 2π (not "n/a"), the rays per level of photons are shown
+/// against the uniform-line law without a verdict (the law is for lines), and without a terminal
+/// progress comes as plain lines while the point runs, counting photons.
+#[test]
+fn one_replica_is_judged_against_the_exact_value_and_progress_ticks() {
+    let tmp = tempfile::tempdir().expect("temp");
+    let spec = root().join("experiments/detp-accuracy.toml");
+    let o = raycost()
+        .arg("run")
+        .arg(&spec)
+        .arg("--out")
+        .arg(tmp.path())
+        .args([
+            "--set",
+            "detp.scene=\"scenes/closed-sphere.toml\"",
+            "--set",
+            "detp.photons=100000",
+            "--set",
+            "detp.disc_radius=0.05",
+            "--set",
+            "detp.photon_map_k=16",
+            "--set",
+            "detp.replicas=1",
+            "--set",
+            "detp.engines=[\"sphere-cache\"]",
+        ])
+        .output()
+        .expect("runs");
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert!(o.status.success(), "{stderr}");
+    let irr = stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with("irradiance"))
+        .unwrap_or_else(|| panic!("{stdout}"));
+    assert!(irr.contains("6.2832"), "{irr}");
+    assert!(!irr.contains("n/a") && irr.contains(" ± "), "{irr}");
+    assert!(irr.contains("ok (99% CI)") || irr.contains(" SE"), "{irr}");
+    for l in stdout.lines().filter(|l| l.contains("rays L")) {
+        assert!(
+            l.contains("(photons: not judged)") && !l.contains(" SE"),
+            "{l}"
+        );
+    }
+    // The CSV's SE is the summary's.
+    let (header, rows) =
+        crate::common::read_csv(&tmp.path().join("detp-accuracy/detp-accuracy.csv"));
+    let se = header.iter().position(|h| h == "irradiance_se").unwrap();
+    let se: f64 = rows[0][se].parse().unwrap();
+    assert!(se.is_finite() && se > 0.0, "{se}");
+    // Every parameter of the point is in its row, swept or not.
+    for key in ["detp.q", "detp.threshold", "experiment.seed", "detp.scene"] {
+        assert!(header.iter().any(|h| h == key), "{key}: {header:?}");
+    }
+    let ticks: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("progress:"))
+        .collect();
+    assert!(
+        ticks.len() >= 3,
+        "start, a tick while running, end: {stderr}"
+    );
+    assert!(ticks
+        .iter()
+        .all(|l| l.contains("photons") && l.contains("eta")));
+    assert!(ticks.last().unwrap().contains("100000/100000 photons"));
+}
