@@ -120,7 +120,7 @@ fn walk(de: &dyn Fn(&toml::Table) -> Result<(), String>, path: &[String], out: &
         return;
     };
     for name in names {
-        let table = [path, &[name.clone()]].concat();
+        let table = [path, std::slice::from_ref(&name)].concat();
         let array = [path, &[format!("{name}[]")]].concat();
         if struct_fields(de, &table).is_some() {
             walk(de, &table, out);
