@@ -148,11 +148,13 @@ def require_columns(path, header, required):
 
 
 def spec_value(csv_path, key, row=None, default=None):
-    """The value of spec key `key` (dotted) for a point: its column when swept or set, else the
-    spec's base value recorded in NAME.meta.toml beside the CSV ([spec.base.SECTION] KEY), else
+    """The value of spec key `key` (dotted) for a point: its column (every parameter has one in
+    tables of this version; NaN there means the key was left out), else the spec's base value
+    recorded in NAME.meta.toml beside the CSV ([spec.base.SECTION] KEY) for older tables, else
     `default`."""
-    if row is not None and row.get(key) is not None:
-        return row[key]
+    value = None if row is None else row.get(key)
+    if value is not None and not (isinstance(value, float) and math.isnan(value)):
+        return value
     meta = (csv_path[:-4] if csv_path.endswith(".csv") else csv_path) + ".meta.toml"
     try:
         import tomllib  # Python >= 3.11

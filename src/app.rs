@@ -37,7 +37,12 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
         }
         Command::Check(a) => {
             let plan = Plan::load(&a.spec, &a.set)?;
-            write!(std::io::stdout().lock(), "{}", plan.describe())?;
+            let text = if a.json {
+                json_text(&plan.describe_json())
+            } else {
+                plan.describe()
+            };
+            write!(std::io::stdout().lock(), "{text}")?;
             Ok(())
         }
         Command::Theory(t) => match t.which {
@@ -67,7 +72,12 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
                     EyeArg::Corner => Eye::Corner,
                     EyeArg::Uniform => Eye::Uniform,
                 };
-                write!(std::io::stdout().lock(), "{}", grid_theory_table(&inp, eye))?;
+                let text = if g.json {
+                    json_text(&grid_theory_json(&inp, eye))
+                } else {
+                    grid_theory_table(&inp, eye)
+                };
+                write!(std::io::stdout().lock(), "{text}")?;
                 Ok(())
             }
             TheoryCommand::Detp(d) => {
@@ -103,7 +113,12 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
                     d.threshold.is_finite() && d.threshold >= 1.0,
                     "a count ≥ 1",
                 )?;
-                write!(std::io::stdout().lock(), "{}", detp_theory_table(&d))?;
+                let text = if d.json {
+                    json_text(&detp_theory_json(&d))
+                } else {
+                    detp_theory_table(&d)
+                };
+                write!(std::io::stdout().lock(), "{text}")?;
                 Ok(())
             }
         },
@@ -111,6 +126,8 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             let text = match d.what {
                 crate::cli::DocTopic::Kinds => crate::experiment::reference::kinds(),
                 crate::cli::DocTopic::Columns => crate::experiment::reference::columns(),
+                crate::cli::DocTopic::Spec => crate::experiment::reference::spec(),
+                crate::cli::DocTopic::Scene => crate::experiment::reference::scene(),
             };
             write!(std::io::stdout().lock(), "{text}")?;
             Ok(())
@@ -122,6 +139,17 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
                 force: r.force,
             })?;
             writeln!(std::io::stdout().lock(), "wrote {}", page.display())?;
+            Ok(())
+        }
+        Command::Completions(c) => {
+            use clap::CommandFactory;
+            let mut cmd = Cli::command();
+            clap_complete::generate(c.shell, &mut cmd, "raycost", &mut std::io::stdout().lock());
+            Ok(())
+        }
+        Command::Man => {
+            use clap::CommandFactory;
+            clap_mangen::Man::new(Cli::command()).render(&mut std::io::stdout().lock())?;
             Ok(())
         }
         Command::Bench(b) => {
@@ -162,6 +190,13 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
     }
 }
 
+/// Pretty JSON with a final newline.
+fn json_text(v: &serde_json::Value) -> String {
+    let mut s = serde_json::to_string_pretty(v).expect("a JSON value serializes");
+    s.push('\n');
+    s
+}
+
 /// Starts the global thread pool with `n` threads (`--threads`), refusing 0 and more than 8 per
 /// CPU (which only add scheduling cost, and a huge count takes minutes to start).
 fn thread_pool(n: Option<usize>) -> crate::error::Result<()> {
@@ -194,99 +229,211 @@ fn vec3(flag: &str, v: &[f64]) -> crate::error::Result<Option<glam::DVec3>> {
     }
 }
 
-/// The closed forms of `theory::detp` for one parameter set, as a table (costs in tests, t = u = 1).
-pub fn detp_theory_table(d: &crate::cli::DetpTheoryArgs) -> String {
+/// One row of a theory table: a stable name (the JSON key), the table's label, the value.
+pub type TheoryRow = (&'static str, &'static str, f64);
+
+/// The closed forms of `theory::detp` for one parameter set (costs in tests, t = u = 1), and the
+/// rays per level `(i, r_i/r_0, rays)` while a sphere holds at least `threshold` rays.
+pub fn detp_theory_rows(d: &crate::cli::DetpTheoryArgs) -> (Vec<TheoryRow>, Vec<(u32, f64, f64)>) {
     use crate::theory::detp as td;
     let (n_r, n_p, q) = (d.rays, d.points, d.q);
     let (t_r, t_i) = td::sphere_cache_cost(1.0, 1.0, n_r, n_p, q);
     let f_r = td::retraced_rays(n_r, d.ratio);
     let (st_sc, st_di) = td::static_points_cost(f_r, n_p, q);
     let (dy_sc, dy_di) = td::dynamic_points_cost(n_r, d.ratio, n_p, q);
-    let rows = [
-        ("sphere cache T_R = t·n_R/Q²·(∛n_P − 1)/(1 − Q)", t_r),
-        ("sphere cache T_I = (4/3)·u·n_R·∛n_P", t_i),
-        ("sphere cache T = T_R + T_I (Theorem 1)", t_r + t_i),
+    let rows = vec![
         (
+            "sphere_cache_t_r",
+            "sphere cache T_R = t·n_R/Q²·(∛n_P − 1)/(1 − Q)",
+            t_r,
+        ),
+        (
+            "sphere_cache_t_i",
+            "sphere cache T_I = (4/3)·u·n_R·∛n_P",
+            t_i,
+        ),
+        (
+            "sphere_cache_t",
+            "sphere cache T = T_R + T_I (Theorem 1)",
+            t_r + t_i,
+        ),
+        (
+            "disc_index_t",
             "disc indexing T = u·n_R·∛n_P (Theorem 1)",
             td::disc_index_cost(1.0, n_r, n_p),
         ),
         (
+            "rebuild_factor",
             "1/(Q²(1 − Q)) (Proposition 1: 6.75 at Q = 2/3)",
             td::rebuild_factor(q),
         ),
-        ("optimal Q (Proposition 1)", td::OPTIMAL_Q),
-        ("f_R = n_R·(r_D/r_0)² re-traced rays (eq. 11)", f_r),
-        ("static points, sphere cache (eq. 13)", st_sc),
-        ("static points, disc indexing 2·f_R·∛n (eq. 14)", st_di),
-        ("dynamic points, sphere cache (eq. 15)", dy_sc),
-        ("dynamic points, disc indexing n_R·∛n", dy_di),
+        ("optimal_q", "optimal Q (Proposition 1)", td::OPTIMAL_Q),
         (
+            "retraced_rays",
+            "f_R = n_R·(r_D/r_0)² re-traced rays (eq. 11)",
+            f_r,
+        ),
+        (
+            "static_sphere_cache",
+            "static points, sphere cache (eq. 13)",
+            st_sc,
+        ),
+        (
+            "static_disc_index",
+            "static points, disc indexing 2·f_R·∛n (eq. 14)",
+            st_di,
+        ),
+        (
+            "dynamic_sphere_cache",
+            "dynamic points, sphere cache (eq. 15)",
+            dy_sc,
+        ),
+        (
+            "dynamic_disc_index",
+            "dynamic points, disc indexing n_R·∛n",
+            dy_di,
+        ),
+        (
+            "crossover_ratio_limit",
             "crossover r_D/r_0, n → ∞ (Theorem 2: 0.35)",
             td::crossover_ratio(q, f64::INFINITY),
         ),
-        ("crossover r_D/r_0 at this n_P", td::crossover_ratio(q, n_p)),
+        (
+            "crossover_ratio",
+            "crossover r_D/r_0 at this n_P",
+            td::crossover_ratio(q, n_p),
+        ),
     ];
+    let deepest = td::deepest_level(n_r, q, d.threshold, 1.0, 0.0);
+    let levels = (0..=deepest.min(200))
+        .map(|i| (i, q.powi(i as i32), td::rays_per_level(n_r, q, i)))
+        .collect();
+    (rows, levels)
+}
+
+/// [`detp_theory_rows`] as a table.
+pub fn detp_theory_table(d: &crate::cli::DetpTheoryArgs) -> String {
+    let (rows, levels) = detp_theory_rows(d);
     let mut s = format!(
-        "DETP theory: n_R = {n_r}, n_P = {n_p}, Q = {q}, r_D/r_0 = {}; costs in tests (t = u = 1)\n",
-        d.ratio
+        "DETP theory: n_R = {}, n_P = {}, Q = {}, r_D/r_0 = {}; costs in tests (t = u = 1)\n",
+        d.rays, d.points, d.q, d.ratio
     );
-    for (k, v) in rows {
+    for (_, k, v) in rows {
         s.push_str(&format!("  {k:<52} {v:>16.6e}\n"));
     }
     s.push_str(&format!(
         "  rays per level n_R·Q^(2i), subdivided while ≥ {} rays:\n",
         d.threshold
     ));
-    let deepest = td::deepest_level(n_r, q, d.threshold, 1.0, 0.0);
-    for i in 0..=deepest.min(200) {
+    for (i, r, rays) in levels {
         s.push_str(&format!(
-            "    level {i:>3}  r_i/r_0 = {:<12.6e} rays {:>14.3}\n",
-            q.powi(i as i32),
-            td::rays_per_level(n_r, q, i)
+            "    level {i:>3}  r_i/r_0 = {r:<12.6e} rays {rays:>14.3}\n"
         ));
     }
     s
 }
 
-/// The closed forms of `theory::grid` for one parameter set, as a table.
-pub fn grid_theory_table(inp: &GridTheoryInput, eye: Eye) -> String {
+/// [`detp_theory_rows`] as JSON: the inputs, every value by name, and the levels.
+pub fn detp_theory_json(d: &crate::cli::DetpTheoryArgs) -> serde_json::Value {
+    let (rows, levels) = detp_theory_rows(d);
+    serde_json::json!({
+        "theory": "detp",
+        "inputs": {
+            "rays": d.rays, "points": d.points, "q": d.q, "ratio": d.ratio,
+            "threshold": d.threshold,
+        },
+        "values": rows_json(&rows),
+        "levels": levels.iter().map(|&(i, r, rays)| serde_json::json!({
+            "level": i, "radius_ratio": r, "rays": rays,
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// Rows as `{name: {value, label}}`, in table order.
+fn rows_json(rows: &[TheoryRow]) -> serde_json::Value {
+    serde_json::Value::Object(
+        rows.iter()
+            .map(|&(name, label, v)| {
+                (
+                    name.to_string(),
+                    serde_json::json!({ "value": v, "label": label }),
+                )
+            })
+            .collect(),
+    )
+}
+
+/// The closed forms of `theory::grid` for one parameter set.
+pub fn grid_theory_rows(inp: &GridTheoryInput, eye: Eye) -> Vec<TheoryRow> {
     let band = th::n_i_band(inp);
     let n_s = th::n_s_mean(inp, eye);
     let r = inp.classes[0].radius.expect(|r| r);
-    let rows = [
+    vec![
         (
+            "first_hit_rate",
             "first-hit rate λ = ρπr² (1/length)",
             th::first_hit_rate(inp),
         ),
-        ("E[t*] = 1/λ (length)", th::mean_first_hit(inp)),
+        ("t_hit", "E[t*] = 1/λ (length)", th::mean_first_hit(inp)),
         (
+            "offset_cube_volume",
             "|o(a,r)| offset cube volume",
             th::offset_cube_volume(inp.cell_width, r),
         ),
-        ("E[N_I] lower (Result 3.1)", band.lower),
-        ("E[N_I] upper (Result 3.1)", band.upper),
-        ("E[N_S] (this eye placement)", n_s),
+        ("n_i_lower", "E[N_I] lower (Result 3.1)", band.lower),
+        ("n_i_upper", "E[N_I] upper (Result 3.1)", band.upper),
+        ("n_s", "E[N_S] (this eye placement)", n_s),
         (
+            "n_s_uniform_eye",
             "E[N_S] eye uniform in cell = 1.5·E[t*]/a",
             th::n_s_uniform_eye(inp),
         ),
-        ("E[N_S] eye at cell corner", th::n_s_corner_eye(inp)),
-        ("E[N_I] predictor, no mailbox", th::n_i_predictor(inp, n_s)),
         (
+            "n_s_corner_eye",
+            "E[N_S] eye at cell corner",
+            th::n_s_corner_eye(inp),
+        ),
+        (
+            "n_i_predictor",
+            "E[N_I] predictor, no mailbox",
+            th::n_i_predictor(inp, n_s),
+        ),
+        (
+            "n_i_plain_predictor",
             "E[N_I] (1+E[N_S])·ρ|o| (plain)",
             th::n_i_plain_predictor(inp, n_s),
         ),
         (
+            "n_i_mb_predictor",
             "E[N_I] predictor, mailboxed",
             th::n_i_mb_predictor(inp, n_s),
         ),
-    ];
+    ]
+}
+
+/// [`grid_theory_rows`] as a table.
+pub fn grid_theory_table(inp: &GridTheoryInput, eye: Eye) -> String {
+    let r = inp.classes[0].radius.expect(|r| r);
     let mut s = format!(
         "grid theory: ρ = {}, r = {r}, a = {}, eye {:?}\n",
         inp.intensity, inp.cell_width, eye
     );
-    for (k, v) in rows {
+    for (_, k, v) in grid_theory_rows(inp, eye) {
         s.push_str(&format!("  {k:<44} {v:>14.6}\n"));
     }
     s
+}
+
+/// [`grid_theory_rows`] as JSON: the inputs and every value by name.
+pub fn grid_theory_json(inp: &GridTheoryInput, eye: Eye) -> serde_json::Value {
+    serde_json::json!({
+        "theory": "grid",
+        "inputs": {
+            "intensity": inp.intensity,
+            "radius": inp.classes[0].radius.expect(|r| r),
+            "cell_width": inp.cell_width,
+            "eye": format!("{eye:?}").to_lowercase(),
+        },
+        "values": rows_json(&grid_theory_rows(inp, eye)),
+    })
 }

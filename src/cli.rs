@@ -19,9 +19,22 @@ const VERSION: &str = concat!(
     ")"
 );
 
+/// The top-level `--help`'s epilogue: the exit codes scripts rely on.
+const EXIT_CODES: &str = "\
+Exit codes:
+  0    success
+  1    a built-in check failed (the tables are kept as evidence), or an internal failure
+  2    bad input or usage: a spec, scene or points file, a flag, a refused output (nothing written)
+  130  interrupted (Ctrl-C): what was kept and the command that resumes are printed
+  101  a panic: a bug in raycost, please report it
+
+Start: raycost check experiments/quickstart.toml && raycost run experiments/quickstart.toml
+Reference: docs/cli.md, docs/spec.md, docs/scene.md, docs/columns.md (or raycost doc, raycost man)";
+
 /// Measure what ray-tracing acceleration structures really cost, against closed-form theory.
 #[derive(Debug, Parser)]
-#[command(name = "raycost", version = VERSION, about, long_about = None, propagate_version = true)]
+#[command(name = "raycost", version = VERSION, about, long_about = None, propagate_version = true,
+          after_help = EXIT_CODES)]
 pub struct Cli {
     /// What to do.
     #[command(subcommand)]
@@ -32,21 +45,68 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Run an experiment spec and write DIR/NAME/NAME.csv (+ .meta.toml, .hist.csv).
+    #[command(after_help = "\
+Examples:
+  raycost run experiments/quickstart.toml
+  raycost run experiments/grid-cell-width.toml --set experiment.rays=100000 --out /tmp/r
+  raycost run spec.toml --shard 2/8          # points 2, 10, 18, …; then raycost merge
+  raycost run spec.toml --resume             # continue after Ctrl-C")]
     Run(RunArgs),
     /// Validate a spec and print its expanded points; runs nothing.
+    #[command(after_help = "\
+Examples:
+  raycost check experiments/detp-accuracy.toml
+  raycost check spec.toml --set detp.q=0.5 --json | jq '.points[].work'")]
     Check(CheckArgs),
     /// Print closed forms for given parameters.
+    #[command(after_help = "\
+Examples:
+  raycost theory grid --intensity 1 --radius 0.2 --cell-width 0.5
+  raycost theory detp --rays 1e6 --points 1e5 --json")]
     Theory(TheoryArgs),
     /// Speed figures of every engine, side by side in one run (results/bench/bench.csv).
+    #[command(after_help = "\
+Examples:
+  raycost bench --quick --out /tmp/r
+  raycost bench --threads 4 --force")]
     Bench(BenchArgs),
     /// Join the shards of a sweep (NAME.shard-K-of-N.csv) into NAME.csv, checking that they fit.
+    #[command(after_help = "\
+Examples:
+  raycost merge results/grid-scaling
+  raycost merge a/x.shard-0-of-2.csv b/x.shard-1-of-2.csv --out x.csv")]
     Merge(MergeArgs),
     /// Render the DETP irradiance of a quasi-static spec's frame(s), seen from the scene's camera.
+    #[command(after_help = "\
+Examples:
+  raycost render experiments/render-cornell.toml --frame 3 --out cornell.png
+  raycost render experiments/render-cornell.toml --frames 0,2,4,6 --gif cornell.gif --colormap")]
     Render(RenderArgs),
     /// Print reference documentation generated from the code, as Markdown.
+    #[command(after_help = "\
+Examples:
+  raycost doc spec > docs/spec.md
+  raycost doc columns | less")]
     Doc(DocArgs),
     /// Write DIR/index.html: one static page of every result (plots, claims, tables, bench).
+    #[command(after_help = "\
+Examples:
+  raycost report --out report              # report/index.html of results/
+  raycost report scratch --out scratch/report --force")]
     Report(ReportArgs),
+    /// Print a shell completion script.
+    #[command(after_help = "\
+Examples:
+  raycost completions bash > ~/.local/share/bash-completion/completions/raycost
+  raycost completions zsh > ~/.zfunc/_raycost
+  raycost completions fish > ~/.config/fish/completions/raycost.fish")]
+    Completions(CompletionsArgs),
+    /// Print the man page (roff).
+    #[command(after_help = "\
+Examples:
+  raycost man > ~/.local/share/man/man1/raycost.1 && man raycost
+  raycost man | man -l -")]
+    Man,
 }
 
 /// `raycost report`.
@@ -61,6 +121,14 @@ pub struct ReportArgs {
     /// Replace an existing DIR/index.html.
     #[arg(long)]
     pub force: bool,
+}
+
+/// `raycost completions`.
+#[derive(Debug, Args)]
+pub struct CompletionsArgs {
+    /// The shell.
+    #[arg(value_enum)]
+    pub shell: clap_complete::Shell,
 }
 
 /// `raycost doc`.
@@ -78,6 +146,10 @@ pub enum DocTopic {
     Kinds,
     /// Every CSV column of every kind: unit, class and meaning (docs/columns.md).
     Columns,
+    /// Every spec key: type, unit, default, allowed values, kinds, meaning (docs/spec.md).
+    Spec,
+    /// Every scene-file key and the scene conventions (docs/scene.md).
+    Scene,
 }
 
 /// `raycost render`.
@@ -193,6 +265,9 @@ pub struct CheckArgs {
     /// Override a spec key; repeatable.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
+    /// Print JSON instead of text: the points with their parameters, work, memory and warnings.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// `raycost theory`.
@@ -230,6 +305,9 @@ pub struct DetpTheoryArgs {
     /// Subdivision threshold (rays).
     #[arg(long, default_value_t = 100.0)]
     pub threshold: f64,
+    /// Print JSON instead of the table (the same numbers, unrounded).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// `raycost theory grid`.
@@ -247,6 +325,9 @@ pub struct GridTheoryArgs {
     /// Eye placement in its cell.
     #[arg(long, value_enum, default_value = "uniform")]
     pub eye: EyeArg,
+    /// Print JSON instead of the table (the same numbers, unrounded).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Eye placement.

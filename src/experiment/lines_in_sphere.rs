@@ -19,8 +19,29 @@ use crate::output::row::Row;
 use crate::sample::lines::uniform_line;
 use crate::sample::rng::{domain, stream};
 use crate::spec::de::{count, open_unit};
+use crate::spec::keys::{key, IfAbsent::*, KeyDoc};
 use crate::spec::RawExperiment;
 use crate::stats::ClusteredMean;
+
+/// The keys of `[lines]` (`raycost doc spec`, checked against [`RawLines`] by a test).
+pub const KEYS: &[KeyDoc] = &[
+    key(
+        "lines.count",
+        "integer",
+        "lines",
+        Required,
+        "≥ 1",
+        "Lines drawn per point.",
+    ),
+    key(
+        "lines.inner_radius",
+        "number",
+        "",
+        Required,
+        "(0, 1)",
+        "r: radius of the inner sphere, relative to the unit sphere the lines are drawn through.",
+    ),
+];
 
 /// The spec file: `[experiment]`, `[lines]` and `[sweep]`.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]

@@ -128,6 +128,17 @@ pub fn band_verdict(e: &Estimate, lower: f64, upper: f64) -> &'static str {
     }
 }
 
+/// The verdict against a law the experiment documents as not applying (`why`: e.g. photons of a
+/// scene against the uniform-line law): the ratio measured/law, marked as not judged, never a
+/// distance in SE.
+pub fn not_judged(e: &Estimate, law: f64, why: &str) -> String {
+    if e.mean.is_finite() && law.is_finite() && law != 0.0 {
+        format!("×{:.2} ({why}: not judged)", e.mean / law)
+    } else {
+        format!("({why}: not judged)")
+    }
+}
+
 /// "ok" when the measurement is within its 99 % CI (Student-t, clusters − 1 dof) of a prediction,
 /// else how many SE away; `n/a` without a standard error or a finite prediction.
 pub fn z_verdict(e: &Estimate, theory: f64) -> String {
@@ -173,6 +184,17 @@ mod tests {
         assert_eq!(band_verdict(&est(11.0, 0.1, 100), 1.0, 10.0), "above");
         assert_eq!(band_verdict(&est(0.5, 0.1, 100), 1.0, 10.0), "below");
         assert_eq!(band_verdict(&est(4.5, f64::NAN, 1), 1.0, 2.7), "n/a");
+    }
+
+    #[test]
+    fn a_law_that_does_not_apply_gives_a_ratio_not_a_verdict() {
+        let v = not_judged(&est(120.0, 0.1, 100), 100.0, "photons");
+        assert_eq!(v, "×1.20 (photons: not judged)");
+        assert!(!v.contains("SE") && !v.contains("ok"));
+        assert_eq!(
+            not_judged(&est(1.0, 0.1, 100), 0.0, "photons"),
+            "(photons: not judged)"
+        );
     }
 
     #[test]

@@ -178,6 +178,64 @@ impl Plan {
     }
 }
 
+impl Plan {
+    /// `raycost check --json`: what [`Plan::describe`] prints, as data: the kind, every point with
+    /// its parameters (values as in the spec), its description, work (units and what they count),
+    /// memory needs (bytes, the spec key driving each, the budget) and warnings, and the input files.
+    pub fn describe_json(&self) -> serde_json::Value {
+        use serde_json::json;
+        let points: Vec<serde_json::Value> = self
+            .spec
+            .points
+            .iter()
+            .zip(&self.points)
+            .map(|(p, point)| {
+                let params: serde_json::Map<String, serde_json::Value> = p
+                    .params
+                    .iter()
+                    .map(|(k, v)| {
+                        let v = serde_json::to_value(v).unwrap_or(serde_json::Value::Null);
+                        (k.clone(), v)
+                    })
+                    .collect();
+                let work = point.work();
+                let memory = point.memory();
+                let needs: Vec<serde_json::Value> = memory
+                    .needs
+                    .iter()
+                    .map(|n| json!({ "what": n.what, "key": n.key, "bytes": n.bytes }))
+                    .collect();
+                json!({
+                    "point": p.index,
+                    "params": params,
+                    "describe": point.describe(),
+                    "work": { "units": work.units, "unit": work.unit },
+                    "memory": {
+                        "bytes": memory.needs.iter().map(|n| n.bytes).sum::<f64>(),
+                        "needs": needs,
+                        "budget": memory.budget.map(|(key, gib)| json!({ "key": key, "gib": gib })),
+                    },
+                    "warnings": point.warnings(),
+                })
+            })
+            .collect();
+        let inputs: Vec<serde_json::Value> = self
+            .inputs
+            .iter()
+            .map(
+                |f| json!({ "path": f.path, "role": f.role, "sha256": f.sha256, "bytes": f.bytes }),
+            )
+            .collect();
+        json!({
+            "spec": self.spec.path,
+            "kind": self.kind.name(),
+            "spec_hash": self.hash,
+            "points": points,
+            "inputs": inputs,
+        })
+    }
+}
+
 /// Refuses a point whose structures would not fit: over the spec's budget key, or over the memory
 /// this machine has available (the error names the spec key that drives the largest need).
 fn check_memory(spec: &Spec, index: usize, point: &dyn DynPoint) -> Result<(), InputError> {

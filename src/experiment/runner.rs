@@ -117,12 +117,53 @@ fn param_value(v: &toml::Value) -> Value {
     }
 }
 
+/// Keys of the spec that are not parameters of a point: names, free text and the sweep itself.
+const NOT_PARAMETERS: &[&str] = &[
+    "experiment.name",
+    "experiment.kind",
+    "experiment.description",
+    "sweep",
+];
+
+/// Every parameter of a point, in column order: the swept or `--set` keys first (as `check`
+/// lists them), then every other key the kind accepts, in its declaration order, with the value in
+/// force (defaults filled in); a key without a value (an optional key left out) is missing (NaN).
+/// An array of tables (`scene.class`) is one column with its TOML text.
+pub fn all_params(
+    kind: &dyn DynKind,
+    accepted: &[String],
+    swept: &[(String, toml::Value)],
+    tree: &toml::Table,
+) -> Vec<(String, Value)> {
+    let normalized = kind.normalize(tree).ok();
+    let mut out: Vec<(String, Value)> = swept
+        .iter()
+        .map(|(k, v)| (k.clone(), param_value(v)))
+        .collect();
+    for key in accepted {
+        // `scene.class[].radius` → the column `scene.class`.
+        let key = match key.split_once("[]") {
+            Some((head, _)) => head,
+            None => key.as_str(),
+        };
+        if NOT_PARAMETERS.contains(&key) || out.iter().any(|(k, _)| k == key) {
+            continue;
+        }
+        let value = normalized
+            .as_ref()
+            .and_then(|v| key.split('.').try_fold(v, |v, seg| v.get(seg)))
+            .map_or(Value::F(f64::NAN), param_value);
+        out.push((key.to_string(), value));
+    }
+    out
+}
+
 /// Prepends `point` and the parameter columns to a result row.
-fn with_point_columns(index: usize, params: &[(String, toml::Value)], row: &Row) -> Row {
+fn with_point_columns(index: usize, params: &[(String, Value)], row: &Row) -> Row {
     let mut r = Row::default();
     r.put(&POINT, index as u64);
     for (k, v) in params {
-        r.param(k, param_value(v));
+        r.param(k, v.clone());
     }
     r.extend(row);
     r
@@ -211,6 +252,8 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
         return Ok((Vec::new(), msg));
     };
     meta.run.started = sink.started().to_string();
+    // The keys the kind accepts, found once per run (the parameter columns of every row).
+    let accepted = crate::experiment::reference::accepted_keys(kind);
     if let Some(then) = sink.previous() {
         meta.columns = then.columns.clone();
     }
@@ -265,7 +308,8 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
         for (name, rows) in &out.tables {
             check_declared(kind, name, rows)?;
         }
-        let row = with_point_columns(i, &p.params, &out.row);
+        let params = all_params(kind, &accepted, &p.params, &p.tree);
+        let row = with_point_columns(i, &params, &out.row);
         let side: Vec<(&'static str, Vec<Row>)> = out
             .tables
             .iter()

@@ -19,10 +19,69 @@
 //! [analytic]               # kind = "point-over-plane" | "closed-sphere": the exact irradiance
 //! ```
 
-use serde::{de::Error as _, Deserialize, Deserializer};
+use serde::{de::Error as _, Deserialize, Deserializer, Serialize};
+
+use crate::spec::keys::{key, IfAbsent::*, KeyDoc};
+
+/// Every key of a TOML scene file (`raycost doc scene`; a test checks them against the structs
+/// below, defaults included). Serialize exists only for that test: it shows the defaults serde
+/// fills in.
+pub const KEYS: &[KeyDoc] = &[
+    key("surface[].kind", "string", "", Required, "`\"triangle\"`, `\"quad\"`, `\"sphere\"`, `\"obj\"`",
+        "What the surface is: three or four `vertices`, a sphere (`center`, `radius`, `inside`), or a Wavefront OBJ mesh (`path`)."),
+    key("surface[].name", "string", "", Absent("`surface N` (its index)"), "any text",
+        "A label for messages and warnings."),
+    key("surface[].vertices", "array of [x, y, z]", "length", Absent("none; 3 for a triangle, 4 for a quad"), "finite",
+        "Corners, listed around the edge (a quad is split into two triangles; a bow-tie or non-planar quad is refused or warned). The winding (right-hand rule) gives the normal, which matters only for an emitting surface."),
+    key("surface[].center", "[x, y, z]", "length", Absent("none; required for a sphere"), "finite",
+        "Sphere centre."),
+    key("surface[].radius", "number", "length", Absent("none; required for a sphere"), "> 0",
+        "Sphere radius."),
+    key("surface[].inside", "bool", "", Value("false"), "`true`, `false`",
+        "A sphere seen from inside (a closed room): its normal points inwards, photons start and bounce inside it."),
+    key("surface[].path", "string (path)", "", Absent("none; required for an obj"), "an `.obj` file",
+        "The OBJ mesh, relative to the scene file (triangulated; its materials are ignored: this surface's albedo applies)."),
+    key("surface[].albedo", "number", "", Required, "[0, 1)",
+        "Diffuse reflectance, the same on both sides (reflection is two-sided); 1 is refused (photon paths without end)."),
+    key("surface[].emission", "number", "power/(area·sr)", Absent("0: not a light"), "> 0",
+        "Emitted radiance L_e, one-sided (on the normal's side): an area light of power π·L_e·area. An area light is given by its radiance, not its power. A dynamic surface cannot emit."),
+    key("surface[].dynamic", "string", "", Absent("static"), "the `name` of a `[[dynamic]]`",
+        "The dynamic object this surface belongs to: it moves with that object's motion."),
+    key("light[].kind", "string", "", Required, "`\"point\"`, `\"spot\"`",
+        "An isotropic point light, or a point light emitting uniformly inside a cone."),
+    key("light[].position", "[x, y, z]", "length", Required, "finite", "Where the light is."),
+    key("light[].power", "number", "power", Required, "> 0",
+        "Emitted power Φ (radiant flux; a spot's whole power goes into its cone). Irradiance comes out in power/length² of the same units."),
+    key("light[].direction", "[x, y, z]", "", Absent("none; required for a spot"), "non-zero",
+        "A spot's axis."),
+    key("light[].cone_deg", "number", "degrees", Absent("none; required for a spot"), "(0, 180]",
+        "A spot's half-angle."),
+    key("camera.eye", "[x, y, z]", "length", Required, "finite",
+        "The pinhole (`[camera]` itself is optional; `raycost render` needs it)."),
+    key("camera.look_at", "[x, y, z]", "length", Required, "finite", "The point looked at."),
+    key("camera.up", "[x, y, z]", "", Required, "not along the view direction", "Up vector."),
+    key("camera.fov_deg", "number", "degrees", Required, "> 0", "Vertical field of view."),
+    key("camera.width", "integer", "pixels", Required, "≥ 1", "Image width."),
+    key("camera.height", "integer", "pixels", Required, "≥ 1", "Image height."),
+    key("analytic.kind", "string", "", Required, "`\"point-over-plane\"`, `\"closed-sphere\"`",
+        "A closed form of the irradiance, written as `irradiance_exact` and used for verdicts: point-over-plane is the direct light of the first point light, E = Φ·max(0, n·(p − x))/(4π|p − x|³), in a scene where nothing else is lit; closed-sphere is the inside of the one emitting sphere, E = π·L_e/(1 − α). (`[analytic]` itself is optional.)"),
+    key("dynamic[].name", "string", "", Required, "any text; surfaces refer to it",
+        "A dynamic object: the surfaces with `dynamic = NAME` move together."),
+    key("dynamic[].path", "string", "", Required, "`\"circle\"`, `\"line\"`",
+        "The path its bounding-sphere centre travels over the frames (τ = 0 … 1): a circle, or a polyline at constant speed."),
+    key("dynamic[].center", "[x, y, z]", "length", Absent("none; required for a circle"), "finite", "Circle centre."),
+    key("dynamic[].radius", "number", "length", Absent("none; required for a circle"), "> 0", "Circle radius."),
+    key("dynamic[].axis", "[x, y, z]", "", Absent("`[0, 1, 0]`"), "non-zero", "Circle axis (normal of its plane)."),
+    key("dynamic[].turns", "number", "turns", Value("1.0"), "> 0", "Turns around the circle over the frames."),
+    key("dynamic[].points", "array of [x, y, z]", "length", Absent("none; ≥ 2 required for a line"), "finite",
+        "The polyline's points."),
+    key("dynamic[].spin_deg", "number", "degrees", Value("0.0"), "finite",
+        "Spin over the frames about `spin_axis` through the object's centre."),
+    key("dynamic[].spin_axis", "[x, y, z]", "", Absent("`[0, 1, 0]`"), "non-zero", "Spin axis."),
+];
 
 /// A whole scene file.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawScene {
     /// Surfaces.
@@ -41,7 +100,7 @@ pub struct RawScene {
 }
 
 /// Motion paths of `[[dynamic]]`.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum PathKind {
     /// Around a circle (`center`, `radius`, `axis`, `turns`).
@@ -63,7 +122,7 @@ pub enum PathKind {
 /// spin_deg = 0.0                # spin about spin_axis through the object's centre
 /// spin_axis = [0, 1, 0]
 /// ```
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawDynamic {
     /// The name surfaces refer to.
@@ -83,7 +142,11 @@ pub struct RawDynamic {
     #[serde(default = "one", deserialize_with = "positive")]
     pub turns: f64,
     /// Polyline points (≥ 2).
-    #[serde(default, deserialize_with = "points")]
+    #[serde(
+        default,
+        deserialize_with = "points",
+        skip_serializing_if = "Vec::is_empty"
+    )]
     pub points: Vec<[f64; 3]>,
     /// Spin over the frames, degrees.
     #[serde(default, deserialize_with = "finite_number")]
@@ -103,7 +166,7 @@ fn finite_number<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
 }
 
 /// Surface kinds.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum SurfaceKind {
     /// Three vertices.
@@ -117,7 +180,7 @@ pub enum SurfaceKind {
 }
 
 /// `[[surface]]`.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawSurface {
     /// Kind.
@@ -125,7 +188,11 @@ pub struct RawSurface {
     /// A label for messages.
     pub name: Option<String>,
     /// Triangle or quad vertices.
-    #[serde(default, deserialize_with = "points")]
+    #[serde(
+        default,
+        deserialize_with = "points",
+        skip_serializing_if = "Vec::is_empty"
+    )]
     pub vertices: Vec<[f64; 3]>,
     /// Sphere centre.
     #[serde(default, deserialize_with = "opt_point")]
@@ -149,7 +216,7 @@ pub struct RawSurface {
 }
 
 /// Light kinds.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum LightKind {
     /// Isotropic point light.
@@ -159,7 +226,7 @@ pub enum LightKind {
 }
 
 /// `[[light]]`.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawLight {
     /// Kind.
@@ -179,7 +246,7 @@ pub struct RawLight {
 }
 
 /// `[camera]`.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawCamera {
     /// Eye.
@@ -201,7 +268,7 @@ pub struct RawCamera {
 }
 
 /// `[analytic]`.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawAnalytic {
     /// `point-over-plane` (direct light of the first point light, nothing else lit) or
@@ -210,7 +277,7 @@ pub struct RawAnalytic {
 }
 
 /// Closed forms a scene can declare.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum AnalyticKind {
     /// E(x) = Φ·max(0, n·(p − x)) / (4π|p − x|³) from the first point light.

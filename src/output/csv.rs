@@ -41,15 +41,18 @@ mod tests {
         const M: Column = Column::value("n_i_mean", "1", Class::Measured, "");
         const B: Column = Column::value("n_i_band", "1", Class::Check, "");
         const X: Column = Column::value("x", "1", Class::Measured, "");
+        const Y: Column = Column::value("y", "1", Class::Check, "");
         let mut r = Row::default();
         r.put(&P, 0u64)
             .put(&M, 1.5)
             .put(&B, "inside")
-            .put(&X, f64::NAN);
+            .put(&X, f64::NAN)
+            .put(&Y, "");
         let text = String::from_utf8(serialize(&[r.clone(), r])).expect("utf8");
+        // One missing-value convention: a missing number and a missing text are both `NaN`.
         assert_eq!(
             text,
-            "point,n_i_mean,n_i_band,x\n0,1.5,inside,NaN\n0,1.5,inside,NaN\n"
+            "point,n_i_mean,n_i_band,x,y\n0,1.5,inside,NaN,NaN\n0,1.5,inside,NaN,NaN\n"
         );
     }
 }

@@ -2,11 +2,13 @@
 //! nothing with `--quiet`. Advanced per chunk of batches, never per ray.
 //!
 //! A log line reads `progress: 3/8 points, 1200000/3200000 rays (37.5 %), 2.41e5 rays/s, eta 8 s,
-//! elapsed 5 s`: one when the run starts, then at most one per interval (10 s), and a last one when it
-//! ends.
+//! elapsed 5 s`, counting the unit the kind's work is in (rays, lines, photons, photon-frames): one
+//! when the run starts, then one per second for the first minute and one per 10 s after (a ticker
+//! thread prints them, so a long point whose kind reports its work only at the end still shows the
+//! run is alive), and a last one when it ends.
 
 use std::io::IsTerminal;
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
@@ -26,6 +28,18 @@ pub struct LogState {
     start: Instant,
     /// When the last line was printed.
     last: Instant,
+    /// Set by [`Progress::finish`]: the ticker stops.
+    finished: bool,
+}
+
+/// Seconds between two log lines `elapsed` into the run: 1 s for the first minute (a short run
+/// shows its rate and ETA at once), then 10 s (a day-long batch job's log stays readable).
+pub fn log_interval(elapsed: Duration) -> Duration {
+    if elapsed < Duration::from_secs(60) {
+        Duration::from_secs(1)
+    } else {
+        Duration::from_secs(10)
+    }
 }
 
 /// How progress is shown.
@@ -34,14 +48,12 @@ pub enum Progress {
     Hidden,
     /// An indicatif bar (stderr is a terminal).
     Bar(ProgressBar),
-    /// A log line at most every `every` (stderr is a file or pipe).
+    /// Log lines every [`log_interval`] (stderr is a file or pipe).
     Log {
-        /// Total rays.
+        /// Total units.
         total: u64,
-        /// Counters and clocks.
-        state: Mutex<LogState>,
-        /// Interval between lines.
-        every: Duration,
+        /// Counters and clocks, shared with the ticker thread.
+        state: Arc<Mutex<LogState>>,
     },
 }
 
@@ -70,13 +82,25 @@ pub fn progress(total: u64, unit: &'static str, points: usize, quiet: bool) -> P
             points,
             start: now,
             last: now,
+            finished: false,
         };
         eprintln!("{}", log_line(&state, total, Duration::ZERO));
-        Progress::Log {
-            total,
-            state: Mutex::new(state),
-            every: Duration::from_secs(10),
-        }
+        let state = Arc::new(Mutex::new(state));
+        let ticking = Arc::clone(&state);
+        // The ticker: wakes every 200 ms, prints when the interval has passed, stops at finish.
+        std::thread::spawn(move || loop {
+            std::thread::sleep(Duration::from_millis(200));
+            let Ok(mut s) = ticking.lock() else { return };
+            if s.finished {
+                return;
+            }
+            let el = s.start.elapsed();
+            if s.last.elapsed() >= log_interval(el) {
+                s.last = Instant::now();
+                eprintln!("{}", log_line(&s, total, el));
+            }
+        });
+        Progress::Log { total, state }
     }
 }
 
@@ -109,17 +133,9 @@ impl Progress {
         match self {
             Progress::Hidden => {}
             Progress::Bar(b) => b.inc(n),
-            Progress::Log {
-                total,
-                state,
-                every,
-            } => {
-                let mut s = state.lock().expect("progress lock");
-                s.rays += n;
-                if s.last.elapsed() >= *every {
-                    s.last = Instant::now();
-                    eprintln!("{}", log_line(&s, *total, s.start.elapsed()));
-                }
+            Progress::Log { state, .. } => {
+                // Lines are printed by the ticker alone, so they come at a steady pace.
+                state.lock().expect("progress lock").rays += n;
             }
         }
     }
@@ -144,6 +160,7 @@ impl Progress {
             Progress::Log { total, state, .. } => {
                 let mut s = state.lock().expect("progress lock");
                 s.points_done = s.points;
+                s.finished = true;
                 eprintln!("{}", log_line(&s, *total, s.start.elapsed()));
             }
             Progress::Hidden => {}
@@ -156,6 +173,19 @@ mod tests {
     use super::*;
 
     #[test]
+    fn log_lines_come_every_second_then_every_ten() {
+        assert_eq!(log_interval(Duration::ZERO), Duration::from_secs(1));
+        assert_eq!(
+            log_interval(Duration::from_secs(59)),
+            Duration::from_secs(1)
+        );
+        assert_eq!(
+            log_interval(Duration::from_secs(60)),
+            Duration::from_secs(10)
+        );
+    }
+
+    #[test]
     fn log_line_shows_points_rate_and_eta() {
         let now = Instant::now();
         let s = LogState {
@@ -165,6 +195,7 @@ mod tests {
             points: 8,
             start: now,
             last: now,
+            finished: false,
         };
         let line = log_line(&s, 4_000, Duration::from_secs(2));
         assert_eq!(
@@ -178,6 +209,7 @@ mod tests {
             points: 0,
             start: now,
             last: now,
+            finished: false,
         };
         assert_eq!(
             log_line(&s, 0, Duration::ZERO),

@@ -5,6 +5,9 @@
 use super::column::{Class, Column, ColumnInfo, Shape};
 use crate::stats::Estimate;
 
+/// How every table writes a missing value.
+pub const MISSING: &str = "NaN";
+
 /// One CSV value.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Value {
@@ -17,13 +20,21 @@ pub enum Value {
 }
 
 impl Value {
-    /// CSV text: reals with full round-trip precision, NaN as `NaN`.
+    /// CSV text: reals with full round-trip precision. A missing value, numeric (NaN) or text
+    /// (empty), is written `NaN`: the one missing-value convention of every table (docs/columns.md),
+    /// which every float parser reads back, where an empty field is refused by most.
     pub fn render(&self) -> String {
         match self {
             Value::F(x) => format!("{x:?}"),
             Value::U(u) => u.to_string(),
+            Value::S(s) if s.is_empty() => MISSING.to_string(),
             Value::S(s) => s.clone(),
         }
+    }
+
+    /// A missing value.
+    pub const fn missing() -> Self {
+        Value::F(f64::NAN)
     }
 
     /// The value as a real, if it is a number.

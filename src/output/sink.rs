@@ -48,6 +48,8 @@ pub struct Sink {
     csv: File,
     tables: Vec<SideTable>,
     csv_has_header: bool,
+    /// The header of a resumed table: this run's rows must have the same columns.
+    resumed_header: Option<String>,
     done: BTreeSet<usize>,
     started: String,
     previous: Option<Meta>,
@@ -140,6 +142,7 @@ impl Sink {
         let mut previous = None;
         let mut done = BTreeSet::new();
         let mut csv_has_header = false;
+        let mut resumed_header = None;
         let mut table_has_header = vec![false; suffixes.len()];
         if csv_p.exists() && opts.resume {
             let then = Meta::read(&meta_p)?;
@@ -148,6 +151,7 @@ impl Sink {
             previous = Some(then);
             let rows = read_complete(&csv_p).map_err(|e| err(&csv_p, e))?;
             csv_has_header = !rows.is_empty();
+            resumed_header = rows.first().cloned();
             for line in rows.iter().skip(1) {
                 let point = line
                     .split(',')
@@ -221,6 +225,7 @@ impl Sink {
             csv: open(&csv_p)?,
             tables,
             csv_has_header,
+            resumed_header,
             done,
             started: started.unwrap_or_else(super::time::now_rfc3339),
             previous,
@@ -264,6 +269,17 @@ impl Sink {
             t.file.sync_data()?;
         }
         let mut m = Vec::new();
+        if let Some(then) = self.resumed_header.take() {
+            let now = String::from_utf8_lossy(&header(row)).trim_end().to_string();
+            if then.trim_end() != now {
+                return Err(std::io::Error::other(format!(
+                    "{}: its columns differ from this run's (written by an older raycost, \
+                     before every row carried every parameter of its point): \
+                     --resume cannot continue it; pass --force without --resume to start over",
+                    Self::partial(&self.dir, &self.stem, "csv").display()
+                )));
+            }
+        }
         if !self.csv_has_header {
             m.extend(header(row));
             self.csv_has_header = true;

@@ -43,7 +43,7 @@ pub fn render(points: &[SummaryPoint]) -> String {
         "measured ± 95% CI",
         "theory (prediction [band])",
         "verdict",
-        "rays/s",
+        "speed",
         "wall s"
     );
     for p in points {

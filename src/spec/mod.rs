@@ -8,6 +8,7 @@
 //! file, line, column and dotted key, or the `--set` flag that set the value.
 
 pub mod de;
+pub mod keys;
 pub mod sweep;
 
 pub use crate::error::InputError;

@@ -17,6 +17,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::de::{from_text, from_tree, KeyError, TextError};
+use super::keys::{key, IfAbsent::*, KeyDoc};
 use crate::error::InputError;
 use crate::toml_text::{find_key, line_col};
 
@@ -46,6 +47,22 @@ pub struct RawExperiment {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub description: Option<String>,
 }
+
+/// The keys every spec has: `[experiment]` and `[sweep]` (`raycost doc spec`).
+pub const KEYS: &[KeyDoc] = &[
+    key("experiment.name", "string", "", Required, "1–100 letters, digits, `-`, `_`",
+        "Names the results: `DIR/NAME/NAME.csv`, `NAME.meta.toml`, `NAME.TABLE.csv`."),
+    key("experiment.kind", "string", "", Required, "a kind of `raycost doc kinds`",
+        "What the experiment measures; decides which tables below the spec may have."),
+    key("experiment.seed", "integer", "", Value("1"), "0 … 2⁶⁴ − 1",
+        "Master seed of every random stream: the same spec and seed give the same measured columns on any machine, thread count or shard split."),
+    key("experiment.rays", "integer", "rays", Absent("required by the grid kinds, unused by others"), "≥ 1 (grid: ≤ 10¹⁰)",
+        "Rays traced per sweep point (DETP kinds count their rays in `detp.photons`, lines in `lines.count`)."),
+    key("experiment.description", "string", "", Absent("none"), "any text",
+        "Free text copied into `NAME.meta.toml`."),
+    key("sweep", "table", "", Absent("one point"), "dotted spec key = array of values",
+        "The sweep: every combination of the arrays is one point (the first key varies slowest, the last fastest; at most 10 000 points). Each swept key becomes a column; `--set` on a swept key stops it being swept."),
+];
 
 fn default_seed() -> u64 {
     1

@@ -282,11 +282,19 @@ pub fn run_point(
         f64::NAN
     };
     let errs: Vec<(f64, f64)> = irr.iter().map(|e| engines::errors(e, &pts.exact)).collect();
-    let mean_irr = engines::per_replica(
+    let mut mean_irr = engines::per_replica(
         &irr.iter()
             .map(|e| mean_over(e, &judged))
             .collect::<Vec<_>>(),
     );
+    if irr.len() == 1 && !judged.is_empty() {
+        // One replica: the Poisson SE of the mean over the n judged points, each point's sum
+        // counted as independent (as the points table does per point): √(Ē·w̄/(πd²·n)). With it the
+        // mean is judged against an exact value instead of "n/a".
+        let n = judged.len() as f64;
+        mean_irr.se = (mean_irr.mean.max(0.0) * mean_segment_watts / (area * n)).sqrt();
+        mean_irr.clusters = judged.len() as u64;
+    }
     let engine_s: f64 = engines.iter().map(|e| e.seconds()).sum();
     let rays_per_s = segments as f64 / engine_s.max(1e-12);
     let mut summary = Vec::new();

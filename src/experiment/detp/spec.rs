@@ -23,6 +23,66 @@ use crate::geom::Aabb;
 use crate::spec::de::{count, open_unit, opt_count, opt_positive, positive};
 use crate::spec::RawExperiment;
 
+/// The keys of `[detp]` (kinds `detp` and `quasi-static`; `raycost doc spec`, checked against
+/// [`RawDetp`] by a test).
+pub const KEYS: &[KeyDoc] = &[
+    key("detp.source", "string", "", Value("\"lines\""), "`\"lines\"`, `\"scene\"`",
+        "Where the rays come from: μ-random lines through the unit ball, or photons traced from `detp.scene`."),
+    key("detp.scene", "string (path)", "", Absent("none; required with `source = \"scene\"`"),
+        "a `.toml` scene (`raycost doc scene`) or a BART `.aff`/`.nff` file",
+        "The scene file, relative to the spec's folder."),
+    key("detp.photons", "integer", "photons", Required, "≥ 1",
+        "n_R: lines drawn, or photons emitted from the scene's lights (their paths' segments are the rays)."),
+    key("detp.points", "integer", "points", Absent("required with `point_source = \"ball\"`"), "≥ 1",
+        "n_P: sample points uniform in the unit ball (a file name here is refused with a hint to `points_file`)."),
+    key("detp.point_source", "string", "", Absent("`\"ball\"` for lines, `\"surface\"` for a scene"),
+        "`\"ball\"`, `\"surface\"`, `\"file\"`",
+        "Where the sample points come from: uniform in the unit ball with uniform normals, on the scene's surfaces, or a CSV."),
+    key("detp.points_file", "string (path)", "", Absent("none; required with `point_source = \"file\"`"),
+        "a CSV with header `x,y,z,nx,ny,nz`",
+        "The sample points, relative to the spec's folder (normals need not be unit length)."),
+    key("detp.point_spacing", "number", "length", Absent("2·d (the paper's optimum)"), "> 0",
+        "Spacing of surface points."),
+    key("detp.disc_radius", "number or string", "length", Required, "> 0, or `\"spacing\"`",
+        "d: the discs' radius, or the points' mean spacing ((4π/3/n_P)^⅓ in the ball, `point_spacing` on surfaces), the paper's d for Theorem 1."),
+    key("detp.q", "number", "", Value("0.6666666666666666"), "(0, 1)",
+        "Q: ratio of consecutive sphere radii of the sphere cache (Proposition 1: 2/3 is optimal)."),
+    key("detp.threshold", "integer", "rays", Value("100"), "≥ 1",
+        "A sphere holding fewer rays is not subdivided."),
+    key("detp.order", "string", "", Value("\"hilbert\""), "`\"none\"`, `\"morton\"`, `\"hilbert\"`",
+        "Order in which the sphere cache visits the points."),
+    key("detp.order_bits", "integer", "bits", Value("10"), "1 … 21",
+        "Bits per axis of the ordering keys."),
+    key("detp.list_mode", "string", "", Value("\"exact\""), "`\"exact\"`, `\"inherited\"`",
+        "Each sphere's list holds exactly the rays meeting it, or the parent's rays meeting it (the paper's literal rule)."),
+    key("detp.chunk_points", "integer", "points", Value("16384"), "≥ 1",
+        "Points per independent sphere-cache run (chunks run in parallel; a spec value, never the thread count, so counts do not depend on threads)."),
+    key("detp.engines", "array of strings", "", Value("[\"sphere-cache\"]"),
+        "`\"sphere-cache\"`, `\"disc-index\"`, `\"brute-force\"`, `\"photon-map\"`",
+        "Kind `detp`: the engines run on every point (columns per engine)."),
+    key("detp.index", "string", "", Value("\"octree\""), "`\"octree\"`, `\"grid\"`",
+        "The disc index's structure."),
+    key("detp.index_cell_width", "number", "length", Absent("2·d"), "> 0",
+        "Cell width of the grid disc index."),
+    key("detp.octree_leaf", "integer", "discs", Value("8"), "≥ 1",
+        "Most discs in an octree leaf before it splits (it also stops at side ≤ d)."),
+    key("detp.brute_force_points", "integer", "points", Value("256"), "≥ 0",
+        "Points whose sums are checked against brute force, bit for bit (0: none); failures fail the run (exit 1)."),
+    key("detp.photon_map_k", "integer", "photons", Value("64"), "≥ 1",
+        "k nearest photons of the photon map."),
+    key("detp.photon_map_filter", "string", "", Value("\"cone\""), "`\"cone\"`, `\"disc\"`",
+        "The photon map's density estimation filter."),
+    key("detp.replicas", "integer", "", Value("1"), "≥ 1",
+        "Independent realisations (new rays and points each): with one, standard errors are Poisson estimates; with several, the spread across replicas."),
+    key("detp.write_points", "bool", "", Value("false"), "`true`, `false`",
+        "Also write the per-sample-point irradiance table `NAME.points.csv`."),
+    key("detp.engine", "string", "", Absent("`\"hybrid\"`"),
+        "`\"hybrid\"`, `\"sphere-cache\"`, `\"disc-index\"`, `\"predicted\"`",
+        "Kind `quasi-static`: how dynamic points are recomputed (hybrid: Theorem 2 picks per object; predicted: the §4.1 predictor picks)."),
+    key("detp.memory_budget_gib", "number", "GiB", Value("8.0"), "> 0",
+        "Memory the ray store and engines may take; a point needing more is refused before it allocates."),
+];
+
 /// A spec file of kind `detp`.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -142,6 +202,7 @@ pub struct RawDetp {
 }
 
 use crate::choice;
+use crate::spec::keys::{key, IfAbsent::*, KeyDoc};
 
 choice!(
     /// Where the rays come from.

@@ -8,7 +8,54 @@ use serde::{de::Error as _, Deserialize, Deserializer, Serialize};
 use crate::spec::de::{
     check_positive, count, fraction, opt_count, opt_finite3, opt_positive, positive,
 };
+use crate::spec::keys::{key, IfAbsent::*, KeyDoc};
 use crate::spec::RawExperiment;
+
+/// The keys of the grid kinds' tables (`raycost doc spec`; a test checks them against the structs).
+pub const KEYS: &[KeyDoc] = &[
+    key("scene.intensity", "number", "1/length³", Required, "> 0",
+        "ρ: sphere centres per unit volume of the Poisson scene."),
+    key("scene.radius", "number", "length", Absent("give `[[scene.class]]` instead"), "> 0",
+        "One radius for every sphere (exactly one of `radius` and `[[scene.class]]`)."),
+    key("scene.class[].fraction", "number", "", Required, "(0, 1]; the fractions sum to 1",
+        "α_i: the share of the spheres in this radius class (Result 3.2)."),
+    key("scene.class[].radius", "number or table", "length", Required,
+        "> 0, or `{ dist = \"uniform\", lo, hi }` (0 < lo ≤ hi), or `{ dist = \"lognormal\", median, sigma, max }` (all > 0)",
+        "The class's radius: a constant or a distribution drawn per sphere (or per scene, see `radius_draw`)."),
+    key("scene.extent", "number or string", "length", Absent("infinite unless `spheres` is given"),
+        "`\"infinite\"` or a cube side > 0",
+        "The lazily generated infinite scene, or a finite cube of this side around `center`."),
+    key("scene.spheres", "integer", "spheres", Absent("none"), "≥ 1; not with a numeric `extent`",
+        "Exact sphere count of a finite scene (its side is (n/ρ)^⅓)."),
+    key("scene.replicas", "integer", "", Absent("1"), "≥ 1",
+        "Independent realisations of a finite scene per point, sharing the rays; with two or more the standard errors include the scene-to-scene spread."),
+    key("scene.center", "[x, y, z]", "length", Absent("the origin"), "finite",
+        "Centre of a finite scene (the eye sits in its cell)."),
+    key("scene.radius_draw", "string", "", Absent("`\"per-sphere\"`"), "`\"per-sphere\"`, `\"per-scene\"`",
+        "Each sphere draws its radius, or one radius per class per scene (the paper's literal Result 3.2)."),
+    key("grid.cell_width", "number", "length", Required, "> 0",
+        "a: the grid's cell width."),
+    key("grid.mailbox", "bool", "", Value("true"), "`true`, `false`",
+        "Skip repeated tests of a sphere within one ray (changes time, not the reported counts: `n_i` and `n_i_mb` are both counted)."),
+    key("grid.eye", "string", "", Value("\"uniform\""), "`\"corner\"`, `\"uniform\"`",
+        "The eye on a cell corner, or uniform inside its cell (changes E[N_S])."),
+    key("grid.memory_budget_gib", "number", "GiB", Value("4.0"), "> 0",
+        "Memory the cell lists of a finite grid may take; a point needing more is refused before it allocates."),
+    key("grid.rays_per_scene", "integer", "rays", Value("1"), "1 … 256",
+        "Rays sharing one realisation of an infinite scene: 1 gives independent samples (exact SE and p-values) and the fastest engine."),
+    key("grid.max_steps", "integer", "cells", Value("10000000"), "≥ 1",
+        "Most cells one ray may visit in an infinite scene before it is cut off (counted)."),
+    key("histogram.bins", "integer", "", Value("40"), "≥ 1",
+        "Bins of the t* histogram (`NAME.hist.csv`)."),
+    key("histogram.t_max_mfp", "number", "mean free paths", Value("6.0"), "> 0",
+        "Right edge of the t* histogram."),
+    key("scaling.brute_force_max_n", "integer", "spheres", Value("20000"), "≥ 1",
+        "Kind `grid-scaling`: brute force runs only where n ≤ this."),
+    key("scaling.brute_force_rays", "integer", "rays", Value("2000"), "≥ 1",
+        "Kind `grid-scaling`: rays traced by brute force (the point's first ones)."),
+    key("scaling.c", "number", "", Value("1.0"), "> 0",
+        "Kind `grid-scaling`: c of Proposition 4.1 (columns P(N_I ≥ c·ln n) and P(N_I ≥ c·√n))."),
+];
 
 /// A spec file of a grid kind.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]

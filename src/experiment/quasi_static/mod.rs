@@ -410,7 +410,7 @@ fn frame_row(replica: u64, st: &FrameStats, full: Option<(f64, u64)>) -> Row {
         .put(&c::FULL_FRAME_S, full.map_or(f64::NAN, |f| f.0))
         .put(
             &c::FULL_MISMATCH,
-            full.map_or(Value::S(String::new()), |f| Value::U(f.1)),
+            full.map_or(Value::missing(), |f| Value::U(f.1)),
         );
     r
 }

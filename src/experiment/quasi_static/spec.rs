@@ -14,7 +14,26 @@ use crate::experiment::inputs::{Inputs, SceneFile};
 use crate::experiment::kind::{refuse, ConfigError};
 use crate::lt::Scene;
 use crate::spec::de::{count, count_or_zero, number, opt_count, opt_count_or_zero};
+use crate::spec::keys::{key, IfAbsent::*, KeyDoc};
 use crate::spec::RawExperiment;
+
+/// The keys of `[dynamic]` (`raycost doc spec`, checked against [`RawDynamicSpec`] by a test).
+pub const KEYS: &[KeyDoc] = &[
+    key("dynamic.frames", "integer", "frames", Required, "≥ 1",
+        "F: frames; frame 0 is the full trace, the objects sit at τ = f/(F − 1) of their motion."),
+    key("dynamic.ratio", "number", "", Absent("the objects' size in the scene"), "(0, 1)",
+        "r_D/r_0 of every dynamic object, each scaled about its centre (r_0: radius of the sphere around the static scene)."),
+    key("dynamic.crossover", "number", "", Absent("Theorem 2 at the run's Q and n_D"), "(0, 1)",
+        "The hybrid engine's crossover r_D/r_0: smaller objects use the sphere cache."),
+    key("dynamic.check_every", "integer", "frames", Value("1"), "≥ 0",
+        "Check every k-th frame (and the last) against a full recalculation (`full_mismatch`, `full_frame_s`); 0: never. A mismatch fails the run (exit 1)."),
+    key("dynamic.points_frame", "integer", "", Absent("the last frame"), "0 … frames − 1",
+        "The frame whose irradiance goes to `NAME.points.csv` (with `detp.write_points`)."),
+    key("dynamic.reference_photons", "integer", "photons", Absent("no reference"), "≥ 1",
+        "Photons of a reference full recalculation of the last frame (another seed); the run's error against it is `irradiance_rmse`."),
+    key("dynamic.predict", "number", "", Absent("0.05 with `detp.engine = \"predicted\"`, else none"), "(0, 1]",
+        "The §4.1 predictor: the fraction of the photons whose segments predict each engine's cost at frame 0."),
+];
 
 /// The spec file of kind `quasi-static`: `[experiment]`, `[detp]`, `[dynamic]` and `[sweep]`.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
