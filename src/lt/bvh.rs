@@ -188,6 +188,32 @@ impl Bvh {
     }
 }
 
+impl Bvh {
+    /// Calls `f` with every triangle whose node box comes within `r` of `p` (a superset of the
+    /// triangles within `r`: the caller measures each).
+    pub fn near(&self, p: DVec3, r: f64, f: &mut dyn FnMut(u32)) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack = vec![0u32];
+        while let Some(k) = stack.pop() {
+            let n = self.nodes[k as usize];
+            let q = p.clamp(n.lo, n.hi);
+            if (q - p).length_squared() > r * r {
+                continue;
+            }
+            if n.count > 0 {
+                for &i in &self.order[n.start as usize..(n.start + n.count) as usize] {
+                    f(i);
+                }
+            } else {
+                stack.push(n.start);
+                stack.push(n.start + 1);
+            }
+        }
+    }
+}
+
 /// The same answer by testing every triangle (the oracle).
 pub fn two_nearest_brute(
     tris: &[Triangle],

@@ -480,6 +480,15 @@ impl Scene {
                     "closed-sphere needs an emitting sphere seen from inside".into(),
                 ));
             }
+            Some(AnalyticKind::DirectLight)
+                if surfaces.iter().any(|s| s.albedo != 0.0)
+                    || lights.iter().any(|l| matches!(l, Light::Area { .. })) =>
+            {
+                return Err(err(
+                    "analytic.kind".into(),
+                    "direct-light needs every albedo 0 and point or spot lights only (no emitting surface): then the irradiance is the lights' direct light".into(),
+                ));
+            }
             _ => {}
         }
         let camera = raw.camera.map(|c| Camera {
@@ -734,6 +743,14 @@ impl Scene {
         (Some(Hit { t, prim, surface }), best.second.0)
     }
 
+    /// Calls `f` with every triangle (static or dynamic, by its index in `triangles`) that may
+    /// come within `r` of `p` (a superset: the caller measures each).
+    pub fn triangles_near(&self, p: DVec3, r: f64, f: &mut dyn FnMut(u32)) {
+        let n = self.n_static_tris as u32;
+        self.bvh.near(p, r, f);
+        self.dyn_bvh.near(p, r, &mut |i| f(i + n));
+    }
+
     /// The normal that receives light at a point of a primitive.
     pub fn normal(&self, prim: Prim, p: DVec3) -> DVec3 {
         match prim {
@@ -762,7 +779,47 @@ impl Scene {
                 let s = &self.surfaces[b.surface as usize];
                 Some(PI * s.emission / (1.0 - s.albedo))
             }
+            AnalyticKind::DirectLight => Some(self.direct_light(p, n)),
         }
+    }
+
+    /// The direct irradiance at `p` (normal `n`) from the point and spot lights, with a shadow test:
+    /// a light counts if the first surface its ray toward `p` meets lies no nearer than `p` (less a
+    /// relative 10⁻⁹ of the scene's size, so that the surface `p` lies on does not shadow it).
+    pub fn direct_light(&self, p: DVec3, n: DVec3) -> f64 {
+        let n = n.normalize();
+        let tol = 1e-9 * self.magnitude();
+        let mut e = 0.0;
+        for l in &self.lights {
+            let (pos, intensity) = match l {
+                Light::Point { position, power } => (*position, power / (4.0 * PI)),
+                Light::Spot {
+                    position,
+                    axis,
+                    cos_cone,
+                    power,
+                } => {
+                    let dir = (p - *position).normalize();
+                    if dir.dot(*axis) < *cos_cone {
+                        continue;
+                    }
+                    (*position, power / (2.0 * PI * (1.0 - cos_cone)))
+                }
+                Light::Area { .. } => continue,
+            };
+            let v = pos - p;
+            let r = v.length();
+            let cos = n.dot(v) / r;
+            if cos.is_nan() || cos <= 0.0 {
+                continue;
+            }
+            let (hit, _) = self.first_two_hits(pos, -v / r, 0.0, None);
+            if hit.is_some_and(|h| h.t < r - tol) {
+                continue;
+            }
+            e += intensity * cos / (r * r);
+        }
+        e
     }
 }
 

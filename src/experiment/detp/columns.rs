@@ -20,6 +20,20 @@ pub const TRACE_S: Column = Column::value(
     Class::Timing,
     "seconds to generate the lines or trace the photons, summed over replicas",
 );
+/// Seconds the edge remedy took.
+pub const EDGE_S: Column = Column::value(
+    "edge_s",
+    "s",
+    Class::Timing,
+    "seconds spent on detp.edge's remedy, summed over replicas: the per-disc radii (clamp-radius, once per point) or cutting every segment at its first impact (first-hit); 0 for the paper's method",
+);
+/// Mean disc radius over d.
+pub const EDGE_RADIUS: Column = Column::value(
+    "edge_radius",
+    "1",
+    Class::Measured,
+    "mean disc radius over d across the points (1 unless detp.edge = \"clamp-radius\" shrinks discs near other surfaces)",
+);
 /// An engine's counted tests.
 pub const TESTS: Column = Column::value(
     "tests_{}",
@@ -154,6 +168,8 @@ pub const MAIN: &[Column] = &[
     SEGMENTS,
     POINTS,
     TRACE_S,
+    EDGE_S,
+    EDGE_RADIUS,
     TESTS,
     TESTS_THEORY,
     RAY_SPHERE_TESTS,
@@ -282,6 +298,14 @@ pub const POINT_IRRADIANCE_EXACT: Column = Column::value(
     "the scene's closed form at the point (NaN without one)",
 );
 
+/// The point's disc radius.
+pub const POINT_DISC_RADIUS: Column = Column::value(
+    "disc_radius",
+    "length",
+    Class::Measured,
+    "the point's disc radius: d, or with detp.edge = \"clamp-radius\" its own radius (distance to the nearest other surface, clamped to [edge_min_radius·d, d]); its sum is divided by π·disc_radius²",
+);
+
 /// `NAME.points.csv`.
 pub const POINTS_TABLE: &[Column] = &[
     SAMPLE,
@@ -291,6 +315,7 @@ pub const POINTS_TABLE: &[Column] = &[
     NX,
     NY,
     NZ,
+    POINT_DISC_RADIUS,
     POINT_IRRADIANCE_MEAN,
     POINT_IRRADIANCE_SE,
     POINT_IRRADIANCE_EXACT,

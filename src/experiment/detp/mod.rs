@@ -63,6 +63,8 @@ pub(crate) struct RaySet {
     pub(crate) rays_in_root: u64,
     /// Seconds to generate or trace them.
     pub(crate) trace_s: f64,
+    /// Seconds spent applying `detp.edge` to them (first-hit).
+    pub(crate) edge_s: f64,
 }
 
 /// The sample points of a point (shared by its replicas) with their exact irradiance where known.
@@ -70,6 +72,8 @@ pub(crate) struct PointSet {
     pub(crate) discs: Discs,
     /// Exact irradiance per disc, NaN where the source has none.
     pub(crate) exact: Vec<f64>,
+    /// Seconds spent applying `detp.edge` to the discs (clamp-radius).
+    pub(crate) edge_s: f64,
 }
 
 /// Sample points: uniform in the ball (drawn once per point: all replicas share them, only the rays
@@ -107,7 +111,11 @@ pub(crate) fn points(cfg: &DetpConfig, point: u64) -> Result<PointSet, Error> {
         .iter()
         .map(|&c| lines::exact(cfg.photons, c, cfg.disc_radius))
         .collect();
-    Ok(PointSet { discs, exact })
+    Ok(PointSet {
+        discs,
+        exact,
+        edge_s: 0.0,
+    })
 }
 
 /// The rays of one replica.
@@ -186,12 +194,11 @@ pub fn run_point(
 ) -> Result<PointOutput<DetpTables>, Error> {
     let pts = points(cfg, point)?;
     let discs = &pts.discs;
-    let d = cfg.disc_radius;
-    let area = std::f64::consts::PI * d * d;
     let mut engines: Vec<Box<dyn engines::Engine>> =
         cfg.engines.iter().map(|&e| engines::engine(e)).collect();
     let (mut law_radius, mut root_radius, mut mean_segment_watts) = (1.0, 1.0, 0.0);
     let (mut segments, mut rays_in_root, mut trace_s) = (0u64, 0u64, 0.0);
+    let mut edge_s = pts.edge_s;
     let (mut mismatches, mut bf_checked) = (0u64, 0u64);
     let mut irr: Vec<Vec<f64>> = Vec::with_capacity(cfg.replicas as usize);
     for replica in 0..cfg.replicas {
@@ -202,6 +209,7 @@ pub fn run_point(
         segments += rays.store.len() as u64;
         rays_in_root += rays.rays_in_root;
         trace_s += rays.trace_s;
+        edge_s += rays.edge_s;
         if !rays.store.is_empty() {
             mean_segment_watts = rays
                 .store
@@ -221,7 +229,13 @@ pub fn run_point(
         let a = agree(cfg, point, replica, &rays, &pts, &sums);
         mismatches += a.mismatches;
         bf_checked += a.bf_checked;
-        irr.push(a.sums.iter().map(|&s| scale.watts(s) / area).collect());
+        irr.push(
+            a.sums
+                .iter()
+                .enumerate()
+                .map(|(i, &s)| discs.irradiance(i, scale.watts(s)))
+                .collect(),
+        );
         progress(cfg.photons);
     }
 
@@ -236,7 +250,13 @@ pub fn run_point(
     let mut row = Row::default();
     row.put(&col::SEGMENTS, segments)
         .put(&col::POINTS, discs.len())
-        .put(&col::TRACE_S, trace_s);
+        .put(&col::TRACE_S, trace_s)
+        .put(&col::EDGE_S, edge_s)
+        .put(
+            &col::EDGE_RADIUS,
+            (0..discs.len()).map(|i| discs.radius_of(i)).sum::<f64>()
+                / (discs.len().max(1) as f64 * discs.radius),
+        );
     for e in &engines {
         e.write(&pooled, &mut row);
     }
@@ -301,7 +321,7 @@ pub fn run_point(
             let v: Vec<f64> = irr.iter().map(|e| e[i]).collect();
             let mut est = engines::per_replica(&v);
             if irr.len() == 1 {
-                est.se = (est.mean.max(0.0) * mean_segment_watts / area).sqrt();
+                est.se = (est.mean.max(0.0) * mean_segment_watts / discs.area(i)).sqrt();
             }
             let (c, nn) = (discs.centers[i], discs.normals[i]);
             let mut r = Row::default();
@@ -312,6 +332,7 @@ pub fn run_point(
                 .put(&col::NX, nn.x)
                 .put(&col::NY, nn.y)
                 .put(&col::NZ, nn.z)
+                .put(&col::POINT_DISC_RADIUS, discs.radius_of(i))
                 .put(&col::POINT_IRRADIANCE_MEAN, est.mean)
                 .put(&col::POINT_IRRADIANCE_SE, est.se)
                 .put(&col::POINT_IRRADIANCE_EXACT, pts.exact[i]);

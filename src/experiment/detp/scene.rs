@@ -7,6 +7,7 @@ use std::time::Instant;
 use super::spec::{DetpConfig, Points};
 use super::{PointSet, RaySet};
 use crate::detp::disc::Discs;
+use crate::detp::edge::{clamped_radii, clip_to_first_hit, EdgeMode};
 use crate::detp::photon::trace_photons;
 use crate::detp::sphere_cache::root_sphere;
 use crate::detp::surface_points::surface_points;
@@ -26,14 +27,24 @@ pub(super) fn points(cfg: &DetpConfig, point: u64, scene: &Scene) -> Result<Poin
         Points::File(p) => (p.centers.clone(), p.normals.clone()),
         Points::Ball(_) => unreachable!("the spec check gives a scene surface or file points"),
     };
-    let discs = Discs::new(centers, normals, cfg.disc_radius).map_err(Error::internal)?;
+    let mut discs = Discs::new(centers, normals, cfg.disc_radius).map_err(Error::internal)?;
+    let start = Instant::now();
+    if let EdgeMode::ClampRadius { min } = cfg.edge {
+        let radii = clamped_radii(scene, &discs.centers, &discs.normals, discs.radius, min);
+        discs = discs.with_radii(radii).map_err(Error::internal)?;
+    }
+    let edge_s = start.elapsed().as_secs_f64();
     let exact = discs
         .centers
         .iter()
         .zip(&discs.normals)
         .map(|(&p, &n)| scene.exact_irradiance(p, n).unwrap_or(f64::NAN))
         .collect();
-    Ok(PointSet { discs, exact })
+    Ok(PointSet {
+        discs,
+        exact,
+        edge_s,
+    })
 }
 
 /// The photons of one replica, and a root sphere that holds the scene and every disc.
@@ -45,8 +56,13 @@ pub(super) fn photons(
     discs: &Discs,
 ) -> RaySet {
     let start = Instant::now();
-    let store = trace_photons(scene, cfg.photons, hash_key(&[cfg.seed, point, replica]));
+    let mut store = trace_photons(scene, cfg.photons, hash_key(&[cfg.seed, point, replica]));
     let trace_s = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    if let EdgeMode::FirstHit { gap } = cfg.edge {
+        clip_to_first_hit(&mut store, gap * cfg.disc_radius);
+    }
+    let edge_s = start.elapsed().as_secs_f64();
     let (b, d) = (scene.bounds(), discs.bounds_all());
     let root = root_sphere(&Aabb::new(b.lo.min(d.lo), b.hi.max(d.hi)));
     let n = store.len() as u64;
@@ -57,5 +73,6 @@ pub(super) fn photons(
         law_ball: None,
         rays_in_root: n,
         trace_s,
+        edge_s,
     }
 }

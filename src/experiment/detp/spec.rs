@@ -14,6 +14,7 @@ use serde::{de::Error as _, Deserialize, Deserializer, Serialize};
 
 use glam::DVec3;
 
+use crate::detp::edge::EdgeMode;
 use crate::detp::order::Order;
 use crate::detp::quasi_static::IndexKind;
 use crate::detp::sphere_cache::{ListMode, SphereCacheParams};
@@ -131,7 +132,24 @@ pub struct RawDetp {
     /// Memory the ray store and engines may take, GiB.
     #[serde(default = "default_budget", deserialize_with = "positive")]
     pub memory_budget_gib: f64,
+    /// Where a disc reaches past an edge: `"paper"` (the paper's method, default),
+    /// `"clamp-radius"` (per-disc radius limited by the nearest other surface) or `"first-hit"`
+    /// (crossings counted up to `edge_gap`·d beyond the first impact). See docs/hard-cases.md.
+    #[serde(default)]
+    pub edge: EdgeChoice,
+    /// `"clamp-radius"`: the smallest disc radius, as a fraction of d (in (0, 1]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub edge_min_radius: Option<f64>,
+    /// `"first-hit"`: how far beyond the first impact a crossing still counts, as a fraction of d
+    /// (≥ 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub edge_gap: Option<f64>,
 }
+
+/// Default `detp.edge_min_radius`.
+pub const EDGE_MIN_RADIUS: f64 = 0.25;
+/// Default `detp.edge_gap`.
+pub const EDGE_GAP: f64 = 0.05;
 
 use crate::choice;
 
@@ -167,6 +185,11 @@ choice!(
 choice!(
     /// Photon-map filter.
     FilterChoice { Cone => "cone", Disc => "disc" } default Cone
+);
+
+choice!(
+    /// `detp.edge`: the paper's method or a remedy at edges.
+    EdgeChoice { Paper => "paper", ClampRadius => "clamp-radius", FirstHit => "first-hit" } default Paper
 );
 
 choice!(
@@ -278,6 +301,52 @@ fn bits<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
     }
 }
 
+/// `detp.edge` and its parameter, checked: a remedy needs a scene, and each parameter belongs to
+/// its own mode.
+fn edge_mode(d: &RawDetp, rays: &Rays) -> Result<EdgeMode, ConfigError> {
+    if d.edge != EdgeChoice::Paper && matches!(rays, Rays::Lines) {
+        return refuse(
+            "detp.edge",
+            format!(
+                "\"{}\" needs surfaces: lines through the unit ball have no edges (use detp.source = \"scene\")",
+                d.edge.as_str()
+            ),
+        );
+    }
+    if d.edge_min_radius.is_some() && d.edge != EdgeChoice::ClampRadius {
+        return refuse(
+            "detp.edge_min_radius",
+            "belongs to detp.edge = \"clamp-radius\"",
+        );
+    }
+    if d.edge_gap.is_some() && d.edge != EdgeChoice::FirstHit {
+        return refuse("detp.edge_gap", "belongs to detp.edge = \"first-hit\"");
+    }
+    Ok(match d.edge {
+        EdgeChoice::Paper => EdgeMode::Paper,
+        EdgeChoice::ClampRadius => {
+            let min = d.edge_min_radius.unwrap_or(EDGE_MIN_RADIUS);
+            if !(min > 0.0 && min <= 1.0) {
+                return refuse(
+                    "detp.edge_min_radius",
+                    format!("got {min}, expected a fraction of d in (0, 1]"),
+                );
+            }
+            EdgeMode::ClampRadius { min }
+        }
+        EdgeChoice::FirstHit => {
+            let gap = d.edge_gap.unwrap_or(EDGE_GAP);
+            if !(gap.is_finite() && gap >= 0.0) {
+                return refuse(
+                    "detp.edge_gap",
+                    format!("got {gap}, expected a fraction of d ≥ 0"),
+                );
+            }
+            EdgeMode::FirstHit { gap }
+        }
+    })
+}
+
 /// The rays of a point.
 #[derive(Clone, Debug)]
 pub enum Rays {
@@ -335,6 +404,8 @@ pub struct DetpConfig {
     pub memory_budget_gib: f64,
     /// Whether the spec gave `detp.point_spacing` (else surface points are 2d apart).
     pub spacing_given: bool,
+    /// `detp.edge` with its parameter.
+    pub edge: EdgeMode,
 }
 
 impl DetpConfig {
@@ -623,6 +694,7 @@ impl DetpConfig {
                 format!("d = {disc_radius:e} is larger than {}: a tangent disc must be small against the scene", reach.1),
             );
         }
+        let edge = edge_mode(d, &rays)?;
         let cfg = Self {
             seed,
             rays,
@@ -659,6 +731,7 @@ impl DetpConfig {
             write_points: d.write_points,
             memory_budget_gib: d.memory_budget_gib,
             spacing_given: d.point_spacing.is_some(),
+            edge,
         };
         if let Some(cells) = cfg.grid_cells() {
             if cells >= (1u64 << 31) as f64 {
