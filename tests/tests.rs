@@ -4,6 +4,7 @@ mod bad_input;
 mod bench;
 mod cli;
 mod common;
+mod detp_edge;
 mod detp_engines;
 mod detp_runs;
 mod lt;

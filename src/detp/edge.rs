@@ -26,7 +26,10 @@
 //!   enters a solid dies at its surface; the gap keeps the paper's concave-surface allowance for
 //!   surfaces that sag at most gap·d below their tangent plane over the disc. The disc keeps radius
 //!   d and area πd², so the part of it inside a solid now gathers nothing: beside a lit face the
-//!   estimate is low by the fraction of the disc that is covered.
+//!   estimate is low by the fraction of the disc that is covered;
+//! - [`EdgeMode::ClampFirstHit`]: both. The clamped disc lies in free space, so cutting at the first
+//!   impact removes only light that passed through something above it (an open sheet, a box a point
+//!   lies under), which no clamp can see when it is farther than d.
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -51,6 +54,31 @@ pub enum EdgeMode {
         /// The allowance beyond the first impact, over d.
         gap: f64,
     },
+    /// Both: clamped radii and crossings cut at the first impact.
+    ClampFirstHit {
+        /// r_min / d.
+        min: f64,
+        /// The allowance beyond the first impact, over d.
+        gap: f64,
+    },
+}
+
+impl EdgeMode {
+    /// r_min / d when discs get their own radius.
+    pub fn clamp_min(self) -> Option<f64> {
+        match self {
+            EdgeMode::ClampRadius { min } | EdgeMode::ClampFirstHit { min, .. } => Some(min),
+            _ => None,
+        }
+    }
+
+    /// The first-hit allowance over d when segments are cut.
+    pub fn first_hit_gap(self) -> Option<f64> {
+        match self {
+            EdgeMode::FirstHit { gap } | EdgeMode::ClampFirstHit { gap, .. } => Some(gap),
+            _ => None,
+        }
+    }
 }
 
 /// The radius of each disc under [`EdgeMode::ClampRadius`]: the distance from centre `c[i]` to the

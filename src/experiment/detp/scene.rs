@@ -7,7 +7,7 @@ use std::time::Instant;
 use super::spec::{DetpConfig, Points};
 use super::{PointSet, RaySet};
 use crate::detp::disc::Discs;
-use crate::detp::edge::{clamped_radii, clip_to_first_hit, EdgeMode};
+use crate::detp::edge::{clamped_radii, clip_to_first_hit};
 use crate::detp::photon::trace_photons;
 use crate::detp::sphere_cache::root_sphere;
 use crate::detp::surface_points::surface_points;
@@ -29,7 +29,7 @@ pub(super) fn points(cfg: &DetpConfig, point: u64, scene: &Scene) -> Result<Poin
     };
     let mut discs = Discs::new(centers, normals, cfg.disc_radius).map_err(Error::internal)?;
     let start = Instant::now();
-    if let EdgeMode::ClampRadius { min } = cfg.edge {
+    if let Some(min) = cfg.edge.clamp_min() {
         let radii = clamped_radii(scene, &discs.centers, &discs.normals, discs.radius, min);
         discs = discs.with_radii(radii).map_err(Error::internal)?;
     }
@@ -59,7 +59,7 @@ pub(super) fn photons(
     let mut store = trace_photons(scene, cfg.photons, hash_key(&[cfg.seed, point, replica]));
     let trace_s = start.elapsed().as_secs_f64();
     let start = Instant::now();
-    if let EdgeMode::FirstHit { gap } = cfg.edge {
+    if let Some(gap) = cfg.edge.first_hit_gap() {
         clip_to_first_hit(&mut store, gap * cfg.disc_radius);
     }
     let edge_s = start.elapsed().as_secs_f64();

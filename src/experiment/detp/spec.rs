@@ -134,14 +134,16 @@ pub struct RawDetp {
     pub memory_budget_gib: f64,
     /// Where a disc reaches past an edge: `"paper"` (the paper's method, default),
     /// `"clamp-radius"` (per-disc radius limited by the nearest other surface) or `"first-hit"`
-    /// (crossings counted up to `edge_gap`·d beyond the first impact). See docs/hard-cases.md.
+    /// (crossings counted up to `edge_gap`·d beyond the first impact) or `"clamp-first-hit"` (both).
+    /// See docs/hard-cases.md.
     #[serde(default)]
     pub edge: EdgeChoice,
-    /// `"clamp-radius"`: the smallest disc radius, as a fraction of d (in (0, 1]).
+    /// `"clamp-radius"`, `"clamp-first-hit"`: the smallest disc radius, as a fraction of d (in
+    /// (0, 1]; default 0.25).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub edge_min_radius: Option<f64>,
-    /// `"first-hit"`: how far beyond the first impact a crossing still counts, as a fraction of d
-    /// (≥ 0).
+    /// `"first-hit"`, `"clamp-first-hit"`: how far beyond the first impact a crossing still counts,
+    /// as a fraction of d (≥ 0; default 0.05).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub edge_gap: Option<f64>,
 }
@@ -189,7 +191,12 @@ choice!(
 
 choice!(
     /// `detp.edge`: the paper's method or a remedy at edges.
-    EdgeChoice { Paper => "paper", ClampRadius => "clamp-radius", FirstHit => "first-hit" } default Paper
+    EdgeChoice {
+        Paper => "paper",
+        ClampRadius => "clamp-radius",
+        FirstHit => "first-hit",
+        ClampFirstHit => "clamp-first-hit",
+    } default Paper
 );
 
 choice!(
@@ -313,37 +320,39 @@ fn edge_mode(d: &RawDetp, rays: &Rays) -> Result<EdgeMode, ConfigError> {
             ),
         );
     }
-    if d.edge_min_radius.is_some() && d.edge != EdgeChoice::ClampRadius {
+    let clamps = matches!(d.edge, EdgeChoice::ClampRadius | EdgeChoice::ClampFirstHit);
+    let cuts = matches!(d.edge, EdgeChoice::FirstHit | EdgeChoice::ClampFirstHit);
+    if d.edge_min_radius.is_some() && !clamps {
         return refuse(
             "detp.edge_min_radius",
-            "belongs to detp.edge = \"clamp-radius\"",
+            "belongs to detp.edge = \"clamp-radius\" or \"clamp-first-hit\"",
         );
     }
-    if d.edge_gap.is_some() && d.edge != EdgeChoice::FirstHit {
-        return refuse("detp.edge_gap", "belongs to detp.edge = \"first-hit\"");
+    if d.edge_gap.is_some() && !cuts {
+        return refuse(
+            "detp.edge_gap",
+            "belongs to detp.edge = \"first-hit\" or \"clamp-first-hit\"",
+        );
+    }
+    let min = d.edge_min_radius.unwrap_or(EDGE_MIN_RADIUS);
+    if !(min > 0.0 && min <= 1.0) {
+        return refuse(
+            "detp.edge_min_radius",
+            format!("got {min}, expected a fraction of d in (0, 1]"),
+        );
+    }
+    let gap = d.edge_gap.unwrap_or(EDGE_GAP);
+    if !(gap.is_finite() && gap >= 0.0) {
+        return refuse(
+            "detp.edge_gap",
+            format!("got {gap}, expected a fraction of d ≥ 0"),
+        );
     }
     Ok(match d.edge {
         EdgeChoice::Paper => EdgeMode::Paper,
-        EdgeChoice::ClampRadius => {
-            let min = d.edge_min_radius.unwrap_or(EDGE_MIN_RADIUS);
-            if !(min > 0.0 && min <= 1.0) {
-                return refuse(
-                    "detp.edge_min_radius",
-                    format!("got {min}, expected a fraction of d in (0, 1]"),
-                );
-            }
-            EdgeMode::ClampRadius { min }
-        }
-        EdgeChoice::FirstHit => {
-            let gap = d.edge_gap.unwrap_or(EDGE_GAP);
-            if !(gap.is_finite() && gap >= 0.0) {
-                return refuse(
-                    "detp.edge_gap",
-                    format!("got {gap}, expected a fraction of d ≥ 0"),
-                );
-            }
-            EdgeMode::FirstHit { gap }
-        }
+        EdgeChoice::ClampRadius => EdgeMode::ClampRadius { min },
+        EdgeChoice::FirstHit => EdgeMode::FirstHit { gap },
+        EdgeChoice::ClampFirstHit => EdgeMode::ClampFirstHit { min, gap },
     })
 }
 
