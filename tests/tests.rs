@@ -14,5 +14,6 @@ mod quasi_static;
 mod render;
 mod reproducible;
 mod resume;
+mod reference;
 mod sanity;
 mod slurm;

@@ -217,3 +217,87 @@ pub fn read_points_csv(path: &Path) -> Result<(Vec<DVec3>, Vec<DVec3>), InputErr
     }
     Ok((pts, nrm))
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+
+    /// A 4 × 4 floor, a cube's bottom face lying on it (coplanar, facing down), a box open at the
+    /// bottom standing on it elsewhere (faces wound outward), and a light above.
+    const SCENE: &str = r#"
+[[surface]]
+name = "floor"
+kind = "quad"
+vertices = [[-2, 0, -2], [-2, 0, 2], [2, 0, 2], [2, 0, -2]]
+albedo = 0.5
+[[surface]]
+name = "cube bottom"
+kind = "quad"
+vertices = [[-1.5, 0, -1.5], [-0.5, 0, -1.5], [-0.5, 0, -0.5], [-1.5, 0, -0.5]]
+albedo = 0.5
+[[surface]]
+name = "open box top"
+kind = "quad"
+vertices = [[0.5, 1, 0.5], [0.5, 1, 1.5], [1.5, 1, 1.5], [1.5, 1, 0.5]]
+albedo = 0.5
+[[surface]]
+name = "open box side"
+kind = "quad"
+vertices = [[0.5, 0, 0.5], [0.5, 1, 0.5], [1.5, 1, 0.5], [1.5, 0, 0.5]]
+albedo = 0.5
+[[surface]]
+name = "open box side"
+kind = "quad"
+vertices = [[0.5, 0, 1.5], [1.5, 0, 1.5], [1.5, 1, 1.5], [0.5, 1, 1.5]]
+albedo = 0.5
+[[surface]]
+name = "open box side"
+kind = "quad"
+vertices = [[0.5, 0, 0.5], [0.5, 0, 1.5], [0.5, 1, 1.5], [0.5, 1, 0.5]]
+albedo = 0.5
+[[surface]]
+name = "open box side"
+kind = "quad"
+vertices = [[1.5, 0, 0.5], [1.5, 1, 0.5], [1.5, 1, 1.5], [1.5, 0, 1.5]]
+albedo = 0.5
+[[light]]
+kind = "point"
+position = [0, 3, 0]
+power = 10.0
+"#;
+
+    #[test]
+    fn floor_under_a_box_or_in_contact_with_a_face_is_covered_and_open_floor_is_not() {
+        let s = Scene::parse(SCENE, Path::new("t.toml")).expect("scene");
+        let (all, _) = surface_points(&s, 0.25, 0);
+        let (open, normals, covered) = open_surface_points(&s, 0.25);
+        let floor_under = |p: &DVec3, lo: f64, hi: f64, zlo: f64, zhi: f64| {
+            p.y == 0.0 && p.x > lo && p.x < hi && p.z > zlo && p.z < zhi
+        };
+        // Floor under the cube (contact with its bottom face) and under the open box.
+        let under_cube = |p: &DVec3| floor_under(p, -1.5, -0.5, -1.5, -0.5);
+        let under_box = |p: &DVec3| floor_under(p, 0.5, 1.5, 0.5, 1.5);
+        assert!(all.iter().any(under_cube) && all.iter().any(under_box));
+        assert!(!open.iter().any(under_cube), "floor in contact with the cube's bottom");
+        assert!(!open.iter().any(under_box), "floor inside the open box");
+        // The open box's top faces up (its points stay); its sides face out (their points stay).
+        assert!(open.iter().any(|p| p.y == 1.0));
+        assert!(open.iter().any(|p| p.x == 1.5 && p.y > 0.0));
+        // Open floor stays, and nothing else was dropped: the cube bottom's own points (facing down,
+        // into the floor) are covered too.
+        let floor_open = open
+            .iter()
+            .zip(&normals)
+            .filter(|(p, n)| p.y == 0.0 && n.y > 0.0)
+            .count();
+        assert!(floor_open > 100, "{floor_open}");
+        assert_eq!(open.len() as u64 + covered, all.len() as u64);
+        let expected = all
+            .iter()
+            .filter(|p| under_cube(p) || under_box(p))
+            .count() as u64;
+        assert_eq!(covered, expected, "only the points under the two boxes");
+    }
+}
