@@ -94,7 +94,14 @@ fn engines_agree_under_every_mode_and_first_hit_stops_the_leak() {
         let perm = permutation(&discs.centers, Order::Hilbert, 10);
         let root = root_sphere(&s.bounds());
         let mut acc = vec![0; discs.len()];
-        run(st, discs, &perm, root, &SphereCacheParams::default(), &mut acc);
+        run(
+            st,
+            discs,
+            &perm,
+            root,
+            &SphereCacheParams::default(),
+            &mut acc,
+        );
         assert_eq!(acc, want, "{label}: sphere cache");
         for ix in [
             Box::new(Octree::build(discs, 8, d)) as Box<dyn DiscIndex>,
@@ -112,7 +119,10 @@ fn engines_agree_under_every_mode_and_first_hit_stops_the_leak() {
             .sum();
         match label {
             "paper" | "clamp-radius" => {
-                assert!(under > 0, "{label}: the second-intersection rule lets light through");
+                assert!(
+                    under > 0,
+                    "{label}: the second-intersection rule lets light through"
+                );
                 under_paper += under;
             }
             _ => assert_eq!(under, 0, "{label}: light under the box"),

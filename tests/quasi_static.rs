@@ -93,3 +93,59 @@ fn overlapping_objects_are_a_counted_warning() {
     let m = h.iter().position(|c| c == "full_mismatch").unwrap();
     assert_eq!(rows[0][m], "0");
 }
+
+/// Replicas are independent runs of every frame: replica 0 is the run without replicas (its frames
+/// are the same rows), replica 1 traces other photons, every frame of both is exact, and the
+/// per-frame estimates' sample count is the number of replicas' frames.
+#[test]
+fn replicas_are_independent_runs_and_replica_zero_is_the_single_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = spec(dir.path(), "qs");
+    let run = |out: &str, extra: &[&str]| {
+        let out = dir.path().join(out);
+        raycost()
+            .args(["run", s.to_str().unwrap(), "--quiet", "--out"])
+            .arg(&out)
+            .args(extra)
+            .assert()
+            .success();
+        out
+    };
+    let one = run("one", &[]);
+    let two = run("two", &["--set", "detp.replicas=2"]);
+    let (h, rows) = read_csv(&two.join("qs/qs.csv"));
+    let col = |n: &str| rows[0][h.iter().position(|c| c == n).unwrap()].clone();
+    assert_eq!(col("full_mismatch"), "0");
+    assert_eq!(col("full_checked"), "22", "11 checked frames per replica");
+    assert_eq!(col("retraced_rays_n"), "22", "11 frames per replica");
+    let (fh, f1) = read_csv(&one.join("qs/qs.frames.csv"));
+    let (fh2, f2) = read_csv(&two.join("qs/qs.frames.csv"));
+    assert_eq!(fh, fh2);
+    assert_eq!(f2.len(), 24, "12 frames per replica");
+    let measured: Vec<usize> = [
+        "replica",
+        "frame",
+        "retraced_rays",
+        "segments_added",
+        "static_disc_tests",
+    ]
+    .iter()
+    .map(|n| {
+        fh.iter()
+            .position(|c| c == n)
+            .unwrap_or_else(|| panic!("{n}"))
+    })
+    .collect();
+    let pick = |r: &Vec<String>| measured.iter().map(|&i| r[i].clone()).collect::<Vec<_>>();
+    let (r0, r1): (Vec<_>, Vec<_>) = f2.iter().partition(|r| r[measured[0]] == "0");
+    assert_eq!(
+        f1.iter().map(pick).collect::<Vec<_>>(),
+        r0.iter().map(|r| pick(r)).collect::<Vec<_>>(),
+        "replica 0 = the run without replicas"
+    );
+    assert_ne!(
+        r0.iter().map(|r| pick(r)[2..].to_vec()).collect::<Vec<_>>(),
+        r1.iter().map(|r| pick(r)[2..].to_vec()).collect::<Vec<_>>(),
+        "replica 1 traces other photons"
+    );
+}

@@ -274,7 +274,11 @@ engines = ["disc-index"]
         .output()
         .expect("runs");
     let text = String::from_utf8_lossy(&o.stdout);
-    assert!(o.status.success(), "{text}\n{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        o.status.success(),
+        "{text}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let (w, h, px) = read_grey_png(&out);
     assert_eq!(w, 3 * 48);
     let line = text

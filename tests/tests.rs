@@ -12,6 +12,7 @@ mod merge;
 mod never_panics;
 mod oracle;
 mod quasi_static;
+mod reference;
 mod render;
 mod reproducible;
 mod resume;

@@ -197,7 +197,10 @@ mod tests {
                 }
             }
             let d = distance_to_triangle(p, &t);
-            assert!(d <= m + 1e-12 && m - d < 3e-3, "{p}: exact {d}, sampled {m}");
+            assert!(
+                d <= m + 1e-12 && m - d < 3e-3,
+                "{p}: exact {d}, sampled {m}"
+            );
         }
     }
 

@@ -11,6 +11,7 @@ pub mod aff;
 pub mod bvh;
 pub mod format;
 pub mod motion;
+pub mod reference;
 pub mod shapes;
 pub mod spline;
 
@@ -27,6 +28,10 @@ use crate::geom::Aabb;
 use crate::toml_text::{find_key, line_col};
 
 pub use crate::error::InputError;
+
+/// Reflections per light path at most, for the photon tracer and the reference alike (albedos below
+/// 1 make longer paths vanishingly rare; the photon tracer counts the cut ones).
+pub const MAX_BOUNCES: u16 = 64;
 
 /// Material and emission of one surface.
 #[derive(Clone, Debug, PartialEq)]
@@ -741,6 +746,51 @@ impl Scene {
             Prim::Ball(i) => self.balls[i as usize].surface,
         };
         (Some(Hit { t, prim, surface }), best.second.0)
+    }
+
+    /// The nearest hit with t > t_min, skipping triangle `skip`: the first hit of
+    /// [`Scene::first_two_hits`] for the same ray, found without the second (cheaper: a path tracer
+    /// needs only this).
+    pub fn first_hit(&self, o: DVec3, d: DVec3, t_min: f64, skip: Option<Prim>) -> Option<Hit> {
+        let skip_tri = match skip {
+            Some(Prim::Triangle(i)) => i,
+            _ => u32::MAX,
+        };
+        let n = self.n_static_tris;
+        let (mut t, mut id) = self
+            .bvh
+            .nearest(&self.triangles[..n], o, d, t_min, skip_tri);
+        if !self.dyn_bvh.is_empty() {
+            let (td, idd) = self.dyn_bvh.nearest(
+                &self.triangles[n..],
+                o,
+                d,
+                t_min,
+                skip_tri.wrapping_sub(n as u32),
+            );
+            if td < t {
+                (t, id) = (td, idd + n as u32);
+            }
+        }
+        let mut prim = Prim::Triangle(id);
+        for (i, b) in self.balls.iter().enumerate() {
+            if let Some((t0, t1)) = b.roots(o, d) {
+                for r in [t0, t1] {
+                    if r > t_min && r < t {
+                        t = r;
+                        prim = Prim::Ball(i as u32);
+                    }
+                }
+            }
+        }
+        if !t.is_finite() {
+            return None;
+        }
+        let surface = match prim {
+            Prim::Triangle(i) => self.triangles[i as usize].surface,
+            Prim::Ball(i) => self.balls[i as usize].surface,
+        };
+        Some(Hit { t, prim, surface })
     }
 
     /// Calls `f` with every triangle (static or dynamic, by its index in `triangles`) that may

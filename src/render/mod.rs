@@ -303,8 +303,14 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
                 edge_name(mode),
                 view.discs.len()
             )?;
-            shown.push(Frame { b: paper, diff: None });
-            shown.push(Frame { b: remedy, diff: None });
+            shown.push(Frame {
+                b: paper,
+                diff: None,
+            });
+            shown.push(Frame {
+                b: remedy,
+                diff: None,
+            });
             shown.push(Frame { b: dif, diff: None });
             continue;
         }
@@ -322,7 +328,11 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
     let exposure = tone::exposure(
         shown
             .iter()
-            .take(if o.compare_edge.is_some() { 2 } else { usize::MAX })
+            .take(if o.compare_edge.is_some() {
+                2
+            } else {
+                usize::MAX
+            })
             .map(|f| f.b.as_slice()),
     );
     let mut images: Vec<Vec<u8>> = shown
@@ -454,8 +464,12 @@ fn with_spec_params(mode: EdgeMode, spec: EdgeMode) -> EdgeMode {
     let min = spec.clamp_min();
     let gap = spec.first_hit_gap();
     match mode {
-        EdgeMode::ClampRadius { min: m } => EdgeMode::ClampRadius { min: min.unwrap_or(m) },
-        EdgeMode::FirstHit { gap: g } => EdgeMode::FirstHit { gap: gap.unwrap_or(g) },
+        EdgeMode::ClampRadius { min: m } => EdgeMode::ClampRadius {
+            min: min.unwrap_or(m),
+        },
+        EdgeMode::FirstHit { gap: g } => EdgeMode::FirstHit {
+            gap: gap.unwrap_or(g),
+        },
         EdgeMode::ClampFirstHit { min: m, gap: g } => EdgeMode::ClampFirstHit {
             min: min.unwrap_or(m),
             gap: gap.unwrap_or(g),
@@ -562,9 +576,9 @@ fn start(
     seed: Option<u64>,
 ) -> anyhow::Result<(QuasiStatic, crate::detp::quasi_static::FrameStats)> {
     match seed {
-        None => Ok(eq::start(cfg)),
+        None => Ok(eq::start(cfg, 0)),
         Some(s) => {
-            let mut p = eq::params(cfg, 1.0);
+            let mut p = eq::params(cfg, 1.0, 0);
             p.seed = s;
             Ok(QuasiStatic::start(cfg.scene.clone(), p))
         }

@@ -155,6 +155,50 @@ pub const IRRADIANCE_BIAS: Column = Column::estimate(
     "W/m²",
     "DETP's mean error against the exact irradiance, one sample per replica",
 );
+/// Reference: mean irradiance over the points.
+pub const REFERENCE_IRRADIANCE: Column = Column::estimate(
+    "reference_irradiance",
+    "W/m²",
+    "engine reference: its irradiance averaged over the sample points; SE from the points' own SEs (√Σse²/n), n = points",
+);
+/// Reference: mean SE.
+pub const REFERENCE_MEAN_SE: Column = Column::value(
+    "reference_mean_se",
+    "W/m²",
+    Class::Measured,
+    "engine reference: the mean over the sample points of its standard error (detp.reference_samples paths each)",
+);
+/// DETP against the reference: mean error.
+pub const IRRADIANCE_REF_BIAS: Column = Column::estimate(
+    "irradiance_ref_bias",
+    "W/m²",
+    "DETP's mean error against engine reference over the points, Σ(E_i − R_i)/n; SE √Σ(se_E,i² + se_R,i²)/n (Monte Carlo noise of both; the point set is fixed)",
+);
+/// DETP against the reference: RMSE.
+pub const IRRADIANCE_REF_RMSE: Column = Column::estimate(
+    "irradiance_ref_rmse",
+    "W/m²",
+    "DETP's root-mean-square error against the true irradiance, estimated against engine reference with the reference's variance subtracted: √max(0, Σ((E_i − R_i)² − se_R,i²)/n); SE by the delta method from Var((E_i − R_i)²) ≈ 4b_i²s_i² + 2s_i⁴",
+);
+/// Photon map against the reference: mean error.
+pub const PHOTON_MAP_REF_BIAS: Column = Column::estimate(
+    "photon_map_ref_bias",
+    "W/m²",
+    "photon map: mean error against engine reference, as irradiance_ref_bias (its per-point SE: across replicas, or with one replica E/√k)",
+);
+/// Photon map against the reference: RMSE.
+pub const PHOTON_MAP_REF_RMSE: Column = Column::estimate(
+    "photon_map_ref_rmse",
+    "W/m²",
+    "photon map: root-mean-square error against the true irradiance, estimated against engine reference as irradiance_ref_rmse",
+);
+/// Surface points skipped as covered.
+pub const POINTS_COVERED: Column = Column::value(
+    "points_covered",
+    "points",
+    Class::Measured,
+    "point_source = \"surface\": lattice points skipped because other geometry covers them (a surface within 10⁻⁶ of the scene's size along the normal, or every probe over the hemisphere meets the back of a surface: inside a solid)",
+);
 /// Speed.
 pub const RAYS_PER_S: Column = Column::value(
     "rays_per_s",
@@ -188,6 +232,13 @@ pub const MAIN: &[Column] = &[
     IRRADIANCE,
     IRRADIANCE_RMSE,
     IRRADIANCE_BIAS,
+    REFERENCE_IRRADIANCE,
+    REFERENCE_MEAN_SE,
+    IRRADIANCE_REF_BIAS,
+    IRRADIANCE_REF_RMSE,
+    PHOTON_MAP_REF_BIAS,
+    PHOTON_MAP_REF_RMSE,
+    POINTS_COVERED,
     RAYS_PER_S,
 ];
 
@@ -305,6 +356,20 @@ pub const POINT_DISC_RADIUS: Column = Column::value(
     Class::Measured,
     "the point's disc radius: d, or with detp.edge = \"clamp-radius\" its own radius (distance to the nearest other surface, clamped to [edge_min_radius·d, d]); its sum is divided by π·disc_radius²",
 );
+/// A baseline's estimate at the point.
+pub const POINT_BASELINE_E: Column = Column::value(
+    "{}_e",
+    "W/m²",
+    Class::Measured,
+    "a baseline engine's irradiance at the point: reference_e (path-traced, unbiased) or photon_map_e (mean over replicas)",
+);
+/// Its SE.
+pub const POINT_BASELINE_SE: Column = Column::value(
+    "{}_se",
+    "W/m²",
+    Class::Measured,
+    "its standard error: the reference's from its samples' variance; the photon map's across replicas, or with one replica E/√k",
+);
 
 /// `NAME.points.csv`.
 pub const POINTS_TABLE: &[Column] = &[
@@ -319,4 +384,6 @@ pub const POINTS_TABLE: &[Column] = &[
     POINT_IRRADIANCE_MEAN,
     POINT_IRRADIANCE_SE,
     POINT_IRRADIANCE_EXACT,
+    POINT_BASELINE_E,
+    POINT_BASELINE_SE,
 ];

@@ -7,7 +7,10 @@
 //!   n_R·Q^(2i) and Theorem 1;
 //! - `disc-index`: the discs in an octree or a grid that every segment traverses, against Theorem 1;
 //! - `brute-force`: every segment against every disc;
-//! - `photon-map`: Jensen's k-nearest-neighbour estimate over the same photons (scenes only).
+//! - `photon-map`: Jensen's k-nearest-neighbour estimate over the same photons (scenes only);
+//! - `reference`: the path-traced irradiance at every point ([`crate::lt::reference`]), the ground
+//!   truth DETP and the photon map are measured against (scenes only; computed once per point set
+//!   in a run, not per replica).
 //!
 //! The DETP engines must give the same integer sum on every disc, bit for bit; on top of that a keyed
 //! random subset of `brute_force_points` discs is re-computed by brute force. Any difference is the
@@ -27,7 +30,7 @@ mod scene;
 pub mod spec;
 
 use self::columns as col;
-use self::engines::{Law, Output, Pooled};
+use self::engines::{Law, Output, Pooled, ReferenceCache};
 pub use self::spec::DetpConfig;
 use self::spec::{DetpSpec, EngineChoice, Points};
 use super::inputs::Inputs;
@@ -74,13 +77,16 @@ pub(crate) struct PointSet {
     pub(crate) exact: Vec<f64>,
     /// Seconds spent applying `detp.edge` to the discs (clamp-radius).
     pub(crate) edge_s: f64,
+    /// Surface points: lattice points skipped because other geometry covers them (None for other
+    /// point sources).
+    pub(crate) covered: Option<u64>,
 }
 
 /// Sample points: uniform in the ball (drawn once per point: all replicas share them, only the rays
 /// change), on a scene's surfaces, or from a user's CSV.
 pub(crate) fn points(cfg: &DetpConfig, point: u64) -> Result<PointSet, Error> {
     if let Some(s) = cfg.scene() {
-        return scene::points(cfg, point, &s.scene);
+        return scene::points(cfg, &s.scene);
     }
     let (centers, normals) = match &cfg.points {
         Points::Ball(n) => {
@@ -115,6 +121,7 @@ pub(crate) fn points(cfg: &DetpConfig, point: u64) -> Result<PointSet, Error> {
         discs,
         exact,
         edge_s: 0.0,
+        covered: None,
     })
 }
 
@@ -191,11 +198,15 @@ pub fn run_point(
     cfg: &DetpConfig,
     point: u64,
     progress: &(dyn Fn(u64) + Sync),
+    refs: &ReferenceCache,
 ) -> Result<PointOutput<DetpTables>, Error> {
     let pts = points(cfg, point)?;
     let discs = &pts.discs;
-    let mut engines: Vec<Box<dyn engines::Engine>> =
-        cfg.engines.iter().map(|&e| engines::engine(e)).collect();
+    let mut engines: Vec<Box<dyn engines::Engine>> = cfg
+        .engines
+        .iter()
+        .map(|&e| engines::engine(e, refs))
+        .collect();
     let (mut law_radius, mut root_radius, mut mean_segment_watts) = (1.0, 1.0, 0.0);
     let (mut segments, mut rays_in_root, mut trace_s) = (0u64, 0u64, 0.0);
     let mut edge_s = pts.edge_s;
@@ -254,14 +265,70 @@ pub fn run_point(
         .put(&col::EDGE_S, edge_s)
         .put(
             &col::EDGE_RADIUS,
-            (0..discs.len()).map(|i| discs.radius_of(i)).sum::<f64>()
-                / (discs.len().max(1) as f64 * discs.radius),
+            (0..discs.len())
+                .map(|i| discs.radius_of(i) / discs.radius)
+                .sum::<f64>()
+                / discs.len().max(1) as f64,
         );
     for e in &engines {
         e.write(&pooled, &mut row);
     }
     row.put(&col::MISMATCHES, mismatches)
         .put(&col::BF_CHECKED, bf_checked);
+    if let Some(c) = pts.covered {
+        row.put(&col::POINTS_COVERED, c);
+    }
+
+    // DETP's estimate per disc: mean over replicas, SE across them (or, with one replica, the
+    // Poisson SE of a sum of segments of the mean segment power: √(E·w̄/πd²)).
+    let detp_points: Vec<(f64, f64)> = (0..discs.len())
+        .map(|i| {
+            let v: Vec<f64> = irr.iter().map(|e| e[i]).collect();
+            let mut est = engines::per_replica(&v);
+            if irr.len() == 1 {
+                est.se = (est.mean.max(0.0) * mean_segment_watts / discs.area(i)).sqrt();
+            }
+            (est.mean, est.se)
+        })
+        .collect();
+    // Baselines' estimates per disc, and every engine against the reference where it runs.
+    let baselines: Vec<(EngineChoice, Vec<(f64, f64)>)> = cfg
+        .engines
+        .iter()
+        .zip(&engines)
+        .filter_map(|(&c, e)| e.per_point(&pooled).map(|v| (c, v)))
+        .collect();
+    if let Some((_, refr)) = baselines
+        .iter()
+        .find(|(c, _)| *c == EngineChoice::Reference)
+    {
+        let n = refr.len().max(1) as f64;
+        let se2: f64 = refr.iter().map(|r| r.1 * r.1).sum();
+        row.put_estimate(
+            &col::REFERENCE_IRRADIANCE,
+            &crate::stats::Estimate {
+                mean: refr.iter().map(|r| r.0).sum::<f64>() / n,
+                se: se2.sqrt() / n,
+                n: refr.len() as u64,
+                clusters: refr.len() as u64,
+            },
+        )
+        .put(
+            &col::REFERENCE_MEAN_SE,
+            refr.iter().map(|r| r.1).sum::<f64>() / n,
+        );
+        let (bias, rmse) = engines::against_reference(&detp_points, refr);
+        row.put_estimate(&col::IRRADIANCE_REF_BIAS, &bias)
+            .put_estimate(&col::IRRADIANCE_REF_RMSE, &rmse);
+        if let Some((_, pm)) = baselines
+            .iter()
+            .find(|(c, _)| *c == EngineChoice::PhotonMap)
+        {
+            let (bias, rmse) = engines::against_reference(pm, refr);
+            row.put_estimate(&col::PHOTON_MAP_REF_BIAS, &bias)
+                .put_estimate(&col::PHOTON_MAP_REF_RMSE, &rmse);
+        }
+    }
 
     // Accuracy against ground truth: the discs with an exact value (all of them where none has one,
     // so the mean irradiance is still reported).
@@ -314,15 +381,9 @@ pub fn run_point(
     // Levels first, then the point's own metrics.
     lines.append(&mut summary);
 
-    // Points table: mean over replicas, SE across them (or, with one replica, the Poisson SE of a sum
-    // of segments of the mean segment power: √(E·w̄/πd²)).
+    // Points table: DETP's estimate and SE per disc, then each baseline's.
     if cfg.write_points {
-        for i in 0..discs.len() {
-            let v: Vec<f64> = irr.iter().map(|e| e[i]).collect();
-            let mut est = engines::per_replica(&v);
-            if irr.len() == 1 {
-                est.se = (est.mean.max(0.0) * mean_segment_watts / discs.area(i)).sqrt();
-            }
+        for (i, &(mean, se)) in detp_points.iter().enumerate() {
             let (c, nn) = (discs.centers[i], discs.normals[i]);
             let mut r = Row::default();
             r.put(&col::SAMPLE, i)
@@ -333,9 +394,13 @@ pub fn run_point(
                 .put(&col::NY, nn.y)
                 .put(&col::NZ, nn.z)
                 .put(&col::POINT_DISC_RADIUS, discs.radius_of(i))
-                .put(&col::POINT_IRRADIANCE_MEAN, est.mean)
-                .put(&col::POINT_IRRADIANCE_SE, est.se)
+                .put(&col::POINT_IRRADIANCE_MEAN, mean)
+                .put(&col::POINT_IRRADIANCE_SE, se)
                 .put(&col::POINT_IRRADIANCE_EXACT, pts.exact[i]);
+            for (c, v) in &baselines {
+                r.put_member(&col::POINT_BASELINE_E, c.column(), v[i].0)
+                    .put_member(&col::POINT_BASELINE_SE, c.column(), v[i].1);
+            }
             tables.points.push(r);
         }
     }
@@ -477,7 +542,7 @@ impl Kind for DetpKind {
     type Raw = DetpSpec;
     type Point = DetpConfig;
     type Tables = DetpTables;
-    type Shared = ();
+    type Shared = ReferenceCache;
 
     fn columns() -> Vec<(&'static str, &'static [Column])> {
         vec![
@@ -514,10 +579,14 @@ impl Kind for DetpKind {
     fn warnings(p: &DetpConfig) -> Vec<String> {
         p.warnings()
     }
-    fn shared(_: &[&DetpConfig]) -> Result<(), Error> {
-        Ok(())
+    fn shared(_: &[&DetpConfig]) -> Result<ReferenceCache, Error> {
+        Ok(ReferenceCache::default())
     }
-    fn run(p: &DetpConfig, _: &(), ctx: &Context) -> Result<PointOutput<DetpTables>, Error> {
-        run_point(p, ctx.index, ctx.progress)
+    fn run(
+        p: &DetpConfig,
+        refs: &ReferenceCache,
+        ctx: &Context,
+    ) -> Result<PointOutput<DetpTables>, Error> {
+        run_point(p, ctx.index, ctx.progress, refs)
     }
 }

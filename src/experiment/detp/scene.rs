@@ -10,21 +10,21 @@ use crate::detp::disc::Discs;
 use crate::detp::edge::{clamped_radii, clip_to_first_hit};
 use crate::detp::photon::trace_photons;
 use crate::detp::sphere_cache::root_sphere;
-use crate::detp::surface_points::surface_points;
+use crate::detp::surface_points::open_surface_points;
 use crate::error::Error;
 use crate::geom::Aabb;
 use crate::lt::Scene;
-use crate::sample::rng::{domain, hash_key};
+use crate::sample::rng::hash_key;
 
 /// Sample points on the scene's surfaces or from a CSV, with the scene's exact irradiance.
-pub(super) fn points(cfg: &DetpConfig, point: u64, scene: &Scene) -> Result<PointSet, Error> {
-    let (centers, normals) = match &cfg.points {
-        Points::Surface(spacing) => surface_points(
-            scene,
-            *spacing,
-            hash_key(&[domain::POINTS, cfg.seed, point]),
-        ),
-        Points::File(p) => (p.centers.clone(), p.normals.clone()),
+/// (The lattice is deterministic: every sweep point of a scene gets the same surface points.)
+pub(super) fn points(cfg: &DetpConfig, scene: &Scene) -> Result<PointSet, Error> {
+    let (centers, normals, covered) = match &cfg.points {
+        Points::Surface(spacing) => {
+            let (c, n, k) = open_surface_points(scene, *spacing);
+            (c, n, Some(k))
+        }
+        Points::File(p) => (p.centers.clone(), p.normals.clone(), None),
         Points::Ball(_) => unreachable!("the spec check gives a scene surface or file points"),
     };
     let mut discs = Discs::new(centers, normals, cfg.disc_radius).map_err(Error::internal)?;
@@ -44,6 +44,7 @@ pub(super) fn points(cfg: &DetpConfig, point: u64, scene: &Scene) -> Result<Poin
         discs,
         exact,
         edge_s,
+        covered,
     })
 }
 

@@ -94,7 +94,8 @@ pub struct RawDetp {
     /// thread count, so counters do not depend on threads).
     #[serde(default = "default_chunk", deserialize_with = "count")]
     pub chunk_points: u64,
-    /// Engines to run on every point: `sphere-cache`, `disc-index`, `brute-force`, `photon-map`.
+    /// Engines to run on every point: `sphere-cache`, `disc-index`, `brute-force`, `photon-map`,
+    /// `reference`.
     #[serde(default = "default_engines")]
     pub engines: Vec<EngineChoice>,
     /// Disc index kind: `"octree"` (default) or `"grid"`.
@@ -119,6 +120,9 @@ pub struct RawDetp {
     /// Photon-map filter: `"disc"` or `"cone"`.
     #[serde(default)]
     pub photon_map_filter: FilterChoice,
+    /// Paths per sample point of engine `reference` (the path-traced ground truth).
+    #[serde(default = "default_reference_samples", deserialize_with = "count")]
+    pub reference_samples: u64,
     /// Independent realisations (new rays and points each); standard errors are across them.
     #[serde(default = "one_u", deserialize_with = "count")]
     pub replicas: u64,
@@ -178,6 +182,7 @@ choice!(
         DiscIndex => "disc-index",
         BruteForce => "brute-force",
         PhotonMap => "photon-map",
+        Reference => "reference",
     } default SphereCache
 );
 choice!(
@@ -210,14 +215,20 @@ choice!(
 );
 
 impl EngineChoice {
-    /// Column stem: `sphere_cache`, `disc_index`, `brute_force`, `photon_map`.
+    /// Column stem: `sphere_cache`, `disc_index`, `brute_force`, `photon_map`, `reference`.
     pub fn column(self) -> &'static str {
         match self {
             EngineChoice::SphereCache => "sphere_cache",
             EngineChoice::DiscIndex => "disc_index",
             EngineChoice::BruteForce => "brute_force",
             EngineChoice::PhotonMap => "photon_map",
+            EngineChoice::Reference => "reference",
         }
+    }
+
+    /// A baseline beside the DETP engines (its own estimates, not DETP's integer sums)?
+    pub fn is_baseline(self) -> bool {
+        matches!(self, EngineChoice::PhotonMap | EngineChoice::Reference)
     }
 }
 
@@ -279,6 +290,9 @@ fn default_bf_points() -> u64 {
 }
 fn default_k() -> u64 {
     64
+}
+fn default_reference_samples() -> u64 {
+    1024
 }
 fn default_budget() -> f64 {
     8.0
@@ -405,6 +419,8 @@ pub struct DetpConfig {
     pub photon_map_k: u64,
     /// Photon-map filter.
     pub photon_map_filter: FilterChoice,
+    /// Paths per sample point of the reference.
+    pub reference_samples: u64,
     /// Realisations.
     pub replicas: u64,
     /// Write NAME.points.csv.
@@ -642,10 +658,10 @@ impl DetpConfig {
         if d.engines.is_empty() {
             return refuse("detp.engines", "empty: name at least one engine");
         }
-        if d.engines.iter().all(|&x| x == EngineChoice::PhotonMap) {
+        if d.engines.iter().all(|x| x.is_baseline()) {
             return refuse(
                 "detp.engines",
-                "name a DETP engine (sphere-cache, disc-index or brute-force): the photon map is a baseline beside them",
+                "name a DETP engine (sphere-cache, disc-index or brute-force): the photon map and the reference are baselines beside them",
             );
         }
         for (i, a) in d.engines.iter().enumerate() {
@@ -660,6 +676,18 @@ impl DetpConfig {
             return refuse(
                 "detp.engines",
                 "the photon map needs photon impacts on surfaces: use detp.source = \"scene\"",
+            );
+        }
+        if d.engines.contains(&EngineChoice::Reference) && matches!(rays, Rays::Lines) {
+            return refuse(
+                "detp.engines",
+                "the reference path-traces a scene's lights and surfaces: it needs detp.source = \"scene\" (lines through the unit ball have an exact irradiance already)",
+            );
+        }
+        if d.engines.contains(&EngineChoice::Reference) && d.reference_samples < 2 {
+            return refuse(
+                "detp.reference_samples",
+                "got 1, at least 2 (the reference's standard error comes from its samples' variance)",
             );
         }
         if d.photons > 1 << 31 {
@@ -736,6 +764,7 @@ impl DetpConfig {
             brute_force_points: d.brute_force_points,
             photon_map_k: d.photon_map_k,
             photon_map_filter: d.photon_map_filter,
+            reference_samples: d.reference_samples,
             replicas: d.replicas,
             write_points: d.write_points,
             memory_budget_gib: d.memory_budget_gib,

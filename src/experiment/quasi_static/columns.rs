@@ -27,7 +27,7 @@ pub const PHOTONS: Column = parameter("photons", "photons", "photons traced per 
 pub const SEGMENTS: Column = measured(
     "segments",
     "segments",
-    "segments stored after frame 0 (n_R)",
+    "segments stored after frame 0 (n_R) of replica 0",
 );
 /// Static points.
 pub const POINTS_STATIC: Column = measured(
@@ -184,7 +184,7 @@ pub const FULL_FRAME_S: Column = Column::timed_estimate(
 pub const FRAME0_S: Column = timing(
     "frame0_s",
     "s",
-    "seconds of frame 0 (the full trace and gather)",
+    "seconds of frame 0 (the full trace and gather), mean over replicas",
 );
 /// Static index build.
 pub const STATIC_INDEX_BUILD_S: Column = timing(
@@ -338,6 +338,12 @@ pub const MAIN: &[Column] = &[
 
 /// Frame number.
 pub const FRAME: Column = measured("frame", "1", "the frame");
+/// The replica a frame belongs to.
+pub const REPLICA: Column = measured(
+    "replica",
+    "1",
+    "the replica (an independent run of every frame with new photons), from 0",
+);
 /// Segments removed in a frame.
 pub const SEGMENTS_REMOVED: Column = measured("segments_removed", "segments", "segments removed");
 /// Segments added.
@@ -432,6 +438,7 @@ pub mod frame {
 
 /// `NAME.frames.csv`.
 pub const FRAMES_TABLE: &[Column] = &[
+    REPLICA,
     FRAME,
     frame::RETRACED_RAYS,
     frame::RAYS_MEETING_OBJECT,

@@ -34,15 +34,12 @@ use crate::theory::detp as th;
 
 pub use self::spec::apply_ratio;
 
-/// The engines' settings for a validated point.
-pub fn params(cfg: &QuasiStaticConfig, n_dynamic_points: f64) -> Params {
+/// The engines' settings for a validated point and one of its replicas.
+pub fn params(cfg: &QuasiStaticConfig, n_dynamic_points: f64, replica: u64) -> Params {
     let d = &cfg.detp;
     Params {
         photons: d.photons,
-        // Common random numbers: every point of a sweep traces the same photon streams (keyed by the
-        // seed alone), so engines and ratios are compared on identical photons; a point's
-        // results still depend only on its own parameters, never on threads or shards.
-        seed: crate::sample::rng::hash_key(&[d.seed, 0x7173]),
+        seed: replica_seed(d.seed, replica),
         frames: cfg.frames,
         disc_radius: d.disc_radius,
         spacing: cfg.spacing,
@@ -62,8 +59,20 @@ pub fn params(cfg: &QuasiStaticConfig, n_dynamic_points: f64) -> Params {
     }
 }
 
-/// Starts a run: frame 0 and its stats.
-pub fn start(cfg: &QuasiStaticConfig) -> (QuasiStatic, FrameStats) {
+/// The photon streams' key of a replica. Common random numbers: every point of a sweep traces the
+/// same photon streams (keyed by the seed and the replica alone), so engines and ratios are compared
+/// on identical photons; a point's results still depend only on its own parameters, never on threads
+/// or shards. Replica 0 keeps the key of the runs before replicas existed, so their tables reproduce.
+fn replica_seed(seed: u64, replica: u64) -> u64 {
+    if replica == 0 {
+        crate::sample::rng::hash_key(&[seed, 0x7173])
+    } else {
+        crate::sample::rng::hash_key(&[seed, 0x7173, replica])
+    }
+}
+
+/// Starts a run of one replica: frame 0 and its stats.
+pub fn start(cfg: &QuasiStaticConfig, replica: u64) -> (QuasiStatic, FrameStats) {
     // n_D for Theorem 2's finite-n crossover: the dynamic points of the first object, estimated
     // from its area (the run counts them exactly afterwards).
     let n_d = cfg
@@ -77,7 +86,7 @@ pub fn start(cfg: &QuasiStaticConfig) -> (QuasiStatic, FrameStats) {
             area / (cfg.spacing * cfg.spacing)
         })
         .unwrap_or(1.0);
-    QuasiStatic::start(cfg.scene.clone(), params(cfg, n_d))
+    QuasiStatic::start(cfg.scene.clone(), params(cfg, n_d, replica))
 }
 
 /// Frames per cluster of the per-frame estimates: 16 batches of consecutive frames (or one frame
@@ -94,12 +103,37 @@ fn batch(frames: u32) -> u32 {
 /// object, and the engine Theorem 2's rule would have picked per object.
 type Predictions = (f64, Vec<crate::detp::quasi_static::Prediction>, Vec<Used>);
 
-/// One quasi-static point.
-pub fn run_point(
+/// What one replica's run leaves for the point's row.
+struct ReplicaRun {
+    /// The run after its last frame (its scene, parameters and sums).
+    qs: QuasiStatic,
+    /// Frame 0.
+    f0: FrameStats,
+    /// Segments live after frame 0 (n_R).
+    n_r: f64,
+    /// The predictor's run, where asked.
+    predictions: Option<Predictions>,
+    /// The relative RMSE of the last frame against a high-photon reference and its seconds.
+    reference: Option<(f64, f64)>,
+    /// The points table's sums and discs, where asked.
+    points_at: Option<(Vec<Acc>, crate::detp::disc::Discs)>,
+}
+
+/// Runs every frame of one replica, adding its per-frame values to `means` (one cluster per
+/// replica when there are several, batches of consecutive frames otherwise), its checks to
+/// `full_*`, and its frames to the frames table.
+#[allow(clippy::too_many_arguments)]
+fn run_replica(
     cfg: &QuasiStaticConfig,
+    replica: u64,
     progress: &(dyn Fn(u64) + Sync),
-) -> PointOutput<QuasiStaticTables> {
-    let (mut qs, f0) = start(cfg);
+    means: &mut [ClusteredMean],
+    full_s: &mut ClusteredMean,
+    full: &mut (u64, u64),
+    tables: &mut QuasiStaticTables,
+) -> ReplicaRun {
+    let replicas = cfg.detp.replicas.max(1);
+    let (mut qs, f0) = start(cfg, replica);
     progress(cfg.detp.photons);
     let predictions: Option<Predictions> = cfg.predict.map(|fraction| {
         let rule: Vec<Used> = (0..qs.scene.movers.len())
@@ -108,23 +142,18 @@ pub fn run_point(
         let p = qs.predict_and_pick(fraction, cfg.engine == DynamicEngine::Predicted);
         (fraction, p, rule)
     });
-    let r0 = qs.root().1;
     let n_r = qs.live_segments() as f64;
-    let ratios: Vec<f64> = qs.scene.movers.iter().map(|m| m.radius() / r0).collect();
-    let f_r: f64 = ratios.iter().map(|&r| th::retraced_rays(n_r, r)).sum();
-    let (n_s, n_dyn) = qs.point_counts();
-    let n_d: usize = n_dyn.iter().sum();
-    let b = batch(cfg.frames);
-    let mut means = vec![ClusteredMean::default(); col::PER_FRAME.len()];
-    let mut full_s = ClusteredMean::default();
-    let (mut full_mismatch, mut full_checked) = (0u64, 0u64);
-    let mut tables = QuasiStaticTables::default();
-    tables.frames.push(frame_row(&f0, None));
+    // One replica: batches of consecutive frames (correlated) are the clusters; several: each
+    // replica is one cluster, so the standard error is across independent realisations.
+    let b = if replicas > 1 {
+        u32::MAX
+    } else {
+        batch(cfg.frames)
+    };
+    tables.frames.push(frame_row(replica, &f0, None));
     let points_frame = cfg.points_frame.unwrap_or(cfg.frames - 1);
-    let mut points_at: Option<(Vec<Acc>, crate::detp::disc::Discs)> = None;
-    if points_frame == 0 && cfg.detp.write_points {
-        points_at = Some((qs.sums(), qs.discs()));
-    }
+    let write_points = cfg.detp.write_points && replica == 0;
+    let mut points_at = (points_frame == 0 && write_points).then(|| (qs.sums(), qs.discs()));
     for f in 1..cfg.frames {
         let st = qs.step(f);
         progress(cfg.detp.photons);
@@ -133,11 +162,11 @@ pub fn run_point(
         }
         let check =
             cfg.check_every > 0 && (u64::from(f) % cfg.check_every == 0 || f == cfg.frames - 1);
-        let full = check.then(|| {
+        let checked = check.then(|| {
             let (sums, _, s) = qs.full_recalculation();
             let bad = mismatches(&qs.sums(), &sums);
-            full_mismatch += bad;
-            full_checked += 1;
+            full.0 += bad;
+            full.1 += 1;
             full_s.push(s);
             (s, bad)
         });
@@ -145,8 +174,8 @@ pub fn run_point(
             means.iter_mut().for_each(ClusteredMean::end_batch);
             full_s.end_batch();
         }
-        tables.frames.push(frame_row(&st, full));
-        if f == points_frame && cfg.detp.write_points {
+        tables.frames.push(frame_row(replica, &st, checked));
+        if f == points_frame && write_points {
             points_at = Some((qs.sums(), qs.discs()));
         }
     }
@@ -157,7 +186,7 @@ pub fn run_point(
         let t = std::time::Instant::now();
         let refr = qs.reference_irradiance(
             n,
-            crate::sample::rng::hash_key(&[cfg.detp.seed, 0x7265_6665]),
+            crate::sample::rng::hash_key(&[cfg.detp.seed, 0x7265_6665, replica]),
         );
         let ref_s = t.elapsed().as_secs_f64();
         let mean_ref = refr.iter().sum::<f64>() / refr.len().max(1) as f64;
@@ -167,8 +196,63 @@ pub fn run_point(
             .map(|(a, b)| (a - b).powi(2))
             .sum::<f64>()
             / mine.len().max(1) as f64;
-        (mse.sqrt() / mean_ref, ref_s, n)
+        (mse.sqrt() / mean_ref, ref_s)
     });
+    ReplicaRun {
+        qs,
+        f0,
+        n_r,
+        predictions,
+        reference,
+        points_at,
+    }
+}
+
+/// One quasi-static point: `detp.replicas` independent runs of every frame (new photons each),
+/// pooled. Geometry, point counts and the predictor's figures come from replica 0; times, the
+/// reference error and n_R are means over replicas; checks are summed.
+pub fn run_point(
+    cfg: &QuasiStaticConfig,
+    progress: &(dyn Fn(u64) + Sync),
+) -> PointOutput<QuasiStaticTables> {
+    let replicas = cfg.detp.replicas.max(1);
+    let mut means = vec![ClusteredMean::default(); col::PER_FRAME.len()];
+    let mut full_s = ClusteredMean::default();
+    let mut full = (0u64, 0u64);
+    let mut tables = QuasiStaticTables::default();
+    let runs: Vec<ReplicaRun> = (0..replicas)
+        .map(|r| {
+            run_replica(
+                cfg,
+                r,
+                progress,
+                &mut means,
+                &mut full_s,
+                &mut full,
+                &mut tables,
+            )
+        })
+        .collect();
+    let (full_mismatch, full_checked) = full;
+    let mean_of =
+        |f: &dyn Fn(&ReplicaRun) -> f64| runs.iter().map(f).sum::<f64>() / runs.len() as f64;
+    let n_r = mean_of(&|r| r.n_r);
+    let frame0_s = mean_of(&|r| r.f0.frame_s);
+    let build_s = mean_of(&|r| r.qs.static_index_build_s);
+    let reference = runs[0].reference.map(|_| {
+        (
+            mean_of(&|r| r.reference.map_or(f64::NAN, |x| x.0)),
+            mean_of(&|r| r.reference.map_or(f64::NAN, |x| x.1)),
+            cfg.reference_photons.unwrap_or(0),
+        )
+    });
+    let first = &runs[0];
+    let (qs, f0, predictions) = (&first.qs, &first.f0, &first.predictions);
+    let r0 = qs.root().1;
+    let ratios: Vec<f64> = qs.scene.movers.iter().map(|m| m.radius() / r0).collect();
+    let f_r: f64 = ratios.iter().map(|&r| th::retraced_rays(n_r, r)).sum();
+    let (n_s, n_dyn) = qs.point_counts();
+    let n_d: usize = n_dyn.iter().sum();
     let est: Vec<Estimate> = means.iter().map(ClusteredMean::estimate).collect();
     let frame_s = est[col::PER_FRAME.len() - 1];
 
@@ -176,7 +260,7 @@ pub fn run_point(
     let used: Vec<&str> = f0.used.iter().map(|u| u.as_str()).collect();
     row.put(&col::FRAMES, u64::from(cfg.frames))
         .put(&col::PHOTONS, cfg.detp.photons)
-        .put(&col::SEGMENTS, n_r as u64)
+        .put(&col::SEGMENTS, first.n_r as u64)
         .put(&col::POINTS_STATIC, n_s)
         .put(&col::POINTS_DYNAMIC, n_d)
         .put(&col::OBJECTS, ratios.len())
@@ -196,12 +280,12 @@ pub fn run_point(
     }
     let full = full_s.estimate();
     row.put_estimate(&col::FULL_FRAME_S, &full)
-        .put(&col::FRAME0_S, f0.frame_s)
-        .put(&col::STATIC_INDEX_BUILD_S, qs.static_index_build_s)
+        .put(&col::FRAME0_S, frame0_s)
+        .put(&col::STATIC_INDEX_BUILD_S, build_s)
         .put(&col::SPEEDUP, full.mean / frame_s.mean)
         .put(&col::FULL_MISMATCH, full_mismatch)
         .put(&col::FULL_CHECKED, full_checked);
-    if let Some((fraction, preds, rule)) = &predictions {
+    if let Some((fraction, preds, rule)) = predictions {
         // The first object's figures; picks are counted over all objects.
         let p = preds[0];
         let engines = ["sphere_cache", "disc_index"];
@@ -263,8 +347,9 @@ pub fn run_point(
         "full_frame_s / frame_s".into(),
         format!("{:.1}× faster", full.mean / frame_s.mean),
     ));
-    if let Some((sums, discs)) = points_at {
-        tables.points = points_table(&qs, &sums, &discs, points_frame, n_s);
+    if let Some((sums, discs)) = &first.points_at {
+        let frame = cfg.points_frame.unwrap_or(cfg.frames - 1);
+        tables.points = points_table(qs, sums, discs, frame, n_s);
     }
     PointOutput {
         row,
@@ -286,11 +371,12 @@ pub fn run_point(
 }
 
 /// One row of the frames table.
-fn frame_row(st: &FrameStats, full: Option<(f64, u64)>) -> Row {
+fn frame_row(replica: u64, st: &FrameStats, full: Option<(f64, u64)>) -> Row {
     use col::frame as c;
     let mut r = Row::default();
     let used: Vec<&str> = st.used.iter().map(|u| u.as_str()).collect();
-    r.put(&col::FRAME, st.frame)
+    r.put(&col::REPLICA, replica)
+        .put(&col::FRAME, st.frame)
         .put(&c::RETRACED_RAYS, st.affected_segments)
         .put(&c::RAYS_MEETING_OBJECT, st.meeting_new)
         .put(&c::PHOTONS_RETRACED, st.photons_retraced)
@@ -420,7 +506,7 @@ impl Kind for QuasiStaticKind {
     }
     fn work(p: &QuasiStaticConfig) -> Work {
         Work {
-            units: p.detp.photons * u64::from(p.frames),
+            units: p.detp.photons * u64::from(p.frames) * p.detp.replicas.max(1),
             unit: "photon-frames",
         }
     }

@@ -172,12 +172,6 @@ impl QuasiStaticConfig {
                 "kind quasi-static runs the paper's method only (its incremental updates keep the stored segments and d); the remedies are measured by kind \"detp\"",
             );
         }
-        if detp.replicas != 1 {
-            return refuse(
-                "detp.replicas",
-                "kind quasi-static runs one realisation (frames are its samples)",
-            );
-        }
         if detp.engines != [crate::experiment::detp::spec::EngineChoice::SphereCache] {
             return refuse(
                 "detp.engines",
