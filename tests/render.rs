@@ -291,14 +291,14 @@ engines = ["disc-index"]
         .and_then(|s| s.split(' ').next())
         .and_then(|s| s.parse().ok())
         .unwrap_or_else(|| panic!("no count in {line}"));
-    assert!(differ > 20, "{line}");
+    assert!(differ > 10, "{line}");
     // The difference panel is lit where pixels differ, the two renderings are not the same picture.
     let panel = |k: usize| -> Vec<u8> {
         (0..h as usize)
             .flat_map(|y| px[y * w as usize + k * 48..y * w as usize + (k + 1) * 48].to_vec())
             .collect()
     };
-    assert!(panel(2).iter().filter(|&&v| v > 0).count() > 20);
+    assert!(panel(2).iter().filter(|&&v| v > 0).count() > 10);
     assert_ne!(panel(0), panel(1));
     for bad in [
         vec!["--compare-edge", "sideways"],

@@ -374,7 +374,10 @@ impl Engine for PhotonMap {
 /// sample points (other photon counts, d, k) compute the reference once. Values are a pure function
 /// of the key, so sharing them changes no measured column.
 #[derive(Clone, Default)]
-pub struct ReferenceCache(Arc<Mutex<HashMap<u64, Arc<(Vec<Irradiance>, f64)>>>>);
+pub struct ReferenceCache(Arc<Mutex<References>>);
+
+/// Per key: the reference per disc and its seconds.
+type References = HashMap<u64, Arc<(Vec<Irradiance>, f64)>>;
 
 /// The path-traced reference irradiance per disc (a baseline: never part of DETP's sums or speed).
 struct Reference {
