@@ -131,7 +131,7 @@ def plot(args):
         ax.set_title("%s: %s%s" % (scene.replace(".toml", ""), case, " (truth ≈ 0)" if shadow else ""),
                      fontsize=8)
         ax.legend(fontsize=7)
-    for j in range(len(cases), nrows * ncols):
+    for j in range(len(panels), nrows * ncols):
         axes[j // ncols][j % ncols].axis("off")
     rp.finish(fig, args)
 
