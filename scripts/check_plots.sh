@@ -32,7 +32,8 @@ echo "ok: $PNG"
 
 # Every DETP plot script on a small fresh run of its own spec (fewer rays and points: the shape of
 # the figure, not its statistics). detp-engines-cost keeps two of its sizes per axis.
-for name in lines-rays-per-level lines-cache-misses sphere-cache-q detp-engines-cost detp-accuracy cornell-levels; do
+for name in lines-rays-per-level lines-cache-misses sphere-cache-q detp-engines-cost detp-accuracy cornell-levels \
+            detp-hard-cases; do
     case "$name" in
         lines-rays-per-level) args=(--set detp.points=2000 --set detp.replicas=2) ;;
         lines-cache-misses) args=(--set detp.points=5000 --set detp.chunk_points=5000) ;;
@@ -41,6 +42,7 @@ for name in lines-rays-per-level lines-cache-misses sphere-cache-q detp-engines-
         # A set key is no longer swept: one photon count, the other keys' sweeps kept.
         detp-accuracy) args=(--set detp.replicas=1) ;;
         cornell-levels) args=(--set detp.point_spacing=40 --set detp.replicas=1) ;;
+        detp-hard-cases) args=(--set detp.replicas=2) ;;
     esac
     spec="experiments/$name.toml"
     if [ "$name" = detp-engines-cost ]; then

@@ -182,6 +182,11 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
                 eye: vec3("--eye", &r.eye)?,
                 look_at: vec3("--look-at", &r.look_at)?,
                 fov: r.fov,
+                compare_edge: r
+                    .compare_edge
+                    .as_deref()
+                    .map(crate::render::edge_mode)
+                    .transpose()?,
             };
             let log = crate::render::run(&plan, &opts)?;
             write!(std::io::stdout().lock(), "{log}")?;

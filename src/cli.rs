@@ -185,6 +185,10 @@ pub struct RenderArgs {
     /// Image width in pixels (the height keeps the camera's aspect ratio).
     #[arg(long)]
     pub width: Option<u32>,
+    /// Three panels: the paper's method, this detp.edge remedy (clamp-radius, first-hit,
+    /// clamp-first-hit; parameters from the spec or their defaults) and |difference|.
+    #[arg(long, value_name = "MODE")]
+    pub compare_edge: Option<String>,
     /// False colour (viridis) instead of grey.
     #[arg(long)]
     pub colormap: bool,

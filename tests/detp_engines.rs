@@ -325,3 +325,48 @@ fn add_then_remove_equals_the_complement() {
         "octree"
     );
 }
+
+/// `detp.edge` remedies: per-disc radii (each in (0, d], some rims grazed by aimed segments) and
+/// segments cut at their first impact. Engines bound discs by d, so they must still equal brute
+/// force, which tests each disc with its own radius.
+#[test]
+fn per_disc_radii_and_first_hit_cuts() {
+    let mut rng = stream(&[0xe0, 9]);
+    let mut segs = lines(&mut rng, 20_000, DVec3::ZERO, 1.0);
+    let discs = ball_discs(&mut rng, 1_000, DVec3::ZERO, 1.0, 0.05);
+    let radii: Vec<f64> = (0..discs.len())
+        .map(|i| match i % 4 {
+            0 => 0.05,
+            1 => 0.05 * rng.gen_range(0.05..1.0),
+            2 => 0.0125,
+            _ => 0.05 * f64::EPSILON.max(rng.gen::<f64>()),
+        })
+        .collect();
+    // Segments aimed at the rim of each small disc (rim closed: these count, 1 ulp farther not).
+    for i in (1..discs.len()).step_by(4) {
+        let (c, n, r) = (discs.centers[i], discs.normals[i], radii[i]);
+        let u = n.any_orthonormal_vector();
+        let x = c + u * r;
+        let v = (-n + u * 0.3).normalize();
+        segs.push(Segment::new(x - v * 0.5, v, 0.0, 0.5, power(&mut rng), 0));
+    }
+    // Cut every other segment somewhere along it, as first-hit does with t_hit + gap.
+    for (k, s) in segs.iter_mut().enumerate() {
+        if k % 2 == 0 {
+            s.t_hit = rng.gen_range(0.0..2.0);
+            s.t_end = s.t_end.min(s.t_hit + 0.01);
+        }
+    }
+    let discs = discs.with_radii(radii).unwrap();
+    let st = store(segs);
+    let hit = all_engines_agree("per-disc radii, cut segments", &st, &discs, false);
+    assert!(hit > 300, "only {hit} discs crossed");
+    // And the radii matter: with radius d everywhere some sums differ.
+    let mut full = vec![0 as Acc; discs.len()];
+    let mut plain = discs.clone();
+    plain.radii = None;
+    brute::accumulate(&st, &plain, None, 1, &mut full);
+    let mut small = vec![0 as Acc; discs.len()];
+    brute::accumulate(&st, &discs, None, 1, &mut small);
+    assert!(full.iter().zip(&small).filter(|(a, b)| a != b).count() > 100);
+}

@@ -231,3 +231,88 @@ fn an_image_larger_than_memory_is_refused_before_tracing() {
     assert!(err.contains("--width") && err.contains("GiB"), "{err}");
     assert!(!out.exists());
 }
+
+/// `--compare-edge`: the paper's method, a remedy and their difference side by side on the lit
+/// hard-case scene (a box on an open floor, a sheet over it): three panels, the remedy changes
+/// pixels (the light the paper's rule lets through the box and sheet), and an unknown mode or more
+/// than one frame is refused.
+#[test]
+fn compare_edge_renders_paper_remedy_and_difference() {
+    let tmp = tempfile::tempdir().expect("temp");
+    let spec = write_spec(
+        tmp.path(),
+        "render-edge",
+        &format!(
+            r#"
+[experiment]
+name = "render-edge"
+kind = "detp"
+seed = 3
+
+[detp]
+source = "scene"
+scene = "{}"
+photons = 100000
+point_spacing = 0.5
+disc_radius = 0.05
+engines = ["disc-index"]
+"#,
+            root()
+                .join("experiments/scenes/hard/hard-cases-lit.toml")
+                .display()
+                .to_string()
+                .replace('\\', "/")
+        ),
+    );
+    let out = tmp.path().join("cmp.png");
+    let o = raycost()
+        .arg("render")
+        .arg(&spec)
+        .args(["--width", "48", "--compare-edge", "clamp-first-hit"])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{text}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let (w, h, px) = read_grey_png(&out);
+    assert_eq!(w, 3 * 48);
+    let line = text
+        .lines()
+        .find(|l| l.contains("paper vs clamp-first-hit"))
+        .unwrap_or_else(|| panic!("no comparison line in {text}"));
+    let differ: usize = line
+        .split(": ")
+        .nth(2)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no count in {line}"));
+    assert!(differ > 10, "{line}");
+    // The difference panel is lit where pixels differ, the two renderings are not the same picture.
+    let panel = |k: usize| -> Vec<u8> {
+        (0..h as usize)
+            .flat_map(|y| px[y * w as usize + k * 48..y * w as usize + (k + 1) * 48].to_vec())
+            .collect()
+    };
+    assert!(panel(2).iter().filter(|&&v| v > 0).count() > 10);
+    assert_ne!(panel(0), panel(1));
+    for bad in [
+        vec!["--compare-edge", "sideways"],
+        vec!["--compare-edge", "first-hit", "--frames", "0,0"],
+    ] {
+        let o = raycost()
+            .arg("render")
+            .arg(&spec)
+            .args(["--width", "8", "--force"])
+            .args(&bad)
+            .arg("--out")
+            .arg(tmp.path().join("bad.png"))
+            .output()
+            .expect("runs");
+        assert_eq!(o.status.code(), Some(2), "{bad:?}");
+    }
+}

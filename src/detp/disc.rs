@@ -20,15 +20,20 @@ use crate::geom::Aabb;
 
 use super::store::Segment;
 
-/// Sample points, their unit normals and the common disc radius d.
+/// Sample points, their unit normals and the disc radius d (with `detp.edge = "clamp-radius"`, a
+/// radius per disc, each at most d).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Discs {
     /// Disc centres (the sample points).
     pub centers: Vec<DVec3>,
     /// Unit normals: a segment counts when it arrives against the normal.
     pub normals: Vec<DVec3>,
-    /// Disc radius d.
+    /// Disc radius d: every disc's radius, or the largest when discs have their own
+    /// ([`Discs::with_radii`]). Every engine bounds a disc by d, so culling stays conservative
+    /// whatever the per-disc radii are.
     pub radius: f64,
+    /// Per-disc radii (each in (0, d]), or `None`: every disc has radius d (the paper's method).
+    pub radii: Option<Vec<f64>>,
 }
 
 impl Discs {
@@ -60,7 +65,40 @@ impl Discs {
             centers,
             normals: unit,
             radius,
+            radii: None,
         })
+    }
+
+    /// The same discs with a radius each (`radii[i]` ∈ (0, d]). Fails on a wrong count or a radius
+    /// outside (0, d].
+    pub fn with_radii(mut self, radii: Vec<f64>) -> Result<Self, crate::error::Invalid> {
+        if radii.len() != self.len() {
+            return Err(format!("{} radii for {} discs", radii.len(), self.len()).into());
+        }
+        if let Some((i, r)) = radii
+            .iter()
+            .enumerate()
+            .find(|(_, &r)| !(r > 0.0 && r <= self.radius))
+        {
+            return Err(format!("disc {i}: radius {r} outside (0, {}]", self.radius).into());
+        }
+        self.radii = Some(radii);
+        Ok(self)
+    }
+
+    /// The radius of disc `i`.
+    #[inline]
+    pub fn radius_of(&self, i: usize) -> f64 {
+        match &self.radii {
+            None => self.radius,
+            Some(r) => r[i],
+        }
+    }
+
+    /// The area π r_i² that disc `i`'s power sum is divided by.
+    pub fn area(&self, i: usize) -> f64 {
+        let r = self.radius_of(i);
+        std::f64::consts::PI * r * r
     }
 
     /// `n` discs of radius `d` centred uniformly in the ball (`center`, `rad`) with uniform normals:
@@ -99,12 +137,13 @@ impl Discs {
             s.t_end(),
             self.centers[i],
             self.normals[i],
-            self.radius,
+            self.radius_of(i),
         )
     }
 
     /// A box that holds disc `i` (conservative by a relative pad of 10⁻⁹ of the coordinates'
-    /// magnitude plus d, so culling by it can never drop a crossing [`crosses`] accepts).
+    /// magnitude plus d, so culling by it can never drop a crossing [`crosses`] accepts). It is the
+    /// box of the radius-d disc even when disc `i` is smaller: larger, hence still conservative.
     pub fn bounds(&self, i: usize) -> Aabb {
         disc_bounds(self.centers[i], self.normals[i], self.radius)
     }
@@ -121,9 +160,9 @@ impl Discs {
         Aabb::new(lo, hi)
     }
 
-    /// Irradiance for an accumulated power sum: watts / (π d²).
-    pub fn irradiance(&self, watts: f64) -> f64 {
-        watts / (std::f64::consts::PI * self.radius * self.radius)
+    /// Irradiance of disc `i` for its accumulated power sum: watts / (π r_i²).
+    pub fn irradiance(&self, i: usize, watts: f64) -> f64 {
+        watts / self.area(i)
     }
 }
 

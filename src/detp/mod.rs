@@ -13,6 +13,8 @@
 //! - [`fixed`]: integer power units and per-disc accumulators;
 //! - [`store`]: the ray store (segments with photon ids, ≤ 64 B each);
 //! - [`disc`]: sample points with normals, their discs, the exact crossing test;
+//! - [`edge`]: `detp.edge`, what a disc does where it reaches past an edge (the paper's method or a
+//!   remedy: per-disc radii, or crossings cut at the first impact);
 //! - [`brute`]: every segment against every disc (the oracle);
 //! - [`order`]: point orderings (none, Morton/Lebesgue, Hilbert);
 //! - [`sphere_cache`]: the hierarchy of spheres with ratio Q;
@@ -25,6 +27,7 @@
 pub mod brute;
 pub mod disc;
 pub mod disc_index;
+pub mod edge;
 pub mod fixed;
 pub mod order;
 pub mod photon;

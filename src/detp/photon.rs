@@ -18,11 +18,11 @@ use rayon::prelude::*;
 use super::fixed::{PowerScale, Units};
 use super::store::{Segment, SegmentStore};
 use crate::lt::{Light, Prim, Scene};
-use crate::sample::directions::uniform_direction;
+use crate::sample::directions::{cosine_about, uniform_direction};
 use crate::sample::rng::{domain, stream};
 
 /// Paths longer than this are cut (and counted): albedos below 1 make them vanishingly rare.
-pub const MAX_BOUNCES: u16 = 64;
+pub const MAX_BOUNCES: u16 = crate::lt::MAX_BOUNCES;
 
 /// Photons per parallel work item (each keeps its own streams: the result does not depend on it).
 const BATCH: u64 = 1024;
@@ -89,15 +89,6 @@ fn pick_light(scene: &Scene, u: f64) -> &Light {
         }
     }
     scene.lights.last().expect("a scene has a light")
-}
-
-/// A direction cosine-distributed about the unit normal `n`.
-fn cosine_about<R: Rng>(rng: &mut R, n: DVec3) -> DVec3 {
-    let (u1, u2): (f64, f64) = (rng.gen(), rng.gen());
-    let r = u1.sqrt();
-    let phi = TAU * u2;
-    let (a, b) = n.any_orthonormal_pair();
-    (a * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt()).normalize()
 }
 
 /// Where a photon leaves its light: (origin, direction, the primitive it leaves).

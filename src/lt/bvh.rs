@@ -188,6 +188,84 @@ impl Bvh {
     }
 }
 
+impl Bvh {
+    /// The nearest triangle crossing with t > t_min, skipping triangle `skip`: (t, triangle), or
+    /// (+∞, `u32::MAX`). The same traversal as [`Bvh::two_nearest`], culling boxes beyond the
+    /// nearest hit so far (a path tracer needs only the first hit).
+    pub fn nearest(
+        &self,
+        tris: &[Triangle],
+        o: DVec3,
+        d: DVec3,
+        t_min: f64,
+        skip: u32,
+    ) -> (f64, u32) {
+        let mut best = (f64::INFINITY, u32::MAX);
+        if self.nodes.is_empty() {
+            return best;
+        }
+        let inv = d.recip();
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let n = self.nodes[stack[top] as usize];
+            let t0 = (n.lo - o) * inv;
+            let t1 = (n.hi - o) * inv;
+            let near = t0.min(t1).max_element();
+            let far = t0.max(t1).min_element();
+            if near > far || far < t_min || near > best.0 {
+                continue;
+            }
+            if n.count > 0 {
+                for &i in &self.order[n.start as usize..(n.start + n.count) as usize] {
+                    if i == skip {
+                        continue;
+                    }
+                    if let Some(t) = tris[i as usize].intersect(o, d, t_min) {
+                        if t < best.0 {
+                            best = (t, i);
+                        }
+                    }
+                }
+            } else if top + 2 <= stack.len() {
+                stack[top] = n.start;
+                stack[top + 1] = n.start + 1;
+                top += 2;
+            } else {
+                unreachable!("BVH deeper than its traversal stack");
+            }
+        }
+        best
+    }
+}
+
+impl Bvh {
+    /// Calls `f` with every triangle whose node box comes within `r` of `p` (a superset of the
+    /// triangles within `r`: the caller measures each).
+    pub fn near(&self, p: DVec3, r: f64, f: &mut dyn FnMut(u32)) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack = vec![0u32];
+        while let Some(k) = stack.pop() {
+            let n = self.nodes[k as usize];
+            let q = p.clamp(n.lo, n.hi);
+            if (q - p).length_squared() > r * r {
+                continue;
+            }
+            if n.count > 0 {
+                for &i in &self.order[n.start as usize..(n.start + n.count) as usize] {
+                    f(i);
+                }
+            } else {
+                stack.push(n.start);
+                stack.push(n.start + 1);
+            }
+        }
+    }
+}
+
 /// The same answer by testing every triangle (the oracle).
 pub fn two_nearest_brute(
     tris: &[Triangle],
@@ -248,6 +326,11 @@ mod tests {
                 got,
                 two_nearest_brute(&tris, o, d, 1e-9, u32::MAX),
                 "ray {k}"
+            );
+            assert_eq!(
+                bvh.nearest(&tris, o, d, 1e-9, u32::MAX).0,
+                got.first.0,
+                "nearest, ray {k}"
             );
         }
     }

@@ -272,7 +272,8 @@ pub struct RawCamera {
 #[serde(deny_unknown_fields)]
 pub struct RawAnalytic {
     /// `point-over-plane` (direct light of the first point light, nothing else lit) or
-    /// `closed-sphere` (the inside of an emitting sphere: E = πL_e/(1 − α)).
+    /// `closed-sphere` (the inside of an emitting sphere: E = πL_e/(1 − α)) or `direct-light` (all
+    /// albedos 0, point and spot lights: their direct light with a shadow test).
     pub kind: AnalyticKind,
 }
 
@@ -284,6 +285,10 @@ pub enum AnalyticKind {
     PointOverPlane,
     /// E = π·L_e / (1 − α) on the inside of the one emitting sphere.
     ClosedSphere,
+    /// Direct light alone (every albedo 0, point and spot lights only):
+    /// E(x) = Σ_lights V(x)·I·max(0, n·(p − x)) / |p − x|³, with I = Φ/4π (point) or Φ/(2π(1 − cos θ))
+    /// inside a spot's cone, and V the shadow test (1 if nothing lies between x and the light).
+    DirectLight,
 }
 
 fn finite(x: &toml::Value) -> Option<f64> {

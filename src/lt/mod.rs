@@ -11,6 +11,7 @@ pub mod aff;
 pub mod bvh;
 pub mod format;
 pub mod motion;
+pub mod reference;
 pub mod shapes;
 pub mod spline;
 
@@ -27,6 +28,10 @@ use crate::geom::Aabb;
 use crate::toml_text::{find_key, line_col};
 
 pub use crate::error::InputError;
+
+/// Reflections per light path at most, for the photon tracer and the reference alike (albedos below
+/// 1 make longer paths vanishingly rare; the photon tracer counts the cut ones).
+pub const MAX_BOUNCES: u16 = 64;
 
 /// Material and emission of one surface.
 #[derive(Clone, Debug, PartialEq)]
@@ -480,6 +485,15 @@ impl Scene {
                     "closed-sphere needs an emitting sphere seen from inside".into(),
                 ));
             }
+            Some(AnalyticKind::DirectLight)
+                if surfaces.iter().any(|s| s.albedo != 0.0)
+                    || lights.iter().any(|l| matches!(l, Light::Area { .. })) =>
+            {
+                return Err(err(
+                    "analytic.kind".into(),
+                    "direct-light needs every albedo 0 and point or spot lights only (no emitting surface): then the irradiance is the lights' direct light".into(),
+                ));
+            }
             _ => {}
         }
         let camera = raw.camera.map(|c| Camera {
@@ -734,6 +748,59 @@ impl Scene {
         (Some(Hit { t, prim, surface }), best.second.0)
     }
 
+    /// The nearest hit with t > t_min, skipping triangle `skip`: the first hit of
+    /// [`Scene::first_two_hits`] for the same ray, found without the second (cheaper: a path tracer
+    /// needs only this).
+    pub fn first_hit(&self, o: DVec3, d: DVec3, t_min: f64, skip: Option<Prim>) -> Option<Hit> {
+        let skip_tri = match skip {
+            Some(Prim::Triangle(i)) => i,
+            _ => u32::MAX,
+        };
+        let n = self.n_static_tris;
+        let (mut t, mut id) = self
+            .bvh
+            .nearest(&self.triangles[..n], o, d, t_min, skip_tri);
+        if !self.dyn_bvh.is_empty() {
+            let (td, idd) = self.dyn_bvh.nearest(
+                &self.triangles[n..],
+                o,
+                d,
+                t_min,
+                skip_tri.wrapping_sub(n as u32),
+            );
+            if td < t {
+                (t, id) = (td, idd + n as u32);
+            }
+        }
+        let mut prim = Prim::Triangle(id);
+        for (i, b) in self.balls.iter().enumerate() {
+            if let Some((t0, t1)) = b.roots(o, d) {
+                for r in [t0, t1] {
+                    if r > t_min && r < t {
+                        t = r;
+                        prim = Prim::Ball(i as u32);
+                    }
+                }
+            }
+        }
+        if !t.is_finite() {
+            return None;
+        }
+        let surface = match prim {
+            Prim::Triangle(i) => self.triangles[i as usize].surface,
+            Prim::Ball(i) => self.balls[i as usize].surface,
+        };
+        Some(Hit { t, prim, surface })
+    }
+
+    /// Calls `f` with every triangle (static or dynamic, by its index in `triangles`) that may
+    /// come within `r` of `p` (a superset: the caller measures each).
+    pub fn triangles_near(&self, p: DVec3, r: f64, f: &mut dyn FnMut(u32)) {
+        let n = self.n_static_tris as u32;
+        self.bvh.near(p, r, f);
+        self.dyn_bvh.near(p, r, &mut |i| f(i + n));
+    }
+
     /// The normal that receives light at a point of a primitive.
     pub fn normal(&self, prim: Prim, p: DVec3) -> DVec3 {
         match prim {
@@ -762,7 +829,47 @@ impl Scene {
                 let s = &self.surfaces[b.surface as usize];
                 Some(PI * s.emission / (1.0 - s.albedo))
             }
+            AnalyticKind::DirectLight => Some(self.direct_light(p, n)),
         }
+    }
+
+    /// The direct irradiance at `p` (normal `n`) from the point and spot lights, with a shadow test:
+    /// a light counts if the first surface its ray toward `p` meets lies no nearer than `p` (less a
+    /// relative 10⁻⁹ of the scene's size, so that the surface `p` lies on does not shadow it).
+    pub fn direct_light(&self, p: DVec3, n: DVec3) -> f64 {
+        let n = n.normalize();
+        let tol = 1e-9 * self.magnitude();
+        let mut e = 0.0;
+        for l in &self.lights {
+            let (pos, intensity) = match l {
+                Light::Point { position, power } => (*position, power / (4.0 * PI)),
+                Light::Spot {
+                    position,
+                    axis,
+                    cos_cone,
+                    power,
+                } => {
+                    let dir = (p - *position).normalize();
+                    if dir.dot(*axis) < *cos_cone {
+                        continue;
+                    }
+                    (*position, power / (2.0 * PI * (1.0 - cos_cone)))
+                }
+                Light::Area { .. } => continue,
+            };
+            let v = pos - p;
+            let r = v.length();
+            let cos = n.dot(v) / r;
+            if cos.is_nan() || cos <= 0.0 {
+                continue;
+            }
+            let (hit, _) = self.first_two_hits(pos, -v / r, 0.0, None);
+            if hit.is_some_and(|h| h.t < r - tol) {
+                continue;
+            }
+            e += intensity * cos / (r * r);
+        }
+        e
     }
 }
 

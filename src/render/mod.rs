@@ -8,6 +8,12 @@
 //! grid disc index. A pixel shows the radiosity B = albedo·E/π, one exposure for every frame of the
 //! picture (99th percentile → 0.9, gamma 1/2.2); emitters are white, nothing seen is black.
 //!
+//! The spec's `detp.edge` applies (kind `detp`): clamped disc radii and/or segments cut at their
+//! first impact, as in `raycost run`. `--compare-edge MODE` renders one frame three times side by
+//! side: the paper's method, MODE, and |E_paper − E_MODE| (tone-mapped with its own exposure), and
+//! prints how many pixels differ — the contact shadows under objects show in the middle panel and
+//! the light that leaked through them in the right one.
+//!
 //! `--diff` gathers the same discs from a full recalculation of the frame and marks the pixels
 //! whose integer sums differ (there should be none: incremental equals full bit for bit).
 //!
@@ -22,7 +28,10 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use crate::detp::disc::Discs;
+use crate::detp::edge::{clamped_radii, clip_to_first_hit, EdgeMode};
 use crate::detp::quasi_static::QuasiStatic;
+use crate::detp::store::SegmentStore;
 use crate::error::Error;
 use crate::experiment::detp::spec::{DynamicEngine, Points};
 use crate::experiment::detp::DetpKind;
@@ -63,6 +72,8 @@ pub struct RenderOptions {
     pub look_at: Option<glam::DVec3>,
     /// Camera override: vertical field of view, degrees.
     pub fov: Option<f64>,
+    /// Render the paper's method, this `detp.edge` mode and their difference side by side.
+    pub compare_edge: Option<EdgeMode>,
 }
 
 /// One rendered frame.
@@ -126,17 +137,16 @@ fn spec_error(plan: &Plan, key: &str, message: &str) -> InputError {
     plan.spec.locate(None, KeyError::new(key, message))
 }
 
-/// The radiosity of every pixel of `view` from sums `acc` (watts per unit `w`).
-fn radiosity(view: &View, acc: &[i64], watts_per_unit: f64) -> Vec<Radiosity> {
-    let d = view.discs.radius;
-    let area = std::f64::consts::PI * d * d;
+/// The radiosity of every pixel of `view` from sums `acc` over `discs` (the view's, or the same
+/// discs with their own radii; watts per unit `w`).
+fn radiosity(view: &View, discs: &Discs, acc: &[i64], watts_per_unit: f64) -> Vec<Radiosity> {
     view.pixels
         .iter()
         .map(|p| match *p {
             Pixel::Miss => f64::NAN,
             Pixel::Emitter => f64::INFINITY,
             Pixel::Disc { disc, albedo } => {
-                let e = acc[disc as usize] as f64 * watts_per_unit / area;
+                let e = discs.irradiance(disc as usize, acc[disc as usize] as f64 * watts_per_unit);
                 albedo * e / std::f64::consts::PI
             }
         })
@@ -159,6 +169,12 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
     let (cfg, seed) = config(plan, o.point)?;
     if o.frames.is_empty() {
         return Err(Error::Usage("--frames: give at least one frame".into()).into());
+    }
+    if o.compare_edge.is_some() && (o.frames.len() != 1 || o.diff.is_some() || o.gif.is_some()) {
+        return Err(Error::Usage(
+            "--compare-edge renders one frame as three panels: give one frame and no --diff or --gif".into(),
+        )
+        .into());
     }
     if let Some(&f) = o.frames.iter().find(|&&f| f >= cfg.frames) {
         let what = if cfg.frames == 1 {
@@ -235,15 +251,18 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
         let t = Instant::now();
         let view = camera::view(&qs.scene, &cam, w, h, cfg.detp.disc_radius);
         let live = qs.live_store();
-        let acc = gather::gather(&view.discs, &live);
-        let b = radiosity(&view, &acc, live.scale.watts_per_unit);
+        let (discs, cut) = edge(&qs.scene, &view.discs, &live, cfg.detp.edge);
+        let live_e = cut.as_ref().unwrap_or(&live);
+        let acc = gather::gather(&discs, live_e);
+        let b = radiosity(&view, &discs, &acc, live.scale.watts_per_unit);
         gather_s += t.elapsed().as_secs_f64();
         let diff = if o.diff.is_some() {
             let t = Instant::now();
             let (_, full, _) = qs.full_recalculation();
-            let acc_full = gather::gather(&view.discs, &full);
-            let e_inc = radiosity(&view, &acc, live.scale.watts_per_unit);
-            let e_full = radiosity(&view, &acc_full, full.scale.watts_per_unit);
+            let (_, cut_full) = edge(&qs.scene, &view.discs, &full, cfg.detp.edge);
+            let acc_full = gather::gather(&discs, cut_full.as_ref().unwrap_or(&full));
+            let e_inc = radiosity(&view, &discs, &acc, live.scale.watts_per_unit);
+            let e_full = radiosity(&view, &discs, &acc_full, full.scale.watts_per_unit);
             let mut dif = vec![0.0; view.pixels.len()];
             let mut count = 0;
             for (k, p) in view.pixels.iter().enumerate() {
@@ -269,6 +288,33 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
         } else {
             None
         };
+        if let Some(mode) = o.compare_edge.map(|m| with_spec_params(m, cfg.detp.edge)) {
+            let t = Instant::now();
+            let (pd, pc) = edge(&qs.scene, &view.discs, &live, EdgeMode::Paper);
+            let a = gather::gather(&pd, pc.as_ref().unwrap_or(&live));
+            let paper = radiosity(&view, &pd, &a, live.scale.watts_per_unit);
+            let (rd, rc) = edge(&qs.scene, &view.discs, &live, mode);
+            let a = gather::gather(&rd, rc.as_ref().unwrap_or(&live));
+            let remedy = radiosity(&view, &rd, &a, live.scale.watts_per_unit);
+            let (dif, count, max) = difference(&view, &paper, &remedy);
+            gather_s += t.elapsed().as_secs_f64();
+            writeln!(
+                log,
+                "render: frame {f}, paper vs {}: {count} of {} pixel(s) differ (max |ΔE| = {max:.6e} W/m²)",
+                edge_name(mode),
+                view.discs.len()
+            )?;
+            shown.push(Frame {
+                b: paper,
+                diff: None,
+            });
+            shown.push(Frame {
+                b: remedy,
+                diff: None,
+            });
+            shown.push(Frame { b: dif, diff: None });
+            continue;
+        }
         shown.push(Frame { b, diff });
     }
 
@@ -279,11 +325,25 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
     } else {
         Palette::Grey
     };
-    let exposure = tone::exposure(shown.iter().map(|f| f.b.as_slice()));
-    let images: Vec<Vec<u8>> = shown
+    // With --compare-edge the two renderings share one exposure and the difference has its own.
+    let exposure = tone::exposure(
+        shown
+            .iter()
+            .take(if o.compare_edge.is_some() {
+                2
+            } else {
+                usize::MAX
+            })
+            .map(|f| f.b.as_slice()),
+    );
+    let mut images: Vec<Vec<u8>> = shown
         .iter()
         .map(|f| tone::indices(&f.b, exposure, palette))
         .collect();
+    if o.compare_edge.is_some() {
+        let dif = &shown[2].b;
+        images[2] = tone::indices(dif, tone::exposure([dif.as_slice()]), palette);
+    }
     let (wu, hu) = (w as usize, h as usize);
     let k = images.len() as u32;
     let rgb = palette.rgb();
@@ -360,6 +420,96 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
         t_all.elapsed().as_secs_f64()
     )?;
     Ok(log)
+}
+
+/// The view's discs and, if the mode cuts segments, a cut copy of `store`: `detp.edge` applied as
+/// `raycost run` applies it.
+fn edge(
+    scene: &crate::lt::Scene,
+    discs: &Discs,
+    store: &SegmentStore,
+    mode: EdgeMode,
+) -> (Discs, Option<SegmentStore>) {
+    let discs = match mode.clamp_min() {
+        None => discs.clone(),
+        Some(min) => {
+            let r = clamped_radii(scene, &discs.centers, &discs.normals, discs.radius, min);
+            discs.clone().with_radii(r).expect("radii in (0, d]")
+        }
+    };
+    let cut = mode.first_hit_gap().map(|g| {
+        let mut s = store.clone();
+        clip_to_first_hit(&mut s, g * discs.radius);
+        s
+    });
+    (discs, cut)
+}
+
+/// `--compare-edge MODE`: a remedy of `detp.edge`, with the default parameters (the spec's replace
+/// them in [`run`] when it gives them).
+pub fn edge_mode(name: &str) -> Result<EdgeMode, Error> {
+    use crate::experiment::detp::spec::{EDGE_GAP, EDGE_MIN_RADIUS};
+    let (min, gap) = (EDGE_MIN_RADIUS, EDGE_GAP);
+    match name {
+        "clamp-radius" => Ok(EdgeMode::ClampRadius { min }),
+        "first-hit" => Ok(EdgeMode::FirstHit { gap }),
+        "clamp-first-hit" => Ok(EdgeMode::ClampFirstHit { min, gap }),
+        other => Err(Error::Usage(format!(
+            "--compare-edge: got \"{other}\", expected a remedy of detp.edge: clamp-radius, first-hit or clamp-first-hit"
+        ))),
+    }
+}
+
+/// `mode` with the parameters the spec's own mode gives.
+fn with_spec_params(mode: EdgeMode, spec: EdgeMode) -> EdgeMode {
+    let min = spec.clamp_min();
+    let gap = spec.first_hit_gap();
+    match mode {
+        EdgeMode::ClampRadius { min: m } => EdgeMode::ClampRadius {
+            min: min.unwrap_or(m),
+        },
+        EdgeMode::FirstHit { gap: g } => EdgeMode::FirstHit {
+            gap: gap.unwrap_or(g),
+        },
+        EdgeMode::ClampFirstHit { min: m, gap: g } => EdgeMode::ClampFirstHit {
+            min: min.unwrap_or(m),
+            gap: gap.unwrap_or(g),
+        },
+        EdgeMode::Paper => EdgeMode::Paper,
+    }
+}
+
+/// The `detp.edge` value of a mode.
+fn edge_name(mode: EdgeMode) -> &'static str {
+    match mode {
+        EdgeMode::Paper => "paper",
+        EdgeMode::ClampRadius { .. } => "clamp-radius",
+        EdgeMode::FirstHit { .. } => "first-hit",
+        EdgeMode::ClampFirstHit { .. } => "clamp-first-hit",
+    }
+}
+
+/// Per pixel |E_a − E_b| (irradiance, from radiosity over albedo; 0 where neither is a disc), the
+/// number of disc pixels that differ and the largest difference.
+fn difference(view: &View, a: &[Radiosity], b: &[Radiosity]) -> (Vec<Radiosity>, usize, f64) {
+    let mut out = vec![f64::NAN; view.pixels.len()];
+    let (mut count, mut max) = (0, 0.0f64);
+    for (k, p) in view.pixels.iter().enumerate() {
+        match *p {
+            Pixel::Disc { albedo, .. } => {
+                let d = if a[k] == b[k] {
+                    0.0
+                } else {
+                    count += 1;
+                    (a[k] - b[k]).abs() * std::f64::consts::PI / albedo.max(1e-300)
+                };
+                max = max.max(d);
+                out[k] = d;
+            }
+            Pixel::Emitter | Pixel::Miss => {}
+        }
+    }
+    (out, count, max)
 }
 
 /// The scene's camera, moved and aimed as the options say.

@@ -12,6 +12,17 @@ pub fn uniform_direction<R: Rng + ?Sized>(rng: &mut R) -> DVec3 {
     DVec3::new(s * phi.cos(), s * phi.sin(), z)
 }
 
+/// A direction cosine-distributed about the unit normal `n` (density cos θ / π): how a diffuse
+/// surface emits and reflects, shared by the photon tracer and the reference path tracer.
+#[inline]
+pub fn cosine_about<R: Rng + ?Sized>(rng: &mut R, n: DVec3) -> DVec3 {
+    let (u1, u2): (f64, f64) = (rng.gen(), rng.gen());
+    let r = u1.sqrt();
+    let phi = std::f64::consts::TAU * u2;
+    let (a, b) = n.any_orthonormal_pair();
+    (a * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt()).normalize()
+}
+
 /// A point uniform in the unit cube `[0, 1)³`.
 #[inline]
 pub fn uniform_unit_cube<R: Rng + ?Sized>(rng: &mut R) -> DVec3 {

@@ -61,6 +61,8 @@ pub mod domain {
     pub const PHOTON: u64 = 0x7068_6f74;
     /// The subset of points checked by brute force: `[CHECK, seed, point]`.
     pub const CHECK: u64 = 0x6368_6563;
+    /// The reference path tracer's samples at one sample point: `[REFERENCE, seed, point, sample]`.
+    pub const REFERENCE: u64 = 0x7265_6665;
 }
 
 #[cfg(test)]

@@ -109,7 +109,6 @@ pub trait DiscIndex: Sync {
     ) -> IndexStats {
         let discs = self.discs();
         assert!(acc.len() >= discs.len(), "one accumulator per disc");
-        let d = discs.discs.radius;
         let n = segments.map_or(store.len(), <[u32]>::len);
         let seg_at = |k: usize| &store.segments[segments.map_or(k, |s| s[k] as usize)];
         let (sums, stats) = (0..n)
@@ -128,8 +127,9 @@ pub trait DiscIndex: Sync {
                     let mut test = |i: u32| {
                         st.ray_disc_tests += 1;
                         let [c, n] = discs.packed[i as usize];
+                        let r = discs.discs.radius_of(i as usize);
                         // The very call `Discs::crossed_by` makes, on exact copies of the values.
-                        if crosses(s.o(), s.d(), s.t_end(), c, n, d) {
+                        if crosses(s.o(), s.d(), s.t_end(), c, n, r) {
                             add(&mut sums[i as usize], s.power, sign);
                         }
                     };
@@ -190,6 +190,10 @@ impl LocalDiscs {
                 centers,
                 normals,
                 radius: discs.radius,
+                radii: discs
+                    .radii
+                    .as_ref()
+                    .map(|r| original.iter().map(|&i| r[i as usize]).collect()),
             },
             packed,
             original,
@@ -208,7 +212,7 @@ impl LocalDiscs {
 
     /// Bytes held.
     pub fn bytes(&self) -> usize {
-        self.len() * (48 + 48 + 4)
+        self.len() * (48 + 48 + 4) + self.discs.radii.as_ref().map_or(0, |r| r.len() * 8)
     }
 }
 

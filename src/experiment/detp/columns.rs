@@ -20,6 +20,20 @@ pub const TRACE_S: Column = Column::value(
     Class::Timing,
     "seconds to generate the lines or trace the photons, summed over replicas",
 );
+/// Seconds the edge remedy took.
+pub const EDGE_S: Column = Column::value(
+    "edge_s",
+    "s",
+    Class::Timing,
+    "seconds spent on detp.edge's remedy, summed over replicas: the per-disc radii (clamp-radius, once per point) or cutting every segment at its first impact (first-hit); 0 for the paper's method",
+);
+/// Mean disc radius over d.
+pub const EDGE_RADIUS: Column = Column::value(
+    "edge_radius",
+    "1",
+    Class::Measured,
+    "mean disc radius over d across the points (1 unless detp.edge = \"clamp-radius\" shrinks discs near other surfaces)",
+);
 /// An engine's counted tests.
 pub const TESTS: Column = Column::value(
     "tests_{}",
@@ -195,6 +209,50 @@ pub const IRRADIANCE_BIAS: Column = Column::estimate(
     "W/m²",
     "DETP's mean error against the exact irradiance, one sample per replica",
 );
+/// Reference: mean irradiance over the points.
+pub const REFERENCE_IRRADIANCE: Column = Column::estimate(
+    "reference_irradiance",
+    "W/m²",
+    "engine reference: its irradiance averaged over the sample points; SE from the points' own SEs (√Σse²/n), n = points",
+);
+/// Reference: mean SE.
+pub const REFERENCE_MEAN_SE: Column = Column::value(
+    "reference_mean_se",
+    "W/m²",
+    Class::Measured,
+    "engine reference: the mean over the sample points of its standard error (detp.reference_samples paths each)",
+);
+/// DETP against the reference: mean error.
+pub const IRRADIANCE_REF_BIAS: Column = Column::estimate(
+    "irradiance_ref_bias",
+    "W/m²",
+    "DETP's mean error against engine reference over the points, Σ(E_i − R_i)/n; SE √Σ(se_E,i² + se_R,i²)/n (Monte Carlo noise of both; the point set is fixed)",
+);
+/// DETP against the reference: RMSE.
+pub const IRRADIANCE_REF_RMSE: Column = Column::estimate(
+    "irradiance_ref_rmse",
+    "W/m²",
+    "DETP's root-mean-square error against the true irradiance, estimated against engine reference with the reference's variance subtracted: √max(0, Σ((E_i − R_i)² − se_R,i²)/n); SE by the delta method from Var((E_i − R_i)²) ≈ 4b_i²s_i² + 2s_i⁴",
+);
+/// Photon map against the reference: mean error.
+pub const PHOTON_MAP_REF_BIAS: Column = Column::estimate(
+    "photon_map_ref_bias",
+    "W/m²",
+    "photon map: mean error against engine reference, as irradiance_ref_bias (its per-point SE: across replicas, or with one replica E/√k)",
+);
+/// Photon map against the reference: RMSE.
+pub const PHOTON_MAP_REF_RMSE: Column = Column::estimate(
+    "photon_map_ref_rmse",
+    "W/m²",
+    "photon map: root-mean-square error against the true irradiance, estimated against engine reference as irradiance_ref_rmse",
+);
+/// Surface points skipped as covered.
+pub const POINTS_COVERED: Column = Column::value(
+    "points_covered",
+    "points",
+    Class::Measured,
+    "point_source = \"surface\": lattice points skipped because other geometry covers them (a surface within 10⁻⁶ of the scene's size along the normal, or every probe over the hemisphere meets the back of a surface: inside a solid)",
+);
 /// Speed.
 pub const RAYS_PER_S: Column = Column::value(
     "rays_per_s",
@@ -208,6 +266,8 @@ pub const MAIN: &[Column] = &[
     SEGMENTS,
     POINTS,
     TRACE_S,
+    EDGE_S,
+    EDGE_RADIUS,
     TESTS,
     TESTS_THEORY,
     RAY_SPHERE_TESTS,
@@ -234,6 +294,13 @@ pub const MAIN: &[Column] = &[
     IRRADIANCE_BIAS,
     TESTS_PER_REPLICA,
     COST_PER_REPLICA_S,
+    REFERENCE_IRRADIANCE,
+    REFERENCE_MEAN_SE,
+    IRRADIANCE_REF_BIAS,
+    IRRADIANCE_REF_RMSE,
+    PHOTON_MAP_REF_BIAS,
+    PHOTON_MAP_REF_RMSE,
+    POINTS_COVERED,
     RAYS_PER_S,
 ];
 
@@ -374,6 +441,28 @@ pub const POINT_IRRADIANCE_EXACT: Column = Column::value(
     "the scene's closed form at the point (NaN without one)",
 );
 
+/// The point's disc radius.
+pub const POINT_DISC_RADIUS: Column = Column::value(
+    "disc_radius",
+    "length",
+    Class::Measured,
+    "the point's disc radius: d, or with detp.edge = \"clamp-radius\" its own radius (distance to the nearest other surface, clamped to [edge_min_radius·d, d]); its sum is divided by π·disc_radius²",
+);
+/// A baseline's estimate at the point.
+pub const POINT_BASELINE_E: Column = Column::value(
+    "{}_e",
+    "W/m²",
+    Class::Measured,
+    "a baseline engine's irradiance at the point: reference_e (path-traced, unbiased) or photon_map_e (mean over replicas)",
+);
+/// Its SE.
+pub const POINT_BASELINE_SE: Column = Column::value(
+    "{}_se",
+    "W/m²",
+    Class::Measured,
+    "its standard error: the reference's from its samples' variance; the photon map's across replicas, or with one replica E/√k",
+);
+
 /// `NAME.points.csv`.
 pub const POINTS_TABLE: &[Column] = &[
     SAMPLE,
@@ -383,7 +472,10 @@ pub const POINTS_TABLE: &[Column] = &[
     NX,
     NY,
     NZ,
+    POINT_DISC_RADIUS,
     POINT_IRRADIANCE_MEAN,
     POINT_IRRADIANCE_SE,
     POINT_IRRADIANCE_EXACT,
+    POINT_BASELINE_E,
+    POINT_BASELINE_SE,
 ];

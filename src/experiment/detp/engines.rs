@@ -5,6 +5,8 @@
 //! DETP engines return their integer sum per disc, which the runner compares across engines and
 //! against brute force; baselines (the photon map) return per-disc estimates instead.
 
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use super::columns as col;
@@ -16,7 +18,9 @@ use crate::detp::photon_map::{self, Filter};
 use crate::detp::quasi_static::IndexKind;
 use crate::detp::{brute, disc_index, order, sphere_cache};
 use crate::experiment::metric::{not_judged, z_verdict, Metric, SummaryLine, Theory};
+use crate::lt::reference::{self, Irradiance};
 use crate::output::row::Row;
+use crate::sample::rng::{domain, hash_key, mix64};
 use crate::stats::{ClusteredMean, Estimate};
 use crate::theory::detp as th;
 
@@ -50,6 +54,11 @@ pub(super) trait Engine: Send {
     fn seconds(&self) -> f64;
     /// Writes its columns of the main row.
     fn write(&self, p: &Pooled, row: &mut Row);
+    /// A baseline's estimate and standard error per disc, pooled over replicas (None for a DETP
+    /// engine, whose per-disc values the runner pools itself).
+    fn per_point(&self, _p: &Pooled) -> Option<Vec<(f64, f64)>> {
+        None
+    }
     /// The levels table and its summary lines (the sphere cache only).
     fn levels(&self, _p: &Pooled, _law: &Law) -> (Vec<Row>, Vec<SummaryLine>) {
         (Vec::new(), Vec::new())
@@ -66,13 +75,17 @@ pub(super) struct Law {
     pub lines: bool,
 }
 
-/// The engine for a choice of `detp.engines`.
-pub(super) fn engine(e: EngineChoice) -> Box<dyn Engine> {
+/// The engine for a choice of `detp.engines` (the reference reads and fills the run's `cache`).
+pub(super) fn engine(e: EngineChoice, cache: &ReferenceCache) -> Box<dyn Engine> {
     match e {
         EngineChoice::SphereCache => Box::new(SphereCache::default()),
         EngineChoice::DiscIndex => Box::new(Index::default()),
         EngineChoice::BruteForce => Box::new(BruteForce::default()),
         EngineChoice::PhotonMap => Box::new(PhotonMap::default()),
+        EngineChoice::Reference => Box::new(Reference {
+            cache: cache.clone(),
+            result: None,
+        }),
     }
 }
 
@@ -397,6 +410,25 @@ impl Engine for PhotonMap {
         // A baseline: not part of the DETP engines' speed.
         0.0
     }
+    fn per_point(&self, p: &Pooled) -> Option<Vec<(f64, f64)>> {
+        let n = self.runs.first().map_or(0, |r| r.0.len());
+        let k = p.cfg.photon_map_k as f64;
+        Some(
+            (0..n)
+                .map(|i| {
+                    let v: Vec<f64> = self.runs.iter().map(|r| r.0[i]).collect();
+                    let e = per_replica(&v);
+                    // One replica: a k-nearest-neighbour estimate has relative SE ≈ 1/√k.
+                    let se = if v.len() == 1 {
+                        e.mean.abs() / k.sqrt()
+                    } else {
+                        e.se
+                    };
+                    (e.mean, se)
+                })
+                .collect(),
+        )
+    }
     fn write(&self, p: &Pooled, row: &mut Row) {
         let errs: Vec<(f64, f64)> = self.runs.iter().map(|r| errors(&r.0, p.exact)).collect();
         row.put_estimate(
@@ -413,4 +445,124 @@ impl Engine for PhotonMap {
             self.runs.iter().map(|r| r.1).sum::<f64>(),
         );
     }
+}
+
+/// References computed in one run, by (scene, points, samples, seed): sweep points that share their
+/// sample points (other photon counts, d, k) compute the reference once. Values are a pure function
+/// of the key, so sharing them changes no measured column.
+#[derive(Clone, Default)]
+pub struct ReferenceCache(Arc<Mutex<References>>);
+
+/// Per key: the reference per disc and its seconds.
+type References = HashMap<u64, Arc<(Vec<Irradiance>, f64)>>;
+
+/// The path-traced reference irradiance per disc (a baseline: never part of DETP's sums or speed).
+struct Reference {
+    cache: ReferenceCache,
+    /// Estimates per disc and the seconds they took to compute.
+    result: Option<Arc<(Vec<Irradiance>, f64)>>,
+}
+
+impl Engine for Reference {
+    fn run(&mut self, cfg: &DetpConfig, _rays: &RaySet, pts: &PointSet) -> Output {
+        // Once per point: the reference does not depend on the replica's photons.
+        if self.result.is_some() {
+            return Output::Baseline;
+        }
+        let Some(scene) = cfg.scene() else {
+            unreachable!("configure refuses the reference without a scene")
+        };
+        let discs = &pts.discs;
+        let mut key = hash_key(&[domain::REFERENCE, cfg.seed, cfg.reference_samples]);
+        for b in scene.path.to_string_lossy().bytes() {
+            key = mix64(key ^ u64::from(b));
+        }
+        for (c, n) in discs.centers.iter().zip(&discs.normals) {
+            for x in c.to_array().into_iter().chain(n.to_array()) {
+                key = mix64(key ^ x.to_bits());
+            }
+        }
+        let cached = self
+            .cache
+            .0
+            .lock()
+            .expect("no panic holds it")
+            .get(&key)
+            .cloned();
+        let r = cached.unwrap_or_else(|| {
+            let (v, s) = timed(|| {
+                reference::irradiance(
+                    &scene.scene,
+                    &discs.centers,
+                    &discs.normals,
+                    cfg.reference_samples,
+                    hash_key(&[cfg.seed]),
+                )
+            });
+            let r = Arc::new((v, s));
+            self.cache
+                .0
+                .lock()
+                .expect("no panic holds it")
+                .insert(key, r.clone());
+            r
+        });
+        self.result = Some(r);
+        Output::Baseline
+    }
+    fn seconds(&self) -> f64 {
+        0.0
+    }
+    fn per_point(&self, _p: &Pooled) -> Option<Vec<(f64, f64)>> {
+        self.result
+            .as_ref()
+            .map(|r| r.0.iter().map(|e| (e.mean, e.se)).collect())
+    }
+    fn write(&self, _p: &Pooled, row: &mut Row) {
+        row.put_member(
+            &col::COST_S,
+            EngineChoice::Reference.column(),
+            self.result.as_ref().map_or(0.0, |r| r.1),
+        );
+    }
+}
+
+/// An engine's estimates `est` against the reference `refr`, both (value, SE) per disc: the mean
+/// error (bias) and the root-mean-square error against the *true* irradiance, each with a standard
+/// error from the Monte Carlo noise of both (the point set is fixed).
+///
+/// E[(E_i − R_i)²] = b_i² + s_E,i² + s_R,i², so Σ((E_i − R_i)² − s_R,i²)/n estimates the engine's
+/// mean square error (its bias² and its own variance), the reference's variance subtracted; its
+/// variance is Σ Var((E_i − R_i)²)/n² with Var ≈ 4μ_i²s_i² + 2s_i⁴ (normal errors, mean μ_i,
+/// variance s_i² = s_E,i² + s_R,i², μ_i² estimated by max(0, (E_i − R_i)² − s_i²)), carried to the
+/// root by the delta method.
+pub(super) fn against_reference(est: &[(f64, f64)], refr: &[(f64, f64)]) -> (Estimate, Estimate) {
+    let n = est.len().min(refr.len());
+    let (mut sum_d, mut var_d, mut mse, mut var_mse) = (0.0, 0.0, 0.0, 0.0);
+    for (&(e, se), &(r, sr)) in est.iter().zip(refr) {
+        let d = e - r;
+        let s2 = se * se + sr * sr;
+        sum_d += d;
+        var_d += s2;
+        mse += d * d - sr * sr;
+        let mu2 = (d * d - s2).max(0.0);
+        var_mse += 4.0 * mu2 * s2 + 2.0 * s2 * s2;
+    }
+    let nf = n as f64;
+    let est_of = |mean: f64, se: f64| Estimate {
+        mean: if n == 0 { f64::NAN } else { mean },
+        se: if n == 0 { f64::NAN } else { se },
+        n: n as u64,
+        clusters: n as u64,
+    };
+    let bias = est_of(sum_d / nf, var_d.sqrt() / nf);
+    let mse = mse / nf;
+    let se_mse = var_mse.sqrt() / nf;
+    let rmse = mse.max(0.0).sqrt();
+    let se_rmse = if rmse > 0.0 {
+        se_mse / (2.0 * rmse)
+    } else {
+        se_mse.sqrt()
+    };
+    (bias, est_of(rmse, se_rmse))
 }

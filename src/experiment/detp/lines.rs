@@ -45,6 +45,7 @@ pub(super) fn lines(cfg: &DetpConfig, point: u64, replica: u64) -> RaySet {
         law_ball: Some((DVec3::ZERO, 1.0)),
         rays_in_root: n,
         trace_s: start.elapsed().as_secs_f64(),
+        edge_s: 0.0,
     }
 }
 

@@ -7,7 +7,10 @@
 //!   n_R·Q^(2i) and Theorem 1;
 //! - `disc-index`: the discs in an octree or a grid that every segment traverses, against Theorem 1;
 //! - `brute-force`: every segment against every disc;
-//! - `photon-map`: Jensen's k-nearest-neighbour estimate over the same photons (scenes only).
+//! - `photon-map`: Jensen's k-nearest-neighbour estimate over the same photons (scenes only);
+//! - `reference`: the path-traced irradiance at every point ([`crate::lt::reference`]), the ground
+//!   truth DETP and the photon map are measured against (scenes only; computed once per point set
+//!   in a run, not per replica).
 //!
 //! The DETP engines must give the same integer sum on every disc, bit for bit; on top of that a keyed
 //! random subset of `brute_force_points` discs is re-computed by brute force. Any difference is the
@@ -27,7 +30,7 @@ mod scene;
 pub mod spec;
 
 use self::columns as col;
-use self::engines::{Law, Output, Pooled};
+use self::engines::{Law, Output, Pooled, ReferenceCache};
 pub use self::spec::DetpConfig;
 use self::spec::{DetpSpec, EngineChoice, Points};
 use super::inputs::Inputs;
@@ -63,6 +66,8 @@ pub(crate) struct RaySet {
     pub(crate) rays_in_root: u64,
     /// Seconds to generate or trace them.
     pub(crate) trace_s: f64,
+    /// Seconds spent applying `detp.edge` to them (first-hit).
+    pub(crate) edge_s: f64,
 }
 
 /// The sample points of a point (shared by its replicas) with their exact irradiance where known.
@@ -70,13 +75,18 @@ pub(crate) struct PointSet {
     pub(crate) discs: Discs,
     /// Exact irradiance per disc, NaN where the source has none.
     pub(crate) exact: Vec<f64>,
+    /// Seconds spent applying `detp.edge` to the discs (clamp-radius).
+    pub(crate) edge_s: f64,
+    /// Surface points: lattice points skipped because other geometry covers them (None for other
+    /// point sources).
+    pub(crate) covered: Option<u64>,
 }
 
 /// Sample points: uniform in the ball (drawn once per point: all replicas share them, only the rays
 /// change), on a scene's surfaces, or from a user's CSV.
 pub(crate) fn points(cfg: &DetpConfig, point: u64) -> Result<PointSet, Error> {
     if let Some(s) = cfg.scene() {
-        return scene::points(cfg, point, &s.scene);
+        return scene::points(cfg, &s.scene);
     }
     let (centers, normals) = match &cfg.points {
         Points::Ball(n) => {
@@ -108,7 +118,12 @@ pub(crate) fn points(cfg: &DetpConfig, point: u64) -> Result<PointSet, Error> {
         .iter()
         .map(|&c| lines::exact(cfg.photons, c, cfg.disc_radius))
         .collect();
-    Ok(PointSet { discs, exact })
+    Ok(PointSet {
+        discs,
+        exact,
+        edge_s: 0.0,
+        covered: None,
+    })
 }
 
 /// Eq. 4's layout: k³ points at the cell centres of a k-per-side lattice filling the cube inscribed
@@ -206,15 +221,18 @@ pub fn run_point(
     cfg: &DetpConfig,
     point: u64,
     progress: &(dyn Fn(u64) + Sync),
+    refs: &ReferenceCache,
 ) -> Result<PointOutput<DetpTables>, Error> {
     let pts = points(cfg, point)?;
     let discs = &pts.discs;
-    let d = cfg.disc_radius;
-    let area = std::f64::consts::PI * d * d;
-    let mut engines: Vec<Box<dyn engines::Engine>> =
-        cfg.engines.iter().map(|&e| engines::engine(e)).collect();
+    let mut engines: Vec<Box<dyn engines::Engine>> = cfg
+        .engines
+        .iter()
+        .map(|&e| engines::engine(e, refs))
+        .collect();
     let (mut law_radius, mut root_radius, mut mean_segment_watts) = (1.0, 1.0, 0.0);
     let (mut segments, mut rays_in_root, mut trace_s) = (0u64, 0u64, 0.0);
+    let mut edge_s = pts.edge_s;
     let (mut mismatches, mut bf_checked) = (0u64, 0u64);
     let mut irr: Vec<Vec<f64>> = Vec::with_capacity(cfg.replicas as usize);
     for replica in 0..cfg.replicas {
@@ -225,6 +243,7 @@ pub fn run_point(
         segments += rays.store.len() as u64;
         rays_in_root += rays.rays_in_root;
         trace_s += rays.trace_s;
+        edge_s += rays.edge_s;
         if !rays.store.is_empty() {
             mean_segment_watts = rays
                 .store
@@ -244,7 +263,13 @@ pub fn run_point(
         let a = agree(cfg, point, replica, &rays, &pts, &sums);
         mismatches += a.mismatches;
         bf_checked += a.bf_checked;
-        irr.push(a.sums.iter().map(|&s| scale.watts(s) / area).collect());
+        irr.push(
+            a.sums
+                .iter()
+                .enumerate()
+                .map(|(i, &s)| discs.irradiance(i, scale.watts(s)))
+                .collect(),
+        );
         progress(cfg.photons);
     }
 
@@ -259,12 +284,74 @@ pub fn run_point(
     let mut row = Row::default();
     row.put(&col::SEGMENTS, segments)
         .put(&col::POINTS, discs.len())
-        .put(&col::TRACE_S, trace_s);
+        .put(&col::TRACE_S, trace_s)
+        .put(&col::EDGE_S, edge_s)
+        .put(
+            &col::EDGE_RADIUS,
+            (0..discs.len())
+                .map(|i| discs.radius_of(i) / discs.radius)
+                .sum::<f64>()
+                / discs.len().max(1) as f64,
+        );
     for e in &engines {
         e.write(&pooled, &mut row);
     }
     row.put(&col::MISMATCHES, mismatches)
         .put(&col::BF_CHECKED, bf_checked);
+    if let Some(c) = pts.covered {
+        row.put(&col::POINTS_COVERED, c);
+    }
+
+    // DETP's estimate per disc: mean over replicas, SE across them (or, with one replica, the
+    // Poisson SE of a sum of segments of the mean segment power: √(E·w̄/πd²)).
+    let detp_points: Vec<(f64, f64)> = (0..discs.len())
+        .map(|i| {
+            let v: Vec<f64> = irr.iter().map(|e| e[i]).collect();
+            let mut est = engines::per_replica(&v);
+            if irr.len() == 1 {
+                est.se = (est.mean.max(0.0) * mean_segment_watts / discs.area(i)).sqrt();
+            }
+            (est.mean, est.se)
+        })
+        .collect();
+    // Baselines' estimates per disc, and every engine against the reference where it runs.
+    let baselines: Vec<(EngineChoice, Vec<(f64, f64)>)> = cfg
+        .engines
+        .iter()
+        .zip(&engines)
+        .filter_map(|(&c, e)| e.per_point(&pooled).map(|v| (c, v)))
+        .collect();
+    if let Some((_, refr)) = baselines
+        .iter()
+        .find(|(c, _)| *c == EngineChoice::Reference)
+    {
+        let n = refr.len().max(1) as f64;
+        let se2: f64 = refr.iter().map(|r| r.1 * r.1).sum();
+        row.put_estimate(
+            &col::REFERENCE_IRRADIANCE,
+            &crate::stats::Estimate {
+                mean: refr.iter().map(|r| r.0).sum::<f64>() / n,
+                se: se2.sqrt() / n,
+                n: refr.len() as u64,
+                clusters: refr.len() as u64,
+            },
+        )
+        .put(
+            &col::REFERENCE_MEAN_SE,
+            refr.iter().map(|r| r.1).sum::<f64>() / n,
+        );
+        let (bias, rmse) = engines::against_reference(&detp_points, refr);
+        row.put_estimate(&col::IRRADIANCE_REF_BIAS, &bias)
+            .put_estimate(&col::IRRADIANCE_REF_RMSE, &rmse);
+        if let Some((_, pm)) = baselines
+            .iter()
+            .find(|(c, _)| *c == EngineChoice::PhotonMap)
+        {
+            let (bias, rmse) = engines::against_reference(pm, refr);
+            row.put_estimate(&col::PHOTON_MAP_REF_BIAS, &bias)
+                .put_estimate(&col::PHOTON_MAP_REF_RMSE, &rmse);
+        }
+    }
 
     // Accuracy against ground truth: the discs with an exact value (all of them where none has one,
     // so the mean irradiance is still reported).
@@ -289,10 +376,15 @@ pub fn run_point(
     );
     if irr.len() == 1 && !judged.is_empty() {
         // One replica: the Poisson SE of the mean over the n judged points, each point's sum
-        // counted as independent (as the points table does per point): √(Ē·w̄/(πd²·n)). With it the
-        // mean is judged against an exact value instead of "n/a".
+        // counted as independent (as the points table does per point): √(Σ Ē·w̄/(π·d_i²))/n, which
+        // is √(Ē·w̄/(πd²·n)) when every disc has radius d. With it the mean is judged against an
+        // exact value instead of "n/a".
         let n = judged.len() as f64;
-        mean_irr.se = (mean_irr.mean.max(0.0) * mean_segment_watts / (area * n)).sqrt();
+        let var: f64 = judged
+            .iter()
+            .map(|&i| mean_irr.mean.max(0.0) * mean_segment_watts / discs.area(i))
+            .sum();
+        mean_irr.se = var.sqrt() / n;
         mean_irr.clusters = judged.len() as u64;
     }
     let engine_s: f64 = engines.iter().map(|e| e.seconds()).sum();
@@ -325,15 +417,9 @@ pub fn run_point(
     // Levels first, then the point's own metrics.
     lines.append(&mut summary);
 
-    // Points table: mean over replicas, SE across them (or, with one replica, the Poisson SE of a sum
-    // of segments of the mean segment power: √(E·w̄/πd²)).
+    // Points table: DETP's estimate and SE per disc, then each baseline's.
     if cfg.write_points {
-        for i in 0..discs.len() {
-            let v: Vec<f64> = irr.iter().map(|e| e[i]).collect();
-            let mut est = engines::per_replica(&v);
-            if irr.len() == 1 {
-                est.se = (est.mean.max(0.0) * mean_segment_watts / area).sqrt();
-            }
+        for (i, &(mean, se)) in detp_points.iter().enumerate() {
             let (c, nn) = (discs.centers[i], discs.normals[i]);
             let mut r = Row::default();
             r.put(&col::SAMPLE, i)
@@ -343,9 +429,14 @@ pub fn run_point(
                 .put(&col::NX, nn.x)
                 .put(&col::NY, nn.y)
                 .put(&col::NZ, nn.z)
-                .put(&col::POINT_IRRADIANCE_MEAN, est.mean)
-                .put(&col::POINT_IRRADIANCE_SE, est.se)
+                .put(&col::POINT_DISC_RADIUS, discs.radius_of(i))
+                .put(&col::POINT_IRRADIANCE_MEAN, mean)
+                .put(&col::POINT_IRRADIANCE_SE, se)
                 .put(&col::POINT_IRRADIANCE_EXACT, pts.exact[i]);
+            for (c, v) in &baselines {
+                r.put_member(&col::POINT_BASELINE_E, c.column(), v[i].0)
+                    .put_member(&col::POINT_BASELINE_SE, c.column(), v[i].1);
+            }
             tables.points.push(r);
         }
     }
@@ -494,7 +585,7 @@ impl Kind for DetpKind {
     type Raw = DetpSpec;
     type Point = DetpConfig;
     type Tables = DetpTables;
-    type Shared = ();
+    type Shared = ReferenceCache;
 
     fn columns() -> Vec<(&'static str, &'static [Column])> {
         vec![
@@ -531,10 +622,14 @@ impl Kind for DetpKind {
     fn warnings(p: &DetpConfig) -> Vec<String> {
         p.warnings()
     }
-    fn shared(_: &[&DetpConfig]) -> Result<(), Error> {
-        Ok(())
+    fn shared(_: &[&DetpConfig]) -> Result<ReferenceCache, Error> {
+        Ok(ReferenceCache::default())
     }
-    fn run(p: &DetpConfig, _: &(), ctx: &Context) -> Result<PointOutput<DetpTables>, Error> {
-        run_point(p, ctx.index, ctx.progress)
+    fn run(
+        p: &DetpConfig,
+        refs: &ReferenceCache,
+        ctx: &Context,
+    ) -> Result<PointOutput<DetpTables>, Error> {
+        run_point(p, ctx.index, ctx.progress, refs)
     }
 }

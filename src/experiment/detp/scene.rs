@@ -7,35 +7,47 @@ use std::time::Instant;
 use super::spec::{DetpConfig, Points};
 use super::{PointSet, RaySet};
 use crate::detp::disc::Discs;
+use crate::detp::edge::{clamped_radii, clip_to_first_hit};
 use crate::detp::photon::trace_photons;
 use crate::detp::sphere_cache::root_sphere;
-use crate::detp::surface_points::surface_points;
+use crate::detp::surface_points::open_surface_points;
 use crate::error::Error;
 use crate::geom::Aabb;
 use crate::lt::Scene;
-use crate::sample::rng::{domain, hash_key};
+use crate::sample::rng::hash_key;
 
 /// Sample points on the scene's surfaces or from a CSV, with the scene's exact irradiance.
-pub(super) fn points(cfg: &DetpConfig, point: u64, scene: &Scene) -> Result<PointSet, Error> {
-    let (centers, normals) = match &cfg.points {
-        Points::Surface(spacing) => surface_points(
-            scene,
-            *spacing,
-            hash_key(&[domain::POINTS, cfg.seed, point]),
-        ),
-        Points::File(p) => (p.centers.clone(), p.normals.clone()),
+/// (The lattice is deterministic: every sweep point of a scene gets the same surface points.)
+pub(super) fn points(cfg: &DetpConfig, scene: &Scene) -> Result<PointSet, Error> {
+    let (centers, normals, covered) = match &cfg.points {
+        Points::Surface(spacing) => {
+            let (c, n, k) = open_surface_points(scene, *spacing);
+            (c, n, Some(k))
+        }
+        Points::File(p) => (p.centers.clone(), p.normals.clone(), None),
         Points::Ball(_) | Points::Grid(_) => {
             unreachable!("the spec check gives a scene surface or file points")
         }
     };
-    let discs = Discs::new(centers, normals, cfg.disc_radius).map_err(Error::internal)?;
+    let mut discs = Discs::new(centers, normals, cfg.disc_radius).map_err(Error::internal)?;
+    let start = Instant::now();
+    if let Some(min) = cfg.edge.clamp_min() {
+        let radii = clamped_radii(scene, &discs.centers, &discs.normals, discs.radius, min);
+        discs = discs.with_radii(radii).map_err(Error::internal)?;
+    }
+    let edge_s = start.elapsed().as_secs_f64();
     let exact = discs
         .centers
         .iter()
         .zip(&discs.normals)
         .map(|(&p, &n)| scene.exact_irradiance(p, n).unwrap_or(f64::NAN))
         .collect();
-    Ok(PointSet { discs, exact })
+    Ok(PointSet {
+        discs,
+        exact,
+        edge_s,
+        covered,
+    })
 }
 
 /// The photons of one replica, and a root sphere that holds the scene and every disc.
@@ -47,8 +59,13 @@ pub(super) fn photons(
     discs: &Discs,
 ) -> RaySet {
     let start = Instant::now();
-    let store = trace_photons(scene, cfg.photons, hash_key(&[cfg.seed, point, replica]));
+    let mut store = trace_photons(scene, cfg.photons, hash_key(&[cfg.seed, point, replica]));
     let trace_s = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    if let Some(gap) = cfg.edge.first_hit_gap() {
+        clip_to_first_hit(&mut store, gap * cfg.disc_radius);
+    }
+    let edge_s = start.elapsed().as_secs_f64();
     let (b, d) = (scene.bounds(), discs.bounds_all());
     let root = root_sphere(&Aabb::new(b.lo.min(d.lo), b.hi.max(d.hi)));
     let n = store.len() as u64;
@@ -59,5 +76,6 @@ pub(super) fn photons(
         law_ball: None,
         rays_in_root: n,
         trace_s,
+        edge_s,
     }
 }

@@ -14,6 +14,7 @@ use serde::{de::Error as _, Deserialize, Deserializer, Serialize};
 
 use glam::DVec3;
 
+use crate::detp::edge::EdgeMode;
 use crate::detp::order::Order;
 use crate::detp::quasi_static::IndexKind;
 use crate::detp::sphere_cache::{ListMode, PopRule, SphereCacheParams};
@@ -161,7 +162,8 @@ pub struct RawDetp {
     /// thread count, so counters do not depend on threads).
     #[serde(default = "default_chunk", deserialize_with = "count")]
     pub chunk_points: u64,
-    /// Engines to run on every point: `sphere-cache`, `disc-index`, `brute-force`, `photon-map`.
+    /// Engines to run on every point: `sphere-cache`, `disc-index`, `brute-force`, `photon-map`,
+    /// `reference`.
     #[serde(default = "default_engines")]
     pub engines: Vec<EngineChoice>,
     /// Disc index kind: `"octree"` (default) or `"grid"`.
@@ -186,6 +188,9 @@ pub struct RawDetp {
     /// Photon-map filter: `"disc"` or `"cone"`.
     #[serde(default)]
     pub photon_map_filter: FilterChoice,
+    /// Paths per sample point of engine `reference` (the path-traced ground truth).
+    #[serde(default = "default_reference_samples", deserialize_with = "count")]
+    pub reference_samples: u64,
     /// Independent realisations (new rays and points each); standard errors are across them.
     #[serde(default = "one_u", deserialize_with = "count")]
     pub replicas: u64,
@@ -199,7 +204,26 @@ pub struct RawDetp {
     /// Memory the ray store and engines may take, GiB.
     #[serde(default = "default_budget", deserialize_with = "positive")]
     pub memory_budget_gib: f64,
+    /// Where a disc reaches past an edge: `"paper"` (the paper's method, default),
+    /// `"clamp-radius"` (per-disc radius limited by the nearest other surface) or `"first-hit"`
+    /// (crossings counted up to `edge_gap`·d beyond the first impact) or `"clamp-first-hit"` (both).
+    /// See docs/hard-cases.md.
+    #[serde(default)]
+    pub edge: EdgeChoice,
+    /// `"clamp-radius"`, `"clamp-first-hit"`: the smallest disc radius, as a fraction of d (in
+    /// (0, 1]; default 0.25).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub edge_min_radius: Option<f64>,
+    /// `"first-hit"`, `"clamp-first-hit"`: how far beyond the first impact a crossing still counts,
+    /// as a fraction of d (≥ 0; default 0.05).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub edge_gap: Option<f64>,
 }
+
+/// Default `detp.edge_min_radius`.
+pub const EDGE_MIN_RADIUS: f64 = 0.25;
+/// Default `detp.edge_gap`.
+pub const EDGE_GAP: f64 = 0.05;
 
 use crate::choice;
 use crate::spec::keys::{key, IfAbsent::*, KeyDoc};
@@ -231,6 +255,7 @@ choice!(
         DiscIndex => "disc-index",
         BruteForce => "brute-force",
         PhotonMap => "photon-map",
+        Reference => "reference",
     } default SphereCache
 );
 choice!(
@@ -240,6 +265,16 @@ choice!(
 choice!(
     /// Photon-map filter.
     FilterChoice { Cone => "cone", Disc => "disc" } default Cone
+);
+
+choice!(
+    /// `detp.edge`: the paper's method or a remedy at edges.
+    EdgeChoice {
+        Paper => "paper",
+        ClampRadius => "clamp-radius",
+        FirstHit => "first-hit",
+        ClampFirstHit => "clamp-first-hit",
+    } default Paper
 );
 
 choice!(
@@ -253,14 +288,20 @@ choice!(
 );
 
 impl EngineChoice {
-    /// Column stem: `sphere_cache`, `disc_index`, `brute_force`, `photon_map`.
+    /// Column stem: `sphere_cache`, `disc_index`, `brute_force`, `photon_map`, `reference`.
     pub fn column(self) -> &'static str {
         match self {
             EngineChoice::SphereCache => "sphere_cache",
             EngineChoice::DiscIndex => "disc_index",
             EngineChoice::BruteForce => "brute_force",
             EngineChoice::PhotonMap => "photon_map",
+            EngineChoice::Reference => "reference",
         }
+    }
+
+    /// A baseline beside the DETP engines (its own estimates, not DETP's integer sums)?
+    pub fn is_baseline(self) -> bool {
+        matches!(self, EngineChoice::PhotonMap | EngineChoice::Reference)
     }
 }
 
@@ -323,6 +364,9 @@ fn default_bf_points() -> u64 {
 fn default_k() -> u64 {
     64
 }
+fn default_reference_samples() -> u64 {
+    1024
+}
 fn default_budget() -> f64 {
     8.0
 }
@@ -360,6 +404,54 @@ fn bits<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
             "got {b}, expected 1–21 bits per axis (3 × 21 = 63 bits fit a key)"
         )))
     }
+}
+
+/// `detp.edge` and its parameter, checked: a remedy needs a scene, and each parameter belongs to
+/// its own mode.
+fn edge_mode(d: &RawDetp, rays: &Rays) -> Result<EdgeMode, ConfigError> {
+    if d.edge != EdgeChoice::Paper && matches!(rays, Rays::Lines) {
+        return refuse(
+            "detp.edge",
+            format!(
+                "\"{}\" needs surfaces: lines through the unit ball have no edges (use detp.source = \"scene\")",
+                d.edge.as_str()
+            ),
+        );
+    }
+    let clamps = matches!(d.edge, EdgeChoice::ClampRadius | EdgeChoice::ClampFirstHit);
+    let cuts = matches!(d.edge, EdgeChoice::FirstHit | EdgeChoice::ClampFirstHit);
+    if d.edge_min_radius.is_some() && !clamps {
+        return refuse(
+            "detp.edge_min_radius",
+            "belongs to detp.edge = \"clamp-radius\" or \"clamp-first-hit\"",
+        );
+    }
+    if d.edge_gap.is_some() && !cuts {
+        return refuse(
+            "detp.edge_gap",
+            "belongs to detp.edge = \"first-hit\" or \"clamp-first-hit\"",
+        );
+    }
+    let min = d.edge_min_radius.unwrap_or(EDGE_MIN_RADIUS);
+    if !(min > 0.0 && min <= 1.0) {
+        return refuse(
+            "detp.edge_min_radius",
+            format!("got {min}, expected a fraction of d in (0, 1]"),
+        );
+    }
+    let gap = d.edge_gap.unwrap_or(EDGE_GAP);
+    if !(gap.is_finite() && gap >= 0.0) {
+        return refuse(
+            "detp.edge_gap",
+            format!("got {gap}, expected a fraction of d ≥ 0"),
+        );
+    }
+    Ok(match d.edge {
+        EdgeChoice::Paper => EdgeMode::Paper,
+        EdgeChoice::ClampRadius => EdgeMode::ClampRadius { min },
+        EdgeChoice::FirstHit => EdgeMode::FirstHit { gap },
+        EdgeChoice::ClampFirstHit => EdgeMode::ClampFirstHit { min, gap },
+    })
 }
 
 /// The rays of a point.
@@ -413,6 +505,8 @@ pub struct DetpConfig {
     pub photon_map_k: u64,
     /// Photon-map filter.
     pub photon_map_filter: FilterChoice,
+    /// Paths per sample point of the reference.
+    pub reference_samples: u64,
     /// Realisations.
     pub replicas: u64,
     /// Write NAME.points.csv.
@@ -421,6 +515,8 @@ pub struct DetpConfig {
     pub memory_budget_gib: f64,
     /// Whether the spec gave `detp.point_spacing` (else surface points are 2d apart).
     pub spacing_given: bool,
+    /// `detp.edge` with its parameter.
+    pub edge: EdgeMode,
 }
 
 impl DetpConfig {
@@ -661,10 +757,10 @@ impl DetpConfig {
         if d.engines.is_empty() {
             return refuse("detp.engines", "empty: name at least one engine");
         }
-        if d.engines.iter().all(|&x| x == EngineChoice::PhotonMap) {
+        if d.engines.iter().all(|x| x.is_baseline()) {
             return refuse(
                 "detp.engines",
-                "name a DETP engine (sphere-cache, disc-index or brute-force): the photon map is a baseline beside them",
+                "name a DETP engine (sphere-cache, disc-index or brute-force): the photon map and the reference are baselines beside them",
             );
         }
         for (i, a) in d.engines.iter().enumerate() {
@@ -679,6 +775,18 @@ impl DetpConfig {
             return refuse(
                 "detp.engines",
                 "the photon map needs photon impacts on surfaces: use detp.source = \"scene\"",
+            );
+        }
+        if d.engines.contains(&EngineChoice::Reference) && matches!(rays, Rays::Lines) {
+            return refuse(
+                "detp.engines",
+                "the reference path-traces a scene's lights and surfaces: it needs detp.source = \"scene\" (lines through the unit ball have an exact irradiance already)",
+            );
+        }
+        if d.engines.contains(&EngineChoice::Reference) && d.reference_samples < 2 {
+            return refuse(
+                "detp.reference_samples",
+                "got 1, at least 2 (the reference's standard error comes from its samples' variance)",
             );
         }
         if d.photons > 1 << 31 {
@@ -728,6 +836,7 @@ impl DetpConfig {
                 format!("d = {disc_radius:e} is larger than {}: a tangent disc must be small against the scene", reach.1),
             );
         }
+        let edge = edge_mode(d, &rays)?;
         let cfg = Self {
             seed,
             rays,
@@ -764,10 +873,12 @@ impl DetpConfig {
             brute_force_points: d.brute_force_points,
             photon_map_k: d.photon_map_k,
             photon_map_filter: d.photon_map_filter,
+            reference_samples: d.reference_samples,
             replicas: d.replicas,
             write_points: d.write_points,
             memory_budget_gib: d.memory_budget_gib,
             spacing_given: d.point_spacing.is_some(),
+            edge,
         };
         if let Some(cells) = cfg.grid_cells() {
             if cells >= (1u64 << 31) as f64 {

@@ -199,6 +199,12 @@ impl QuasiStaticConfig {
                 "kind quasi-static puts its points on the scene's surfaces (\"surface\")",
             );
         };
+        if detp.edge != crate::detp::edge::EdgeMode::Paper {
+            return refuse(
+                "detp.edge",
+                "kind quasi-static runs the paper's method only (its incremental updates keep the stored segments and d); the remedies are measured by kind \"detp\"",
+            );
+        }
         if detp.engines != [crate::experiment::detp::spec::EngineChoice::SphereCache] {
             return refuse(
                 "detp.engines",
