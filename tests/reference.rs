@@ -3,10 +3,10 @@
 //! through the engine, and the surface sampler drops the floor a block stands on.
 
 use glam::DVec3;
+use raycost::detp::brute;
 use raycost::detp::disc::Discs;
 use raycost::detp::photon::trace_photons;
 use raycost::detp::surface_points::{open_surface_points, surface_points};
-use raycost::detp::brute;
 use raycost::lt::reference::irradiance;
 use raycost::lt::Scene;
 
@@ -29,14 +29,7 @@ fn the_reference_agrees_with_many_photons_of_detp_on_open_cornell_surfaces() {
         DVec3::new(0.0, 300.0, 300.0),
         DVec3::new(185.0, 165.0, 169.0),
     ];
-    let normals = vec![
-        DVec3::Y,
-        DVec3::Y,
-        -DVec3::Y,
-        -DVec3::Z,
-        DVec3::X,
-        DVec3::Y,
-    ];
+    let normals = vec![DVec3::Y, DVec3::Y, -DVec3::Y, -DVec3::Z, DVec3::X, DVec3::Y];
     let (photons, d) = (1_500_000u64, 25.0);
     let store = trace_photons(&s, photons, 5);
     let discs = Discs::new(pts.clone(), normals.clone(), d).expect("discs");
@@ -79,18 +72,32 @@ fn the_reference_engine_matches_the_closed_forms_of_the_analytic_scenes() {
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let (head, rows) = read_csv(&out.join(format!("{name}/{name}.points.csv")));
         let col = |c: &str| head.iter().position(|h| h == c).expect(c);
-        let (e, se, x) = (col("reference_e"), col("reference_se"), col("irradiance_exact"));
+        let (e, se, x) = (
+            col("reference_e"),
+            col("reference_se"),
+            col("irradiance_exact"),
+        );
         assert!(rows.len() >= 10, "{name}: {} points", rows.len());
         let mut z2 = 0.0;
         for r in &rows {
-            let (e, se, x): (f64, f64, f64) =
-                (r[e].parse().unwrap(), r[se].parse().unwrap(), r[x].parse().unwrap());
+            let (e, se, x): (f64, f64, f64) = (
+                r[e].parse().unwrap(),
+                r[se].parse().unwrap(),
+                r[x].parse().unwrap(),
+            );
             // The point light over a black plane is exact in every sample (SE 0).
             let z = if se > 0.0 { (e - x) / se } else { 0.0 };
-            assert!((e - x).abs() <= 4.0 * se + 1e-9 * x, "{name}: {e} ± {se} vs {x}");
+            assert!(
+                (e - x).abs() <= 4.0 * se + 1e-9 * x,
+                "{name}: {e} ± {se} vs {x}"
+            );
             z2 += z * z;
         }
-        println!("{name}: {} points, mean z² {:.3}", rows.len(), z2 / rows.len() as f64);
+        println!(
+            "{name}: {} points, mean z² {:.3}",
+            rows.len(),
+            z2 / rows.len() as f64
+        );
         let mean_z2 = z2 / rows.len() as f64;
         assert!(mean_z2 < 2.0, "{name}: mean z² {mean_z2}");
     }
@@ -103,12 +110,19 @@ fn surface_points_skip_the_floor_under_the_cornell_blocks_and_count_it() {
     let (open, _, covered) = open_surface_points(&s, 20.0);
     assert_eq!(open.len() as u64 + covered, all.len() as u64);
     // Under the short block (its footprint's inner square) and behind the lamp.
-    let under = |p: &DVec3| p.y == 0.0 && (150.0..220.0).contains(&p.x) && (120.0..200.0).contains(&p.z);
+    let under =
+        |p: &DVec3| p.y == 0.0 && (150.0..220.0).contains(&p.x) && (120.0..200.0).contains(&p.z);
     let behind_lamp =
         |p: &DVec3| p.y > 548.0 && (240.0..310.0).contains(&p.x) && (240.0..310.0).contains(&p.z);
     assert!(all.iter().any(under) && all.iter().any(behind_lamp));
-    assert!(!open.iter().any(under), "a floor point under the short block survived");
-    assert!(!open.iter().any(behind_lamp), "a ceiling point behind the lamp survived");
+    assert!(
+        !open.iter().any(under),
+        "a floor point under the short block survived"
+    );
+    assert!(
+        !open.iter().any(behind_lamp),
+        "a ceiling point behind the lamp survived"
+    );
     // Open floor stays.
     assert!(open.iter().any(|p| p.y == 0.0 && p.x < 60.0 && p.z > 500.0));
     println!("{covered} of {} Cornell points covered", all.len());

@@ -79,7 +79,11 @@ pub fn covered(scene: &Scene, p: DVec3, n: DVec3, own: Prim) -> bool {
         Prim::Ball(_) => scene.first_hit(p, n, 1e-9 * mag, None),
     };
     if contact.is_some_and(|h| {
-        let reach = if matches!(own, Prim::Triangle(_)) { 2.0 * delta } else { delta };
+        let reach = if matches!(own, Prim::Triangle(_)) {
+            2.0 * delta
+        } else {
+            delta
+        };
         h.prim != own && h.t <= reach
     }) {
         return true;
@@ -280,7 +284,10 @@ power = 10.0
         let under_cube = |p: &DVec3| floor_under(p, -1.5, -0.5, -1.5, -0.5);
         let under_box = |p: &DVec3| floor_under(p, 0.5, 1.5, 0.5, 1.5);
         assert!(all.iter().any(under_cube) && all.iter().any(under_box));
-        assert!(!open.iter().any(under_cube), "floor in contact with the cube's bottom");
+        assert!(
+            !open.iter().any(under_cube),
+            "floor in contact with the cube's bottom"
+        );
         assert!(!open.iter().any(under_box), "floor inside the open box");
         // The open box's top faces up (its points stay); its sides face out (their points stay).
         assert!(open.iter().any(|p| p.y == 1.0));
@@ -294,10 +301,7 @@ power = 10.0
             .count();
         assert!(floor_open > 100, "{floor_open}");
         assert_eq!(open.len() as u64 + covered, all.len() as u64);
-        let expected = all
-            .iter()
-            .filter(|p| under_cube(p) || under_box(p))
-            .count() as u64;
+        let expected = all.iter().filter(|p| under_cube(p) || under_box(p)).count() as u64;
         assert_eq!(covered, expected, "only the points under the two boxes");
     }
 }

@@ -255,7 +255,11 @@ mod tests {
         let s = scene(
             "[[surface]]\nkind = \"quad\"\nvertices = [[-4, 0, -4], [-4, 0, 4], [4, 0, 4], [4, 0, -4]]\nalbedo = 0.0\n[[light]]\nkind = \"point\"\nposition = [0, 1, 0]\npower = 100.0\n",
         );
-        let pts = [DVec3::ZERO, DVec3::new(1.0, 0.0, 0.5), DVec3::new(-2.0, 0.0, 1.0)];
+        let pts = [
+            DVec3::ZERO,
+            DVec3::new(1.0, 0.0, 0.5),
+            DVec3::new(-2.0, 0.0, 1.0),
+        ];
         let got = irradiance(&s, &pts, &[DVec3::Y; 3], 16, 1);
         for (p, g) in pts.iter().zip(&got) {
             let r = (DVec3::Y - *p).length();
@@ -304,7 +308,12 @@ mod tests {
         let got = irradiance(&s, &pts, &normals, 20_000, 7);
         for ((p, n), g) in pts.iter().zip(&normals).zip(&got) {
             let want = polygon_irradiance(2.0, &lamp, *p, *n);
-            println!("rectangle at {p}: {:.5} ± {:.5} vs {want:.5} (z = {:.2})", g.mean, g.se, z(g, want));
+            println!(
+                "rectangle at {p}: {:.5} ± {:.5} vs {want:.5} (z = {:.2})",
+                g.mean,
+                g.se,
+                z(g, want)
+            );
             assert!(g.se > 0.0 && g.se < 0.02 * want, "{p}: {g:?}");
             assert!(z(g, want).abs() < 4.0, "{p}: {g:?} vs {want}");
         }
@@ -321,7 +330,12 @@ mod tests {
         let got = irradiance(&s, &pts, &normals, 20_000, 3);
         let want = PI / (1.0 - 0.5);
         for (p, g) in pts.iter().zip(&got) {
-            println!("sphere at {p}: {:.5} ± {:.5} vs {want:.5} (z = {:.2})", g.mean, g.se, z(g, want));
+            println!(
+                "sphere at {p}: {:.5} ± {:.5} vs {want:.5} (z = {:.2})",
+                g.mean,
+                g.se,
+                z(g, want)
+            );
             assert!(g.se > 0.0, "{p}: {g:?}");
             assert!(z(g, want).abs() < 4.0, "{p}: {g:?} vs {want}");
         }
@@ -342,7 +356,13 @@ mod tests {
         let s = scene(
             "[[surface]]\nkind = \"quad\"\nvertices = [[-4, 0, -4], [-4, 0, 4], [4, 0, 4], [4, 0, -4]]\nalbedo = 0.0\n[[light]]\nkind = \"spot\"\nposition = [0, 1, 0]\ndirection = [0, -1, 0]\ncone_deg = 30\npower = 10.0\n",
         );
-        let got = irradiance(&s, &[DVec3::ZERO, DVec3::new(1.0, 0.0, 0.0)], &[DVec3::Y; 2], 4, 1);
+        let got = irradiance(
+            &s,
+            &[DVec3::ZERO, DVec3::new(1.0, 0.0, 0.0)],
+            &[DVec3::Y; 2],
+            4,
+            1,
+        );
         let want = 10.0 / (2.0 * PI * (1.0 - 30f64.to_radians().cos()));
         assert!((got[0].mean - want).abs() < 1e-12 * want, "{got:?}");
         assert_eq!(got[1].mean, 0.0, "45° is outside a 30° cone");

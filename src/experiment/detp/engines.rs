@@ -17,10 +17,10 @@ use crate::detp::fixed::Acc;
 use crate::detp::photon_map::{self, Filter};
 use crate::detp::quasi_static::IndexKind;
 use crate::detp::{brute, disc_index, order, sphere_cache};
-use crate::lt::reference::{self, Irradiance};
-use crate::sample::rng::{domain, hash_key, mix64};
 use crate::experiment::metric::{z_verdict, SummaryLine};
+use crate::lt::reference::{self, Irradiance};
 use crate::output::row::Row;
+use crate::sample::rng::{domain, hash_key, mix64};
 use crate::stats::{ClusteredMean, Estimate};
 use crate::theory::detp as th;
 
@@ -342,7 +342,11 @@ impl Engine for PhotonMap {
                     let v: Vec<f64> = self.runs.iter().map(|r| r.0[i]).collect();
                     let e = per_replica(&v);
                     // One replica: a k-nearest-neighbour estimate has relative SE ≈ 1/√k.
-                    let se = if v.len() == 1 { e.mean.abs() / k.sqrt() } else { e.se };
+                    let se = if v.len() == 1 {
+                        e.mean.abs() / k.sqrt()
+                    } else {
+                        e.se
+                    };
                     (e.mean, se)
                 })
                 .collect(),
@@ -370,13 +374,16 @@ impl Engine for PhotonMap {
 /// sample points (other photon counts, d, k) compute the reference once. Values are a pure function
 /// of the key, so sharing them changes no measured column.
 #[derive(Clone, Default)]
-pub struct ReferenceCache(Arc<Mutex<HashMap<u64, Arc<(Vec<Irradiance>, f64)>>>>);
+pub struct ReferenceCache(Arc<Mutex<HashMap<u64, Arc<Computed>>>>);
+
+/// A reference: estimates per disc and the seconds they took.
+type Computed = (Vec<Irradiance>, f64);
 
 /// The path-traced reference irradiance per disc (a baseline: never part of DETP's sums or speed).
 struct Reference {
     cache: ReferenceCache,
     /// Estimates per disc and the seconds they took to compute.
-    result: Option<Arc<(Vec<Irradiance>, f64)>>,
+    result: Option<Arc<Computed>>,
 }
 
 impl Engine for Reference {
@@ -398,7 +405,13 @@ impl Engine for Reference {
                 key = mix64(key ^ x.to_bits());
             }
         }
-        let cached = self.cache.0.lock().expect("no panic holds it").get(&key).cloned();
+        let cached = self
+            .cache
+            .0
+            .lock()
+            .expect("no panic holds it")
+            .get(&key)
+            .cloned();
         let r = cached.unwrap_or_else(|| {
             let (v, s) = timed(|| {
                 reference::irradiance(

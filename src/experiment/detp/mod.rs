@@ -199,11 +199,11 @@ pub fn run_point(
     let discs = &pts.discs;
     let d = cfg.disc_radius;
     let area = std::f64::consts::PI * d * d;
-    let mut engines: Vec<Box<dyn engines::Engine>> =
-        cfg.engines
-            .iter()
-            .map(|&e| engines::engine(e, refs))
-            .collect();
+    let mut engines: Vec<Box<dyn engines::Engine>> = cfg
+        .engines
+        .iter()
+        .map(|&e| engines::engine(e, refs))
+        .collect();
     let (mut law_radius, mut root_radius, mut mean_segment_watts) = (1.0, 1.0, 0.0);
     let (mut segments, mut rays_in_root, mut trace_s) = (0u64, 0u64, 0.0);
     let (mut mismatches, mut bf_checked) = (0u64, 0u64);
@@ -518,7 +518,7 @@ impl Kind for DetpKind {
         "detp.engines",
         "the engines decide the table's columns, which must be the same for every point",
     )];
-    const ABOUT: &'static str = "Density estimation on the tangent plane: photon segments (μ-random lines through the unit ball, or photons traced from a scene) crossing discs of radius d on sample points, gathered by the sphere cache (radius ratio Q, threshold, Morton/Hilbert order), a disc index (octree or grid), brute force and, as a baseline, Jensen's photon map. Engines agree bit for bit (integer fixed point) and with brute force on a keyed subset; tests per engine against Theorem 1, rays per level against n_R·Q^(2i), irradiance against the exact value where the source has one.";
+    const ABOUT: &'static str = "Density estimation on the tangent plane: photon segments (μ-random lines through the unit ball, or photons traced from a scene) crossing discs of radius d on sample points, gathered by the sphere cache (radius ratio Q, threshold, Morton/Hilbert order), a disc index (octree or grid), brute force and, as baselines, Jensen's photon map and a path-traced reference (engine reference: unbiased irradiance per point with its SE, and every engine's bias and RMSE against it). Engines agree bit for bit (integer fixed point) and with brute force on a keyed subset; tests per engine against Theorem 1, rays per level against n_R·Q^(2i), irradiance against the exact value where the source has one.";
     type Raw = DetpSpec;
     type Point = DetpConfig;
     type Tables = DetpTables;
