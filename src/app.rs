@@ -115,6 +115,15 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             write!(std::io::stdout().lock(), "{text}")?;
             Ok(())
         }
+        Command::Report(r) => {
+            let page = crate::report::run(&crate::report::ReportOptions {
+                results: r.results,
+                out: r.out,
+                force: r.force,
+            })?;
+            writeln!(std::io::stdout().lock(), "wrote {}", page.display())?;
+            Ok(())
+        }
         Command::Bench(b) => {
             thread_pool(b.threads)?;
             Ok(crate::bench::run(b.quick, &b.out, b.force)?)

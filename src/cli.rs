@@ -45,6 +45,22 @@ pub enum Command {
     Render(RenderArgs),
     /// Print reference documentation generated from the code, as Markdown.
     Doc(DocArgs),
+    /// Write DIR/index.html: one static page of every result (plots, claims, tables, bench).
+    Report(ReportArgs),
+}
+
+/// `raycost report`.
+#[derive(Debug, Args)]
+pub struct ReportArgs {
+    /// The results root.
+    #[arg(default_value = "results")]
+    pub results: PathBuf,
+    /// The output folder (index.html, img/).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Replace an existing DIR/index.html.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// `raycost doc`.

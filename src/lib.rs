@@ -8,7 +8,8 @@
 //! Layers, each depending only on those above it: `toml_text`, `geom`, `sample`, `stats`, `theory`,
 //! `scene` (Poisson processes) and `lt` (light-transport scenes), `grid`, `detp` (ray store, discs,
 //! sphere cache, disc index, photon tracing, photon map), `output`, `spec`, `experiment`, `bench`;
-//! `render` (images of a quasi-static run); `cli`, `app` and `main.rs` sit on top.
+//! `render` (images of a quasi-static run) and `report` (an HTML page of a results folder); `cli`,
+//! `app` and `main.rs` sit on top.
 #![warn(missing_docs)]
 
 pub mod app;
@@ -24,6 +25,7 @@ pub mod grid;
 pub mod lt;
 pub mod output;
 pub mod render;
+pub mod report;
 pub mod sample;
 pub mod scene;
 pub mod spec;

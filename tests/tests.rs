@@ -13,6 +13,7 @@ mod oracle;
 mod quasi_static;
 mod reference;
 mod render;
+mod report;
 mod reproducible;
 mod resume;
 mod sanity;

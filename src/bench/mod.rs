@@ -308,6 +308,11 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         meta.columns.insert("main".into(), r.columns());
     }
     meta.end(t0.elapsed().as_secs_f64());
+    if meta.busy() {
+        if let Some(w) = meta.warnings.last() {
+            eprintln!("warning: {w}");
+        }
+    }
     for p in sink.finish(&meta)? {
         println!("wrote {}", p.display());
     }

@@ -108,6 +108,13 @@ pub struct LevelStats {
     pub inside_rays_held: u64,
     /// Σ (list length)² over those builds.
     pub inside_rays_held_sq: u128,
+    /// Builds holding fewer rays than the threshold: the spheres that are never subdivided (the
+    /// paper's "94.6 rays at level 9" may be their mean; THEORY.md §2).
+    pub leaf_builds: u64,
+    /// Σ list length over those builds.
+    pub leaf_rays_held: u64,
+    /// Σ (list length)² over those builds.
+    pub leaf_rays_held_sq: u128,
     /// Segments tested against spheres of this level while building them.
     pub ray_sphere_tests: u64,
 }
@@ -157,6 +164,9 @@ impl CacheStats {
             a.rays_held_sq += b.rays_held_sq;
             a.inside_builds += b.inside_builds;
             a.inside_rays_held += b.inside_rays_held;
+            a.leaf_builds += b.leaf_builds;
+            a.leaf_rays_held += b.leaf_rays_held;
+            a.leaf_rays_held_sq += b.leaf_rays_held_sq;
             a.inside_rays_held_sq += b.inside_rays_held_sq;
             a.ray_sphere_tests += b.ray_sphere_tests;
         }
@@ -333,6 +343,11 @@ impl<'a> Ctx<'a> {
                 l.misses += u64::from(k != 0);
                 l.rays_held += held;
                 l.rays_held_sq += u128::from(held) * u128::from(held);
+                if list.len() < self.params.threshold {
+                    l.leaf_builds += 1;
+                    l.leaf_rays_held += held;
+                    l.leaf_rays_held_sq += u128::from(held) * u128::from(held);
+                }
                 if let Some((lc, lr)) = self.params.law_ball {
                     if (c - lc).length() + r <= lr {
                         l.inside_builds += 1;

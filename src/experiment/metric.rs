@@ -25,6 +25,29 @@ pub enum Theory {
     },
 }
 
+impl Theory {
+    /// The verdict of `est` against this theory: [`z_verdict`] for a prediction, [`band_verdict`]
+    /// for a band. The one place both the terminal summary and `raycost report` take it from.
+    pub fn verdict(&self, est: &Estimate) -> String {
+        match *self {
+            Theory::Prediction(p) => z_verdict(est, p),
+            Theory::Band { lower, upper, .. } => band_verdict(est, lower, upper).into(),
+        }
+    }
+
+    /// The theory as the summary prints it: `prediction` or `prediction [lower, upper]`.
+    pub fn describe(&self) -> String {
+        match *self {
+            Theory::Prediction(p) => format!("{p:.4}"),
+            Theory::Band {
+                prediction,
+                lower,
+                upper,
+            } => format!("{prediction:.3} [{lower:.3}, {upper:.3}]"),
+        }
+    }
+}
+
 /// A measured metric and its theory: a declared estimate column ([`Shape::EstimateVsPrediction`] or
 /// [`Shape::EstimateVsBand`]) with its value.
 #[derive(Clone, Debug, PartialEq)]
@@ -62,10 +85,7 @@ impl Metric {
 
     /// The verdict against the theory.
     pub fn verdict(&self) -> String {
-        match self.theory {
-            Theory::Prediction(p) => z_verdict(&self.est, p),
-            Theory::Band { lower, upper, .. } => band_verdict(&self.est, lower, upper).into(),
-        }
+        self.theory.verdict(&self.est)
     }
 
     /// Appends its columns to `row` and its line to `summary`.
@@ -73,10 +93,9 @@ impl Metric {
         let m = &self.stem;
         let unit = self.column.unit;
         row.estimate_cells(self.column, m, &self.est);
-        let text = match self.theory {
+        match self.theory {
             Theory::Prediction(p) => {
                 row.derived_cell(m, "_theory", Class::Theory, unit, Value::F(p));
-                format!("{p:.4}")
             }
             Theory::Band {
                 prediction,
@@ -87,10 +106,9 @@ impl Metric {
                     .derived_cell(m, "_lower", Class::Theory, unit, Value::F(lower))
                     .derived_cell(m, "_upper", Class::Theory, unit, Value::F(upper))
                     .derived_cell(m, "_band", Class::Check, "1", Value::S(self.verdict()));
-                format!("{prediction:.3} [{lower:.3}, {upper:.3}]")
             }
-        };
-        summary.push((m.clone(), self.est, text, self.verdict()));
+        }
+        summary.push((m.clone(), self.est, self.theory.describe(), self.verdict()));
     }
 }
 

@@ -338,6 +338,11 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
     }
 
     meta.end(t0.elapsed().as_secs_f64());
+    if meta.busy() {
+        if let Some(w) = meta.warnings.last() {
+            eprintln!("warning: {w}");
+        }
+    }
     meta.run.resumed_points = resumed;
     let failed: Vec<String> = finished
         .iter()

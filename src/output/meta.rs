@@ -175,6 +175,14 @@ pub struct RunInfo {
     /// The same when it ended.
     #[serde(default)]
     pub load_end: Vec<f64>,
+    /// Cores' worth of CPU that *other* processes used on average while the run went (the machine's
+    /// busy time from `/proc/stat` less this process's own): 0 on a quiet machine. Above
+    /// [`BUSY_CORES`] the run's timing columns are unreliable and a warning says so.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub other_cores: Option<f64>,
+    /// CPU ticks (machine busy, this process) at the start, for `other_cores`.
+    #[serde(skip)]
+    pub cpu_start: Option<(u64, u64)>,
     /// Points of the whole sweep (all shards); `raycost merge` checks coverage against it.
     #[serde(default)]
     pub points_total: usize,
@@ -268,6 +276,8 @@ impl Meta {
                 wall_s: None,
                 load_start: load_average(),
                 load_end: Vec::new(),
+                other_cores: None,
+                cpu_start: cpu_ticks(),
                 points_total: 0,
                 points: Vec::new(),
                 point_wall_s: Vec::new(),
@@ -287,6 +297,27 @@ impl Meta {
         self.run.finished = Some(crate::output::time::now_rfc3339());
         self.run.wall_s = Some(wall_s);
         self.run.load_end = load_average();
+        if let (Some((busy0, own0)), Some((busy1, own1))) = (self.run.cpu_start, cpu_ticks()) {
+            let others = busy1
+                .saturating_sub(busy0)
+                .saturating_sub(own1.saturating_sub(own0));
+            let cores = others as f64 / CLOCK_TICKS / wall_s.max(1e-3);
+            self.run.other_cores = Some((cores * 1000.0).round() / 1000.0);
+            // Sub-second runs are too short for the kernel's tick accounting to say anything.
+            if cores > BUSY_CORES && wall_s >= 1.0 {
+                let w = format!(
+                    "the machine was busy: other processes used {cores:.2} cores on average during this run, so its timing columns are unreliable (counts are not affected)"
+                );
+                if !self.warnings.contains(&w) {
+                    self.warnings.push(w);
+                }
+            }
+        }
+    }
+
+    /// Whether the run's timings were taken on a busy machine (see [`RunInfo::other_cores`]).
+    pub fn busy(&self) -> bool {
+        self.run.other_cores.is_some_and(|c| c > BUSY_CORES)
     }
 
     /// TOML text (the one writer).
@@ -347,6 +378,36 @@ pub fn host_name() -> String {
         .map(|s| s.trim().to_string())
         .or_else(|_| std::env::var("HOSTNAME"))
         .unwrap_or_else(|_| "unknown".into())
+}
+
+/// Other processes' mean CPU use, in cores, above which a run's timings are called unreliable.
+pub const BUSY_CORES: f64 = 0.25;
+
+/// Linux's `USER_HZ`, the unit of `/proc/stat` and `/proc/self/stat` (100 on every Linux ABI).
+const CLOCK_TICKS: f64 = 100.0;
+
+/// (ticks the whole machine spent busy, ticks this process spent on CPU), from `/proc/stat`'s `cpu`
+/// line (user + nice + system + irq + softirq + steal) and `/proc/self/stat` (utime + stime);
+/// `None` off Linux.
+pub fn cpu_ticks() -> Option<(u64, u64)> {
+    let stat = std::fs::read_to_string("/proc/stat").ok()?;
+    let cpu: Vec<u64> = stat
+        .lines()
+        .next()?
+        .split_whitespace()
+        .skip(1)
+        .filter_map(|x| x.parse().ok())
+        .collect();
+    // user nice system idle iowait irq softirq steal
+    let busy = [0, 1, 2, 5, 6, 7]
+        .iter()
+        .map(|&i| cpu.get(i).copied().unwrap_or(0))
+        .sum();
+    let me = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name: state is field 3, utime 14, stime 15.
+    let rest: Vec<&str> = me.rsplit_once(')')?.1.split_whitespace().collect();
+    let own = rest.get(11)?.parse::<u64>().ok()? + rest.get(12)?.parse::<u64>().ok()?;
+    Some((busy, own))
 }
 
 /// The 1-, 5- and 15-minute load averages (Linux `/proc/loadavg`; empty elsewhere).
@@ -485,6 +546,8 @@ mod tests {
                 wall_s: None,
                 load_start: vec![0.1, 0.2, 0.3],
                 load_end: vec![],
+                other_cores: None,
+                cpu_start: None,
                 points_total: 2,
                 points: vec![0, 1],
                 point_wall_s: vec![0.5, 0.25],
@@ -533,5 +596,43 @@ mod tests {
         assert!(changed_input(&a, &[])
             .expect("gone")
             .contains("not by this one"));
+    }
+
+    /// Another process spinning on a core while a run goes is measured (about one core) and makes
+    /// the run's metadata carry the busy-machine warning; the run's own CPU is not counted.
+    #[test]
+    #[cfg(target_os = "linux")]
+    fn another_process_spinning_makes_the_run_busy() {
+        let (b0, o0) = cpu_ticks().expect("Linux has /proc/stat");
+        assert!(b0 >= o0, "the machine's busy ticks include this process's");
+        let mut m = Meta::begin("run", BTreeMap::new());
+        let mut spinner = std::process::Command::new("sh")
+            .args([
+                "-c",
+                "end=$(( $(date +%s) + 3 )); while [ $(date +%s) -lt $end ]; do :; done",
+            ])
+            .spawn()
+            .expect("sh");
+        std::thread::sleep(std::time::Duration::from_millis(1500));
+        m.end(1.5);
+        spinner.kill().ok();
+        spinner.wait().ok();
+        let others = m.run.other_cores.expect("measured on Linux");
+        assert!(
+            others > 0.5,
+            "a spinning shell is about one core, got {others}"
+        );
+        assert!(m.busy());
+        assert!(
+            m.warnings
+                .iter()
+                .any(|w| w.contains("the machine was busy")),
+            "{:?}",
+            m.warnings
+        );
+        // The figure is written to the metadata; the start sample is not.
+        let text = m.render();
+        assert!(text.contains("other_cores"), "{text}");
+        assert!(!text.contains("cpu_start"), "{text}");
     }
 }

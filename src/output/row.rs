@@ -122,6 +122,14 @@ impl Row {
         self.estimate_cells(c, c.name, e)
     }
 
+    /// Appends `M_mean, M_se, M_n` of member `part` of the estimate family `c`
+    /// (`tests_{}_per_replica` → `tests_PART_per_replica_mean`, …).
+    pub fn put_member_estimate(&mut self, c: &Column, part: &str, e: &Estimate) -> &mut Self {
+        debug_assert!(c.shape == Shape::Estimate && c.is_family(), "{}", c.name);
+        let stem = c.member(part);
+        self.estimate_cells(c, &stem, e)
+    }
+
     /// Appends the estimate cells of `c` under `stem` (a metric writes its theory columns after).
     pub(crate) fn estimate_cells(&mut self, c: &Column, stem: &str, e: &Estimate) -> &mut Self {
         self.push(format!("{stem}_mean"), c.class, c.unit, Value::F(e.mean))

@@ -69,9 +69,10 @@ pub fn render(points: &[SummaryPoint]) -> String {
     out
 }
 
-/// `mean ± half-width`; an exact count (zero half-width) as an integer; no `±` where there is no
-/// standard error (one independent sample: one replica, one cluster).
-fn measured(e: &Estimate) -> String {
+/// `mean ± half-width` (95 % CI); an exact count (zero half-width) as an integer; no `±` where there
+/// is no standard error (one independent sample: one replica, one cluster). Shared with `raycost
+/// report`.
+pub fn measured(e: &Estimate) -> String {
     let h = e.half_width(0.95);
     let integral = e.mean.fract() == 0.0 && e.mean.abs() < 1e15;
     if integral && h == 0.0 {

@@ -27,6 +27,18 @@ pub const TESTS: Column = Column::value(
     Class::Measured,
     "the engine's counted ray tests, summed over replicas (sphere cache: ray–sphere + ray–disc; disc index and brute force: ray–disc)",
 );
+/// The same per replica, with its spread across replicas.
+pub const TESTS_PER_REPLICA: Column = Column::estimate(
+    "tests_{}_per_replica",
+    "tests",
+    "the engine's counted ray tests in one replica: mean, standard error across replicas, replicas",
+);
+/// Seconds per replica, with their spread.
+pub const COST_PER_REPLICA_S: Column = Column::timed_estimate(
+    "cost_{}_per_replica_s",
+    "s",
+    "seconds the engine took in one replica: mean, standard error across replicas, replicas",
+);
 /// Theorem 1 for them.
 pub const TESTS_THEORY: Column = Column::value(
     "tests_{}_theory",
@@ -223,6 +235,8 @@ pub const MAIN: &[Column] = &[
     PHOTON_MAP_REF_BIAS,
     PHOTON_MAP_REF_RMSE,
     POINTS_COVERED,
+    TESTS_PER_REPLICA,
+    COST_PER_REPLICA_S,
     RAYS_PER_S,
 ];
 
@@ -275,6 +289,18 @@ pub const MISSES_LEVEL: Column = Column::value(
     Class::Measured,
     "cache misses: builds of this level except a chunk's cold start",
 );
+/// Rays held by the spheres of this level that hold fewer than the threshold (never subdivided).
+pub const RAYS_LEVEL_LEAF: Column = Column::vs_prediction(
+    "rays_level_leaf",
+    "segments",
+    "rays held per sphere of this level that holds fewer than detp.threshold (a sphere never subdivided): mean over those builds, SE clustered by replica, builds; theory: E[X | X < threshold] for X ~ Poisson(rays_level_theory)",
+);
+/// Misses per replica.
+pub const MISSES_LEVEL_PER_REPLICA: Column = Column::estimate(
+    "misses_level_per_replica",
+    "builds",
+    "misses at this level in one replica: mean, standard error across replicas, replicas",
+);
 /// Tests.
 pub const RAY_SPHERE_TESTS_LEVEL: Column = Column::value(
     "ray_sphere_tests_level",
@@ -292,7 +318,9 @@ pub const LEVELS: &[Column] = &[
     RAYS_LEVEL_THEORY,
     RAYS_LEVEL_THEORY_CLIPPED,
     RAYS_LEVEL_INSIDE,
+    RAYS_LEVEL_LEAF,
     MISSES_LEVEL,
+    MISSES_LEVEL_PER_REPLICA,
     RAY_SPHERE_TESTS_LEVEL,
 ];
 

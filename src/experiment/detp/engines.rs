@@ -17,7 +17,7 @@ use crate::detp::fixed::Acc;
 use crate::detp::photon_map::{self, Filter};
 use crate::detp::quasi_static::IndexKind;
 use crate::detp::{brute, disc_index, order, sphere_cache};
-use crate::experiment::metric::{z_verdict, SummaryLine};
+use crate::experiment::metric::{z_verdict, Metric, SummaryLine, Theory};
 use crate::lt::reference::{self, Irradiance};
 use crate::output::row::Row;
 use crate::sample::rng::{domain, hash_key, mix64};
@@ -104,6 +104,13 @@ pub(super) fn per_replica(values: &[f64]) -> Estimate {
     m.estimate()
 }
 
+/// An engine's tests and seconds per replica, with their spread across replicas (the sums above
+/// carry no standard error).
+fn replica_spread(row: &mut Row, engine: &str, tests: &[f64], secs: &[f64]) {
+    row.put_member_estimate(&col::TESTS_PER_REPLICA, engine, &per_replica(tests))
+        .put_member_estimate(&col::COST_PER_REPLICA_S, engine, &per_replica(secs));
+}
+
 /// Root-mean-square error and mean error of `est` against `exact` over the discs that have an exact
 /// value (NaN, NaN if none has).
 pub(super) fn errors(est: &[f64], exact: &[f64]) -> (f64, f64) {
@@ -160,6 +167,13 @@ impl Engine for SphereCache {
             .put(&col::RAY_DISC_TESTS_THEORY, p.reps * t_i)
             .put_member(&col::COST_S, c, self.seconds())
             .put(&col::ORDER_S, self.runs.iter().map(|r| r.2).sum::<f64>());
+        let tests: Vec<f64> = self
+            .runs
+            .iter()
+            .map(|r| (r.0.ray_sphere_tests + r.0.ray_disc_tests) as f64)
+            .collect();
+        let secs: Vec<f64> = self.runs.iter().map(|r| r.1).collect();
+        replica_spread(row, c, &tests, &secs);
     }
     fn levels(&self, p: &Pooled, law: &Law) -> (Vec<Row>, Vec<SummaryLine>) {
         let mut rows = Vec::new();
@@ -173,7 +187,9 @@ impl Engine for SphereCache {
         for i in 0..depth {
             let mut m = ClusteredMean::default();
             let mut inside = ClusteredMean::default();
+            let mut leaf = ClusteredMean::default();
             let (mut builds, mut misses, mut tests) = (0u64, 0u64, 0u64);
+            let mut misses_per_replica = Vec::with_capacity(self.runs.len());
             let mut radius = f64::NAN;
             for (stats, ..) in &self.runs {
                 let l = stats.levels.get(i).cloned().unwrap_or_default();
@@ -183,8 +199,14 @@ impl Engine for SphereCache {
                     l.inside_rays_held as f64,
                     l.inside_rays_held_sq as f64,
                 );
+                leaf.push_cluster(
+                    l.leaf_builds,
+                    l.leaf_rays_held as f64,
+                    l.leaf_rays_held_sq as f64,
+                );
                 builds += l.builds;
                 misses += l.misses;
+                misses_per_replica.push(l.misses as f64);
                 tests += l.ray_sphere_tests;
                 if l.builds > 0 {
                     radius = l.radius;
@@ -212,7 +234,18 @@ impl Engine for SphereCache {
                 .put(&col::RAYS_LEVEL_THEORY_CLIPPED, clipped)
                 .put_estimate(&col::RAYS_LEVEL_INSIDE, &inside.estimate())
                 .put(&col::MISSES_LEVEL, misses)
+                .put_estimate(
+                    &col::MISSES_LEVEL_PER_REPLICA,
+                    &per_replica(&misses_per_replica),
+                )
                 .put(&col::RAY_SPHERE_TESTS_LEVEL, tests);
+            // The leaf mean's line is not summarised (one per level would drown the rays' lines).
+            Metric::new(
+                &col::RAYS_LEVEL_LEAF,
+                leaf.estimate(),
+                Theory::Prediction(th::poisson_mean_below(theory, p.cfg.cache.threshold as u64)),
+            )
+            .write(&mut r, &mut Vec::new());
             rows.push(r);
             if e.n > 0 {
                 lines.push((
@@ -278,6 +311,13 @@ impl Engine for Index {
             c,
             self.runs.iter().map(|r| r.3).max().unwrap_or(0),
         );
+        let tests: Vec<f64> = self
+            .runs
+            .iter()
+            .map(|r| r.0.ray_disc_tests as f64)
+            .collect();
+        let secs: Vec<f64> = self.runs.iter().map(|r| r.2).collect();
+        replica_spread(row, c, &tests, &secs);
     }
 }
 
@@ -302,6 +342,9 @@ impl Engine for BruteForce {
         row.put_member(&col::TESTS, c, self.runs.iter().map(|r| r.0).sum::<u64>())
             .put_member(&col::TESTS_THEORY, c, p.reps * p.n_r * p.n_p)
             .put_member(&col::COST_S, c, self.seconds());
+        let tests: Vec<f64> = self.runs.iter().map(|r| r.0 as f64).collect();
+        let secs: Vec<f64> = self.runs.iter().map(|r| r.1).collect();
+        replica_spread(row, c, &tests, &secs);
     }
 }
 
