@@ -63,7 +63,7 @@ done
 
 # The quasi-static plot scripts on small fresh runs of their specs (few photons and frames, coarse
 # points); the kitchen ones read the vendored experiments/scenes/bart/.
-for name in quasi-static-frames quasi-static-crossover quasi-static-static-points real-scene-levels speed-vs-error \
+for name in quasi-static-frames quasi-static-crossover quasi-static-static-points real-scene-levels \
             predict-engine quasi-static-robots; do
     case "$name" in
         quasi-static-frames) args=(--set detp.photons=5000 --set dynamic.frames=6 --set dynamic.check_every=2
@@ -73,15 +73,23 @@ for name in quasi-static-frames quasi-static-crossover quasi-static-static-point
         real-scene-levels) args=(--set detp.photons=5000 --set detp.point_spacing=0.3 --set detp.replicas=1) ;;
         quasi-static-robots) args=(--set detp.photons=5000 --set dynamic.frames=4 --set detp.point_spacing=4) ;;
         predict-engine) args=(--set detp.photons=5000 --set detp.point_spacing=40) ;;
-        speed-vs-error) args=(--set dynamic.frames=3 --set dynamic.check_every=1 --set detp.point_spacing=0.3
-                              --set dynamic.reference_photons=20000) ;;
     esac
     spec="experiments/$name.toml"
-    if [ "$name" = speed-vs-error ]; then
-        sed -e 's/^"detp.photons" = .*/"detp.photons" = [2000, 8000]/' "$spec" > "experiments/.check-$name.toml"
-        spec="experiments/.check-$name.toml"
-    fi
     "$RAYCOST" run "$spec" --out "$TMP" --quiet "${args[@]}"
+    MPLBACKEND=Agg "$PYTHON" "scripts/plot_${name//-/_}.py" --input "$TMP/$name/$name.csv"
+    test -s "$TMP/$name/$name.png" || { echo "error: $name.png was not written" >&2; exit 1; }
+    echo "ok: $name.png"
+done
+
+# Speed against error against the path-traced reference, both scenes: two small photon counts (the
+# d and k sweeps kept), a few reference paths per point, coarse Cornell points.
+for name in speed-vs-error speed-vs-error-cornell; do
+    sed -e 's/^"detp.photons" = .*/"detp.photons" = [5000, 20000]/' "experiments/$name.toml" > "experiments/.check-$name.toml"
+    args=(--set detp.reference_samples=8)
+    if [ "$name" = speed-vs-error-cornell ]; then
+        args+=(--set detp.point_spacing=120)
+    fi
+    "$RAYCOST" run "experiments/.check-$name.toml" --out "$TMP" --quiet "${args[@]}"
     rm -f "experiments/.check-$name.toml"
     MPLBACKEND=Agg "$PYTHON" "scripts/plot_${name//-/_}.py" --input "$TMP/$name/$name.csv"
     test -s "$TMP/$name/$name.png" || { echo "error: $name.png was not written" >&2; exit 1; }

@@ -1,35 +1,92 @@
 #!/usr/bin/env python3
-"""Speed against error on the BART kitchen (experiment speed-vs-error): seconds per frame against
-the irradiance error of the last frame (relative RMSE over the points against a high-photon
-reference), one curve per engine over the photon counts, and the full recalculation (same error,
-its own time). Lower-left is better.
+"""Speed against error on a real scene against the path-traced reference (experiments speed-vs-error,
+the BART kitchen, and speed-vs-error-cornell, the Cornell box; engine "reference").
+
+Left: RMSE against the true irradiance (estimated against the reference, its own variance
+subtracted), relative to the mean reference irradiance, against seconds (photon tracing + the
+engine), ± 95 % CI: DETP with the sphere cache and with the disc index (one curve per disc radius d,
+over photon counts; both engines give the same estimate, so they differ in time only) and the photon
+map (one curve per k). The grey steps are the front of best choices: configurations no other is both
+faster and more accurate than. Right: the relative bias (mean error over the points) ± 95 % CI.
 """
 
 import raycost_plot as rp
 
 NAME = "speed-vs-error"
-REQUIRED = ["detp.photons", "detp.engine", "frame_s_mean", "full_frame_s_mean", "irradiance_rmse"]
+REQUIRED = ["detp.photons", "detp.disc_radius", "detp.photon_map_k", "trace_s", "cost_sphere_cache_s",
+            "cost_disc_index_s", "cost_photon_map_s", "reference_irradiance_mean",
+            "irradiance_ref_rmse_mean", "irradiance_ref_rmse_se", "irradiance_ref_bias_mean",
+            "irradiance_ref_bias_se", "photon_map_ref_rmse_mean", "photon_map_ref_rmse_se",
+            "photon_map_ref_bias_mean", "photon_map_ref_bias_se"]
+Z = 1.96
+
+
+def configurations(rows):
+    """One entry per (method, setting, photons): seconds, relative RMSE ± SE, relative bias ± SE.
+    DETP rows at the same photons and d (but other k) are independent runs: averaged."""
+    out = {}
+    for r in rows:
+        ref = r["reference_irradiance_mean"]
+        for method, cost, stem, setting in (
+                ("DETP sphere cache", "cost_sphere_cache_s", "irradiance_ref", "d = %g" % r["detp.disc_radius"]),
+                ("DETP disc index", "cost_disc_index_s", "irradiance_ref", "d = %g" % r["detp.disc_radius"]),
+                ("photon map", "cost_photon_map_s", "photon_map_ref", "k = %d" % r["detp.photon_map_k"])):
+            key = (method, setting, r["detp.photons"])
+            out.setdefault(key, []).append((r["trace_s"] + r[cost], r[stem + "_rmse_mean"] / ref,
+                                             r[stem + "_rmse_se"] / ref, r[stem + "_bias_mean"] / ref,
+                                             r[stem + "_bias_se"] / ref))
+    avg = {}
+    for key, vs in out.items():
+        n = len(vs)
+        avg[key] = tuple(sum(v[i] for v in vs) / n for i in range(5))
+        # SEs of a mean of n independent runs.
+        avg[key] = avg[key][:2] + (avg[key][2] / n ** 0.5,) + (avg[key][3],) + (avg[key][4] / n ** 0.5,)
+    return avg
+
+
+def front(points):
+    """The (seconds, error) points no other point beats on both."""
+    best, out = float("inf"), []
+    for t, e in sorted(points):
+        if e < best:
+            out.append((t, e))
+            best = e
+    return out
 
 
 def plot(args):
     rows = rp.read_csv(args.input, REQUIRED)
-    fig, axes = rp.subplots(1, 1, panel_w=6.0, panel_h=4.5)
-    ax = axes[0][0]
-    for i, eng in enumerate(("hybrid", "sphere-cache", "disc-index")):
-        rs = rp.sort_by([r for r in rows if r["detp.engine"] == eng], "detp.photons")
-        ax.plot(rp.col(rs, "frame_s_mean"), rp.col(rs, "irradiance_rmse"), "o-", color="C%d" % i, label="incremental, %s" % eng)
-        for r in rs:
-            print("%-12s %8d photons: frame %.4f s, full %.3f s, relative RMSE %.4f" % (
-                eng, r["detp.photons"], r["frame_s_mean"], r["full_frame_s_mean"], r["irradiance_rmse"]))
-    full = rp.sort_by([r for r in rows if r["detp.engine"] == "hybrid"], "detp.photons")
-    ax.plot(rp.col(full, "full_frame_s_mean"), rp.col(full, "irradiance_rmse"), "s--", color="0.3", label="full recalculation")
-    for r in full:
-        ax.annotate("%dk" % (r["detp.photons"] // 1000), (r["full_frame_s_mean"], r["irradiance_rmse"]), fontsize=7,
-                    xytext=(4, 4), textcoords="offset points")
-    rp.log_scale(ax, x=True, y=True)
-    ax.set_xlabel("seconds per frame")
-    ax.set_ylabel("irradiance error (relative RMSE vs reference)")
-    ax.legend(fontsize=7)
+    conf = configurations(rows)
+    fig, axes = rp.subplots(1, 2, panel_w=6.0, panel_h=4.6)
+    ax_r, ax_b = axes[0]
+    series = sorted({(m, s) for m, s, _ in conf})
+    styles = {"DETP sphere cache": "o-", "DETP disc index": "s--", "photon map": "^:"}
+    for i, (m, s) in enumerate(series):
+        pts = sorted((p, conf[(m, s, p)]) for mm, ss, p in conf if (mm, ss) == (m, s))
+        t = [v[0] for _, v in pts]
+        c = "C%d" % i
+        ax_r.errorbar(t, [v[1] for _, v in pts], yerr=[Z * v[2] for _, v in pts], fmt=styles[m], color=c,
+                      ms=4, capsize=2, label="%s, %s" % (m, s))
+        ax_b.errorbar(t, [v[3] for _, v in pts], yerr=[Z * v[4] for _, v in pts], fmt=styles[m], color=c,
+                      ms=4, capsize=2, label="%s, %s" % (m, s))
+        for p, v in pts:
+            print("%-18s %-9s %9d photons: %8.3f s, relative RMSE %.4f ± %.4f, relative bias %+.4f ± %.4f"
+                  % (m, s, p, v[0], v[1], Z * v[2], v[3], Z * v[4]))
+    best = front([(v[0], v[1]) for v in conf.values()])
+    ax_r.step([b[0] for b in best], [b[1] for b in best], where="post", color="0.5", lw=3, alpha=0.35,
+              label="front of best choices", zorder=0)
+    names = {(round(v[0], 9), round(v[1], 12)): k for k, v in conf.items()}
+    for t, e in best:
+        m, s, p = names[(round(t, 9), round(e, 12))]
+        print("front: %-18s %-9s %9d photons: %8.3f s, relative RMSE %.4f" % (m, s, p, t, e))
+    rp.log_scale(ax_r, x=True, y=True)
+    ax_r.set_xlabel("seconds (photon tracing + engine)")
+    ax_r.set_ylabel("relative RMSE vs truth (reference variance removed)")
+    ax_r.legend(fontsize=6)
+    ax_b.axhline(0.0, color="0.5", lw=0.8)
+    rp.log_scale(ax_b, x=True)
+    ax_b.set_xlabel("seconds (photon tracing + engine)")
+    ax_b.set_ylabel("relative bias vs reference (mean error / mean E)")
     rp.finish(fig, args)
 
 

@@ -11,7 +11,7 @@ if [ ${#names[@]} -eq 0 ]; then
   names=(quickstart grid-cell-width grid-first-hit grid-radius-classes grid-scaling grid-concentration grid-cost-model
          lines-rays-per-level lines-cache-misses-unsorted lines-cache-misses sphere-cache-q detp-engines-cost
          detp-accuracy cornell-levels quasi-static-frames quasi-static-crossover quasi-static-static-points
-         quasi-static-amortisation real-scene-levels speed-vs-error predict-engine quasi-static-robots
+         quasi-static-amortisation real-scene-levels speed-vs-error speed-vs-error-cornell predict-engine quasi-static-robots
          theorem1-decomposition)
 fi
 secs=()

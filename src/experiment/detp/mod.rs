@@ -581,7 +581,7 @@ impl Kind for DetpKind {
         "detp.engines",
         "the engines decide the table's columns, which must be the same for every point",
     )];
-    const ABOUT: &'static str = "Density estimation on the tangent plane: photon segments (μ-random lines through the unit ball, or photons traced from a scene) crossing discs of radius d on sample points, gathered by the sphere cache (radius ratio Q, threshold, Morton/Hilbert order), a disc index (octree or grid), brute force and, as a baseline, Jensen's photon map. Engines agree bit for bit (integer fixed point) and with brute force on a keyed subset; tests per engine against Theorem 1, rays per level against n_R·Q^(2i), irradiance against the exact value where the source has one.";
+    const ABOUT: &'static str = "Density estimation on the tangent plane: photon segments (μ-random lines through the unit ball, or photons traced from a scene) crossing discs of radius d on sample points, gathered by the sphere cache (radius ratio Q, threshold, Morton/Hilbert order), a disc index (octree or grid), brute force and, as baselines, Jensen's photon map and a path-traced reference (engine reference: unbiased irradiance per point with its SE, and every engine's bias and RMSE against it). Engines agree bit for bit (integer fixed point) and with brute force on a keyed subset; tests per engine against Theorem 1, rays per level against n_R·Q^(2i), irradiance against the exact value where the source has one.";
     type Raw = DetpSpec;
     type Point = DetpConfig;
     type Tables = DetpTables;
