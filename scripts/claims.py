@@ -305,13 +305,16 @@ def level_nine():
     mean_all, _, _ = estimate(r9, "rays_level")
     th = r9["rays_level_leaf_theory"]
     ci = t95(3) * se
+    _, lve = levels_of("lines-rays-per-level", detp__q=0.6, detp__list_mode="exact")
+    e9 = one(lve, level=9)
+    me, see, _ = estimate(e9, "rays_level_leaf")
     ok = abs(m - 94.6) <= ci
     return dict(
         claim="level 9 holds 94.6 rays on average",
         reference=DETP + ", §4.2",
         paper="94.6",
-        measured="all level-9 spheres: %s; the %d never subdivided (< 100 rays): %s against E[X | X < 100] = %s for X ~ Poisson(law)"
-        % (fmt(mean_all), n, pm(m, ci), fmt(th)),
+        measured="the paper's cache: all level-9 spheres %s; the %d never subdivided (< 100 rays) %s; exact lists: never subdivided %s, against E[X | X < 100] = %s for X ~ Poisson(law)"
+        % (fmt(mean_all), n, pm(m, ci), pm(me, t95(3) * see), fmt(th)),
         value=m, ci=ci,
         verdict="holds" if ok else "differs",
         source=source("lines-rays-per-level", "levels"),
@@ -353,13 +356,15 @@ def figure_10():
     start_h = [b - a for a, b in zip([0] + mh, mh)]
     start_m = [b - a for a, b in zip([0] + mm, mm)]
     lows = []
+    low_ratios = []
     kk = 1
     while True:
         level = round(kk * math.log(2) / -math.log(0.9))
         if level >= min(len(start_h), len(start_m)):
             break
         if start_m[level] > 0:
-            lows.append("L%d %.2f" % (level, start_h[level] / start_m[level]))
+            low_ratios.append(start_h[level] / start_m[level])
+            lows.append("L%d %.2f" % (level, low_ratios[-1]))
         kk += 1
     return dict(
         claim="Hilbert order has much smaller peaks than Lebesgue (Q = 0.9)",
@@ -368,9 +373,9 @@ def figure_10():
         measured="peak of misses per level, Hilbert/Morton: %s %s; misses that start at the levels of radius 2^(−k): Hilbert/Morton %s"
         % (fmt(peak, 3), interval(lo, hi), ", ".join(lows)),
         value=peak, ci=(hi - lo) / 2,
-        verdict="holds" if hi < 0.9 else "differs",
+        verdict="holds" if hi < 0.9 else ("holds in part" if sum(r < 0.9 for r in low_ratios) * 2 >= len(low_ratios) else "differs"),
         source=source("lines-cache-misses", "levels"),
-        note="read as cumulative misses per level the peaks are equal; read as misses starting at each level Hilbert is lower at the 2^(−k) levels",
+        note="the paper's cache (inherited lists), 10⁶ points, 4 replicas. Read as cumulative misses per level the overall peaks (deep levels, where both orders rebuild for nearly every point) are equal; read as misses starting at each level Hilbert is lower at most of the 2^(−k) levels, where the paper sees its local maxima",
     )
 
 
