@@ -33,6 +33,8 @@ pub const KEYS: &[KeyDoc] = &[
         "Photons of a reference full recalculation of the last frame (another seed); the run's error against it is `irradiance_rmse`."),
     key("dynamic.predict", "number", "", Absent("0.05 with `detp.engine = \"predicted\"`, else none"), "(0, 1]",
         "The §4.1 predictor: the fraction of the photons whose segments predict each engine's cost at frame 0."),
+    key("dynamic.feed", "string", "", Value("\"paper\""), "`\"paper\"`, `\"segment-index\"`, `\"all\"`",
+        "Which segments the dynamic points' engines get: Theorem 2's model (the sphere cache the segment index's answer, the disc index every segment), both the segment index's answer, or both every segment."),
 ];
 
 /// The spec file of kind `quasi-static`: `[experiment]`, `[detp]`, `[dynamic]` and `[sweep]`.
