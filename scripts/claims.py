@@ -22,7 +22,7 @@ import math
 import os
 import sys
 
-from raycost_stats import Z95, bootstrap, break_even, frame0, optimum_q, t95
+from raycost_stats import Z95, bootstrap, break_even, crossing, frame0, optimum_q, t95
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 RESULTS = os.path.join(ROOT, "results")
@@ -427,17 +427,6 @@ def theorem_1():
     )
 
 
-def crossing(xs, a, b):
-    """First x where log a − log b changes sign (log-linear interpolation), NaN if none."""
-    for i in range(1, len(xs)):
-        if min(a[i - 1], a[i], b[i - 1], b[i]) <= 0:
-            continue
-        d0, d1 = math.log(a[i - 1] / b[i - 1]), math.log(a[i] / b[i])
-        if d0 <= 0 < d1 or d0 >= 0 > d1:
-            return xs[i - 1] + (xs[i] - xs[i - 1]) * d0 / (d0 - d1)
-    return math.nan
-
-
 def crossover(rows, metric):
     sc = sorted(where(rows, detp__engine="sphere-cache"), key=lambda r: r["dynamic.ratio"])
     di = sorted(where(rows, detp__engine="disc-index"), key=lambda r: r["dynamic.ratio"])
@@ -537,29 +526,26 @@ def static_points():
 
 @claim
 def real_scene_levels():
-    main, _ = table("real-scene-levels"), None
+    main = table("real-scene-levels")
     out = []
-    worst = {}
+    within = {}
     for scene in sorted({r["detp.scene"] for r in main}):
         _, lv = levels_of("real-scene-levels", detp__scene=scene, detp__list_mode="inherited")
-        lv = [r for r in lv if 2 <= r["level"] <= 9 and r["rays_level_n"] > 0]
+        lv = [r for r in lv if 1 <= r["level"] <= 9 and r["rays_level_n"] > 0]
         err = [100 * (r["rays_level_theory"] - r["rays_level_mean"]) / r["rays_level_mean"] for r in lv]
-        cal = [r for r in lv if r["level"] <= 4]
-        k = sum(r["rays_level_mean"] for r in cal) / sum(r["rays_level_theory"] for r in cal)
-        errc = [100 * (k * r["rays_level_theory"] - r["rays_level_mean"]) / r["rays_level_mean"] for r in lv if r["level"] > 4]
         name = scene.split("/")[-1].replace(".aff", "")
-        worst[name] = max(abs(e) for e in err)
-        out.append("%s: law %+.0f … %+.0f %%, calibrated on levels 2–4 %+.1f … %+.1f %% (levels 5–9)"
-                   % (name, min(err), max(err), min(errc), max(errc)))
+        within[name] = sum(abs(e) <= 5 for e in err)
+        out.append("%s: %d of %d levels within 5 %% (law %+.0f … %+.0f %%)" % (name, within[name], len(err), min(err), max(err)))
+    best = max(within, key=within.get)
     return dict(
         claim="rays per level in real scenes: the law is within 5 % in most levels",
         reference=DETP + ", §4.1, Figures 6–7",
         paper="< 5 % in most levels",
-        measured="BART kitchen, levels 2–9, error of the law relative to the measurement — " + "; ".join(out),
+        measured="BART kitchen, the paper's cache, levels 1–9, error of the law relative to the measurement — " + "; ".join(out),
         value=None, ci=None,
-        verdict="holds" if min(worst.values()) <= 5 else "differs",
+        verdict="holds without the backdrop" if within[best] * 2 > 9 and best.endswith("no-garden") else ("holds" if within[best] * 2 > 9 else "differs"),
         source=source("real-scene-levels", "levels"),
-        note="the kitchen's root sphere encloses a garden backdrop 3.75 m outside the window; without it the law is much closer",
+        note="the kitchen's root sphere (6.04 m) encloses a garden backdrop 3.75 m outside the window; without it (root 3.52 m) the law holds at the middle levels and fails only at the deepest, where only rich parents get children. Cornell box: results/cornell-levels",
     )
 
 
@@ -602,6 +588,39 @@ def incremental_exact():
         verdict="holds" if total == 0 else "refuted",
         source=source("quasi-static-frames"),
         note="raycost's exactness is by construction (integer sums, photons re-traced from their own streams)",
+    )
+
+
+def accuracy(name, label):
+    main = table(name)
+    big = max(r["detp.photons"] for r in main)
+    rows = where(main, detp__photons=big)
+    parts = []
+    worst = 0.0
+    for r in sorted(rows, key=lambda r: r["detp.disc_radius"]):
+        ref = r["reference_irradiance_mean"]
+        b, se = r["irradiance_ref_bias_mean"], r["irradiance_ref_bias_se"]
+        pb, pse = r["photon_map_ref_bias_mean"], r["photon_map_ref_bias_se"]
+        worst = max(worst, abs(b) / ref)
+        parts.append("d = %g: DETP %+.1f ± %.1f %%, photon map %+.1f ± %.1f %%" % (
+            r["detp.disc_radius"], 100 * b / ref, 100 * Z95 * se / ref, 100 * pb / ref, 100 * Z95 * pse / ref))
+    return big, parts, worst
+
+
+@claim
+def detp_unbiased():
+    big_c, cornell, worst_c = accuracy("speed-vs-error-cornell", "Cornell box")
+    big_k, kitchen, worst_k = accuracy("speed-vs-error", "kitchen")
+    return dict(
+        claim="DETP estimates irradiance from photon segments crossing a tangent disc of radius d",
+        reference=DETP + ", §2",
+        paper="density estimation on the tangent plane (bias O(d²) on smooth open surfaces)",
+        measured="mean error against raycost's path-traced reference, relative to the mean irradiance — Cornell box (%s photons): %s; BART kitchen (%s photons): %s"
+        % (pow10(big_c), "; ".join(cornell), pow10(big_k), "; ".join(kitchen)),
+        value=None, ci=None,
+        verdict="holds" if worst_c < 0.03 else "differs",
+        source=source("speed-vs-error-cornell"),
+        note="where a point's disc reaches past an edge into another solid (s < d) DETP is biased by tens of per cent and leaks light under objects; detp.edge = \"clamp-first-hit\" removes most of it (docs/hard-cases.md, results/detp-hard-cases)",
     )
 
 

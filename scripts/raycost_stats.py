@@ -98,3 +98,14 @@ def frame0(frames, point):
     m = sum(v) / len(v)
     se = math.sqrt(sum((x - m) ** 2 for x in v) / (len(v) - 1) / len(v)) if len(v) > 1 else float("nan")
     return m, se, len(v)
+
+
+def crossing(xs, a, b):
+    """First x where log a − log b changes sign (log-linear interpolation between points), NaN if none."""
+    for i in range(1, len(xs)):
+        if min(a[i - 1], a[i], b[i - 1], b[i]) <= 0:
+            continue
+        d0, d1 = math.log(a[i - 1] / b[i - 1]), math.log(a[i] / b[i])
+        if d0 <= 0 < d1 or d0 >= 0 > d1:
+            return xs[i - 1] + (xs[i] - xs[i - 1]) * d0 / (d0 - d1)
+    return math.nan
