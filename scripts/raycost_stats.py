@@ -30,8 +30,13 @@ def bootstrap(f, means, ses, draws=4000, seed=1):
 
 
 def t95(dof):
-    """Student-t's two-sided 95 % quantile (normal beyond 30 degrees of freedom)."""
-    if dof is None or dof != dof or dof > 30:
+    """Student-t's two-sided 95 % quantile (normal beyond 30 degrees of freedom; NaN below 1: one
+    sample has no CI)."""
+    if dof is None or dof != dof:
+        return Z95
+    if dof < 1:
+        return math.nan
+    if dof > 30:
         return Z95
     dof = int(dof)
     while dof not in T95:
