@@ -149,3 +149,68 @@ fn replicas_are_independent_runs_and_replica_zero_is_the_single_run() {
         "replica 1 traces other photons"
     );
 }
+
+/// With `detp.engine = "predicted"` the §4.1 predictor picks each object's engine on seconds, so
+/// the pick and every count that follows it may differ between runs of one spec and seed (observed:
+/// predict-engine's frames picked the disc index in one quiet run and the sphere cache in another).
+/// The metadata must class them as timings, so that reproducibility checks skip them, while the
+/// static points' counts and the irradiance stay measured.
+#[test]
+fn a_pick_taken_on_seconds_is_classed_timing() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = spec(dir.path(), "pick");
+    let text = std::fs::read_to_string(&s)
+        .unwrap()
+        .replace(
+            "index = \"grid\"",
+            "index = \"grid\"\nengine = \"predicted\"",
+        )
+        .replace("frames = 12", "frames = 3\npredict = 0.2");
+    std::fs::write(&s, text).unwrap();
+    let out = dir.path().join("out");
+    raycost()
+        .args(["run", s.to_str().unwrap(), "--quiet", "--out"])
+        .arg(&out)
+        .assert()
+        .success();
+    let meta = raycost::output::meta::Meta::read(&out.join("pick/pick.meta.toml")).unwrap();
+    for table in ["main", "frames"] {
+        let class = |name: &str| {
+            meta.columns[table]
+                .iter()
+                .find(|c| c.name == name)
+                .unwrap_or_else(|| panic!("{table}.{name}"))
+                .class
+                .as_str()
+        };
+        assert_eq!(class("engine_used"), "timing", "{table}");
+        let (dynamic_tests, static_tests) = if table == "main" {
+            ("dynamic_tests_mean", "static_tests_mean")
+        } else {
+            ("dynamic_disc_tests", "static_disc_tests")
+        };
+        assert_eq!(class(dynamic_tests), "timing", "{table}");
+        assert_eq!(class(static_tests), "measured", "{table}");
+    }
+    // The same spec with a fixed engine keeps them measured.
+    let fixed = dir.path().join("fixed.toml");
+    std::fs::write(
+        &fixed,
+        std::fs::read_to_string(&s)
+            .unwrap()
+            .replace("name = \"pick\"", "name = \"fixed\"")
+            .replace("engine = \"predicted\"", "engine = \"disc-index\""),
+    )
+    .unwrap();
+    raycost()
+        .args(["run", fixed.to_str().unwrap(), "--quiet", "--out"])
+        .arg(&out)
+        .assert()
+        .success();
+    let meta = raycost::output::meta::Meta::read(&out.join("fixed/fixed.meta.toml")).unwrap();
+    let engine_used = meta.columns["main"]
+        .iter()
+        .find(|c| c.name == "engine_used")
+        .unwrap();
+    assert_eq!(engine_used.class.as_str(), "measured");
+}

@@ -227,6 +227,7 @@ mod tests {
                 "n_i_mean",
                 "n_i_se",
                 "n_i_n",
+                "n_i_clusters",
                 "n_i_theory",
                 "n_i_lower",
                 "n_i_upper",

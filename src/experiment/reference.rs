@@ -206,8 +206,9 @@ pub fn columns() -> String {
          closed form, a check that did not run); no field is ever empty. Classes: `measured` (identical for one spec and seed on any machine, thread \
          count or shard split), `timing` (clocks: may differ between runs), `theory` (closed forms), \
          `check` (mismatch counts and verdicts). `{}` in a name is a family: one column per engine \
-         or part. An estimate `M` is written as `M_mean`, `M_se` (standard error) and `M_n` \
-         (samples); against a prediction also `M_theory`; against a band `M_lower`, `M_upper` and \
+         or part. An estimate `M` is written as `M_mean`, `M_se` (standard error), `M_n` \
+         (samples) and `M_clusters` (the independent clusters behind `M_se`: a 95 % CI is \
+         Student-t on clusters − 1 degrees of freedom); against a prediction also `M_theory`; against a band `M_lower`, `M_upper` and \
          the verdict `M_band`.\n\n",
     );
     for k in KINDS {

@@ -10,7 +10,7 @@ use std::time::Instant;
 use super::kind::{Check, Context, DynKind, ErasedOutput};
 use super::plan::Plan;
 use crate::error::{Context as _, Error};
-use crate::output::column::{declaration, ColumnInfo, POINT};
+use crate::output::column::{declaration, Class, ColumnInfo, POINT};
 use crate::output::meta::Meta;
 use crate::output::progress::progress;
 use crate::output::row::{Row, Value};
@@ -441,7 +441,14 @@ fn check_declared(kind: &dyn DynKind, table: &str, rows: &[Row]) -> Result<(), E
                 Some(&ok) => ok,
                 None => {
                     let ok = match declaration(declared, &cell.name) {
-                        Some((column, class)) if class == cell.class => column.infinite_ok,
+                        // A measured cell may be written as a timing where seconds decided it
+                        // (Row::decided_by_timing); never the other way.
+                        Some((column, class))
+                            if class == cell.class
+                                || (class == Class::Measured && cell.class == Class::Timing) =>
+                        {
+                            column.infinite_ok
+                        }
                         Some((_, class)) => {
                             return Err(Error::internal(format!(
                                 "kind {}: column {table}.{} is written as {} but declared {}",
@@ -482,11 +489,17 @@ fn describe_failure(i: usize, params: &str, c: &Check) -> String {
     )
 }
 
-/// Records the columns of `row` as those of `table` (the first row of a table defines them).
+/// Records the columns of `row` as those of `table`: the first row of a table defines them, and a
+/// column any later row writes as a timing (a value decided by seconds in that row) is a timing.
 fn record_columns(columns: &mut BTreeMap<String, Vec<ColumnInfo>>, table: &str, row: &Row) {
-    columns
+    let cols = columns
         .entry(table.to_string())
         .or_insert_with(|| row.columns());
+    for cell in row.0.iter().filter(|c| c.class == Class::Timing) {
+        if let Some(c) = cols.iter_mut().find(|c| c.name == cell.name) {
+            c.class = Class::Timing;
+        }
+    }
 }
 
 fn short(key: &str) -> &str {

@@ -179,15 +179,18 @@ impl Column {
             name: format!("{stem}{suffix}"),
             class,
             unit: match suffix {
-                "_n" | "_band" => "1".into(),
+                "_n" | "_clusters" | "_band" => "1".into(),
                 _ => self.unit.into(),
             },
         };
         let est = |v: &mut Vec<ColumnInfo>| {
             v.push(c("_mean", self.class));
             v.push(c("_se", self.class));
-            // The number of samples does not depend on the machine, even for a timing estimate.
+            // The number of samples, and of the independent clusters (replicas or batches) the SE
+            // was estimated from, which sets a CI's degrees of freedom: neither depends on the
+            // machine, even for a timing estimate.
             v.push(c("_n", Class::Measured));
+            v.push(c("_clusters", Class::Measured));
         };
         let mut v = Vec::new();
         match self.shape {
@@ -260,6 +263,7 @@ mod tests {
                 ("n_i_mean".to_string(), Class::Measured),
                 ("n_i_se".into(), Class::Measured),
                 ("n_i_n".into(), Class::Measured),
+                ("n_i_clusters".into(), Class::Measured),
                 ("n_i_theory".into(), Class::Theory),
                 ("n_i_lower".into(), Class::Theory),
                 ("n_i_upper".into(), Class::Theory),
@@ -268,7 +272,15 @@ mod tests {
         );
         const FRAME: Column = Column::timed_estimate("frame_s", "s", "seconds per frame");
         let classes: Vec<Class> = FRAME.expand("frame_s").iter().map(|c| c.class).collect();
-        assert_eq!(classes, [Class::Timing, Class::Timing, Class::Measured]);
+        assert_eq!(
+            classes,
+            [
+                Class::Timing,
+                Class::Timing,
+                Class::Measured,
+                Class::Measured
+            ]
+        );
         // N_S is measured whatever its name ends with (issue 15: `n_s_mean` was classed as timing).
         const N_S: Column = Column::vs_prediction("n_s", "steps", "cell steps");
         assert!(N_S.expand("n_s").iter().all(|c| c.class != Class::Timing));

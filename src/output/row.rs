@@ -115,6 +115,17 @@ impl Row {
         self
     }
 
+    /// Reclasses the measured cells whose names `pick` accepts as timings: their values followed
+    /// from a decision taken on seconds (the §4.1 predictor's engine pick), so they may differ
+    /// between runs of the same spec and seed, and the reproducibility checks must not compare them.
+    pub fn decided_by_timing(&mut self, pick: impl Fn(&str) -> bool) {
+        for c in &mut self.0 {
+            if c.class == Class::Measured && pick(&c.name) {
+                c.class = Class::Timing;
+            }
+        }
+    }
+
     /// Appends the single-valued column `c`.
     pub fn put(&mut self, c: &Column, v: impl Into<Value>) -> &mut Self {
         debug_assert!(c.shape == Shape::Value && !c.is_family(), "{}", c.name);
@@ -127,13 +138,13 @@ impl Row {
         self.push(c.member(part), c.class, c.unit, v.into())
     }
 
-    /// Appends `M_mean, M_se, M_n` of the estimate column `c`.
+    /// Appends `M_mean, M_se, M_n, M_clusters` of the estimate column `c`.
     pub fn put_estimate(&mut self, c: &Column, e: &Estimate) -> &mut Self {
         debug_assert!(c.shape == Shape::Estimate && !c.is_family(), "{}", c.name);
         self.estimate_cells(c, c.name, e)
     }
 
-    /// Appends `M_mean, M_se, M_n` of member `part` of the estimate family `c`
+    /// Appends `M_mean, M_se, M_n, M_clusters` of member `part` of the estimate family `c`
     /// (`tests_{}_per_replica` → `tests_PART_per_replica_mean`, …).
     pub fn put_member_estimate(&mut self, c: &Column, part: &str, e: &Estimate) -> &mut Self {
         debug_assert!(c.shape == Shape::Estimate && c.is_family(), "{}", c.name);
@@ -146,6 +157,12 @@ impl Row {
         self.push(format!("{stem}_mean"), c.class, c.unit, Value::F(e.mean))
             .push(format!("{stem}_se"), c.class, c.unit, Value::F(e.se))
             .push(format!("{stem}_n"), Class::Measured, "1", Value::U(e.n))
+            .push(
+                format!("{stem}_clusters"),
+                Class::Measured,
+                "1",
+                Value::U(e.clusters),
+            )
     }
 
     /// Appends a theory or check cell that belongs to the estimate `stem` (`_theory`, `_band`, …).
@@ -206,7 +223,7 @@ mod tests {
             &Estimate {
                 mean: 1.0,
                 se: 0.1,
-                n: 4,
+                n: 12,
                 clusters: 4,
             },
         );
@@ -217,9 +234,22 @@ mod tests {
                 ("count", Class::Measured),
                 ("frame_s_mean", Class::Timing),
                 ("frame_s_se", Class::Timing),
-                ("frame_s_n", Class::Measured)
+                ("frame_s_n", Class::Measured),
+                ("frame_s_clusters", Class::Measured)
             ]
         );
         assert_eq!(r.get("count"), Some(&Value::U(3)));
+        assert_eq!(r.get("frame_s_n"), Some(&Value::U(12)));
+        assert_eq!(r.get("frame_s_clusters"), Some(&Value::U(4)));
+    }
+
+    #[test]
+    fn decided_by_timing_demotes_only_measured_cells() {
+        const THEORY: Column = Column::value("count_theory", "1", Class::Theory, "a law");
+        let mut r = Row::default();
+        r.put(&COUNT, 3u64).put(&THEORY, 2.5);
+        r.decided_by_timing(|name| name.starts_with("count"));
+        let classes: Vec<Class> = r.0.iter().map(|c| c.class).collect();
+        assert_eq!(classes, [Class::Timing, Class::Theory]);
     }
 }

@@ -38,14 +38,14 @@ pub const GENERATOR: &str = "<meta name=\"generator\" content=\"raycost report\"
 
 /// How to read the claims tables, once at the top.
 const READING: &str = "<p class=\"note\">Each experiment's claims are read back from its table \
-(NAME.csv: the M_mean, M_se, M_n columns beside M_theory, or M_lower and M_upper for a band) and \
+(NAME.csv: the M_mean, M_se, M_n, M_clusters columns beside M_theory, or M_lower and M_upper for a \
+band) and \
 judged by the rules of the terminal summary: against a prediction, &ldquo;ok (99% CI)&rdquo; when \
 the prediction lies within the 99% confidence interval, else the distance in standard errors; \
 against a band, where the 95% interval falls (below, inside, above); n/a without a standard error \
-or a finite theory. The tables do not record how many independent clusters stand behind M_se \
-(unless they have an M_clusters column), so the interval here uses M_n; with few clusters (a grid \
-kind's finite-scene replicas, a quasi-static run's 16 batches of frames) the run's own interval was \
-wider, and a distance of about 3 SE may have read &ldquo;ok&rdquo; there. \
+or a finite theory. The interval is Student-t on M_clusters − 1 degrees of freedom, as the run's \
+own; tables written before that column existed give only M_n, which is used instead (too narrow \
+where few clusters stand behind many samples). \
 A single value against a cost model has no standard error: its ratio is shown, with no verdict. \
 Details: docs/report.md.</p>\n";
 

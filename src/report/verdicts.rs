@@ -3,14 +3,12 @@
 //! [`crate::output::summary::measured`]), so the page and the terminal cannot disagree on a rule.
 //!
 //! A metric is a `M_mean` column with a `M_theory` beside it (a prediction), or also `M_lower` and
-//! `M_upper` (a band) — the columns [`crate::experiment::metric::Metric`] writes. The CSV records the
-//! sample count `M_n` but not the number of independent clusters behind `M_se`, which the Student-t
-//! interval needs; the report takes the cluster count from a `M_clusters` column where a table has
-//! one, else it takes `M_n`. That is exact for per-replica estimates and within 0.2 % of the run's
-//! interval for batched ones (hundreds of batches or more), but narrower than the run's when a
-//! metric had few clusters and many samples (a grid kind's finite scene with several replicas: one
-//! cluster each; a quasi-static run of more than 32 frames: 16 batches of frames). So where the run
-//! wrote its own band verdict (`M_band`) and it differs, the page shows both.
+//! `M_upper` (a band) — the columns [`crate::experiment::metric::Metric`] writes. The Student-t
+//! interval takes its degrees of freedom from `M_clusters` (the independent clusters behind `M_se`),
+//! as the run did. Tables written before that column existed have only `M_n`, which is used instead:
+//! exact for per-replica estimates, narrower than the run's where a metric had few clusters and many
+//! samples (a grid kind's finite scene with several replicas; a quasi-static run of more than 32
+//! frames). So where the run wrote its own band verdict (`M_band`) and it differs, the page shows both.
 //!
 //! A single measured value with a `_theory` column and no `_mean` (an exact count against a cost
 //! model) has no standard error; it is listed with the ratio and no verdict.

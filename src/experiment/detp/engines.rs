@@ -59,6 +59,10 @@ pub(super) trait Engine: Send {
     fn per_point(&self, _p: &Pooled) -> Option<Vec<(f64, f64)>> {
         None
     }
+    /// A baseline's estimate per disc in each replica (empty where it keeps none).
+    fn replica_points(&self) -> Vec<Vec<f64>> {
+        Vec::new()
+    }
     /// The levels table and its summary lines (the sphere cache only).
     fn levels(&self, _p: &Pooled, _law: &Law) -> (Vec<Row>, Vec<SummaryLine>) {
         (Vec::new(), Vec::new())
@@ -410,6 +414,9 @@ impl Engine for PhotonMap {
         // A baseline: not part of the DETP engines' speed.
         0.0
     }
+    fn replica_points(&self) -> Vec<Vec<f64>> {
+        self.runs.iter().map(|r| r.0.clone()).collect()
+    }
     fn per_point(&self, p: &Pooled) -> Option<Vec<(f64, f64)>> {
         let n = self.runs.first().map_or(0, |r| r.0.len());
         let k = p.cfg.photon_map_k as f64;
@@ -536,7 +543,19 @@ impl Engine for Reference {
 /// variance is Σ Var((E_i − R_i)²)/n² with Var ≈ 4μ_i²s_i² + 2s_i⁴ (normal errors, mean μ_i,
 /// variance s_i² = s_E,i² + s_R,i², μ_i² estimated by max(0, (E_i − R_i)² − s_i²)), carried to the
 /// root by the delta method.
-pub(super) fn against_reference(est: &[(f64, f64)], refr: &[(f64, f64)]) -> (Estimate, Estimate) {
+///
+/// The bias's SE: one photon set feeds every point of a replica, so the points' errors are
+/// correlated (overlapping discs share segments) and Σ s_i² would understate it. With two or more
+/// replicas it is therefore taken across replicas: the replicas' mean errors b_r over the same
+/// points, Var(b̄) = s_b²/R, plus the reference's own variance Σ s_R,i²/n² (its points are
+/// independent streams); the degrees of freedom of that sum (Welch–Satterthwaite) are written as
+/// its cluster count, so a CI uses Student-t. With one replica, the per-point sum as above.
+/// `replicas` holds the engine's per-point values of each replica (empty if it has none).
+pub(super) fn against_reference(
+    est: &[(f64, f64)],
+    replicas: &[Vec<f64>],
+    refr: &[(f64, f64)],
+) -> (Estimate, Estimate) {
     let n = est.len().min(refr.len());
     let (mut sum_d, mut var_d, mut mse, mut var_mse) = (0.0, 0.0, 0.0, 0.0);
     for (&(e, se), &(r, sr)) in est.iter().zip(refr) {
@@ -555,7 +574,30 @@ pub(super) fn against_reference(est: &[(f64, f64)], refr: &[(f64, f64)]) -> (Est
         n: n as u64,
         clusters: n as u64,
     };
-    let bias = est_of(sum_d / nf, var_d.sqrt() / nf);
+    let bias = if replicas.len() >= 2 && n > 0 {
+        let b: Vec<f64> = replicas
+            .iter()
+            .map(|e| e.iter().zip(refr).map(|(e, r)| e - r.0).sum::<f64>() / nf)
+            .collect();
+        let across = per_replica(&b);
+        let a = across.se * across.se;
+        let var_ref = refr[..n].iter().map(|r| r.1 * r.1).sum::<f64>() / (nf * nf);
+        let reps = b.len() as f64;
+        let dof = (a + var_ref).powi(2)
+            / (a * a / (reps - 1.0) + var_ref * var_ref / (nf - 1.0).max(1.0));
+        Estimate {
+            mean: across.mean,
+            se: (a + var_ref).sqrt(),
+            n: n as u64,
+            clusters: if dof.is_finite() {
+                (dof.floor() as u64 + 1).clamp(2, n as u64)
+            } else {
+                n as u64
+            },
+        }
+    } else {
+        est_of(sum_d / nf, var_d.sqrt() / nf)
+    };
     let mse = mse / nf;
     let se_mse = var_mse.sqrt() / nf;
     let rmse = mse.max(0.0).sqrt();
@@ -565,4 +607,52 @@ pub(super) fn against_reference(est: &[(f64, f64)], refr: &[(f64, f64)]) -> (Est
         se_mse.sqrt()
     };
     (bias, est_of(rmse, se_rmse))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Replicas whose errors are shared by every point (a replica-wide offset): the per-point sum
+    /// of variances would call the mean error exact to within s/√n; across replicas it is the
+    /// offsets' spread, as it must be.
+    #[test]
+    fn the_bias_se_sees_errors_shared_by_all_points() {
+        let n = 400;
+        let truth = vec![(10.0, 0.0); n];
+        let offsets = [-0.3, 0.1, 0.4, -0.2];
+        let replicas: Vec<Vec<f64>> = offsets
+            .iter()
+            .map(|o| {
+                (0..n)
+                    .map(|i| 10.0 + o + 0.01 * ((i % 7) as f64 - 3.0))
+                    .collect()
+            })
+            .collect();
+        let pooled: Vec<(f64, f64)> = (0..n)
+            .map(|i| {
+                let e = per_replica(&replicas.iter().map(|r| r[i]).collect::<Vec<_>>());
+                (e.mean, e.se)
+            })
+            .collect();
+        let (bias, _) = against_reference(&pooled, &replicas, &truth);
+        let b = per_replica(&offsets);
+        let pattern = (0..n).map(|i| 0.01 * ((i % 7) as f64 - 3.0)).sum::<f64>() / n as f64;
+        assert!(
+            (bias.mean - (b.mean + pattern)).abs() < 1e-12,
+            "{}",
+            bias.mean
+        );
+        assert!((bias.se - b.se).abs() < 1e-12, "{} vs {}", bias.se, b.se);
+        // With an exact reference the degrees of freedom are the replicas' R − 1.
+        assert_eq!(bias.clusters, offsets.len() as u64);
+        let (naive, _) = against_reference(&pooled, &[], &truth);
+        assert!(naive.se < bias.se / 10.0, "{} {}", naive.se, bias.se);
+        // A noisy reference adds its variance and raises the degrees of freedom.
+        let noisy: Vec<(f64, f64)> = truth.iter().map(|&(v, _)| (v, 4.0)).collect();
+        let (both, _) = against_reference(&pooled, &replicas, &noisy);
+        let var_ref = 16.0 / n as f64;
+        assert!((both.se - (b.se * b.se + var_ref).sqrt()).abs() < 1e-12);
+        assert!(both.clusters > offsets.len() as u64);
+    }
 }

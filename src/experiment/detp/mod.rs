@@ -340,14 +340,20 @@ pub fn run_point(
             &col::REFERENCE_MEAN_SE,
             refr.iter().map(|r| r.1).sum::<f64>() / n,
         );
-        let (bias, rmse) = engines::against_reference(&detp_points, refr);
+        let (bias, rmse) = engines::against_reference(&detp_points, &irr, refr);
         row.put_estimate(&col::IRRADIANCE_REF_BIAS, &bias)
             .put_estimate(&col::IRRADIANCE_REF_RMSE, &rmse);
         if let Some((_, pm)) = baselines
             .iter()
             .find(|(c, _)| *c == EngineChoice::PhotonMap)
         {
-            let (bias, rmse) = engines::against_reference(pm, refr);
+            let pm_replicas = cfg
+                .engines
+                .iter()
+                .zip(&engines)
+                .find(|(&c, _)| c == EngineChoice::PhotonMap)
+                .map_or_else(Vec::new, |(_, e)| e.replica_points());
+            let (bias, rmse) = engines::against_reference(pm, &pm_replicas, refr);
             row.put_estimate(&col::PHOTON_MAP_REF_BIAS, &bias)
                 .put_estimate(&col::PHOTON_MAP_REF_RMSE, &rmse);
         }

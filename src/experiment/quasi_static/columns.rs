@@ -61,8 +61,15 @@ pub const CROSSOVER: Column = parameter(
 pub const ENGINE_USED: Column = measured(
     "engine_used",
     "",
-    "the engine each object's points used at frame 0, joined by + (with engine \"predicted\" it depends on timings)",
+    "the engine each object's points used at frame 0, joined by + (with engine \"predicted\" the pick is taken on seconds: this and the dynamic_* counts are then classed timing)",
 );
+
+/// The measured columns whose values follow the engine picked for the dynamic points: with
+/// `detp.engine = "predicted"` the §4.1 predictor picks on seconds, so these may differ between
+/// runs of one spec and seed and are written as timings (`Row::decided_by_timing`).
+pub fn decided_by_the_pick(name: &str) -> bool {
+    name == ENGINE_USED.name || name.starts_with("dynamic_")
+}
 /// Warnings.
 pub const WARNINGS: Column = measured(
     "warnings",

@@ -354,6 +354,12 @@ pub fn run_point(
         let frame = cfg.points_frame.unwrap_or(cfg.frames - 1);
         tables.points = points_table(qs, sums, discs, frame, n_s);
     }
+    if cfg.engine == DynamicEngine::Predicted {
+        row.decided_by_timing(col::decided_by_the_pick);
+        for r in &mut tables.frames {
+            r.decided_by_timing(col::decided_by_the_pick);
+        }
+    }
     PointOutput {
         row,
         tables,
