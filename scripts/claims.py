@@ -21,8 +21,9 @@ import csv
 import math
 import os
 import sys
+import tomllib
 
-from raycost_stats import Z95, bootstrap, break_even, crossing, frame0, optimum_q, t95
+from raycost_stats import Z95, bootstrap, break_even, crossing, engine_cost_fits, frame0, optimum_q, t95
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 RESULTS = os.path.join(ROOT, "results")
@@ -51,6 +52,22 @@ def num(v):
         return float(v)
     except ValueError:
         return v
+
+
+BUSY_CORES = 0.25  # raycost's own busy-machine threshold (src/output/meta.rs)
+
+
+def timing(name):
+    """Where a claim's seconds were taken: the CPU and the other processes' mean CPU use during the
+    run, from results/NAME/NAME.meta.toml, and whether that run counts as quiet."""
+    with open(os.path.join(RESULTS, name, "%s.meta.toml" % name), "rb") as f:
+        meta = tomllib.load(f)
+    cores = meta["run"].get("other_cores", math.nan)
+    quiet = cores == cores and cores <= BUSY_CORES
+    text = "seconds on %s, %d threads, other processes %.2f cores%s" % (
+        meta["machine"]["cpu"], meta["run"]["threads"], cores,
+        "" if quiet else " (busy machine: seconds unreliable)")
+    return text, quiet
 
 
 def source(name, side=None):
@@ -412,21 +429,38 @@ def theorem_1():
     rows = where(main, detp__photons=big, detp__index="grid")
     r = max(rows, key=lambda r: r["detp.points"])
     reps = r["tests_sphere_cache_per_replica_n"]
-    sc = r["tests_sphere_cache"] / r["tests_sphere_cache_theory"]
-    di_tests = r["tests_disc_index"] / r["tests_disc_index_theory"]
+    q = t95(reps - 1)
+
+    def ratio(row, total, per_replica, theory):
+        """total / theory and the half-width of its 95 % CI (the per-replica SE scaled to the total)."""
+        th = row[theory]
+        return row[total] / th, q * row[per_replica + "_se"] * row[per_replica + "_n"] / th
+
+    sc = ratio(r, "tests_sphere_cache", "tests_sphere_cache_per_replica", "tests_sphere_cache_theory")
+    di = ratio(r, "tests_disc_index", "tests_disc_index_per_replica", "tests_disc_index_theory")
     di_all = r["counted_cost_disc_index"] / r["tests_disc_index_theory"]
     ratios_sc = [x["tests_sphere_cache"] / x["tests_sphere_cache_theory"] for x in main]
     ratios_di = [x["counted_cost_disc_index"] / x["tests_disc_index_theory"] for x in main]
+    fits = engine_cost_fits(main, table("detp-engines-cost", "levels"))
+    (_, t, u, _), sc_res, sc_ci = fits["sphere-cache"]
+    ns = lambda v, ci: "%.3g ns [%.3g, %.3g]" % (v * 1e9, ci[0] * 1e9, ci[1] * 1e9)  # noqa: E731
+    secs = ["sphere cache t = %s per ray–sphere test, u = %s per ray–disc test (fit residuals ≤ %.0f %%)"
+            % (ns(t, sc_ci[1]), ns(u, sc_ci[2]), 100 * max(abs(x) for x in sc_res))]
+    for name, (c, res, ci) in fits.items():
+        if name != "sphere-cache":
+            secs.append("%s u = %s per ray–disc test (≤ %.0f %%)" % (name, ns(c[1], ci[1]), 100 * max(abs(x) for x in res)))
+    when, _ = timing("detp-engines-cost")
     return dict(
         claim="Theorem 1: sphere cache t·n_R/Q²·(∛n_P − 1)/(1 − Q) + (4/3)·u·n_R·∛n_P; disc index u·n_R·∛n_P",
         reference=DETP + ", Theorem 1",
         paper="counted / theory = 1 (t = u = 1)",
-        measured="at n_R = %s, n_P = %s (grid index): sphere cache %.1f×; disc index %.1f× in ray–disc tests, %.1f× with its traversal (box tests, DDA steps); over the sweep sphere cache %.1f–%.1f×, disc index with traversal %.1f–%.1f×"
-        % (pow10(big), pow10(r["detp.points"]), sc, di_tests, di_all, min(ratios_sc), max(ratios_sc), min(ratios_di), max(ratios_di)),
-        value=sc, ci=None,
+        measured="at n_R = %s, n_P = %s (grid index): sphere cache %s×; disc index %s× in ray–disc tests, %.1f× with its traversal (box tests, DDA steps); over the sweep sphere cache %.1f–%.1f×, disc index with traversal %.1f–%.1f×. Fitted to seconds: %s; %s"
+        % (pow10(big), pow10(r["detp.points"]), pm(*sc, digits=3), pm(*di, digits=3), di_all, min(ratios_sc), max(ratios_sc),
+           min(ratios_di), max(ratios_di), "; ".join(secs), when),
+        value=sc[0], ci=sc[1],
         verdict="differs",
         source=source("detp-engines-cost"),
-        note="constant factors; the decomposition of the sphere cache's excess (list mode, pop rule, point layout) is in docs/findings-detp.md. %d replicas per point" % reps,
+        note="constant factors; the decomposition of the sphere cache's excess (list mode, pop rule, point layout) is in docs/findings-detp.md. %d replicas per point; fit CIs by parametric bootstrap over the replicas' timings" % reps,
     )
 
 
@@ -470,7 +504,7 @@ def theorem_2():
         value=None, ci=None,
         verdict="holds" if ok else "differs",
         source=source("quasi-static-crossover"),
-        note="feeds: paper = the sphere cache gets the segment index's answer and the disc index every segment; segment-index = both get that answer; all = both get every segment. CIs by parametric bootstrap over 4 replicas",
+        note="feeds: paper = the sphere cache gets the segment index's answer and the disc index every segment; segment-index = both get that answer; all = both get every segment. CIs by parametric bootstrap over 4 replicas; " + timing("quasi-static-crossover")[0],
     )
 
 
@@ -497,7 +531,7 @@ def amortisation():
         value=None, ci=None,
         verdict="differs" if max(lows) < 180 else "holds",
         source=source("quasi-static-amortisation"),
-        note="raycost's index is a counting sort of discs into cells, cheap to build; the paper's build is not described",
+        note="raycost's index is a counting sort of discs into cells, cheap to build; the paper's build is not described; " + timing("quasi-static-amortisation")[0],
     )
 
 
@@ -590,7 +624,7 @@ def incremental_exact():
         value=None, ci=None,
         verdict="holds" if total == 0 else "refuted",
         source=source("quasi-static-frames"),
-        note="raycost's exactness is by construction (integer sums, photons re-traced from their own streams)",
+        note="raycost's exactness is by construction (integer sums, photons re-traced from their own streams); speed-up " + timing("quasi-static-frames")[0],
     )
 
 

@@ -6,12 +6,14 @@ T = u·n_R·∛n_P. Left: counted tests over Theorem 1's count, against n_R·∛
 time against the cost the counted tests imply, t·(ray–sphere tests) + u·(ray–disc tests) for the sphere
 cache and u_idx·(ray–disc tests) + v·(nodes visited) for each index, each plus a cost per segment
 (building the root list, walking the index), fitted here by non-negative least squares on relative
-residuals; the fit and its residuals are printed and shown. Right: the residuals in %.
+residuals (raycost_stats.engine_cost_fits), with 95 % CIs by a parametric bootstrap over the replicas'
+timings; the fit and its residuals are printed and shown. Right: the residuals in %.
 """
 
 import numpy as np
 
 import raycost_plot as rp
+from raycost_stats import engine_cost_fits, rays_copied
 
 NAME = "detp-engines-cost"
 REQUIRED = ["detp.photons", "detp.points", "detp.index", "segments", "points", "ray_sphere_tests",
@@ -19,50 +21,27 @@ REQUIRED = ["detp.photons", "detp.points", "detp.index", "segments", "points", "
             "tests_disc_index", "tests_disc_index_theory", "nodes_disc_index", "cost_disc_index_s"]
 
 
-def fit(x_cols, y):
-    """Non-negative least squares on relative residuals (times span two decades, so each point
-    weighs by 1/y): y ≈ X·c with c ≥ 0, by solving every subset of columns and keeping the best
-    non-negative solution (three columns at most). Returns c and the relative residuals."""
-    x = np.column_stack(x_cols)
-    w = x / y[:, None]
-    best = None
-    for mask in range(1, 1 << x.shape[1]):
-        cols = [j for j in range(x.shape[1]) if mask >> j & 1]
-        c_sub, *_ = np.linalg.lstsq(w[:, cols], np.ones_like(y), rcond=None)
-        if np.any(c_sub < 0):
-            continue
-        c = np.zeros(x.shape[1])
-        c[cols] = c_sub
-        res = (x @ c - y) / y
-        if best is None or np.sum(res ** 2) < np.sum(best[1] ** 2):
-            best = (c, res)
-    return best
-
-
 def plot(args):
     rows, levels = rp.with_params(args.input, "levels", ["point", "builds_level", "rays_level_mean"])
     rows = [r for r in rows if all(c in r for c in REQUIRED)] or rp.read_csv(args.input, REQUIRED)
-    # Rays copied into new lists (Σ over builds of the list length), from the levels table.
-    held = {}
-    for l in levels:
-        if (l.get("builds_level") or 0) > 0 and l["level"] > 0:
-            held[l["point"]] = held.get(l["point"], 0.0) + l["builds_level"] * l["rays_level_mean"]
+    held = rays_copied(levels)
+    fits = engine_cost_fits(rows, levels)
     nr = np.array(rp.col(rows, "segments"))
     npts = np.array(rp.col(rows, "points"))
     size = nr * np.cbrt(npts)
-    # The sphere cache runs the same way whatever index the point uses: fit on every row.
     sc_t = np.array(rp.col(rows, "cost_sphere_cache_s"))
     copied = np.array([held.get(r["point"], 0.0) for r in rows])
-    (c_sc, t, u, h), sc_res = fit([nr, np.array(rp.col(rows, "ray_sphere_tests")),
-                                   np.array(rp.col(rows, "ray_disc_tests")), copied], sc_t)
+    (c_sc, t, u, h), sc_res, sc_ci = fits["sphere-cache"]
+    sc_res = np.array(sc_res)
     fig, axes = rp.subplots(1, 3, panel_w=5.2, panel_h=4.2)
     ax_c, ax_t, ax_r = axes[0]
     ax_c.plot(size, np.array(rp.col(rows, "tests_sphere_cache")) / np.array(rp.col(rows, "tests_sphere_cache_theory")),
               "o", color="C0", label="sphere cache")
-    lines = ["sphere cache: %.3g ns/segment + t = %.3g ns/ray–sphere test + u = %.3g ns/ray–disc test + "
+    ns = lambda lo_hi: "[%.3g, %.3g]" % (lo_hi[0] * 1e9, lo_hi[1] * 1e9)  # noqa: E731
+    lines = ["sphere cache: %.3g ns/segment + t = %.3g %s ns/ray–sphere test + u = %.3g %s ns/ray–disc test + "
              "%.3g ns/ray copied; residuals max %.0f %%, rms %.0f %%" % (
-                 c_sc * 1e9, t * 1e9, u * 1e9, h * 1e9, 100 * np.max(np.abs(sc_res)),
-                 100 * np.sqrt(np.mean(sc_res ** 2)))]
+                 c_sc * 1e9, t * 1e9, ns(sc_ci[1]), u * 1e9, ns(sc_ci[2]), h * 1e9,
+                 100 * np.max(np.abs(sc_res)), 100 * np.sqrt(np.mean(sc_res ** 2)))]
     ax_t.plot(c_sc * nr + t * np.array(rp.col(rows, "ray_sphere_tests")) + u * np.array(rp.col(rows, "ray_disc_tests"))
               + h * copied, sc_t, "o", color="C0", label="sphere cache")
     ax_r.plot(size, 100 * sc_res, "o", color="C0", label="sphere cache")
@@ -73,14 +52,15 @@ def plot(args):
         tests = np.array(rp.col(sub, "tests_disc_index"))
         nodes = np.array(rp.col(sub, "nodes_disc_index"))
         seg = np.array(rp.col(sub, "segments"))
-        (ci, ui, v), res = fit([seg, tests, nodes], y)
+        (ci, ui, v), res, cis = fits["disc-index (%s)" % index]
+        res = np.array(res)
         color = "C%d" % (j + 1)
         ax_c.plot(s, tests / np.array(rp.col(sub, "tests_disc_index_theory")), "s", color=color,
                   label="disc index (%s)" % index)
         ax_t.plot(ci * seg + ui * tests + v * nodes, y, "s", color=color, label="disc index (%s)" % index)
         ax_r.plot(s, 100 * res, "s", color=color, label="disc index (%s)" % index)
-        lines.append("disc index (%s): %.3g ns/segment + u = %.3g ns/ray–disc test + v = %.3g ns/node; "
-                     "residuals max %.0f %%, rms %.0f %%" % (index, ci * 1e9, ui * 1e9, v * 1e9,
+        lines.append("disc index (%s): %.3g ns/segment + u = %.3g %s ns/ray–disc test + v = %.3g %s ns/node; "
+                     "residuals max %.0f %%, rms %.0f %%" % (index, ci * 1e9, ui * 1e9, ns(cis[1]), v * 1e9, ns(cis[2]),
                                                           100 * np.max(np.abs(res)), 100 * np.sqrt(np.mean(res ** 2))))
     for line in lines:
         print(line)

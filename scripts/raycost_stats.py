@@ -1,6 +1,6 @@
 """Statistics shared by scripts/claims.py and the plot scripts (no plotting, no third-party deps):
-Student-t quantiles, a parametric bootstrap for figures derived from several means, and the
-optimum of a cost curve.
+Student-t quantiles, a parametric bootstrap for figures derived from several means, the
+optimum of a cost curve and cost constants fitted to timings.
 """
 
 import math
@@ -61,26 +61,67 @@ def optimum_q(rows):
         sx = [sum(v ** k for v in x) for k in range(5)]
         sy = [sum(yy * v ** k for v, yy in zip(x, y)) for k in range(3)]
         a = [[sx[0], sx[1], sx[2]], [sx[1], sx[2], sx[3]], [sx[2], sx[3], sx[4]]]
-        sol = solve3(a, sy)
+        sol = solve(a, sy)
         if sol is None or sol[2] <= 0:
             return qs[i]
         return min(max(-sol[1] / (2 * sol[2]), x[0]), x[-1])
     return f
 
 
-def solve3(a, b):
-    """The solution of the 3×3 system a·x = b (Gaussian elimination with pivoting), None if singular."""
+def solve(a, b):
+    """The solution of the n×n system a·x = b (Gaussian elimination with pivoting), None if singular."""
+    n = len(b)
     m = [row[:] + [v] for row, v in zip(a, b)]
-    for c in range(3):
-        p = max(range(c, 3), key=lambda r: abs(m[r][c]))
+    for c in range(n):
+        p = max(range(c, n), key=lambda r: abs(m[r][c]))
         if abs(m[p][c]) < 1e-300:
             return None
         m[c], m[p] = m[p], m[c]
-        for r in range(3):
+        for r in range(n):
             if r != c:
                 f = m[r][c] / m[c][c]
                 m[r] = [x - f * y for x, y in zip(m[r], m[c])]
-    return [m[i][3] / m[i][i] for i in range(3)]
+    return [m[i][n] / m[i][i] for i in range(n)]
+
+
+def fit_costs(x_cols, y):
+    """Non-negative least squares on relative residuals: y ≈ Σ_j c_j·x_cols[j] with c ≥ 0, each point
+    weighted by 1/y (times span decades). Solves every subset of columns (there are at most four)
+    and keeps the best non-negative solution. Returns (c, relative residuals)."""
+    k, n = len(x_cols), len(y)
+    w = [[x_cols[j][i] / y[i] for j in range(k)] for i in range(n)]
+    best = None
+    for mask in range(1, 1 << k):
+        cols = [j for j in range(k) if mask >> j & 1]
+        ata = [[sum(w[i][a] * w[i][b] for i in range(n)) for b in cols] for a in cols]
+        atb = [sum(w[i][a] for i in range(n)) for a in cols]
+        sub = solve(ata, atb)
+        if sub is None or any(v < 0 for v in sub):
+            continue
+        c = [0.0] * k
+        for j, v in zip(cols, sub):
+            c[j] = v
+        res = [(sum(c[j] * x_cols[j][i] for j in range(k)) - y[i]) / y[i] for i in range(n)]
+        if best is None or sum(r * r for r in res) < sum(r * r for r in best[1]):
+            best = (c, res)
+    return best
+
+
+def fit_costs_ci(x_cols, y, y_se, draws=2000, seed=1):
+    """fit_costs and, per constant, the 2.5/97.5 percentiles of the refitted constant over normal
+    draws of every y within its SE (a parametric bootstrap over replicas: the fit's residual, the
+    model's misfit, is reported beside it, not in it). Returns (c, residuals, [(lo, hi)] per c)."""
+    c, res = fit_costs(x_cols, y)
+    rng = random.Random(seed)
+    draws_c = []
+    for _ in range(draws):
+        yy = [max(v + (s if s == s else 0.0) * rng.gauss(0, 1), 1e-300) for v, s in zip(y, y_se)]
+        draws_c.append(fit_costs(x_cols, yy)[0])
+    cis = []
+    for j in range(len(c)):
+        v = sorted(d[j] for d in draws_c)
+        cis.append((v[int(0.025 * (len(v) - 1))], v[int(0.975 * (len(v) - 1))]))
+    return c, res, cis
 
 
 def break_even(x):
@@ -114,3 +155,40 @@ def crossing(xs, a, b):
         if d0 <= 0 < d1 or d0 >= 0 > d1:
             return xs[i - 1] + (xs[i] - xs[i - 1]) * d0 / (d0 - d1)
     return math.nan
+
+
+def rays_copied(levels):
+    """Rays copied into new sphere-cache lists per sweep point (Σ over levels ≥ 1 of builds × mean
+    list length), from a DETP levels table: {point: rays}."""
+    held = {}
+    for lv in levels:
+        if (lv.get("builds_level") or 0) > 0 and lv["level"] > 0:
+            held[lv["point"]] = held.get(lv["point"], 0.0) + lv["builds_level"] * lv["rays_level_mean"]
+    return held
+
+
+def engine_cost_fits(rows, levels, draws=2000):
+    """Seconds per counted operation of each DETP engine (experiment detp-engines-cost), with CIs.
+
+    The sphere cache's seconds are fitted as c·segments + t·(ray–sphere tests) + u·(ray–disc tests)
+    + h·(rays copied into new lists, Σ builds × mean list length from the levels table), on every row
+    (it runs alike whatever index a row uses); each disc index's as c·segments + u·(ray–disc tests)
+    + v·(nodes visited), on its own rows. Totals over replicas throughout; a total's SE is the
+    replicas' count × the per-replica SE. Returns {engine: (constants, residuals, CIs)}, engine
+    "sphere-cache" or "disc-index (INDEX)"."""
+    held = rays_copied(levels)
+
+    def total_se(r, engine):
+        return r["cost_%s_per_replica_s_se" % engine] * r["cost_%s_per_replica_s_n" % engine]
+
+    col = lambda sub, key: [r[key] for r in sub]  # noqa: E731
+    fits = {"sphere-cache": fit_costs_ci(
+        [col(rows, "segments"), col(rows, "ray_sphere_tests"), col(rows, "ray_disc_tests"),
+         [held.get(r["point"], 0.0) for r in rows]],
+        col(rows, "cost_sphere_cache_s"), [total_se(r, "sphere_cache") for r in rows], draws)}
+    for index in sorted({r["detp.index"] for r in rows}):
+        sub = [r for r in rows if r["detp.index"] == index]
+        fits["disc-index (%s)" % index] = fit_costs_ci(
+            [col(sub, "segments"), col(sub, "tests_disc_index"), col(sub, "nodes_disc_index")],
+            col(sub, "cost_disc_index_s"), [total_se(r, "disc_index") for r in sub], draws)
+    return fits
