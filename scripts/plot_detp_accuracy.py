@@ -28,7 +28,7 @@ def points_of(rows, cost, metric, key):
     out = {}
     for r in rows:
         k = (r["detp.photons"], r[key])
-        e = out.setdefault(k, {"t": [], "rmse": r[metric + "_rmse_mean"], "se": r[metric + "_rmse_se"],
+        e = out.setdefault(k, {"t": [], "rmse": r[metric + "_rmse_mean"], "ci": rp.ci95(r, metric + "_rmse"),
                                "bias": r[metric + "_bias_mean"], "exact": r["irradiance_theory"],
                                "photons": r["detp.photons"], "label": r[key]})
         e["t"].append(r["trace_s"] + r[cost])
@@ -56,7 +56,7 @@ def plot(args):
             pts = points_of(sub, cost, metric, key)
             for p in pts:
                 rel = p["rmse"] / p["exact"]
-                ax.errorbar([p["t"]], [rel], yerr=[rp.Z95 * p["se"] / p["exact"]], fmt=marker, color=color,
+                ax.errorbar([p["t"]], [rel], yerr=[p["ci"] / p["exact"]], fmt=marker, color=color,
                             ms=3 + 2 * (len(str(int(p["photons"]))) - 4), capsize=2, alpha=0.85)
                 ax.annotate("%s=%g" % (short, p["label"]), (p["t"], rel), fontsize=6, xytext=(3, 2),
                             textcoords="offset points")

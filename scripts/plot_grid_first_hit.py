@@ -101,7 +101,7 @@ def plot(args):
             draw_hist(ax_t, t_bins, "expected: Exponential(ρπr²)", "first-hit distance t*")
             lines = [
                 "mean t*: %.3g ± %.2g (theory %.3g)"
-                % (row.get("t_hit_mean", math.nan), rp.Z95 * (row.get("t_hit_se") or 0), row.get("t_hit_theory", math.nan)),
+                % (row.get("t_hit_mean", math.nan), rp.ci95(row, "t_hit"), row.get("t_hit_theory", math.nan)),
                 p_text("KS D", row.get("t_hit_ks", math.nan), row["t_hit_ks_p"]),
                 p_text("χ²", row.get("t_hit_chi2", math.nan), row["t_hit_chi2_p"], row.get("t_hit_chi2_dof")),
             ]
@@ -119,7 +119,7 @@ def plot(args):
                       "N_I with mailboxing (distinct spheres tested)")
             lines = [
                 "mean N_I: %.3g ± %.2g (n_i_mb_theory %.3g)"
-                % (row.get("n_i_mb_mean", math.nan), rp.Z95 * (row.get("n_i_mb_se") or 0), row.get("n_i_mb_theory", math.nan)),
+                % (row.get("n_i_mb_mean", math.nan), rp.ci95(row, "n_i_mb"), row.get("n_i_mb_theory", math.nan)),
                 p_text("χ²", row.get("n_i_mb_chi2", math.nan), row["n_i_mb_chi2_p"], row.get("n_i_mb_chi2_dof")),
             ]
             if isinstance(row.get("n_i_cylinder_radius"), float):

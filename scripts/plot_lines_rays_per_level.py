@@ -49,8 +49,8 @@ def plot(args):
         if nine:
             r = nine[0]
             notes.append("%s: level 9 holds %.2f ± %.2f rays (inside the ball %.2f ± %.2f); n_R·Q^18 = %.2f" % (
-                label, r["rays_level_mean"], rp.Z95 * r["rays_level_se"], r.get("rays_level_inside_mean") or float("nan"),
-                rp.Z95 * (r.get("rays_level_inside_se") or float("nan")), r["rays_level_theory"]))
+                label, r["rays_level_mean"], rp.ci95(r, "rays_level"), r.get("rays_level_inside_mean") or float("nan"),
+                (rp.ci95(r, "rays_level_inside") if r.get("rays_level_inside_se") is not None else float("nan")), r["rays_level_theory"]))
     rp.log_scale(ax, y=True)
     ax.set_xlabel("level i (radius r_0·Q^i)")
     ax.set_ylabel("rays held by a level-i sphere")

@@ -10,7 +10,7 @@ parametric bootstrap. Left: frame 0 per engine; middle: update per frame; right:
 import math
 
 import raycost_plot as rp
-from raycost_stats import bootstrap, break_even, frame0, t95
+from raycost_stats import bootstrap, break_even, dof, frame0, t95
 
 NAME = "quasi-static-amortisation"
 REQUIRED = ["detp.engine", "static_s_mean", "static_s_se", "static_s_n", "frame0_s"]
@@ -43,7 +43,8 @@ def plot(args):
         ax_u.errorbar([i + 0.1], [sc["static_s_mean"]], yerr=[z * sc["static_s_se"]], fmt="o", color="C0",
                       label="sphere cache" if i == 0 else None)
         f, lo, hi = bootstrap(break_even, [f_di[0], f_sc[0], di["static_s_mean"], sc["static_s_mean"]],
-                              [f_di[1], f_sc[1], di["static_s_se"], sc["static_s_se"]])
+                              [f_di[1], f_sc[1], di["static_s_se"], sc["static_s_se"]],
+                              dofs=[f_di[2] - 1, f_sc[2] - 1, dof(di, "static_s"), dof(sc, "static_s")])
         f_mid.append(f)
         f_lo.append(lo)
         f_hi.append(hi)

@@ -9,7 +9,7 @@ and n_D (t = u), whose crossover is 1/√8.08 ≈ 0.35 at n → ∞. The measure
 parametric-bootstrap CI over the replicas.
 """
 import raycost_plot as rp
-from raycost_stats import bootstrap, crossing, t95
+from raycost_stats import bootstrap, crossing, dof
 
 NAME = "quasi-static-crossover"
 REQUIRED = ["dynamic.ratio", "detp.engine", "dynamic_s_mean", "dynamic_s_se", "dynamic_counted_cost_mean",
@@ -22,7 +22,8 @@ def cross_ci(sc, di, metric):
     k = len(sc)
     means = rp.col(sc, metric + "_mean") + rp.col(di, metric + "_mean")
     ses = rp.col(sc, metric + "_se") + rp.col(di, metric + "_se")
-    return bootstrap(lambda v: crossing(xs, v[:k], v[k:]), means, ses)
+    dofs = [dof(r, metric) for r in sc + di]
+    return bootstrap(lambda v: crossing(xs, v[:k], v[k:]), means, ses, dofs=dofs)
 
 
 def text(c):
@@ -42,9 +43,8 @@ def plot(args):
         x = rp.col(sc, "dynamic.ratio")
         for ax, metric, what in ((ax_t, "dynamic_s", "seconds"), (ax_c, "dynamic_counted_cost", "counted")):
             for grp, color, marker, label in ((sc, "C0", "o", "sphere cache"), (di, "C1", "s", "disc index")):
-                # Four replicas, each one cluster: Student-t on 3 degrees of freedom.
-                z = t95(3)
-                ax.errorbar(x, rp.col(grp, metric + "_mean"), yerr=[z * s for s in rp.col(grp, metric + "_se")],
+                # Each replica one cluster: Student-t on M_clusters − 1 degrees of freedom.
+                ax.errorbar(x, rp.col(grp, metric + "_mean"), yerr=[rp.ci95(r, metric) for r in grp],
                             fmt=marker, color=color, ms=4, capsize=2, label=label)
             cr = cross_ci(sc, di, metric)
             if cr[0] == cr[0]:

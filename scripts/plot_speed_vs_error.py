@@ -11,6 +11,7 @@ faster and more accurate than. Right: the relative bias (mean error over the poi
 """
 
 import raycost_plot as rp
+from raycost_stats import dof, t95
 
 NAME = "speed-vs-error"
 REQUIRED = ["detp.photons", "detp.disc_radius", "detp.photon_map_k", "trace_s", "cost_sphere_cache_s",
@@ -18,12 +19,13 @@ REQUIRED = ["detp.photons", "detp.disc_radius", "detp.photon_map_k", "trace_s", 
             "irradiance_ref_rmse_mean", "irradiance_ref_rmse_se", "irradiance_ref_bias_mean",
             "irradiance_ref_bias_se", "photon_map_ref_rmse_mean", "photon_map_ref_rmse_se",
             "photon_map_ref_bias_mean", "photon_map_ref_bias_se"]
-Z = 1.96
 
 
 def configurations(rows):
-    """One entry per (method, setting, photons): seconds, relative RMSE ± SE, relative bias ± SE.
-    DETP rows at the same photons and d (but other k) are independent runs: averaged."""
+    """One entry per (method, setting, photons): seconds, relative RMSE and the half-width of its
+    95 % CI, relative bias and its 95 % CI half-width. DETP rows at the same photons and d (but other
+    k) are independent runs: averaged, their SEs combined and their degrees of freedom added (each
+    row's M_clusters − 1), the CI Student-t on that sum."""
     out = {}
     for r in rows:
         ref = r["reference_irradiance_mean"]
@@ -34,13 +36,16 @@ def configurations(rows):
             key = (method, setting, r["detp.photons"])
             out.setdefault(key, []).append((r["trace_s"] + r[cost], r[stem + "_rmse_mean"] / ref,
                                              r[stem + "_rmse_se"] / ref, r[stem + "_bias_mean"] / ref,
-                                             r[stem + "_bias_se"] / ref))
+                                             r[stem + "_bias_se"] / ref, dof(r, stem + "_rmse"),
+                                             dof(r, stem + "_bias")))
     avg = {}
     for key, vs in out.items():
         n = len(vs)
-        avg[key] = tuple(sum(v[i] for v in vs) / n for i in range(5))
-        # SEs of a mean of n independent runs.
-        avg[key] = avg[key][:2] + (avg[key][2] / n ** 0.5,) + (avg[key][3],) + (avg[key][4] / n ** 0.5,)
+        m = [sum(v[i] for v in vs) / n for i in range(5)]
+        # SE of a mean of n independent runs: √(Σ SE²)/n.
+        se_r = (sum(v[2] ** 2 for v in vs)) ** 0.5 / n
+        se_b = (sum(v[4] ** 2 for v in vs)) ** 0.5 / n
+        avg[key] = (m[0], m[1], t95(sum(v[5] for v in vs)) * se_r, m[3], t95(sum(v[6] for v in vs)) * se_b)
     return avg
 
 
@@ -65,13 +70,13 @@ def plot(args):
         pts = sorted((p, conf[(m, s, p)]) for mm, ss, p in conf if (mm, ss) == (m, s))
         t = [v[0] for _, v in pts]
         c = "C%d" % i
-        ax_r.errorbar(t, [v[1] for _, v in pts], yerr=[Z * v[2] for _, v in pts], fmt=styles[m], color=c,
+        ax_r.errorbar(t, [v[1] for _, v in pts], yerr=[v[2] for _, v in pts], fmt=styles[m], color=c,
                       ms=4, capsize=2, label="%s, %s" % (m, s))
-        ax_b.errorbar(t, [v[3] for _, v in pts], yerr=[Z * v[4] for _, v in pts], fmt=styles[m], color=c,
+        ax_b.errorbar(t, [v[3] for _, v in pts], yerr=[v[4] for _, v in pts], fmt=styles[m], color=c,
                       ms=4, capsize=2, label="%s, %s" % (m, s))
         for p, v in pts:
             print("%-18s %-9s %9d photons: %8.3f s, relative RMSE %.4f ± %.4f, relative bias %+.4f ± %.4f"
-                  % (m, s, p, v[0], v[1], Z * v[2], v[3], Z * v[4]))
+                  % (m, s, p, v[0], v[1], v[2], v[3], v[4]))
     best = front([(v[0], v[1]) for v in conf.values()])
     ax_r.step([b[0] for b in best], [b[1] for b in best], where="post", color="0.5", lw=3, alpha=0.35,
               label="front of best choices", zorder=0)

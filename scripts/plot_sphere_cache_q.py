@@ -6,7 +6,7 @@ with its bootstrap CI is printed and marked. Right: seconds per replica, same la
 detp.list_mode (one list mode) is drawn as one series.
 """
 import raycost_plot as rp
-from raycost_stats import bootstrap, optimum_q, t95
+from raycost_stats import bootstrap, dof, optimum_q, t95
 
 NAME = "sphere-cache-q"
 REQUIRED = ["detp.q", "tests_sphere_cache_per_replica_mean", "tests_sphere_cache_per_replica_se",
@@ -30,7 +30,7 @@ def plot(args):
             m, s = rp.col(grp, stem + "_mean"), rp.col(grp, stem + "_se")
             a.errorbar(q, m, yerr=[z * x for x in s], fmt="o-", ms=4, lw=1, capsize=2, color="C%d" % j,
                        label="%s lists" % value[0])
-            best, lo, hi = bootstrap(optimum_q(grp), m, s)
+            best, lo, hi = bootstrap(optimum_q(grp), m, s, dofs=[dof(r, stem) for r in grp])
             a.axvline(best, color="C%d" % j, ls=":", lw=0.9)
             lines.append("%s lists, %s: optimum Q = %.3f [%.3f, %.3f] (95 %% bootstrap CI, %d replicas)"
                          % (value[0], "tests" if a is ax else "seconds", best, lo, hi, reps))

@@ -3,7 +3,8 @@
 Not a script itself: each plot_NAME.py imports it to read a results CSV, check its columns, group rows
 by swept keys and draw "measured mean ± 95 % CI" against theory the same way in every figure.
 
-CSV conventions (see the project's CONTRACT): a measured metric M has the columns M_mean, M_se, M_n;
+CSV conventions (see the project's CONTRACT): a measured metric M has the columns M_mean, M_se, M_n and
+M_clusters (the independent clusters behind M_se: a 95 % CI is Student-t on M_clusters − 1);
 its theory M_theory, its bounds M_lower / M_upper; swept spec keys appear as columns named by their
 dotted key (grid.cell_width, scene.intensity, ...).
 """
@@ -20,7 +21,10 @@ matplotlib.use("Agg")  # non-interactive: the scripts only write PNG files
 
 import matplotlib.pyplot as plt  # noqa: E402
 
-#: multiplier of the standard error for a two-sided 95 % normal confidence interval
+from raycost_stats import ci95  # noqa: E402,F401  (re-exported: rp.ci95(row, metric))
+
+#: multiplier of the standard error for a two-sided 95 % normal confidence interval (many clusters;
+#: with few, ci95(row, metric) gives Student-t on the row's M_clusters − 1)
 Z95 = 1.96
 #: multiplier for 99 % (the tolerance the tests use for "measured agrees with theory")
 Z99 = 2.58
@@ -224,12 +228,18 @@ def _fmt(v):
 # drawing
 
 
-def measured(ax, rows, x, metric, label=None, color=None, marker="o", z=Z95, **kw):
-    """Measured mean with error bars ± z·se (95 % CI by default) against column x."""
+def measured(ax, rows, x, metric, label=None, color=None, marker="o", z=None, **kw):
+    """Measured mean with error bars against column x: the 95 % CI, Student-t on each row's
+    M_clusters − 1 (ci95), or ± z·se where z is given."""
     xs = col(rows, x)
     ys = col(rows, metric + "_mean")
-    se = col(rows, metric + "_se") if has(rows, metric + "_se") else [0.0] * len(rows)
-    err = [z * s if s == s else 0.0 for s in se]
+    if not has(rows, metric + "_se"):
+        err = [0.0] * len(rows)
+    elif z is None:
+        err = [ci95(r, metric) for r in rows]
+    else:
+        err = [z * s for s in col(rows, metric + "_se")]
+    err = [e if e == e else 0.0 for e in err]
     return ax.errorbar(
         xs,
         ys,

@@ -12,12 +12,28 @@ T95 = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776, 5: 2.571, 6: 2.447, 7: 2.365, 8:
        10: 2.228, 15: 2.131, 20: 2.086, 30: 2.042}
 
 
-def bootstrap(f, means, ses, draws=4000, seed=1):
-    """f(means) and the 2.5/97.5 percentiles of f over normal draws of every mean (NaN SEs as 0)."""
+def draw_error(rng, dof):
+    """One standard error's worth of noise for a mean estimated from clusters − 1 = dof degrees of
+    freedom: Student-t (a normal mean's posterior with its variance unknown, flat prior), normal
+    where dof is unknown or large."""
+    z = rng.gauss(0, 1)
+    if dof is None or dof != dof or dof > 1000:
+        return z
+    if dof < 1:
+        return math.nan
+    return z / math.sqrt(rng.gammavariate(dof / 2, 2) / dof)
+
+
+def bootstrap(f, means, ses, draws=4000, seed=1, dofs=None):
+    """f(means) and the 2.5/97.5 percentiles of f over draws of every mean within its SE (NaN SEs as
+    0): Student-t draws on each mean's degrees of freedom (`dofs`, clusters − 1), normal without."""
     rng = random.Random(seed)
+    dofs = dofs if dofs is not None else [None] * len(means)
     vals = []
     for _ in range(draws):
-        x = [m + (s if s == s else 0.0) * rng.gauss(0, 1) for m, s in zip(means, ses)]
+        x = [m + (s * draw_error(rng, d) if s == s else 0.0) for m, s, d in zip(means, ses, dofs)]
+        if any(v != v for v in x):
+            continue
         v = f(x)
         if v == v:
             vals.append(v)
@@ -27,6 +43,22 @@ def bootstrap(f, means, ses, draws=4000, seed=1):
     lo = vals[int(0.025 * (len(vals) - 1))]
     hi = vals[int(0.975 * (len(vals) - 1))]
     return f(means), lo, hi
+
+
+def dof(row, metric):
+    """Degrees of freedom of metric's SE in a table row: M_clusters − 1, or M_n − 1 in a table
+    written before the clusters column existed."""
+    c = row.get(metric + "_clusters")
+    if c is None or c != c:
+        c = row.get(metric + "_n")
+    return math.nan if c is None or c != c else c - 1
+
+
+def ci95(row, metric):
+    """Half-width of the 95 % CI of metric in a table row: Student-t on its degrees of freedom
+    (NaN without a standard error)."""
+    se = row.get(metric + "_se")
+    return math.nan if se is None else t95(dof(row, metric)) * se
 
 
 def t95(dof):
@@ -107,18 +139,28 @@ def fit_costs(x_cols, y):
     return best
 
 
-def fit_costs_ci(x_cols, y, y_se, draws=2000, seed=1):
+def fit_costs_ci(x_cols, y, y_se, draws=2000, seed=1, dofs=None):
     """fit_costs and, per constant, the 2.5/97.5 percentiles of the refitted constant over normal
-    draws of every y within its SE (a parametric bootstrap over replicas: the fit's residual, the
-    model's misfit, is reported beside it, not in it). Returns (c, residuals, [(lo, hi)] per c)."""
+    draws of every y within its SE, Student-t on `dofs` (a parametric bootstrap over replicas: the
+    fit's residual, the model's misfit, is reported beside it, not in it). The draws refit the
+    columns the fit selected (its non-zero constants); a column it left at 0 adds nothing the data
+    can separate from the others and gets (0, 0). Returns (c, residuals, [(lo, hi)] per c)."""
     c, res = fit_costs(x_cols, y)
+    active = [j for j in range(len(c)) if c[j] > 0]
     rng = random.Random(seed)
+    dofs = dofs if dofs is not None else [None] * len(y)
     draws_c = []
     for _ in range(draws):
-        yy = [max(v + (s if s == s else 0.0) * rng.gauss(0, 1), 1e-300) for v, s in zip(y, y_se)]
-        draws_c.append(fit_costs(x_cols, yy)[0])
+        yy = [max(v + (s * draw_error(rng, d) if s == s else 0.0), 1e-300) for v, s, d in zip(y, y_se, dofs)]
+        if any(v != v for v in yy):
+            continue
+        sub = fit_costs([x_cols[j] for j in active], yy)[0]
+        draws_c.append(dict(zip(active, sub)))
     cis = []
     for j in range(len(c)):
+        if j not in active:
+            cis.append((0.0, 0.0))
+            continue
         v = sorted(d[j] for d in draws_c)
         cis.append((v[int(0.025 * (len(v) - 1))], v[int(0.975 * (len(v) - 1))]))
     return c, res, cis
@@ -181,14 +223,19 @@ def engine_cost_fits(rows, levels, draws=2000):
     def total_se(r, engine):
         return r["cost_%s_per_replica_s_se" % engine] * r["cost_%s_per_replica_s_n" % engine]
 
+    def dofs(sub, engine):
+        return [dof(r, "cost_%s_per_replica_s" % engine) for r in sub]
+
     col = lambda sub, key: [r[key] for r in sub]  # noqa: E731
     fits = {"sphere-cache": fit_costs_ci(
         [col(rows, "segments"), col(rows, "ray_sphere_tests"), col(rows, "ray_disc_tests"),
          [held.get(r["point"], 0.0) for r in rows]],
-        col(rows, "cost_sphere_cache_s"), [total_se(r, "sphere_cache") for r in rows], draws)}
+        col(rows, "cost_sphere_cache_s"), [total_se(r, "sphere_cache") for r in rows], draws,
+        dofs=dofs(rows, "sphere_cache"))}
     for index in sorted({r["detp.index"] for r in rows}):
         sub = [r for r in rows if r["detp.index"] == index]
         fits["disc-index (%s)" % index] = fit_costs_ci(
             [col(sub, "segments"), col(sub, "tests_disc_index"), col(sub, "nodes_disc_index")],
-            col(sub, "cost_disc_index_s"), [total_se(r, "disc_index") for r in sub], draws)
+            col(sub, "cost_disc_index_s"), [total_se(r, "disc_index") for r in sub], draws,
+            dofs=dofs(sub, "disc_index"))
     return fits
