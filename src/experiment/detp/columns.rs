@@ -226,7 +226,7 @@ pub const REFERENCE_MEAN_SE: Column = Column::value(
 pub const IRRADIANCE_REF_BIAS: Column = Column::estimate(
     "irradiance_ref_bias",
     "W/m²",
-    "DETP's mean error against engine reference over the points, Σ(E_i − R_i)/n; SE √Σ(se_E,i² + se_R,i²)/n (Monte Carlo noise of both; the point set is fixed)",
+    "DETP's mean error against engine reference over the points, Σ(E_i − R_i)/n; SE with ≥ 2 replicas across the replicas' mean errors (a replica's points share its photons) plus the reference's Σ se_R,i²/n², clusters its Welch–Satterthwaite degrees of freedom + 1; with one replica √Σ(se_E,i² + se_R,i²)/n (the point set is fixed)",
 );
 /// DETP against the reference: RMSE.
 pub const IRRADIANCE_REF_RMSE: Column = Column::estimate(
@@ -238,7 +238,7 @@ pub const IRRADIANCE_REF_RMSE: Column = Column::estimate(
 pub const PHOTON_MAP_REF_BIAS: Column = Column::estimate(
     "photon_map_ref_bias",
     "W/m²",
-    "photon map: mean error against engine reference, as irradiance_ref_bias (its per-point SE: across replicas, or with one replica E/√k)",
+    "photon map: mean error against engine reference, as irradiance_ref_bias (with one replica its per-point SE is E/√k)",
 );
 /// Photon map against the reference: RMSE.
 pub const PHOTON_MAP_REF_RMSE: Column = Column::estimate(
