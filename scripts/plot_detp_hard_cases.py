@@ -4,7 +4,9 @@
 One panel per (scene, case) (points at distance s from an edge or contact line), one line per
 detp.edge mode and one for the photon map (the same photons; it does not depend on the mode, so the
 paper rows' values are used): the mean of (estimate − truth) over the case's points at that s,
-± 95 % CI (from the per-point standard errors). The truth is the scene's closed form
+± 95 % CI: DETP's across replicas (the irradiance_replica_K columns; a replica's points share its
+photons, so per-point SEs cannot simply be summed), Student-t on Welch–Satterthwaite degrees of
+freedom; the photon map's from the per-point SEs (the table keeps its pooled value only). The truth is the scene's closed form
 (irradiance_exact) where it has one, else the reference engine's value (reference_e, whose SE is
 added in quadrature). The bias is relative
 to the case's mean truth at that s; where that is ~0 (a shadow, under a box) it is relative to the
@@ -12,12 +14,13 @@ mean truth over every point, and the panel says so. The case and s of each point
 points file (extra columns `case`, `s`), joined by row order (`sample`).
 
 Prints a table: scene, case, s/d, and per mode the bias ± SE (relative to the mean truth, or in
-W/m² where the truth is ~0).
+W/m² where the truth is ~0), the SE as above.
 """
 
 import math
 
 import raycost_plot as rp
+from raycost_stats import t95
 
 NAME = "detp-hard-cases"
 POINTS = "experiments/scenes/hard/hard-cases.points.csv"
@@ -56,25 +59,55 @@ def base_radius(csv_path):
         raise rp.PlotError("%s: cannot read detp.disc_radius (%s)" % (meta, e))
 
 
+def replica_values(r):
+    """DETP's value at the point in each replica (irradiance_replica_K columns), [] if not written."""
+    out = []
+    while finite(r.get("irradiance_replica_%d" % len(out))):
+        out.append(r["irradiance_replica_%d" % len(out)])
+    return out
+
+
+def group_error(g):
+    """(mean error, SE, mean truth, degrees of freedom) of one group of points.
+
+    g holds per point (error of the pooled estimate, its SE with the truth's, truth, the truth's SE,
+    the errors in each replica or []). With ≥ 2 replicas the SE is taken across the replicas' mean
+    errors over the group (the points of one replica share its photons, so their errors are
+    correlated and a sum of per-point variances would understate it), plus the truth's own variance,
+    with Welch–Satterthwaite degrees of freedom; otherwise the per-point variances are summed
+    (normal quantile)."""
+    n = len(g)
+    mean = sum(x[0] for x in g) / n
+    truth = sum(x[2] for x in g) / n
+    reps = min(len(x[4]) for x in g)
+    if reps >= 2:
+        b = [sum(x[4][k] for x in g) / n for k in range(reps)]
+        bm = sum(b) / reps
+        a = sum((v - bm) ** 2 for v in b) / (reps - 1) / reps
+        v_t = sum(x[3] ** 2 for x in g) / n ** 2
+        denom = (a * a / (reps - 1) if a > 0 else 0.0) + (v_t * v_t / max(1, n - 1) if v_t > 0 else 0.0)
+        dof = (a + v_t) ** 2 / denom if denom > 0 else math.nan
+        return bm, math.sqrt(a + v_t), truth, dof
+    return mean, math.sqrt(sum(x[1] ** 2 for x in g)) / n, truth, math.nan
+
+
 def aggregate(main, side, labels):
-    """{(mode, case, s/d): (mean error, SE, mean truth)} over the points of each group."""
+    """{(mode, case, s/d): (mean error, SE, mean truth, degrees of freedom)} over the points of
+    each group (group_error)."""
     d_of = {r["point"]: r["detp.disc_radius"] for r in main}
     groups = {}
     for r in side:
         case, s = labels[r["sample"]]
         scene = r.get("detp.scene", "scene").split("/")[-1]
         t, tse = truth_of(r)
-        estimates = [(r["detp.edge"], r["irradiance_mean"], r["irradiance_se"])]
+        estimates = [(r["detp.edge"], r["irradiance_mean"], r["irradiance_se"], replica_values(r))]
         if r["detp.edge"] == "paper" and finite(r.get("photon_map_e")):
-            estimates.append(("photon map", r["photon_map_e"], r["photon_map_se"]))
-        for mode, e, se in estimates:
+            # The points table keeps the photon map's pooled value only.
+            estimates.append(("photon map", r["photon_map_e"], r["photon_map_se"], []))
+        for mode, e, se, reps in estimates:
             key = (mode, scene, case, round(s / d_of[r["point"]], 6))
-            groups.setdefault(key, []).append((e - t, math.sqrt(se ** 2 + tse ** 2), t))
-    out = {}
-    for k, g in groups.items():
-        n = len(g)
-        out[k] = (sum(x[0] for x in g) / n, math.sqrt(sum(x[1] ** 2 for x in g)) / n, sum(x[2] for x in g) / n)
-    return out
+            groups.setdefault(key, []).append((e - t, math.sqrt(se ** 2 + tse ** 2), t, tse, [v - t for v in reps]))
+    return {k: group_error(g) for k, g in groups.items()}
 
 
 def plot(args):
@@ -111,16 +144,16 @@ def plot(args):
             for x in sods:
                 if (m, scene, case, x) not in agg:
                     continue
-                b, se, t = agg[(m, scene, case, x)]
+                b, se, t, dof = agg[(m, scene, case, x)]
                 ref = overall if shadow or t < 0.02 * overall else t
                 xs.append(x)
                 ys.append(b / ref)
-                es.append(rp.Z95 * se / ref)
+                es.append(t95(dof) * se / ref)
             ax.errorbar(xs, ys, yerr=es, fmt=mk + "-", color=c, ms=4, capsize=2, label=m)
         for x in sods:
             cells = []
             for m in modes:
-                b, se, t = agg.get((m, scene, case, x), (float("nan"),) * 3)
+                b, se, t, _ = agg.get((m, scene, case, x), (float("nan"),) * 4)
                 cells.append("%+6.1f%% ± %-5.1f%%" % (100 * b / t, 100 * se / t) if t > 0.02 * overall
                              else "%+7.3f ± %-6.3f W" % (b, se))
             print("%-24s %-30s %5.2f  %s" % (scene, case, x, "  ".join("%-22s" % c for c in cells)))

@@ -77,6 +77,20 @@ fn detp_shards_on_one_thread_merge_into_the_two_thread_table() {
         assert_eq!(r[at("mismatches")], "0", "engines agree with brute force");
         assert_eq!(r[at("bf_checked")], "200");
     }
+    // Two replicas: every point's value in each replica, whose mean is the pooled value (so a mean
+    // error over a group of points can take its SE across replicas).
+    let (h, rows) = crate::common::read_csv(&w.join("detp-small.points.csv"));
+    let at = |c: &str| h.iter().position(|x| x == c).expect(c);
+    assert!(!h.iter().any(|c| c == "irradiance_replica_2"));
+    for r in &rows {
+        let v = |c: &str| r[at(c)].parse::<f64>().unwrap();
+        let mean = (v("irradiance_replica_0") + v("irradiance_replica_1")) / 2.0;
+        assert!(
+            (mean - v("irradiance_mean")).abs() <= 1e-9 * mean.abs().max(1e-300),
+            "{mean} vs {}",
+            v("irradiance_mean")
+        );
+    }
 }
 
 #[test]

@@ -433,6 +433,13 @@ pub const POINT_IRRADIANCE_SE: Column = Column::value(
     Class::Measured,
     "its standard error: across replicas, or with one replica the Poisson SE √(E·w̄/πd²)",
 );
+/// Its value in each replica.
+pub const POINT_IRRADIANCE_REPLICA: Column = Column::value(
+    "irradiance_replica_{}",
+    "W/m²",
+    Class::Measured,
+    "DETP's irradiance at the point in replica {} (with ≥ 2 replicas): a mean error over a group of points must take its SE across replicas, since a replica's points share its photons",
+);
 /// Exact value.
 pub const POINT_IRRADIANCE_EXACT: Column = Column::value(
     "irradiance_exact",
@@ -475,6 +482,7 @@ pub const POINTS_TABLE: &[Column] = &[
     POINT_DISC_RADIUS,
     POINT_IRRADIANCE_MEAN,
     POINT_IRRADIANCE_SE,
+    POINT_IRRADIANCE_REPLICA,
     POINT_IRRADIANCE_EXACT,
     POINT_BASELINE_E,
     POINT_BASELINE_SE,

@@ -437,8 +437,13 @@ pub fn run_point(
                 .put(&col::NZ, nn.z)
                 .put(&col::POINT_DISC_RADIUS, discs.radius_of(i))
                 .put(&col::POINT_IRRADIANCE_MEAN, mean)
-                .put(&col::POINT_IRRADIANCE_SE, se)
-                .put(&col::POINT_IRRADIANCE_EXACT, pts.exact[i]);
+                .put(&col::POINT_IRRADIANCE_SE, se);
+            if irr.len() >= 2 {
+                for (k, e) in irr.iter().enumerate() {
+                    r.put_member(&col::POINT_IRRADIANCE_REPLICA, &k.to_string(), e[i]);
+                }
+            }
+            r.put(&col::POINT_IRRADIANCE_EXACT, pts.exact[i]);
             for (c, v) in &baselines {
                 r.put_member(&col::POINT_BASELINE_E, c.column(), v[i].0)
                     .put_member(&col::POINT_BASELINE_SE, c.column(), v[i].1);
