@@ -2,7 +2,7 @@
 //! spec gives the same measured columns on 1 and 2 threads, and overlapping objects are a counted
 //! warning, not an error.
 
-use crate::common::{measured_columns, raycost, read_csv, root, write_spec};
+use crate::common::{measured_columns, raycost, read_csv, root, run_quiet, write_spec};
 
 fn spec(dir: &std::path::Path, name: &str) -> std::path::PathBuf {
     let scene = root().join("experiments/scenes/cornell-dynamic.toml");
@@ -168,21 +168,9 @@ fn a_pick_taken_on_seconds_is_classed_timing() {
         .replace("frames = 12", "frames = 3\npredict = 0.2");
     std::fs::write(&s, text).unwrap();
     let out = dir.path().join("out");
-    raycost()
-        .args(["run", s.to_str().unwrap(), "--quiet", "--out"])
-        .arg(&out)
-        .assert()
-        .success();
-    let meta = raycost::output::meta::Meta::read(&out.join("pick/pick.meta.toml")).unwrap();
+    run_quiet(&s, &out).assert().success();
     for table in ["main", "frames"] {
-        let class = |name: &str| {
-            meta.columns[table]
-                .iter()
-                .find(|c| c.name == name)
-                .unwrap_or_else(|| panic!("{table}.{name}"))
-                .class
-                .as_str()
-        };
+        let class = |name: &str| class_of(&out, "pick", table, name);
         assert_eq!(class("engine_used"), "timing", "{table}");
         let (dynamic_tests, static_tests) = if table == "main" {
             ("dynamic_tests_mean", "static_tests_mean")
@@ -202,15 +190,19 @@ fn a_pick_taken_on_seconds_is_classed_timing() {
             .replace("engine = \"predicted\"", "engine = \"disc-index\""),
     )
     .unwrap();
-    raycost()
-        .args(["run", fixed.to_str().unwrap(), "--quiet", "--out"])
-        .arg(&out)
-        .assert()
-        .success();
-    let meta = raycost::output::meta::Meta::read(&out.join("fixed/fixed.meta.toml")).unwrap();
-    let engine_used = meta.columns["main"]
+    run_quiet(&fixed, &out).assert().success();
+    assert_eq!(class_of(&out, "fixed", "main", "engine_used"), "measured");
+}
+
+/// The class the run's metadata (OUT/NAME/NAME.meta.toml) gives column `name` of `table`.
+fn class_of(out: &std::path::Path, name: &str, table: &str, column: &str) -> String {
+    let meta = raycost::output::meta::Meta::read(&out.join(format!("{name}/{name}.meta.toml")))
+        .expect("the run's metadata");
+    meta.columns[table]
         .iter()
-        .find(|c| c.name == "engine_used")
-        .unwrap();
-    assert_eq!(engine_used.class.as_str(), "measured");
+        .find(|c| c.name == column)
+        .unwrap_or_else(|| panic!("{table}.{column}"))
+        .class
+        .as_str()
+        .to_string()
 }
