@@ -37,6 +37,7 @@ ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)),
 BEGIN, END = "<!-- claims:begin -->", "<!-- claims:end -->"
 BUSY_CORES = 0.25  # raycost's own busy-machine threshold (src/output/meta.rs)
 UNITS_LISTED = 8   # longer unit lists are summarised: counts, then the units that are not inside
+SHORT_HASH = 7     # a commit is shown by its first 7 hex digits, as git does
 
 KINDS = {
     "band": claims_measures.kind_band,
@@ -71,6 +72,7 @@ class Context:
         self.draws = self.defaults["draws"]
         self.seed = self.defaults["seed"]
         self.min_spheres = self.defaults["min_spheres"]
+        self.commits = prereg.get("commits", {})
 
 
 def load(path):
@@ -198,13 +200,19 @@ def timing_text(claim, ctx):
     return "seconds — " + "; ".join(out) if out else ""
 
 
+def registered_text(claim, ctx):
+    commit = ctx.commits.get(claim["registered"])
+    return claim["registered"] + (", " + commit[:SHORT_HASH] if commit else "")
+
+
 def earlier_text(claim):
     return "; ".join("%s (%s, on the %s tables): %s" % (h["rule"], h["registered"], h["data"], h["verdict"])
                      for h in claim.get("history", []))
 
 
 def judge(claim, ctx):
-    """One claim: its record for claims.toml and the README."""
+    """One claim: its record for claims.toml and the README (`registered`: the rule's date and the
+    commit that registered it, from the pre-registration's `commits`)."""
     needs = needs_of(claim, ctx)
     m = measure(claim, ctx)
     outcome, reason = R.outcome(m.units, claim["verdict"], needs + m.needs)
@@ -221,7 +229,7 @@ def judge(claim, ctx):
     return dict(id=claim["id"], claim=claim["claim"], reference=claim["reference"], paper=claim["paper"],
                 source="%s/%s.csv" % (srcs[0], srcs[0]), measured=" · ".join(measured),
                 verdict="%s: %s" % (outcome, reason), outcome=outcome, rule=claim["rule"],
-                registered=claim["registered"], accounting=claim["accounting"], earlier=earlier_text(claim),
+                registered=registered_text(claim, ctx), accounting=claim["accounting"], earlier=earlier_text(claim),
                 note=note)
 
 
