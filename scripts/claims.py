@@ -30,7 +30,7 @@ import claims_engines
 import claims_levels
 import claims_measures
 import claims_rules as R
-from claims_data import Missing, Tables, requirement_needs, runs_needs
+from claims_data import Missing, Tables, optional_missing, requirement_needs, runs_needs
 from claims_derived import DERIVED
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
@@ -58,6 +58,7 @@ KINDS = {
     "predictor": claims_engines.kind_predictor,
 }
 
+REQUIRES = {"values", "optional", "common_random_numbers", "grid", "columns"}  # [claim.requires] keys
 REQUIRED = ("id", "claim", "reference", "paper", "rule", "registered", "statistic", "accounting", "verdict", "note")
 
 
@@ -96,6 +97,10 @@ def check(pre, path):
             if c["verdict"].get(key) not in R.OUTCOMES:
                 raise SystemExit("error: %s: claim %s: verdict.%s must be one of %s" % (
                     path, c["id"], key, ", ".join(R.OUTCOMES)))
+        odd = set(c.get("requires", {})) - REQUIRES
+        if odd:
+            raise SystemExit("error: %s: claim %s: requires.%s (allowed: %s)" % (
+                path, c["id"], ", ".join(sorted(odd)), ", ".join(sorted(REQUIRES))))
         head, _, n = c["rule"].partition("/")
         if head != c["id"] or not n.isdigit():
             raise SystemExit("error: %s: claim %s: rule %r must be %s/N" % (path, c["id"], c["rule"], c["id"]))
@@ -218,6 +223,10 @@ def judge(claim, ctx):
     outcome, reason = R.outcome(m.units, claim["verdict"], needs + m.needs)
     measured = [units_text(m.units)] if m.units else ["nothing measured"]
     measured += m.notes
+    absent = optional_missing(claim.get("requires", {}), ctx.tables, claims_measures.sources_of(claim),
+                              claim.get("select"))
+    if absent:
+        measured.append("not in the tables (optional): " + "; ".join(absent))
     measured += ["beside: " + t for t in beside_text(claim, ctx)]
     for d in claim.get("derived", []):
         try:

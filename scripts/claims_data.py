@@ -269,6 +269,21 @@ def requirement_needs(req, tables, sources, select):
     return needs
 
 
+def optional_missing(req, tables, sources, select):
+    """The values of [claim.requires].optional the tables do not have (shown, not needed)."""
+    rows = []
+    for s in sources:
+        try:
+            rows += [r for r in tables.rows(s) if matches(r, select)]
+        except Missing:
+            pass
+    out = []
+    for col, want in (req.get("optional") or {}).items():
+        have = {show(r.get(col)) for r in rows}
+        out += ["%s = %s" % (col, show(v)) for v in want if show(v) not in have]
+    return out
+
+
 def grid_needs(g, rows):
     """A swept column must cover [from, to] in steps no larger than `step`, including `include`."""
     col, lo, hi, step = g["column"], g["from"], g["to"], g["step"]
