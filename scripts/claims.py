@@ -172,14 +172,15 @@ def units_text(units):
     return head + " — " + "; ".join(one(u) for u in shown) + ("; … %d more" % more if more else "")
 
 
-def beside_text(claim, ctx):
+def beside_text(claim, ctx, shown):
+    """Each [[claim.beside]] variant's units, and what it needs beyond the needs already `shown`."""
     parts = []
     for b in claim.get("beside", []):
         v = variant(claim, b)
         needs = needs_of(v, ctx)
         m = measure(v, ctx)
         body = units_text(m.units) if m.units else ""
-        lack = needs + m.needs
+        lack = [n for n in dict.fromkeys(needs + m.needs) if n not in shown]
         tail = ("needs " + "; needs ".join(lack)) if lack else ""
         parts.append("%s — %s" % (b["label"], "; ".join(x for x in (body, tail) if x)))
     return parts
@@ -227,7 +228,7 @@ def judge(claim, ctx):
                               claim.get("select"))
     if absent:
         measured.append("not in the tables (optional): " + "; ".join(absent))
-    measured += ["beside: " + t for t in beside_text(claim, ctx)]
+    measured += ["beside: " + t for t in beside_text(claim, ctx, needs + m.needs)]
     for d in claim.get("derived", []):
         try:
             measured.append(DERIVED[d["kind"]](d, ctx))
