@@ -47,7 +47,7 @@ def category_text(iv):
 
 def kind_crossover(v, ctx):
     """Per unit: the root in the range of a smooth fit of log(numerator cost / denominator cost)."""
-    units, notes = [], []
+    units = []
     t = terms(ctx, v, v)
     rows = rows_of(ctx, v)
     degrees, alpha = fit_rule(v, ctx)
@@ -69,7 +69,7 @@ def kind_crossover(v, ctx):
             v["x"].split(".")[-1], ", ".join("%g" % x for x in xs), fit.degree,
             ", misfit ×%.2f" % k if k > 1 else "", category_text(iv))
         units.append(R.Unit(label(g[0], v["units"]), text, j, why))
-    return Measured(units, [], notes)
+    return Measured(units, [], [])
 
 
 def crossover_judgement(iv, roots, lo, hi, band, tol, ctx, cmp, fit, xs):
@@ -133,10 +133,10 @@ def kind_engine_ratio(v, ctx):
 
 
 def kind_break_even(v, ctx):
-    """Per unit: build seconds ÷ per-frame saving (denominator engine − numerator engine would be
-    negative: the saving is numerator − denominator, the index being the denominator), unclipped,
-    with Fieller's interval. The build comes per replica from the frames table (frame 0) when it
-    has the column, else from the main table as a value without SE (the rule then needs it)."""
+    """Per unit: the index's build seconds ÷ the per-frame saving (numerator engine − denominator
+    engine, the index being the denominator), unclipped, with Fieller's interval on the clusters'
+    degrees of freedom. The build comes per replica from the frames table (frame 0's row) when it
+    has the column, else from the main table as one value without SE (the rule then needs it)."""
     units, needs = [], []
     band = R.band_of(v["tolerance"])
     t = terms(ctx, v, v)

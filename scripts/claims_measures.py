@@ -9,12 +9,11 @@ as `needs` (the claim is then inconclusive), with whatever could still be measur
 """
 
 import math
-import random
 from collections import namedtuple
 
 import claims_rules as R
 import raycost_stats as S
-from claims_data import (Missing, group, label, matches, per_replica, quantity, show, short, terms_of)
+from claims_data import Missing, group, label, matches, quantity, show, short, terms_of
 
 Measured = namedtuple("Measured", "units needs notes")
 Measured.__doc__ = """A kind's result: judged units, what the tables lack ("needs …" texts) and notes
@@ -135,10 +134,10 @@ def slope_unit(xs, q, fit, ctx):
     ("se": 1/variance; "equal": every x alike) and the misfit ("birge": the line's Birge ratio
     widens the interval; "report": the largest residual is shown beside it)."""
     weights = fit.get("weights", "se")
-    se = [b if weights == "se" else math.nan for _, b, _ in q]
     sampler = S.Parametric([a for a, _, _ in q], [b for _, b, _ in q], [c for _, _, c in q])
     lx = [math.log(x) for x in xs]
-    w = [((b / a) ** 2 if b == b else 0.0) if weights == "se" else math.nan for (a, b, _), s in zip(q, se)]
+    # Variances of log(mean) for "se" weights; NaN makes polyfit weigh every x alike.
+    w = [((b / a) ** 2 if b == b else 0.0) if weights == "se" else math.nan for a, b, _ in q]
 
     def f(means, _var):
         if min(means) <= 0:
