@@ -119,7 +119,8 @@ fn brute_nearest(
         .collect()
 }
 
-/// The estimate at each point (power per area), from the store's impacts.
+/// The estimate at each point (power per area), from the store's impacts: [`PhotonMap::build`]
+/// then [`PhotonMap::estimate`].
 pub fn estimate(
     store: &SegmentStore,
     points: &[DVec3],
@@ -127,59 +128,109 @@ pub fn estimate(
     k: usize,
     filter: Filter,
 ) -> Vec<f64> {
-    let impacts: Vec<usize> = (0..store.len())
-        .filter(|&i| store.segments[i].t_hit.is_finite())
-        .collect();
-    if impacts.is_empty() {
-        return vec![0.0; points.len()];
+    PhotonMap::build(store).estimate(points, normals, k, filter)
+}
+
+/// A store's impacts in a kd-tree: built once (a cost paid once per photon set), then queried per
+/// point (a cost per point), so the two can be timed apart.
+pub struct PhotonMap<'a> {
+    store: &'a SegmentStore,
+    /// Indices of the segments that end at an impact.
+    impacts: Vec<usize>,
+    /// Their impact points, in the rotated frame.
+    coords: Vec<[f64; 3]>,
+    /// The tree over `coords` (`None`: brute force, see [`build`]).
+    tree: Option<ImmutableKdTree<f64, 3>>,
+}
+
+impl<'a> PhotonMap<'a> {
+    /// The map of `store`'s impacts.
+    pub fn build(store: &'a SegmentStore) -> Self {
+        let impacts: Vec<usize> = (0..store.len())
+            .filter(|&i| store.segments[i].t_hit.is_finite())
+            .collect();
+        let at = |i: usize| {
+            let s = &store.segments[i];
+            s.o() + s.d() * f64::from(s.t_hit)
+        };
+        // The tree holds the impacts in a generically rotated frame: axis-aligned surfaces give
+        // thousands of impacts with exactly equal coordinates (a floor's y = 0), which kiddo's
+        // immutable tree cannot split (a leaf overflows and it panics). Distances are
+        // rotation-invariant, so the neighbours are the same up to rounding (~1e-16 relative).
+        let coords: Vec<[f64; 3]> = impacts
+            .iter()
+            .map(|&i| (FRAME * at(i)).to_array())
+            .collect();
+        let tree = if coords.is_empty() {
+            None
+        } else {
+            build(&coords)
+        };
+        Self {
+            store,
+            impacts,
+            coords,
+            tree,
+        }
     }
-    let at = |i: usize| {
-        let s = &store.segments[i];
-        s.o() + s.d() * f64::from(s.t_hit)
-    };
-    // The tree holds the impacts in a generically rotated frame: axis-aligned surfaces give
-    // thousands of impacts with exactly equal coordinates (a floor's y = 0), which kiddo's immutable
-    // tree cannot split (a leaf overflows and it panics). Distances are rotation-invariant, so the
-    // neighbours are the same up to rounding (~1e-16 relative).
-    let coords: Vec<[f64; 3]> = impacts
-        .iter()
-        .map(|&i| (FRAME * at(i)).to_array())
-        .collect();
-    let k = k.min(impacts.len()).max(1);
-    let tree = build(&coords);
-    points
-        .par_iter()
-        .zip(normals)
-        .map(|(p, n)| {
-            let q = (FRAME * *p).to_array();
-            let near = match &tree {
-                Some(t) => t.nearest_n::<SquaredEuclidean>(&q, k),
-                None => brute_nearest(&coords, &q, k),
-            };
-            let r2 = near.iter().map(|x| x.distance).fold(0.0, f64::max);
-            if r2 <= 0.0 {
-                return 0.0;
-            }
-            let r = r2.sqrt();
-            let mut sum = 0.0;
-            for x in &near {
-                let s = &store.segments[impacts[x.item as usize]];
-                if s.d().dot(*n) >= 0.0 {
-                    continue; // arrived from behind
-                }
-                let w = store.scale.watts(i64::from(s.power));
-                sum += match filter {
-                    Filter::Disc => w,
-                    Filter::Cone => w * (1.0 - x.distance.sqrt() / (K_CONE * r)),
+
+    /// Impacts held.
+    pub fn len(&self) -> usize {
+        self.impacts.len()
+    }
+
+    /// Does it hold no impact?
+    pub fn is_empty(&self) -> bool {
+        self.impacts.is_empty()
+    }
+
+    /// The estimate at each point (power per area) from its `k` nearest impacts.
+    pub fn estimate(
+        &self,
+        points: &[DVec3],
+        normals: &[DVec3],
+        k: usize,
+        filter: Filter,
+    ) -> Vec<f64> {
+        let (store, impacts, coords, tree) = (self.store, &self.impacts, &self.coords, &self.tree);
+        if impacts.is_empty() {
+            return vec![0.0; points.len()];
+        }
+        let k = k.min(impacts.len()).max(1);
+        points
+            .par_iter()
+            .zip(normals)
+            .map(|(p, n)| {
+                let q = (FRAME * *p).to_array();
+                let near = match tree {
+                    Some(t) => t.nearest_n::<SquaredEuclidean>(&q, k),
+                    None => brute_nearest(coords, &q, k),
                 };
-            }
-            let norm = match filter {
-                Filter::Disc => 1.0,
-                Filter::Cone => 1.0 - 2.0 / (3.0 * K_CONE),
-            };
-            sum / (norm * PI * r2)
-        })
-        .collect()
+                let r2 = near.iter().map(|x| x.distance).fold(0.0, f64::max);
+                if r2 <= 0.0 {
+                    return 0.0;
+                }
+                let r = r2.sqrt();
+                let mut sum = 0.0;
+                for x in &near {
+                    let s = &store.segments[impacts[x.item as usize]];
+                    if s.d().dot(*n) >= 0.0 {
+                        continue; // arrived from behind
+                    }
+                    let w = store.scale.watts(i64::from(s.power));
+                    sum += match filter {
+                        Filter::Disc => w,
+                        Filter::Cone => w * (1.0 - x.distance.sqrt() / (K_CONE * r)),
+                    };
+                }
+                let norm = match filter {
+                    Filter::Disc => 1.0,
+                    Filter::Cone => 1.0 - 2.0 / (3.0 * K_CONE),
+                };
+                sum / (norm * PI * r2)
+            })
+            .collect()
+    }
 }
 
 #[cfg(test)]
@@ -190,6 +241,31 @@ mod tests {
     use crate::sample::directions::uniform_direction;
     use crate::sample::rng::stream;
     use glam::DVec3;
+
+    /// Built once, queried twice: the same values as [`estimate`]; a store without impacts gives 0.
+    #[test]
+    fn a_map_built_once_answers_as_the_one_call() {
+        let store = point_light_impacts(5000, 3);
+        let map = PhotonMap::build(&store);
+        assert_eq!(map.len(), store.len());
+        let pts = [DVec3::ZERO, DVec3::new(0.3, 0.0, -0.2)];
+        for k in [8, 32] {
+            assert_eq!(
+                map.estimate(&pts, &[DVec3::Y; 2], k, Filter::Cone),
+                estimate(&store, &pts, &[DVec3::Y; 2], k, Filter::Cone)
+            );
+        }
+        let mut none = store.clone();
+        none.segments
+            .iter_mut()
+            .for_each(|s| s.t_hit = f32::INFINITY);
+        let empty = PhotonMap::build(&none);
+        assert!(empty.is_empty());
+        assert_eq!(
+            empty.estimate(&pts, &[DVec3::Y; 2], 8, Filter::Disc),
+            vec![0.0; 2]
+        );
+    }
 
     #[test]
     fn k_grows_as_the_power_law_and_stays_in_range() {

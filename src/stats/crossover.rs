@@ -50,6 +50,17 @@ impl PathTracingCost {
         var.sqrt() / mean
     }
 
+    /// cv² from the path tracer's own errors against the truth: `rel_mse[k]` is its relative MSE
+    /// (the truth's variance subtracted) after `paths[k]` paths per point, e.g. at the prefix
+    /// checkpoints of one run. Unbiased, mse(n) = cv²/n; least squares with relative weights
+    /// 1/mse(n)² ∝ n² gives cv² = mean_k(n_k·mse_k). Where rare bright paths make the per-path
+    /// sample variance unstable (heavy tails: a secondary vertex close to a point light), this reads
+    /// the error as it is, not as the variance formula says it should be.
+    pub fn cv2_from_prefix_errors(paths: &[f64], rel_mse: &[f64]) -> f64 {
+        let n = paths.len().min(rel_mse.len()) as f64;
+        paths.iter().zip(rel_mse).map(|(p, m)| p * m).sum::<f64>() / n
+    }
+
     /// Paths per point for a relative RMSE of `target`: ⌈(cv/target)²⌉, at least 1.
     pub fn paths_for(&self, target: f64) -> u64 {
         // A hair below the integer it should be is that integer (rounding of cv and target).
@@ -303,6 +314,10 @@ mod tests {
         // cv: pooled variance over the mean truth.
         let cv = PathTracingCost::cv_from(&[4.0, 16.0], &[1.0, 3.0]);
         assert!((cv - 10f64.sqrt() / 2.0).abs() < 1e-15);
+        // From prefix errors: mse = cv²/n exactly gives cv² back.
+        let paths = [1.0, 2.0, 4.0, 8.0, 1024.0];
+        let mse: Vec<f64> = paths.iter().map(|n| 2.25 / n).collect();
+        assert!((PathTracingCost::cv2_from_prefix_errors(&paths, &mse) - 2.25).abs() < 1e-12);
     }
 
     /// γ = 1: the closed form A/(p − bN − c), at which both methods take the same seconds.

@@ -141,6 +141,25 @@ impl CostModel {
         }
     }
 
+    /// [`CostModel::fit`] at each γ of `gammas`, keeping the one with the least relative squared
+    /// misfit Σ (model/measured − 1)²: γ chosen by the measured scaling in n_P.
+    ///
+    /// # Panics
+    /// If `gammas` is empty or holds a value outside [0, 1].
+    pub fn fit_best_gamma(samples: &[(f64, f64, f64)], gammas: &[f64]) -> Self {
+        let misfit = |m: &Self| -> f64 {
+            samples
+                .iter()
+                .map(|&(n, p, s)| (m.seconds(n, p) / s - 1.0).powi(2))
+                .sum()
+        };
+        gammas
+            .iter()
+            .map(|&g| Self::fit(samples, g))
+            .min_by(|a, b| misfit(a).total_cmp(&misfit(b)))
+            .expect("at least one γ")
+    }
+
     /// The largest relative misfit |model/measured − 1| over `samples` (how well the form holds).
     pub fn worst_relative_misfit(&self, samples: &[(f64, f64, f64)]) -> f64 {
         samples
@@ -320,6 +339,29 @@ mod tests {
             assert!((a / b - 1.0).abs() < 1e-6, "{fit:?}");
         }
         assert!(fit.worst_relative_misfit(&samples) < 1e-9);
+    }
+
+    /// Seconds that grow as √n_P per photon: the γ grid finds ½, and the fit is exact there.
+    #[test]
+    fn the_best_gamma_is_the_measured_scaling() {
+        let truth = CostModel {
+            fixed: 0.0,
+            per_photon: 1e-6,
+            per_photon_point: 3e-8,
+            per_point: 1e-6,
+            gamma: 0.5,
+        };
+        let mut samples = Vec::new();
+        for n in [5e4, 2e5] {
+            for p in [1e3, 1e4, 1e5, 1e6] {
+                samples.push((n, p, truth.seconds(n, p)));
+            }
+        }
+        let grid: Vec<f64> = (0..=10).map(|k| f64::from(k) / 10.0).collect();
+        let fit = CostModel::fit_best_gamma(&samples, &grid);
+        assert_eq!(fit.gamma, 0.5);
+        assert!(fit.worst_relative_misfit(&samples) < 1e-9, "{fit:?}");
+        assert!(CostModel::fit(&samples, 1.0).worst_relative_misfit(&samples) > 0.1);
     }
 
     /// A cost with no per-point part: the fit sets it to 0 rather than a negative value.
