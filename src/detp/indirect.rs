@@ -64,7 +64,6 @@ pub fn mute_direct(segments: &mut [Segment]) {
 #[cfg(test)]
 mod tests {
     use std::f64::consts::PI;
-    use std::path::Path;
 
     use glam::DVec3;
 
@@ -74,13 +73,9 @@ mod tests {
     use crate::detp::fixed::Acc;
     use crate::detp::photon::trace_photons;
     use crate::lt::direct::direct_irradiance;
-    use crate::lt::direct::tests::{FURNACE, LIT_RECTANGLE};
+    use crate::lt::direct::tests::FURNACE;
     use crate::lt::reference;
-    use crate::lt::Scene;
-
-    fn scene(text: &str) -> Scene {
-        Scene::parse(text, Path::new("test.toml")).expect("scene")
-    }
+    use crate::lt::reference::tests::{rectangle, scene};
 
     /// Brute-force DETP sums of `store` at `discs`.
     fn sums(store: &SegmentStore, discs: &Discs) -> Vec<Acc> {
@@ -94,7 +89,7 @@ mod tests {
     /// integers, bit for bit, whichever form carries the indirect part.
     #[test]
     fn the_split_is_exact_and_keeps_each_photons_segments() {
-        let s = scene(LIT_RECTANGLE);
+        let s = rectangle(0.5);
         let store = trace_photons(&s, 20_000, 4);
         let ind = indirect_store(&store);
         assert!(!ind.is_empty() && ind.len() < store.len());
@@ -186,7 +181,7 @@ mod tests {
     /// indirect agrees with the path-traced reference total within their combined SE.
     #[test]
     fn under_a_lamp_nee_direct_plus_detp_indirect_is_the_reference_total() {
-        let s = scene(LIT_RECTANGLE);
+        let s = rectangle(0.5);
         let photons = 400_000;
         let store = trace_photons(&s, photons, 2);
         let ind = indirect_store(&store);

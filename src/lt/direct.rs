@@ -87,22 +87,17 @@ pub fn direct_irradiance(
 #[cfg(test)]
 pub(crate) mod tests {
     use std::f64::consts::PI;
-    use std::path::Path;
 
     use super::*;
-    use crate::lt::reference::tests::polygon_irradiance;
-
-    fn scene(text: &str) -> Scene {
-        Scene::parse(text, Path::new("test.toml")).expect("scene")
-    }
+    use crate::lt::reference::tests::{
+        point_light_over_plane, polygon_irradiance, rectangle, rectangle_probes, scene, LAMP,
+    };
 
     /// A point light over a *reflecting* plane: the direct part is still Φ·h/(4π(h² + x²)^{3/2})
     /// exactly (SE 0, one shadow ray, no continuation ray), whatever the indirect light.
     #[test]
     fn a_point_light_is_exact_whatever_the_albedo() {
-        let s = scene(
-            "[[surface]]\nkind = \"quad\"\nvertices = [[-4, 0, -4], [-4, 0, 4], [4, 0, 4], [4, 0, -4]]\nalbedo = 0.7\n[[light]]\nkind = \"point\"\nposition = [0, 1, 0]\npower = 100.0\n",
-        );
+        let s = point_light_over_plane(0.7);
         let pts = [
             DVec3::ZERO,
             DVec3::new(1.5, 0.0, 0.0),
@@ -118,19 +113,12 @@ pub(crate) mod tests {
         assert_eq!(rays, RayTally { path: 0, shadow: 3 });
     }
 
-    /// A Lambertian rectangle over a reflecting floor: the direct part is Lambert's polygon
+    /// A Lambertian rectangle over a reflecting floor (albedo 0.5): the direct part is Lambert's polygon
     /// formula, within its SE, at upright and tilted normals.
     #[test]
     fn a_lambertian_rectangle_is_lamberts_polygon_formula() {
-        let s = scene(LIT_RECTANGLE);
-        let pts = [
-            DVec3::ZERO,
-            DVec3::new(0.3, 0.0, 0.1),
-            DVec3::new(1.5, 0.0, -0.7),
-            DVec3::new(-2.5, 0.0, 2.0),
-        ];
-        let tilted = DVec3::new(0.3, 1.0, -0.2).normalize();
-        let normals = [DVec3::Y, DVec3::Y, DVec3::Y, tilted];
+        let s = rectangle(0.5);
+        let (pts, normals) = rectangle_probes();
         let (got, rays) = direct_irradiance(&s, &pts, &normals, 20_000, 7, 0);
         for ((p, n), g) in pts.iter().zip(&normals).zip(&got) {
             let want = polygon_irradiance(2.0, &LAMP, *p, *n);
@@ -161,16 +149,4 @@ pub(crate) mod tests {
     }
 
     pub(crate) const FURNACE: &str = "[[surface]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1.0\ninside = true\nalbedo = 0.5\nemission = 1.0\n";
-
-    /// A 1 × 0.5 lamp (L_e = 2, facing down, albedo 0.5) at height 1 over an 8 × 8 floor of albedo
-    /// 0.5: direct light by Lambert's formula, and some indirect light (floor → lamp → floor).
-    pub(crate) const LIT_RECTANGLE: &str = "[[surface]]\nname = \"floor\"\nkind = \"quad\"\nvertices = [[-4, 0, -4], [-4, 0, 4], [4, 0, 4], [4, 0, -4]]\nalbedo = 0.5\n[[surface]]\nname = \"lamp\"\nkind = \"quad\"\nvertices = [[-0.5, 1, -0.25], [0.5, 1, -0.25], [0.5, 1, 0.25], [-0.5, 1, 0.25]]\nalbedo = 0.5\nemission = 2.0\n";
-
-    /// The lamp's corners.
-    pub(crate) const LAMP: [DVec3; 4] = [
-        DVec3::new(-0.5, 1.0, -0.25),
-        DVec3::new(0.5, 1.0, -0.25),
-        DVec3::new(0.5, 1.0, 0.25),
-        DVec3::new(-0.5, 1.0, 0.25),
-    ];
 }

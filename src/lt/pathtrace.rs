@@ -217,15 +217,10 @@ fn trace_point(
 #[cfg(test)]
 mod tests {
     use std::f64::consts::PI;
-    use std::path::Path;
 
     use super::*;
-
-    fn scene(text: &str) -> Scene {
-        Scene::parse(text, Path::new("test.toml")).expect("scene")
-    }
-
-    const FURNACE: &str = "[[surface]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1.0\ninside = true\nalbedo = 0.5\nemission = 1.0\n";
+    use crate::lt::direct::tests::FURNACE;
+    use crate::lt::reference::tests::{point_light_over_plane, scene};
 
     /// Points on the furnace sphere, facing in.
     fn furnace_points(n: usize) -> (Vec<DVec3>, Vec<DVec3>) {
@@ -321,9 +316,7 @@ mod tests {
     /// escapes, and every sample is Φ·cos θ/(4π r²) exactly.
     #[test]
     fn a_point_light_over_a_black_plane_costs_two_rays_a_path() {
-        let s = scene(
-            "[[surface]]\nkind = \"quad\"\nvertices = [[-4, 0, -4], [-4, 0, 4], [4, 0, 4], [4, 0, -4]]\nalbedo = 0.0\n[[light]]\nkind = \"point\"\nposition = [0, 1, 0]\npower = 100.0\n",
-        );
+        let s = point_light_over_plane(0.0);
         let p = [DVec3::ZERO, DVec3::new(1.0, 0.0, 0.5)];
         let run = path_trace(&s, &p, &[DVec3::Y; 2], &[1, 2, 8], 1, 0);
         for (i, x) in p.iter().enumerate() {

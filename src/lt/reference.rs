@@ -321,8 +321,16 @@ pub(crate) mod tests {
 
     use super::*;
 
-    fn scene(text: &str) -> Scene {
+    /// A scene from its TOML text.
+    pub(crate) fn scene(text: &str) -> Scene {
         Scene::parse(text, Path::new("test.toml")).expect("scene")
+    }
+
+    /// A 100 W point light at height 1 over an 8 × 8 plane of albedo `albedo`.
+    pub(crate) fn point_light_over_plane(albedo: f64) -> Scene {
+        scene(&format!(
+            "[[surface]]\nkind = \"quad\"\nvertices = [[-4, 0, -4], [-4, 0, 4], [4, 0, 4], [4, 0, -4]]\nalbedo = {albedo:?}\n[[light]]\nkind = \"point\"\nposition = [0, 1, 0]\npower = 100.0\n"
+        ))
     }
 
     /// |z| of `got` against `want` in units of its SE.
@@ -332,9 +340,7 @@ pub(crate) mod tests {
 
     #[test]
     fn a_point_light_over_a_black_plane_is_phi_cos_over_4_pi_r2() {
-        let s = scene(
-            "[[surface]]\nkind = \"quad\"\nvertices = [[-4, 0, -4], [-4, 0, 4], [4, 0, 4], [4, 0, -4]]\nalbedo = 0.0\n[[light]]\nkind = \"point\"\nposition = [0, 1, 0]\npower = 100.0\n",
-        );
+        let s = point_light_over_plane(0.0);
         let pts = [
             DVec3::ZERO,
             DVec3::new(1.0, 0.0, 0.5),
@@ -364,30 +370,45 @@ pub(crate) mod tests {
         0.5 * le * s.abs()
     }
 
-    const RECTANGLE: &str = "[[surface]]\nname = \"floor\"\nkind = \"quad\"\nvertices = [[-4, 0, -4], [-4, 0, 4], [4, 0, 4], [4, 0, -4]]\nalbedo = 0.0\n[[surface]]\nname = \"lamp\"\nkind = \"quad\"\nvertices = [[-0.5, 1, -0.25], [0.5, 1, -0.25], [0.5, 1, 0.25], [-0.5, 1, 0.25]]\nalbedo = 0.0\nemission = 2.0\n";
+    /// A 1 × 0.5 lamp (L_e = 2, facing down) at height 1 over an 8 × 8 floor, both of albedo
+    /// `albedo` (0: direct light only; above 0, some indirect light: floor → lamp → floor).
+    pub(crate) fn rectangle(albedo: f64) -> Scene {
+        scene(&format!(
+            "[[surface]]\nname = \"floor\"\nkind = \"quad\"\nvertices = [[-4, 0, -4], [-4, 0, 4], [4, 0, 4], [4, 0, -4]]\nalbedo = {albedo:?}\n[[surface]]\nname = \"lamp\"\nkind = \"quad\"\nvertices = [[-0.5, 1, -0.25], [0.5, 1, -0.25], [0.5, 1, 0.25], [-0.5, 1, 0.25]]\nalbedo = {albedo:?}\nemission = 2.0\n"
+        ))
+    }
+
+    /// The lamp's corners.
+    pub(crate) const LAMP: [DVec3; 4] = [
+        DVec3::new(-0.5, 1.0, -0.25),
+        DVec3::new(0.5, 1.0, -0.25),
+        DVec3::new(0.5, 1.0, 0.25),
+        DVec3::new(-0.5, 1.0, 0.25),
+    ];
+
+    /// Floor points under and beside the lamp, with their normals (the last one tilted).
+    pub(crate) fn rectangle_probes() -> ([DVec3; 4], [DVec3; 4]) {
+        let tilted = DVec3::new(0.3, 1.0, -0.2).normalize();
+        (
+            [
+                DVec3::ZERO,
+                DVec3::new(0.3, 0.0, 0.1),
+                DVec3::new(1.5, 0.0, -0.7),
+                DVec3::new(-2.5, 0.0, 2.0),
+            ],
+            [DVec3::Y, DVec3::Y, DVec3::Y, tilted],
+        )
+    }
 
     #[test]
     fn a_lambertian_rectangle_over_a_black_plane_is_lamberts_polygon_formula() {
-        let s = scene(RECTANGLE);
-        let lamp = [
-            DVec3::new(-0.5, 1.0, -0.25),
-            DVec3::new(0.5, 1.0, -0.25),
-            DVec3::new(0.5, 1.0, 0.25),
-            DVec3::new(-0.5, 1.0, 0.25),
-        ];
+        let s = rectangle(0.0);
         // The lamp faces down: (v1 − v0) × (v2 − v0) = x × z = −y.
         assert!(s.triangles[2].normal().y < -0.99);
-        let pts = [
-            DVec3::ZERO,
-            DVec3::new(0.3, 0.0, 0.1),
-            DVec3::new(1.5, 0.0, -0.7),
-            DVec3::new(-2.5, 0.0, 2.0),
-        ];
-        let tilted = DVec3::new(0.3, 1.0, -0.2).normalize();
-        let normals = [DVec3::Y, DVec3::Y, DVec3::Y, tilted];
+        let (pts, normals) = rectangle_probes();
         let got = irradiance(&s, &pts, &normals, 20_000, 7);
         for ((p, n), g) in pts.iter().zip(&normals).zip(&got) {
-            let want = polygon_irradiance(2.0, &lamp, *p, *n);
+            let want = polygon_irradiance(2.0, &LAMP, *p, *n);
             println!(
                 "rectangle at {p}: {:.5} ± {:.5} vs {want:.5} (z = {:.2})",
                 g.mean,
@@ -423,7 +444,7 @@ pub(crate) mod tests {
 
     #[test]
     fn a_point_depends_on_its_index_and_key_only() {
-        let s = scene(RECTANGLE);
+        let s = rectangle(0.0);
         let pts = [DVec3::ZERO, DVec3::new(0.5, 0.0, 0.5)];
         let both = irradiance(&s, &pts, &[DVec3::Y; 2], 50, 9);
         let first = irradiance(&s, &pts[..1], &[DVec3::Y], 50, 9);
