@@ -24,10 +24,11 @@ use super::store::SegmentStore;
 ///   disc of radius r is its centre value plus r²/8 times its Laplacian), i.e. b·k/N with
 ///   b = Φ·∇²E/(8π·E²).
 ///
-/// So MSE/E² ≈ 1/k + b²·(k/N)². With k fixed the first term stays: the error stops falling (the
-/// Cornell box's 9–10 % at k = 64 whatever the photons). It falls to 0 exactly when k → ∞ and
-/// k/N → 0 (Loftsgaarden & Quesenberry 1965), i.e. 0 < β < 1. Setting the derivative in k to zero,
-/// −1/k² + 2b²k/N² = 0, gives k* = (N²/(2b²))^{1/3} ∝ N^{2/3}: **β = 2/3** minimises the MSE of a
+/// (The k-th-neighbour radius adds a bias of its own, a factor k/(k − 1): O(1/k), whose square is
+/// negligible beside the variance.) So MSE/E² ≈ 1/k + b²·(k/N)². With k fixed the first term
+/// stays: the error stops falling (the Cornell box's 9–10 % at k = 64 whatever the photons). It
+/// falls to 0 exactly when k → ∞ and k/N → 0 (Loftsgaarden & Quesenberry 1965), i.e. 0 < β < 1.
+/// Setting the derivative in k to zero, −1/k² + 2b²k/N² = 0, gives k* = (N²/(2b²))^{1/3} ∝ N^{2/3}: **β = 2/3** minimises the MSE of a
 /// 2D k-NN estimate of a smooth density (in d dimensions, 4/(d + 4)), and then the relative RMSE
 /// falls as N^{−1/3}. Where the disc meets an edge, a crease or a shadow boundary, E is not smooth
 /// over it and the bias is first order, O(r) = O((k/N)^{1/2}): MSE ≈ 1/k + c·k/N, minimised by

@@ -1,8 +1,8 @@
 //! Direct light at a point by next-event estimation alone (issue 27's `detp.direct = "nee"`): the
 //! first term of [`crate::lt::reference`]'s sum, with the same physics and the same functions
-//! ([`reference::add_delta_lights`], [`reference::add_area_samples`]). Point and spot lights are
-//! exact (one shadow ray each, no random draw); area lights are the mean of S samples (a point
-//! uniform over each light's area and a shadow ray), with its standard error.
+//! ([`add_delta_lights`], [`add_area_samples`]). Point and spot lights are exact (one shadow ray
+//! each, no random draw); area lights are the mean of S samples (a point uniform over each light's
+//! area and a shadow ray), with its standard error.
 //!
 //! DETP then estimates only the rest, the indirect light, from the segments after the first bounce
 //! ([`crate::detp::indirect`]): E = E_direct(NEE) + E_indirect(DETP). The direct part is one number

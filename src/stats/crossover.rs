@@ -96,6 +96,13 @@ pub enum Never {
         /// The path tracer's seconds per point.
         path_tracing: f64,
     },
+    /// DETP's seconds per further (incremental) frame are not below the path tracer's per frame.
+    PerFrameCost {
+        /// DETP's seconds per incremental frame.
+        detp: f64,
+        /// The path tracer's seconds per frame.
+        path_tracing: f64,
+    },
 }
 
 /// Where DETP starts to win.
@@ -188,7 +195,7 @@ pub fn points_crossover(
 /// (incremental) frame — costs less in all than path tracing at `pt_frame_s` per frame.
 pub fn frames_crossover(first_s: f64, frame_s: f64, pt_frame_s: f64) -> Crossover {
     if frame_s >= pt_frame_s {
-        return Crossover::Never(Never::PerPointCost {
+        return Crossover::Never(Never::PerFrameCost {
             detp: frame_s,
             path_tracing: pt_frame_s,
         });
@@ -405,10 +412,15 @@ mod tests {
             panic!("a crossover");
         };
         assert!((10.0 + (f - 1.0) * 0.5 - f * 2.5).abs() < 1e-12);
-        assert!(matches!(
+        assert_eq!(
             frames_crossover(10.0, 3.0, 2.5),
-            Crossover::Never(_)
-        ));
+            Crossover::Never(Never::PerFrameCost {
+                detp: 3.0,
+                path_tracing: 2.5
+            })
+        );
+        // A first frame already cheaper than path tracing's: DETP wins from the first frame.
+        assert_eq!(frames_crossover(1.0, 0.5, 2.5), Crossover::At(1.0));
     }
 
     /// The bootstrap's interval covers the spread of the replicas and is reproducible.
