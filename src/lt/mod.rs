@@ -9,8 +9,10 @@
 
 pub mod aff;
 pub mod bvh;
+pub mod direct;
 pub mod format;
 pub mod motion;
+pub mod pathtrace;
 pub mod reference;
 pub mod shapes;
 pub mod spline;
