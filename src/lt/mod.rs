@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
-use self::bvh::{Bvh, TwoNearest};
+use self::bvh::Bvh;
 use self::format::{AnalyticKind, LightKind, PathKind, RawScene, SurfaceKind};
 use self::motion::{Motion, Mover, MoverPart};
 use self::shapes::{Ball, Triangle};
@@ -704,17 +704,13 @@ impl Scene {
             Some(Prim::Triangle(i)) => i,
             _ => u32::MAX,
         };
-        let mut best = TwoNearest::default();
         let n = self.n_static_tris;
-        self.bvh
-            .two_nearest(&self.triangles[..n], o, d, t_min, skip_tri, &mut best);
+        let mut best = self.bvh.two_nearest(o, d, t_min, skip_tri);
         if !self.dyn_bvh.is_empty() {
             // Dynamic triangles after the static ones, in a fixed order: a photon's path depends only
             // on the geometry, never on which frames came before.
-            let mut dynamic = TwoNearest::default();
             let skip_dyn = skip_tri.wrapping_sub(n as u32);
-            self.dyn_bvh
-                .two_nearest(&self.triangles[n..], o, d, t_min, skip_dyn, &mut dynamic);
+            let dynamic = self.dyn_bvh.two_nearest(o, d, t_min, skip_dyn);
             for (t, id) in [dynamic.first, dynamic.second] {
                 if t.is_finite() {
                     best.offer(t, id + n as u32);
@@ -757,17 +753,11 @@ impl Scene {
             _ => u32::MAX,
         };
         let n = self.n_static_tris;
-        let (mut t, mut id) = self
-            .bvh
-            .nearest(&self.triangles[..n], o, d, t_min, skip_tri);
+        let (mut t, mut id) = self.bvh.nearest(o, d, t_min, skip_tri);
         if !self.dyn_bvh.is_empty() {
-            let (td, idd) = self.dyn_bvh.nearest(
-                &self.triangles[n..],
-                o,
-                d,
-                t_min,
-                skip_tri.wrapping_sub(n as u32),
-            );
+            let (td, idd) = self
+                .dyn_bvh
+                .nearest(o, d, t_min, skip_tri.wrapping_sub(n as u32));
             if td < t {
                 (t, id) = (td, idd + n as u32);
             }
