@@ -28,6 +28,7 @@ use glam::DVec3;
 use rand::Rng;
 use rayon::prelude::*;
 
+use super::cast::Caster;
 use super::{Light, Prim, Scene};
 use crate::sample::directions::{cosine_about, uniform_direction};
 use crate::sample::rng::{domain, stream};
@@ -52,31 +53,53 @@ pub fn irradiance(
     samples: u64,
     key: u64,
 ) -> Vec<Irradiance> {
+    irradiance_with(scene, scene, points, normals, samples, key).0
+}
+
+/// [`irradiance`] with the rays cast by `caster` (the scene's own core, or Embree in
+/// `raycost bench`), and the number of rays cast (path and shadow rays).
+pub fn irradiance_with<C: Caster>(
+    scene: &Scene,
+    caster: &C,
+    points: &[DVec3],
+    normals: &[DVec3],
+    samples: u64,
+    key: u64,
+) -> (Vec<Irradiance>, u64) {
     assert_eq!(points.len(), normals.len(), "one normal per point");
     assert!(samples >= 2, "a standard error needs two samples");
     let lights = Lights::new(scene);
-    points
+    let (est, rays): (Vec<Irradiance>, Vec<u64>) = points
         .par_iter()
         .zip(normals)
         .enumerate()
         .map(|(i, (&p, &n))| {
             let mut rng = stream(&[domain::REFERENCE, key, i as u64]);
             let n = n.normalize();
+            let mut cast = Cast { caster, rays: 0 };
             // Welford: stable for the long tails of rare bright paths.
             let (mut mean, mut m2) = (0.0, 0.0);
             for k in 0..samples {
-                let x = sample(scene, &lights, &mut rng, p, n);
+                let x = sample(scene, &mut cast, &lights, &mut rng, p, n);
                 let delta = x - mean;
                 mean += delta / (k + 1) as f64;
                 m2 += delta * (x - mean);
             }
             let var = m2 / (samples - 1) as f64;
-            Irradiance {
+            let est = Irradiance {
                 mean,
                 se: (var / samples as f64).sqrt(),
-            }
+            };
+            (est, cast.rays)
         })
-        .collect()
+        .unzip();
+    (est, rays.iter().sum())
+}
+
+/// A caster and the rays cast through it.
+struct Cast<'a, C> {
+    caster: &'a C,
+    rays: u64,
 }
 
 /// The area lights' sampling tables, built once.
@@ -120,7 +143,19 @@ fn eps(scene: &Scene) -> f64 {
 
 /// Is the straight path from `x` (leaving primitive `from`) to `y` (on primitive `to`, if any)
 /// free? Hits within ε of either end do not block (the surfaces the path starts and ends on).
-fn visible(scene: &Scene, x: DVec3, from: Option<Prim>, y: DVec3, to: Option<Prim>) -> bool {
+///
+/// The rule is on the nearest hit h: blocked iff h.t < r − ε and not (h is `to` and
+/// h.t ≥ r·(1 − 10⁻⁹)). It is decided by a shadow ray (any hit before min(r − ε, r·(1 − 10⁻⁹))
+/// blocks) and, only if r·(1 − 10⁻⁹) < r − ε, the nearest hit in between: the same answer as
+/// finding the nearest hit, without ordering the hits before the first blocker.
+fn visible<C: Caster>(
+    scene: &Scene,
+    cast: &mut Cast<C>,
+    x: DVec3,
+    from: Option<Prim>,
+    y: DVec3,
+    to: Option<Prim>,
+) -> bool {
     let v = y - x;
     let r = v.length();
     let e = eps(scene);
@@ -128,16 +163,24 @@ fn visible(scene: &Scene, x: DVec3, from: Option<Prim>, y: DVec3, to: Option<Pri
         return false;
     }
     let d = v / r;
-    match scene.first_hit(x, d, e, from) {
-        None => true,
-        Some(h) => h.t >= r - e || (Some(h.prim) == to && h.t >= r * (1.0 - 1e-9)),
+    let (end, on_target) = (r - e, r * (1.0 - 1e-9));
+    cast.rays += 1;
+    if cast.caster.occluded(x, d, e, end.min(on_target), from) {
+        return false;
     }
+    if on_target >= end {
+        return true;
+    }
+    cast.caster
+        .first_hit_before(x, d, e, end, from)
+        .is_none_or(|h| Some(h.prim) == to)
 }
 
 /// The direct irradiance at `x` with unit normal `n` (leaving primitive `from`): every point and
 /// spot light exactly, one area sample per area light.
-fn direct<R: Rng + ?Sized>(
+fn direct<R: Rng + ?Sized, C: Caster>(
     scene: &Scene,
+    cast: &mut Cast<C>,
     lights: &Lights,
     rng: &mut R,
     x: DVec3,
@@ -166,7 +209,7 @@ fn direct<R: Rng + ?Sized>(
         let v = position - x;
         let r2 = v.length_squared();
         let cos = n.dot(v) / r2.sqrt();
-        if cos > 0.0 && visible(scene, x, from, position, None) {
+        if cos > 0.0 && visible(scene, cast, x, from, position, None) {
             e += intensity * cos / r2;
         }
     }
@@ -201,7 +244,7 @@ fn direct<R: Rng + ?Sized>(
         let cos_x = n.dot(v) / r;
         // One-sided: x must lie on the emitting side of the light.
         let cos_y = -ny.dot(v) / r;
-        if cos_x > 0.0 && cos_y > 0.0 && visible(scene, x, from, y, Some(prim)) {
+        if cos_x > 0.0 && cos_y > 0.0 && visible(scene, cast, x, from, y, Some(prim)) {
             e += le * cos_x * cos_y / r2 * total;
         }
     }
@@ -209,17 +252,25 @@ fn direct<R: Rng + ?Sized>(
 }
 
 /// One sample of the irradiance at `p` with unit normal `n` (see the module doc).
-fn sample<R: Rng + ?Sized>(scene: &Scene, lights: &Lights, rng: &mut R, p: DVec3, n: DVec3) -> f64 {
+fn sample<R: Rng + ?Sized, C: Caster>(
+    scene: &Scene,
+    cast: &mut Cast<C>,
+    lights: &Lights,
+    rng: &mut R,
+    p: DVec3,
+    n: DVec3,
+) -> f64 {
     let e = eps(scene);
     let (mut x, mut nx, mut from) = (p, n, None);
     let mut total = 0.0;
     for bounce in 0..=MAX_BOUNCES {
-        total += direct(scene, lights, rng, x, nx, from);
+        total += direct(scene, cast, lights, rng, x, nx, from);
         if bounce == MAX_BOUNCES {
             break;
         }
         let d = cosine_about(rng, nx);
-        let Some(h) = scene.first_hit(x, d, e, from) else {
+        cast.rays += 1;
+        let Some(h) = cast.caster.first_hit(x, d, e, from) else {
             break;
         };
         if rng.gen::<f64>() >= scene.surfaces[h.surface as usize].albedo {

@@ -62,6 +62,7 @@ pub fn build(tris: &[Triangle], pad: f64, single_leaf: usize) -> Built {
         tris,
         pad,
         centroid: tris.iter().map(Triangle::centroid).collect(),
+        bounds: tris.iter().map(Triangle::bounds).collect(),
         bins: Vec::new(),
     };
     let mut order: Vec<u32> = (0..tris.len() as u32).collect();
@@ -84,7 +85,23 @@ struct Builder<'a> {
     tris: &'a [Triangle],
     pad: f64,
     centroid: Vec<DVec3>,
+    /// Each triangle's (lo, hi).
+    bounds: Vec<(DVec3, DVec3)>,
     bins: Vec<Bin>,
+}
+
+/// Component-wise min and max by plain comparisons (the inputs are finite: glam's NaN-aware
+/// `min`/`max` cost twice the build time).
+#[inline(always)]
+fn vmin(a: DVec3, b: DVec3) -> DVec3 {
+    let m = |x: f64, y: f64| if y < x { y } else { x };
+    DVec3::new(m(a.x, b.x), m(a.y, b.y), m(a.z, b.z))
+}
+
+#[inline(always)]
+fn vmax(a: DVec3, b: DVec3) -> DVec3 {
+    let m = |x: f64, y: f64| if y > x { y } else { x };
+    DVec3::new(m(a.x, b.x), m(a.y, b.y), m(a.z, b.z))
 }
 
 impl Builder<'_> {
@@ -92,9 +109,9 @@ impl Builder<'_> {
     fn bounds(&self, ids: &[u32]) -> (DVec3, DVec3) {
         let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
         for &i in ids {
-            let (a, b) = self.tris[i as usize].bounds();
-            lo = lo.min(a);
-            hi = hi.max(b);
+            let (a, b) = self.bounds[i as usize];
+            lo = vmin(lo, a);
+            hi = vmax(hi, b);
         }
         (lo - DVec3::splat(self.pad), hi + DVec3::splat(self.pad))
     }
@@ -132,8 +149,8 @@ impl Builder<'_> {
     fn sah_split(&self, order: &mut [u32], lo: DVec3, hi: DVec3, depth: usize) -> Option<usize> {
         let (mut clo, mut chi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
         for &i in order.iter() {
-            clo = clo.min(self.centroid[i as usize]);
-            chi = chi.max(self.centroid[i as usize]);
+            clo = vmin(clo, self.centroid[i as usize]);
+            chi = vmax(chi, self.centroid[i as usize]);
         }
         let ext = chi - clo;
         let n = order.len();
@@ -170,10 +187,10 @@ impl Builder<'_> {
             let mut bhi = [DVec3::splat(f64::NEG_INFINITY); BINS];
             for &i in order.iter() {
                 let k = bin_of(i);
-                let (a, b) = self.tris[i as usize].bounds();
+                let (a, b) = self.bounds[i as usize];
                 count[k] += 1;
-                blo[k] = blo[k].min(a);
-                bhi[k] = bhi[k].max(b);
+                blo[k] = vmin(blo[k], a);
+                bhi[k] = vmax(bhi[k], b);
             }
             // Right-to-left sweep: area·packets of the right side for each plane.
             let mut right = [0.0; BINS];
@@ -183,8 +200,8 @@ impl Builder<'_> {
                 0,
             );
             for k in (1..BINS).rev() {
-                rlo = rlo.min(blo[k]);
-                rhi = rhi.max(bhi[k]);
+                rlo = vmin(rlo, blo[k]);
+                rhi = vmax(rhi, bhi[k]);
                 rn += count[k];
                 right[k] = half_area(rlo, rhi) * rn.div_ceil(LANES) as f64;
             }
@@ -194,8 +211,8 @@ impl Builder<'_> {
                 0,
             );
             for k in 1..BINS {
-                llo = llo.min(blo[k - 1]);
-                lhi = lhi.max(bhi[k - 1]);
+                llo = vmin(llo, blo[k - 1]);
+                lhi = vmax(lhi, bhi[k - 1]);
                 ln += count[k - 1];
                 if ln == 0 || ln == n {
                     continue;

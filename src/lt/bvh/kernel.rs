@@ -285,11 +285,12 @@ macro_rules! traversal {
             let tmin = f32_down(t_min);
             let mut ts = [0.0f64; LANES];
             let mut near = [0.0f32; WIDTH];
+            // The cull distance in f32 (rounded up), recomputed only after a leaf's offers.
+            let mut bound = f32_up(q.bound());
             while top > 0 {
                 top -= 1;
                 // SAFETY: entries below `top` were written.
                 let (r, entry) = unsafe { stack[top].assume_init() };
-                let bound = f32_up(q.bound());
                 if entry > bound {
                     continue;
                 }
@@ -305,18 +306,19 @@ macro_rules! traversal {
                             }
                         }
                     }
+                    bound = f32_up(q.bound());
                     continue;
                 }
+                let node = &nodes[r.index()];
                 // SAFETY: as above.
-                let mut m = unsafe { $node(&nodes[r.index()], ray, tmin, bound, &mut near) };
+                let mut m = unsafe { $node(node, ray, tmin, bound, &mut near) };
                 assert!(top + WIDTH <= STACK, "BVH deeper than its traversal stack");
-                let child = &nodes[r.index()].child;
                 // Push the hit children farthest first, so the nearest is traversed next.
                 let first = top;
                 while m != 0 {
                     let k = m.trailing_zeros() as usize;
                     m &= m - 1;
-                    let e = (child[k], near[k]);
+                    let e = (node.child[k], near[k]);
                     let mut i = top;
                     // SAFETY: entries first..top were written in this loop.
                     while i > first && unsafe { stack[i - 1].assume_init() }.1 < e.1 {
