@@ -57,9 +57,10 @@ pub struct Built {
 }
 
 /// Builds over `tris`; a scene of at most `single_leaf` triangles is one leaf.
-pub fn build(tris: &[Triangle], pad: f64, single_leaf: usize) -> Built {
+pub fn build(tris: &[Triangle], key_of: &[u32], pad: f64, single_leaf: usize) -> Built {
     let mut b = Builder {
         tris,
+        key_of,
         pad,
         centroid: tris.iter().map(Triangle::centroid).collect(),
         bounds: tris.iter().map(Triangle::bounds).collect(),
@@ -83,6 +84,8 @@ pub fn build(tris: &[Triangle], pad: f64, single_leaf: usize) -> Built {
 
 struct Builder<'a> {
     tris: &'a [Triangle],
+    /// The key a packet stores for each triangle.
+    key_of: &'a [u32],
     pad: f64,
     centroid: Vec<DVec3>,
     /// Each triangle's (lo, hi).
@@ -268,8 +271,10 @@ impl Builder<'_> {
             let (s, e) = bin.range;
             let start = out.packets.len();
             for chunk in order[s..e].chunks(LANES) {
-                let tris: Vec<(u32, Triangle)> =
-                    chunk.iter().map(|&i| (i, self.tris[i as usize])).collect();
+                let tris: Vec<(u32, Triangle)> = chunk
+                    .iter()
+                    .map(|&i| (self.key_of[i as usize], self.tris[i as usize]))
+                    .collect();
                 out.packets.push(Packet::new(&tris));
             }
             return ChildRef::leaf(start, out.packets.len() - start);
@@ -305,4 +310,43 @@ impl Builder<'_> {
         out.nodes[index] = node;
         ChildRef::node(index)
     }
+}
+
+/// The order in which the BVH of f3d7ed0 met the triangles: its tree (median split of the
+/// longest centroid axis, leaves of at most 4 triangles, a scene of at most 64 one leaf) visited
+/// depth first, right child first, every ray in the same order. That BVH kept, among hits at equal
+/// t, the one it met first; ranking triangles by this order keeps its answers bit for bit
+/// (coincident triangles of opposite orientation, common in BART meshes, tie exactly).
+pub fn legacy_order(tris: &[Triangle]) -> Vec<u32> {
+    fn visit(tris: &[Triangle], order: &mut [u32], root: bool, out: &mut Vec<u32>) {
+        let (mut clo, mut chi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for &i in order.iter() {
+            let c = tris[i as usize].centroid();
+            clo = clo.min(c);
+            chi = chi.max(c);
+        }
+        let ext = chi - clo;
+        if order.len() <= 4 || (root && order.len() <= 64) || ext.max_element() <= 0.0 {
+            out.extend_from_slice(order);
+            return;
+        }
+        let axis = if ext.x >= ext.y && ext.x >= ext.z {
+            0
+        } else if ext.y >= ext.z {
+            1
+        } else {
+            2
+        };
+        let mid = order.len() / 2;
+        order.select_nth_unstable_by(mid, |&a, &b| {
+            tris[a as usize].centroid()[axis].total_cmp(&tris[b as usize].centroid()[axis])
+        });
+        let (left, right) = order.split_at_mut(mid);
+        visit(tris, right, false, out);
+        visit(tris, left, false, out);
+    }
+    let mut order: Vec<u32> = (0..tris.len() as u32).collect();
+    let mut out = Vec::with_capacity(tris.len());
+    visit(tris, &mut order, true, &mut out);
+    out
 }

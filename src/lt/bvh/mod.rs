@@ -20,20 +20,25 @@
 //! Which triangles a ray hits, and at which t, is decided only by the f64 test, never by a box: the
 //! f32 box test is conservative (proof in [`kernel`]), so traversal tests every triangle whose
 //! padded box the exact ray meets within the distances that matter. The answer is then a function
-//! of the set of hits alone, not of the order traversal meets them:
-//! - nearest: the hit with the smallest (t, triangle index);
-//! - two nearest: that, and the smallest (t, index) among the hits with
+//! of the set of hits alone, not of the order traversal meets them. Triangles are ranked by the
+//! order in which the BVH of f3d7ed0 met them ([`build::legacy_order`]: its tree, depth first,
+//! right child first — the same order for every ray; the index order for a scene of at most 64
+//! triangles), and
+//! - nearest: the hit with the smallest (t, rank);
+//! - two nearest: that, and the smallest (t, rank) among the hits with
 //!   t − t₁ > 10⁻¹²·max(|t|, 1) (a crossing within 10⁻¹² of the first, such as the other triangle
 //!   of a shared edge, is the same crossing);
 //! - any hit: whether some hit has t < t_max.
 //!
-//! The BVH of f3d7ed0 (binary, median split) folded hits with [`TwoNearest::offer`] in its
-//! traversal order; for a scene of at most 64 triangles (one leaf) that order was the index order,
-//! and then its answers are the ones above — the first always, the second unless three crossings
-//! lie within 2·10⁻¹² of each other. Testing every triangle agrees with any BVH except where the
-//! f64 test accepts a point outside the triangle's padded box, which needs a ray within ~10⁻⁹ rad
-//! of a triangle's plane; the margin here (≥ 6·10⁻⁷ of the scene's size) makes that rarer than the
-//! old padding (10⁻⁹) did.
+//! That BVH kept, among hits at equal t, the one it met first, and folded hits with
+//! [`TwoNearest::offer`] in that order: its answers are the ones above — the first always, the
+//! second unless three crossings lie within 2·10⁻¹² of each other without two being equal (the
+//! fold can then lose the second; tested). Exact ties are common: the BART kitchen has coincident
+//! triangles of opposite orientation, and ranking by index instead changed 228 of 413 352 random
+//! rays' nearest triangle there. Testing every triangle agrees with any BVH except where the f64
+//! test accepts a point outside the triangle's padded box, which needs a ray within ~10⁻⁹ rad of a
+//! triangle's plane; the margin here (≥ 6·10⁻⁷ of the scene's size) makes that rarer than the old
+//! padding (10⁻⁹) did.
 
 mod build;
 mod kernel;
@@ -241,7 +246,12 @@ impl Path {
 #[derive(Clone, Debug)]
 pub struct Bvh {
     nodes: Vec<Node>,
+    /// Triangles by rank (packets hold ranks, answers map them back to indices).
     packets: Vec<Packet>,
+    /// Rank → triangle index.
+    id_of: Vec<u32>,
+    /// Triangle index → rank.
+    key_of: Vec<u32>,
     root: ChildRef,
     /// The largest |coordinate| of any box (sets the f32 test's margin).
     bound: f64,
@@ -253,6 +263,8 @@ impl Default for Bvh {
         Self {
             nodes: Vec::new(),
             packets: Vec::new(),
+            id_of: Vec::new(),
+            key_of: Vec::new(),
             root: ChildRef::EMPTY,
             bound: 0.0,
             path: Path::Scalar,
@@ -273,11 +285,18 @@ impl Bvh {
             .flat_map(|t| t.v)
             .map(|v| v.abs().max_element())
             .fold(1.0, f64::max);
-        let built = build::build(tris, 1e-9 * magnitude, single_leaf);
+        let id_of = build::legacy_order(tris);
+        let mut key_of = vec![0; tris.len()];
+        for (rank, &i) in id_of.iter().enumerate() {
+            key_of[i as usize] = rank as u32;
+        }
+        let built = build::build(tris, &key_of, 1e-9 * magnitude, single_leaf);
         let bound = built.lo.abs().max(built.hi.abs()).max_element();
         Self {
             nodes: built.nodes,
             packets: built.packets,
+            id_of,
+            key_of,
             root: built.root,
             bound: f64::from(layout::f32_up(bound)),
             path: Path::detect(),
@@ -305,14 +324,34 @@ impl Bvh {
     pub fn bytes(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<Node>()
             + self.packets.len() * std::mem::size_of::<Packet>()
+            + 8 * self.id_of.len()
     }
 
-    /// Runs `q` over every hit with t > t_min, skipping triangle `skip`, culled by `q`'s bound.
+    /// Each triangle's rank (the tie order, see the module doc), by index.
+    pub fn ranks(&self) -> &[u32] {
+        &self.key_of
+    }
+
+    /// A triangle's rank (`u32::MAX` for none).
+    #[inline]
+    fn key(&self, id: u32) -> u32 {
+        self.key_of.get(id as usize).copied().unwrap_or(u32::MAX)
+    }
+
+    /// A (t, rank) answer as (t, triangle index).
+    #[inline]
+    fn id(&self, (t, key): (f64, u32)) -> (f64, u32) {
+        (t, self.id_of.get(key as usize).copied().unwrap_or(u32::MAX))
+    }
+
+    /// Runs `q` over every hit with t > t_min, skipping triangle `skip`, culled by `q`'s bound
+    /// (`q` sees ranks, not indices).
     #[inline]
     fn run<Q: Query>(&self, o: DVec3, d: DVec3, t_min: f64, skip: u32, q: &mut Q) {
         if self.packets.is_empty() {
             return;
         }
+        let skip = self.key(skip);
         let ray = RayData::new(o.to_array(), d.to_array(), self.bound);
         let (n, p, r) = (&self.nodes[..], &self.packets[..], self.root);
         match self.path {
@@ -343,11 +382,14 @@ impl Bvh {
             if q.dropped {
                 q.best.second = self.second(o, d, t_min, skip, q.best.first.0, q.best.second);
             }
-            return q.best;
+            return TwoNearest {
+                first: self.id(q.best.first),
+                second: self.id(q.best.second),
+            };
         }
         let first = self.nearest(o, d, t_min, skip);
         let second = if first.0.is_finite() {
-            self.second(o, d, t_min, skip, first.0, TwoNearest::EMPTY.second)
+            self.id(self.second(o, d, t_min, skip, first.0, TwoNearest::EMPTY.second))
         } else {
             TwoNearest::EMPTY.second
         };
@@ -388,7 +430,7 @@ impl Bvh {
             limit,
         };
         self.run(o, d, t_min, skip, &mut q);
-        q.best
+        self.id(q.best)
     }
 
     /// The nearest crossing with t > t_min, skipping triangle `skip`: (t, triangle), or
@@ -415,7 +457,10 @@ impl Bvh {
         while let Some(c) = stack.pop() {
             if c.is_leaf() {
                 for pk in &self.packets[c.packets()] {
-                    pk.id.iter().filter(|&&i| i != u32::MAX).for_each(|&i| f(i));
+                    pk.id
+                        .iter()
+                        .filter(|&&k| k != u32::MAX)
+                        .for_each(|&k| f(self.id_of[k as usize]));
                 }
                 continue;
             }
@@ -432,9 +477,11 @@ impl Bvh {
     }
 }
 
-/// The answer of [`Bvh::two_nearest`] by testing every triangle (the oracle), by the same rule.
+/// The answer of [`Bvh::two_nearest`] by testing every triangle (the oracle), by the same rule;
+/// `rank` is [`Bvh::ranks`].
 pub fn two_nearest_brute(
     tris: &[Triangle],
+    rank: &[u32],
     o: DVec3,
     d: DVec3,
     t_min: f64,
@@ -446,7 +493,14 @@ pub fn two_nearest_brute(
         .filter(|&(i, _)| i as u32 != skip)
         .filter_map(|(i, t)| t.intersect(o, d, t_min).map(|t| (t, i as u32)))
         .collect();
-    let lexmin = |a: (f64, u32), b: (f64, u32)| if before(b.0, b.1, a.0, a.1) { b } else { a };
+    let lexmin = |a: (f64, u32), b: (f64, u32)| {
+        let r = |x: (f64, u32)| rank.get(x.1 as usize).copied().unwrap_or(u32::MAX);
+        if before(b.0, r(b), a.0, r(a)) {
+            b
+        } else {
+            a
+        }
+    };
     let first = hits.iter().copied().fold(TwoNearest::EMPTY.first, lexmin);
     let second = hits
         .iter()
