@@ -194,12 +194,11 @@ fn bench_scene(name: &'static str, scene: &Scene, plan: Plan) -> anyhow::Result<
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
     #[cfg(feature = "embree")]
     let embree = crate::embree::triangles::EmbreeTriangles::build(scene)?;
-    let casters: Vec<(&'static str, &dyn DynCaster)> = {
-        let mut v: Vec<(&'static str, &dyn DynCaster)> = vec![("", scene)];
+    let casters: Vec<(&'static str, &dyn DynCaster)> = vec![
+        ("", scene),
         #[cfg(feature = "embree")]
-        v.push(("-embree", &embree));
-        v
-    };
+        ("-embree", &embree),
+    ];
     let (pts, nrm) = points(scene, plan.points);
     let engines = casters.len();
     // Contestant c: engine c % engines; photons if c < engines, else paths.

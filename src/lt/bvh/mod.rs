@@ -164,6 +164,21 @@ impl Query for Two {
     }
 }
 
+/// [`Two`] culling beyond the first crossing only: the first pass of a tree's two-nearest query,
+/// whose second crossing (an upper bound of the true one) lets the second pass cull early.
+struct TwoFirstPass(Two);
+
+impl Query for TwoFirstPass {
+    #[inline(always)]
+    fn bound(&self) -> f64 {
+        self.0.best.first.0
+    }
+    #[inline(always)]
+    fn offer(&mut self, t: f64, id: u32) -> bool {
+        self.0.offer(t, id)
+    }
+}
+
 /// The second crossing given the final first one.
 struct SecondOnly {
     first: f64,
@@ -368,10 +383,11 @@ impl Bvh {
     /// The two nearest crossings with t > t_min, skipping triangle `skip` (the surface a photon
     /// leaves), by the rule of the module doc.
     ///
-    /// A single-leaf scene tests its packets once, keeping both crossings ([`Two`]); a tree is
-    /// traversed twice, for the nearest and then for the next crossing beyond it (each traversal
-    /// culls by its own distance: measured 2–5× faster on the BART kitchen than one traversal that
-    /// can cull only beyond the second crossing).
+    /// A single-node tree tests its packets once, keeping both crossings ([`Two`]); a deeper tree
+    /// is traversed twice: for the nearest (culling beyond it, and keeping any farther crossing
+    /// its leaves hold) and then for the next crossing beyond it, culling beyond the best found
+    /// so far (measured 2–5× faster on the BART kitchen than one traversal that can cull only
+    /// beyond the second crossing).
     pub fn two_nearest(&self, o: DVec3, d: DVec3, t_min: f64, skip: u32) -> TwoNearest {
         if self.nodes.len() <= 1 {
             let mut q = Two {
@@ -387,13 +403,21 @@ impl Bvh {
                 second: self.id(q.best.second),
             };
         }
-        let first = self.nearest(o, d, t_min, skip);
-        let second = if first.0.is_finite() {
-            self.id(self.second(o, d, t_min, skip, first.0, TwoNearest::EMPTY.second))
-        } else {
-            TwoNearest::EMPTY.second
-        };
-        TwoNearest { first, second }
+        let mut q = TwoFirstPass(Two {
+            best: TwoNearest::EMPTY,
+            dropped: false,
+        });
+        self.run(o, d, t_min, skip, &mut q);
+        let best = q.0.best;
+        if !best.first.0.is_finite() {
+            return TwoNearest::EMPTY;
+        }
+        // Any second crossing the first pass met bounds the second pass.
+        let second = self.second(o, d, t_min, skip, best.first.0, best.second);
+        TwoNearest {
+            first: self.id(best.first),
+            second: self.id(second),
+        }
     }
 
     /// The nearest crossing that is not the same crossing as `first`, given one such, `bound`.
