@@ -48,25 +48,34 @@ fn profile(name: &str, what: &str) -> anyhow::Result<()> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build_global()?;
-    let rays = if what == "photons" {
-        raycost::detp::photon::trace_photons(&scene, 20_000, 1)
-            .segments
-            .len() as u64
-    } else {
-        let pts: Vec<glam::DVec3> = scene
-            .triangles
-            .iter()
-            .take(32)
-            .map(|t| t.centroid() + t.normal() * 1e-3)
-            .collect();
-        let nrm: Vec<glam::DVec3> = scene
-            .triangles
-            .iter()
-            .take(32)
-            .map(|t| t.normal())
-            .collect();
-        raycost::lt::reference::irradiance_with(&scene, &scene, &pts, &nrm, 32, 1).1
+    #[cfg(feature = "embree")]
+    let embree = raycost::embree::triangles::EmbreeTriangles::build(&scene)?;
+    let rays = match what {
+        "photons" => run(&scene, &scene, true),
+        "paths" => run(&scene, &scene, false),
+        #[cfg(feature = "embree")]
+        "photons-embree" => run(&scene, &embree, true),
+        #[cfg(feature = "embree")]
+        "paths-embree" => run(&scene, &embree, false),
+        _ => anyhow::bail!("photons, paths, photons-embree or paths-embree"),
     };
     println!("{name} {what}: {rays} rays");
     Ok(())
+}
+
+/// 20 000 photons, or 32 samples at 32 points, with `caster`: the rays cast.
+fn run<C: raycost::lt::cast::Caster>(scene: &raycost::lt::Scene, caster: &C, photons: bool) -> u64 {
+    if photons {
+        raycost::detp::photon::trace_photons_with(scene, caster, 20_000, 1)
+            .segments
+            .len() as u64
+    } else {
+        let tris = scene.triangles.iter().take(32);
+        let pts: Vec<glam::DVec3> = tris
+            .clone()
+            .map(|t| t.centroid() + t.normal() * 1e-3)
+            .collect();
+        let nrm: Vec<glam::DVec3> = tris.map(|t| t.normal()).collect();
+        raycost::lt::reference::irradiance_with(scene, caster, &pts, &nrm, 32, 1).1
+    }
 }
