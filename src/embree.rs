@@ -171,6 +171,16 @@ mod ffi {
     }
 }
 
+/// Turns a pending error of `device` (a live device handle) into an `Err`.
+fn check(device: ffi::RTCDevice, what: &str) -> Result<()> {
+    // SAFETY: the callers pass a live device handle.
+    let code = unsafe { ffi::rtcGetDeviceError(device) };
+    if code != ffi::RTC_ERROR_NONE {
+        bail!("Embree error {code} after {what}");
+    }
+    Ok(())
+}
+
 /// An Embree BVH over spheres, built once, queried from many threads (`&self` is `Sync`).
 pub struct EmbreeScene {
     device: ffi::RTCDevice,
@@ -256,12 +266,7 @@ impl EmbreeScene {
 
     /// Turns a pending device error into an `Err`.
     fn check(&self, what: &str) -> Result<()> {
-        // SAFETY: `device` is a live device handle.
-        let code = unsafe { ffi::rtcGetDeviceError(self.device) };
-        if code != ffi::RTC_ERROR_NONE {
-            bail!("Embree error {code} after {what}");
-        }
-        Ok(())
+        check(self.device, what)
     }
 
     /// The number of spheres in the scene.

@@ -115,12 +115,7 @@ impl<'s> EmbreeTriangles<'s> {
     }
 
     fn check(&self, what: &str) -> Result<()> {
-        // SAFETY: `device` is a live device handle.
-        let code = unsafe { ffi::rtcGetDeviceError(self.device) };
-        if code != ffi::RTC_ERROR_NONE {
-            bail!("Embree error {code} after {what}");
-        }
-        Ok(())
+        super::check(self.device, what)
     }
 
     fn ray(&self, o: DVec3, d: DVec3, t_min: f64, limit: f64) -> ffi::RTCRay {
