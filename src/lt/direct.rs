@@ -44,7 +44,7 @@ pub fn direct_irradiance(
             let n = n.normalize();
             let mut tally = RayTally::default();
             let mut delta = 0.0;
-            add_delta_lights(scene, p, n, None, &mut tally, &mut delta);
+            add_delta_lights(scene, scene, p, n, None, &mut tally, &mut delta);
             if !lights.any_area() {
                 return (
                     Irradiance {
@@ -58,7 +58,9 @@ pub fn direct_irradiance(
             let (mut mean, mut m2) = (0.0, 0.0);
             for k in 1..=area_samples {
                 let mut x = 0.0;
-                add_area_samples(scene, &lights, &mut rng, p, n, None, &mut tally, &mut x);
+                add_area_samples(
+                    scene, scene, &lights, &mut rng, p, n, None, &mut tally, &mut x,
+                );
                 let d = x - mean;
                 mean += d / k as f64;
                 m2 += d * (x - mean);

@@ -197,7 +197,7 @@ fn trace_point(
     let mut next = 0;
     let k_max = checkpoints[nc - 1];
     for k in 1..=k_max {
-        let x = reference::sample(scene, lights, &mut rng, p, n, &mut tally);
+        let x = reference::sample(scene, scene, lights, &mut rng, p, n, &mut tally);
         let delta = x - mean;
         mean += delta / k as f64;
         m2 += delta * (x - mean);

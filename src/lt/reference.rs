@@ -34,6 +34,7 @@ use glam::DVec3;
 use rand::Rng;
 use rayon::prelude::*;
 
+use super::cast::Caster;
 use super::{Light, Prim, Scene};
 use crate::sample::directions::{cosine_about, uniform_direction};
 use crate::sample::rng::{domain, stream};
@@ -58,10 +59,23 @@ pub fn irradiance(
     samples: u64,
     key: u64,
 ) -> Vec<Irradiance> {
+    irradiance_with(scene, scene, points, normals, samples, key).0
+}
+
+/// [`irradiance`] with the rays cast by `caster` (the scene's own core, or Embree in
+/// `raycost bench`), and the number of rays cast (path and shadow rays).
+pub fn irradiance_with<C: Caster>(
+    scene: &Scene,
+    caster: &C,
+    points: &[DVec3],
+    normals: &[DVec3],
+    samples: u64,
+    key: u64,
+) -> (Vec<Irradiance>, u64) {
     assert_eq!(points.len(), normals.len(), "one normal per point");
     assert!(samples >= 2, "a standard error needs two samples");
     let lights = Lights::new(scene);
-    points
+    let (est, rays): (Vec<Irradiance>, Vec<u64>) = points
         .par_iter()
         .zip(normals)
         .enumerate()
@@ -72,18 +86,20 @@ pub fn irradiance(
             let (mut mean, mut m2) = (0.0, 0.0);
             let mut tally = RayTally::default();
             for k in 0..samples {
-                let x = sample(scene, &lights, &mut rng, p, n, &mut tally);
+                let x = sample(scene, caster, &lights, &mut rng, p, n, &mut tally);
                 let delta = x - mean;
                 mean += delta / (k + 1) as f64;
                 m2 += delta * (x - mean);
             }
             let var = m2 / (samples - 1) as f64;
-            Irradiance {
+            let est = Irradiance {
                 mean,
                 se: (var / samples as f64).sqrt(),
-            }
+            };
+            (est, tally.total())
         })
-        .collect()
+        .unzip();
+    (est, rays.iter().sum())
 }
 
 /// Rays cast by an estimator, by purpose: continuation rays (a path's next surface) and shadow
@@ -151,8 +167,14 @@ fn eps(scene: &Scene) -> f64 {
 
 /// Is the straight path from `x` (leaving primitive `from`) to `y` (on primitive `to`, if any)
 /// free? Hits within ε of either end do not block (the surfaces the path starts and ends on).
-fn visible(
+///
+/// The rule is on the nearest hit h: blocked iff h.t < r − ε and not (h is `to` and
+/// h.t ≥ r·(1 − 10⁻⁹)). It is decided by a shadow ray (any hit before min(r − ε, r·(1 − 10⁻⁹))
+/// blocks) and, only if r·(1 − 10⁻⁹) < r − ε, the nearest hit in between: the same answer as
+/// finding the nearest hit, without ordering the hits before the first blocker.
+fn visible<C: Caster>(
     scene: &Scene,
+    caster: &C,
     x: DVec3,
     from: Option<Prim>,
     y: DVec3,
@@ -166,17 +188,25 @@ fn visible(
         return false;
     }
     let d = v / r;
+    let (end, on_target) = (r - e, r * (1.0 - 1e-9));
     tally.shadow += 1;
-    match scene.first_hit(x, d, e, from) {
-        None => true,
-        Some(h) => h.t >= r - e || (Some(h.prim) == to && h.t >= r * (1.0 - 1e-9)),
+    if caster.occluded(x, d, e, end.min(on_target), from) {
+        return false;
     }
+    if on_target >= end {
+        return true;
+    }
+    caster
+        .first_hit_before(x, d, e, end, from)
+        .is_none_or(|h| Some(h.prim) == to)
 }
 
 /// The direct irradiance at `x` with unit normal `n` (leaving primitive `from`): every point and
 /// spot light exactly, one area sample per area light.
-fn direct<R: Rng + ?Sized>(
+#[allow(clippy::too_many_arguments)] // the vertex (x, n, from), the caster and the sinks are distinct
+fn direct<R: Rng + ?Sized, C: Caster>(
     scene: &Scene,
+    caster: &C,
     lights: &Lights,
     rng: &mut R,
     x: DVec3,
@@ -187,15 +217,16 @@ fn direct<R: Rng + ?Sized>(
     // One accumulator through both parts, in this order: the sum is the same float as before the
     // parts were split out.
     let mut e = 0.0;
-    add_delta_lights(scene, x, n, from, tally, &mut e);
-    add_area_samples(scene, lights, rng, x, n, from, tally, &mut e);
+    add_delta_lights(scene, caster, x, n, from, tally, &mut e);
+    add_area_samples(scene, caster, lights, rng, x, n, from, tally, &mut e);
     e
 }
 
 /// Adds to `e` the irradiance at `x` (unit normal `n`, leaving primitive `from`) from every point
 /// and spot light, exactly (one shadow ray each that faces `x`): no random draw.
-pub fn add_delta_lights(
+pub fn add_delta_lights<C: Caster>(
     scene: &Scene,
+    caster: &C,
     x: DVec3,
     n: DVec3,
     from: Option<Prim>,
@@ -223,7 +254,7 @@ pub fn add_delta_lights(
         let v = position - x;
         let r2 = v.length_squared();
         let cos = n.dot(v) / r2.sqrt();
-        if cos > 0.0 && visible(scene, x, from, position, None, tally) {
+        if cos > 0.0 && visible(scene, caster, x, from, position, None, tally) {
             *e += intensity * cos / r2;
         }
     }
@@ -232,8 +263,9 @@ pub fn add_delta_lights(
 /// Adds to `e` one unbiased sample of the irradiance at `x` (unit normal `n`, leaving primitive
 /// `from`) from every area light: a point uniform over each light's area, one shadow ray each.
 #[allow(clippy::too_many_arguments)] // the vertex (x, n, from) and the sinks (tally, e) are distinct
-pub fn add_area_samples<R: Rng + ?Sized>(
+pub fn add_area_samples<R: Rng + ?Sized, C: Caster>(
     scene: &Scene,
+    caster: &C,
     lights: &Lights,
     rng: &mut R,
     x: DVec3,
@@ -273,7 +305,7 @@ pub fn add_area_samples<R: Rng + ?Sized>(
         let cos_x = n.dot(v) / r;
         // One-sided: x must lie on the emitting side of the light.
         let cos_y = -ny.dot(v) / r;
-        if cos_x > 0.0 && cos_y > 0.0 && visible(scene, x, from, y, Some(prim), tally) {
+        if cos_x > 0.0 && cos_y > 0.0 && visible(scene, caster, x, from, y, Some(prim), tally) {
             *e += le * cos_x * cos_y / r2 * total;
         }
     }
@@ -281,8 +313,9 @@ pub fn add_area_samples<R: Rng + ?Sized>(
 
 /// One sample of the irradiance at `p` with unit normal `n` (see the module doc), counting the
 /// rays it casts in `tally`.
-pub fn sample<R: Rng + ?Sized>(
+pub fn sample<R: Rng + ?Sized, C: Caster>(
     scene: &Scene,
+    caster: &C,
     lights: &Lights,
     rng: &mut R,
     p: DVec3,
@@ -293,13 +326,13 @@ pub fn sample<R: Rng + ?Sized>(
     let (mut x, mut nx, mut from) = (p, n, None);
     let mut total = 0.0;
     for bounce in 0..=MAX_BOUNCES {
-        total += direct(scene, lights, rng, x, nx, from, tally);
+        total += direct(scene, caster, lights, rng, x, nx, from, tally);
         if bounce == MAX_BOUNCES {
             break;
         }
         let d = cosine_about(rng, nx);
         tally.path += 1;
-        let Some(h) = scene.first_hit(x, d, e, from) else {
+        let Some(h) = caster.first_hit(x, d, e, from) else {
             break;
         };
         if rng.gen::<f64>() >= scene.surfaces[h.surface as usize].albedo {
