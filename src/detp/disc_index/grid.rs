@@ -94,7 +94,7 @@ impl DiscIndex for GridIndex {
         &self.reach
     }
 
-    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, f: &mut dyn FnMut(u32)) -> Walk {
+    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, out: &mut Vec<u32>) -> Walk {
         mailbox.clear();
         let v = seg.d();
         let len = v.length();
@@ -119,7 +119,7 @@ impl DiscIndex for GridIndex {
             let s = ((cell[2] * self.dims[1] + cell[1]) * self.dims[0] + cell[0]) as usize;
             for &i in &self.items[self.offsets[s] as usize..self.offsets[s + 1] as usize] {
                 if mailbox.insert(i) {
-                    f(i);
+                    out.push(i);
                 }
             }
         }

@@ -23,6 +23,7 @@
 
 pub mod grid;
 pub mod octree;
+pub mod slab;
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -91,9 +92,9 @@ pub trait DiscIndex: Sync {
     /// The index's reach (see the module doc): pad, centre and the origin radius R.
     fn reach(&self) -> &Reach;
 
-    /// Calls `f` with every candidate disc of `seg` (each once, thanks to `mailbox`, which is
+    /// Appends to `out` every candidate disc of `seg` (each once, thanks to `mailbox`, which is
     /// started afresh here) and returns what the walk cost. Only for segments within the reach.
-    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, f: &mut dyn FnMut(u32)) -> Walk;
+    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, out: &mut Vec<u32>) -> Walk;
 
     /// Bytes held by the index (discs included).
     fn bytes(&self) -> usize;
@@ -109,54 +110,98 @@ pub trait DiscIndex: Sync {
     ) -> IndexStats {
         let discs = self.discs();
         assert!(acc.len() >= discs.len(), "one accumulator per disc");
-        let n = segments.map_or(store.len(), <[u32]>::len);
-        let seg_at = |k: usize| &store.segments[segments.map_or(k, |s| s[k] as usize)];
-        let (sums, stats) = (0..n)
-            .into_par_iter()
-            .with_min_len(1 << 12)
-            .fold(
-                || {
-                    (
-                        vec![0 as Acc; discs.len()],
-                        Mailbox::new(discs.len()),
-                        IndexStats::default(),
-                    )
-                },
-                |(mut sums, mut mb, mut st), k| {
-                    let s = seg_at(k);
-                    let mut test = |i: u32| {
-                        st.ray_disc_tests += 1;
-                        let [c, n] = discs.packed[i as usize];
-                        let r = discs.discs.radius_of(i as usize);
-                        // The very call `Discs::crossed_by` makes, on exact copies of the values.
-                        if crosses(s.o(), s.d(), s.t_end(), c, n, r) {
-                            add(&mut sums[i as usize], s.power, sign);
-                        }
-                    };
-                    if self.reach().holds(s.o()) {
-                        let w = self.candidates(s, &mut mb, &mut test);
-                        st.nodes_visited += w.entered;
-                        st.box_tests += w.box_tests;
-                        st.dda_steps += w.steps;
-                    } else {
-                        (0..discs.len() as u32).for_each(test);
+        let (sums, stats) = walk_segments(
+            self,
+            store,
+            segments,
+            || vec![0 as Acc; discs.len()],
+            |sums, s, cands| {
+                for &i in cands {
+                    let [c, n] = discs.packed[i as usize];
+                    let r = discs.discs.radius_of(i as usize);
+                    // The very call `Discs::crossed_by` makes, on exact copies of the values.
+                    if crosses(s.o(), s.d(), s.t_end(), c, n, r) {
+                        add(&mut sums[i as usize], s.power, sign);
                     }
-                    (sums, mb, st)
-                },
-            )
-            .map(|(sums, _, st)| (sums, st))
-            .reduce(
-                || (vec![0; discs.len()], IndexStats::default()),
-                |(mut a, sa), (b, sb)| {
-                    a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
-                    (a, sa.merge(sb))
-                },
-            );
+                }
+            },
+            |a, b| a.iter_mut().zip(b).for_each(|(x, y)| *x += y),
+        );
         for (&i, s) in discs.original.iter().zip(sums) {
             acc[i as usize] += s;
         }
         stats
     }
+
+    /// **Traversal alone**, for timing it (eq. 8 assumes it negligible): walks the index for every
+    /// segment exactly as [`DiscIndex::accumulate`] does — the same cells or nodes, box tests, DDA
+    /// steps, mailbox and candidate lists — but tests no disc and adds nothing. Returns the
+    /// counters `accumulate` would return, `ray_disc_tests` included (the candidates it would have
+    /// tested), so that seconds(accumulate) − seconds(traversal_only) is the disc tests' share.
+    fn traversal_only(&self, store: &SegmentStore, segments: Option<&[u32]>) -> IndexStats {
+        walk_segments(
+            self,
+            store,
+            segments,
+            || 0u64,
+            |n, _, c| *n += c.len() as u64,
+            |a, b| *a += b,
+        )
+        .1
+    }
+}
+
+/// The per-segment driver shared by [`DiscIndex::accumulate`] and [`DiscIndex::traversal_only`]:
+/// walks each segment (all, or those in `segments`) in parallel and hands its candidates to
+/// `test`, with one state `T` per worker, merged by `merge`. A segment starting outside the reach
+/// gets every disc as a candidate.
+fn walk_segments<I, T, N, F, M>(
+    ix: &I,
+    store: &SegmentStore,
+    segments: Option<&[u32]>,
+    init: N,
+    test: F,
+    merge: M,
+) -> (T, IndexStats)
+where
+    I: DiscIndex + ?Sized,
+    T: Send,
+    N: Fn() -> T + Sync + Send,
+    F: Fn(&mut T, &Segment, &[u32]) + Sync + Send,
+    M: Fn(&mut T, T) + Sync + Send,
+{
+    let nd = ix.discs().len();
+    let n = segments.map_or(store.len(), <[u32]>::len);
+    let seg_at = |k: usize| &store.segments[segments.map_or(k, |s| s[k] as usize)];
+    let (state, stats, _, _) = (0..n)
+        .into_par_iter()
+        .with_min_len(1 << 12)
+        .fold(
+            || (init(), IndexStats::default(), Mailbox::new(nd), Vec::new()),
+            |(mut t, mut st, mut mb, mut cands), k| {
+                let s = seg_at(k);
+                cands.clear();
+                if ix.reach().holds(s.o()) {
+                    let w = ix.candidates(s, &mut mb, &mut cands);
+                    st.nodes_visited += w.entered;
+                    st.box_tests += w.box_tests;
+                    st.dda_steps += w.steps;
+                } else {
+                    cands.extend(0..nd as u32);
+                }
+                st.ray_disc_tests += cands.len() as u64;
+                test(&mut t, s, &cands);
+                (t, st, mb, cands)
+            },
+        )
+        .reduce(
+            || (init(), IndexStats::default(), Mailbox::new(0), Vec::new()),
+            |(mut a, sa, mb, c), (b, sb, _, _)| {
+                merge(&mut a, b);
+                (a, sa.merge(sb), mb, c)
+            },
+        );
+    (state, stats)
 }
 
 /// The discs of an index, renumbered along a Hilbert curve through their centres and packed
