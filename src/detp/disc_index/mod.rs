@@ -21,14 +21,16 @@
 //! P, and reaches the disc. Segments starting farther than R (none in the scenes studied: photons
 //! start on the scene's surfaces) are tested against every disc, which is trivially conservative.
 
+pub mod cross;
 pub mod grid;
 pub mod octree;
+pub mod path;
 pub mod slab;
 
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::disc::{crosses, Discs};
+use super::disc::Discs;
 use super::fixed::{add, Acc};
 use super::order::{permutation, Order};
 use super::store::{Segment, SegmentStore};
@@ -36,6 +38,7 @@ use crate::geom::Aabb;
 
 pub use grid::GridIndex;
 pub use octree::Octree;
+pub use path::SimdPath;
 
 /// What one segment's walk through an index cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -99,6 +102,9 @@ pub trait DiscIndex: Sync {
     /// Bytes held by the index (discs included).
     fn bytes(&self) -> usize;
 
+    /// The SIMD path of the index's kernels (all paths give the same answers and counts).
+    fn path(&self) -> SimdPath;
+
     /// Adds `sign ×` the power of each segment (all, or those listed in `segments`) to every disc
     /// it crosses. Parallel over segments; integer sums make the result order-free.
     fn accumulate(
@@ -115,15 +121,11 @@ pub trait DiscIndex: Sync {
             store,
             segments,
             || vec![0 as Acc; discs.len()],
+            // `crosses` on exact copies of the discs' values: `Discs::crossed_by`'s decisions.
             |sums, s, cands| {
-                for &i in cands {
-                    let [c, n] = discs.packed[i as usize];
-                    let r = discs.discs.radius_of(i as usize);
-                    // The very call `Discs::crossed_by` makes, on exact copies of the values.
-                    if crosses(s.o(), s.d(), s.t_end(), c, n, r) {
-                        add(&mut sums[i as usize], s.power, sign);
-                    }
-                }
+                cross::crossed(self.path(), s, discs, cands, &mut |i| {
+                    add(&mut sums[i as usize], s.power, sign);
+                });
             },
             |a, b| a.iter_mut().zip(b).for_each(|(x, y)| *x += y),
         );
@@ -287,6 +289,29 @@ impl Mailbox {
             self.seen.iter_mut().for_each(|s| *s = 0);
             self.stamp = 1;
         }
+    }
+
+    /// Appends to `out` the discs of `items` not yet seen for this segment, and marks them. Without
+    /// a branch per disc: whether a disc is new is a coin flip along a walk (the branchy loop
+    /// mispredicted on about every other listing), so each disc is written and `out` grows by one
+    /// only if it was new.
+    #[inline]
+    pub fn collect(&mut self, items: &[u32], out: &mut Vec<u32>) {
+        out.reserve(items.len());
+        let mut len = out.len();
+        let spare = out.spare_capacity_mut().as_mut_ptr();
+        let base = len;
+        for &i in items {
+            let s = &mut self.seen[i as usize];
+            let new = *s != self.stamp;
+            *s = self.stamp;
+            // SAFETY: `len − base < items.len()` ≤ the spare capacity reserved above.
+            unsafe { (*spare.add(len - base)).write(i) };
+            len += usize::from(new);
+        }
+        // SAFETY: the first `len` elements are initialised (those before `base` were; every
+        // element in `base..len` was written above).
+        unsafe { out.set_len(len) };
     }
 
     /// Marks disc `i`; true if it was not yet tested for this segment.

@@ -10,7 +10,7 @@
 //!
 //! # Layout and speed
 //! The eight children of an inner node are one [`Boxes8`] block (448 bytes, structure of arrays),
-//! tested together by one eight-lane slab test ([`SlabPath`]: AVX-512, AVX2 or scalar, all deciding
+//! tested together by one eight-lane slab test ([`SimdPath`]: AVX-512, AVX2 or scalar, all deciding
 //! as [`super::clip`] does, bit for bit) with the segment's reciprocals computed once. The first
 //! version popped each child from a stack and clipped it alone (three divisions and NaN-aware
 //! min/max per box, ≈ 200 instructions; 78 % of a 10⁴-disc, leaf-8 run). The counters are those of
@@ -19,7 +19,8 @@
 
 use glam::DVec3;
 
-use super::slab::{Boxes8, SlabPath, SlabRay};
+use super::slab::{Boxes8, SlabRay};
+use super::SimdPath;
 use super::{DiscIndex, LocalDiscs, Mailbox, Reach, Walk};
 use crate::detp::disc::Discs;
 use crate::detp::store::Segment;
@@ -52,7 +53,7 @@ pub struct Octree {
     /// an inner child's `first` naming its own block.
     blocks: Vec<Boxes8>,
     items: Vec<u32>,
-    path: SlabPath,
+    path: SimdPath,
 }
 
 /// The octree as built: nodes in creation order (children of a node contiguous).
@@ -124,15 +125,15 @@ impl Octree {
             root: block_of(&t.nodes[0]),
             blocks,
             items: t.items,
-            path: SlabPath::detect(),
+            path: SimdPath::detect(),
         }
     }
 
-    /// The same octree walked by `path` (tests force every path this CPU has).
+    /// The same octree with its kernels on `path` (tests force every path this CPU has).
     ///
     /// # Panics
     /// If this CPU cannot run `path`.
-    pub fn with_path(mut self, path: SlabPath) -> Self {
+    pub fn with_path(mut self, path: SimdPath) -> Self {
         assert!(path.is_available(), "slab path {path:?} not available");
         self.path = path;
         self
@@ -146,11 +147,7 @@ impl Octree {
     /// Reports leaf `first..first + count`'s discs not yet seen for this segment.
     #[inline]
     fn leaf(&self, first: u32, count: u32, mailbox: &mut Mailbox, out: &mut Vec<u32>) {
-        for &i in &self.items[first as usize..(first + count) as usize] {
-            if mailbox.insert(i) {
-                out.push(i);
-            }
-        }
+        mailbox.collect(&self.items[first as usize..(first + count) as usize], out);
     }
 }
 
@@ -259,7 +256,86 @@ impl DiscIndex for Octree {
         walk
     }
 
+    fn path(&self) -> SimdPath {
+        self.path
+    }
+
     fn bytes(&self) -> usize {
         self.nodes() * std::mem::size_of::<Node>() + self.items.len() * 4 + self.discs.bytes()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::clip;
+    use super::super::tests::{adversarial_segments, scene};
+    use super::*;
+
+    /// The first version's walk, kept as the oracle of the counters: every node popped from a
+    /// stack and clipped alone (`clip` per box), children pushed in order.
+    fn reference(t: &Octree, seg: &Segment, mailbox: &mut Mailbox) -> (Walk, Vec<u32>) {
+        mailbox.clear();
+        let (o, v, t_end) = (seg.o(), seg.d(), seg.t_end());
+        let mut walk = Walk::default();
+        let mut out = Vec::new();
+        let mut stack = vec![t.root];
+        while let Some(n) = stack.pop() {
+            walk.box_tests += 1;
+            if clip(o, v, &Aabb::new(n.lo, n.hi), 0.0, t_end).is_none() {
+                continue;
+            }
+            walk.entered += 1;
+            if n.count == INNER {
+                let b = &t.blocks[n.first as usize];
+                for l in 0..8 {
+                    stack.push(Node {
+                        lo: DVec3::new(b.lo[0][l], b.lo[1][l], b.lo[2][l]),
+                        hi: DVec3::new(b.hi[0][l], b.hi[1][l], b.hi[2][l]),
+                        first: b.first[l],
+                        count: b.count[l],
+                    });
+                }
+            } else {
+                for &i in &t.items[n.first as usize..(n.first + n.count) as usize] {
+                    if mailbox.insert(i) {
+                        out.push(i);
+                    }
+                }
+            }
+        }
+        out.sort_unstable();
+        (walk, out)
+    }
+
+    #[test]
+    fn every_path_walks_as_the_reference_walk_does() {
+        let (store, discs) = scene(3_000, 2_000, 0.03, 7);
+        for (leaf, side) in [(8, 0.06), (32, 0.06), (1, 0.2), (4000, 0.06)] {
+            let base = Octree::build(&discs, leaf, side);
+            let segs: Vec<Segment> = store
+                .segments
+                .iter()
+                .copied()
+                .chain(adversarial_segments(&base.discs.discs, 11))
+                .collect();
+            let mut mb = Mailbox::new(discs.len());
+            let want: Vec<(Walk, Vec<u32>)> =
+                segs.iter().map(|s| reference(&base, s, &mut mb)).collect();
+            let deep = want.iter().any(|w| w.0.entered > 3);
+            assert_eq!(
+                deep,
+                leaf < 4000,
+                "leaf {leaf}: walks go deep below the root"
+            );
+            for path in SimdPath::all_available() {
+                let t = Octree::build(&discs, leaf, side).with_path(path);
+                for (k, (s, w)) in segs.iter().zip(&want).enumerate() {
+                    let mut got = Vec::new();
+                    let walk = t.candidates(s, &mut mb, &mut got);
+                    got.sort_unstable();
+                    assert_eq!((walk, got), w.clone(), "{path:?}, leaf {leaf}, segment {k}");
+                }
+            }
+        }
     }
 }

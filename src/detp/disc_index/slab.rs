@@ -17,7 +17,7 @@
 
 use glam::DVec3;
 
-use super::clip;
+use super::{clip, SimdPath};
 use crate::detp::store::Segment;
 use crate::geom::Aabb;
 
@@ -99,68 +99,13 @@ pub struct Boxes8 {
 
 const _: () = assert!(std::mem::size_of::<Boxes8>() == 448);
 
-/// Which implementation of the eight-box test runs (all decide identically).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SlabPath {
-    /// One 8-lane f64 vector per quantity (x86_64 with AVX-512 F).
-    Avx512,
-    /// Two 4-lane f64 vectors per quantity (x86_64 with AVX).
-    Avx2,
-    /// One lane at a time.
-    Scalar,
-}
-
-impl SlabPath {
-    /// The fastest path this CPU has, unless `RAYCOST_DISC_SIMD` (`avx512`, `avx2` or `scalar`)
-    /// names another one it can run.
-    pub fn detect() -> Self {
-        let forced = match std::env::var("RAYCOST_DISC_SIMD").as_deref() {
-            Ok("avx512") => Some(Self::Avx512),
-            Ok("avx2") => Some(Self::Avx2),
-            Ok("scalar") => Some(Self::Scalar),
-            _ => None,
-        };
-        forced
-            .filter(|p| p.is_available())
-            .unwrap_or_else(|| Self::all_available()[0])
-    }
-
-    /// Every path this CPU can run, fastest first.
-    pub fn all_available() -> Vec<Self> {
-        [Self::Avx512, Self::Avx2, Self::Scalar]
-            .into_iter()
-            .filter(|p| p.is_available())
-            .collect()
-    }
-
-    /// Can this CPU run the path?
-    pub fn is_available(self) -> bool {
-        match self {
-            Self::Scalar => true,
-            #[cfg(target_arch = "x86_64")]
-            Self::Avx512 => is_x86_feature_detected!("avx512f"),
-            #[cfg(target_arch = "x86_64")]
-            Self::Avx2 => is_x86_feature_detected!("avx2"),
-            #[cfg(not(target_arch = "x86_64"))]
-            _ => false,
-        }
-    }
-
-    /// Name for reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Avx512 => "avx512",
-            Self::Avx2 => "avx2",
-            Self::Scalar => "scalar",
-        }
-    }
-
+impl SimdPath {
     /// Bit l set iff the segment meets box l (as `clip` decides it).
     #[inline]
     pub fn test8(self, r: &SlabRay, b: &Boxes8) -> u8 {
         match self {
             #[cfg(target_arch = "x86_64")]
-            // SAFETY: a `SlabPath` other than `Scalar` is only used where `is_available` held
+            // SAFETY: a `SimdPath` other than `Scalar` is only used where `is_available` held
             // (`detect`, `all_available`; the octree checks a forced path).
             Self::Avx512 => unsafe { x86::test8_avx512(r, b) },
             #[cfg(target_arch = "x86_64")]
@@ -203,36 +148,34 @@ mod x86 {
     }
 
     /// # Safety
-    /// The CPU must have AVX (every AVX2 CPU has it).
-    #[target_feature(enable = "avx")]
+    /// The CPU must have AVX2.
+    #[target_feature(enable = "avx2")]
     pub unsafe fn test8_avx2(r: &SlabRay, b: &Boxes8) -> u8 {
-        let mut mask = 0u8;
-        for half in 0..2 {
-            let mut t0 = _mm256_setzero_pd();
-            let mut t1 = _mm256_set1_pd(r.t_end);
-            let mut inside = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
-            for k in 0..3 {
-                let lo = _mm256_load_pd(b.lo[k].as_ptr().add(4 * half));
-                let hi = _mm256_load_pd(b.hi[k].as_ptr().add(4 * half));
-                let o = _mm256_set1_pd(r.o[k]);
+        let mut t0 = [_mm256_setzero_pd(); 2];
+        let mut t1 = [_mm256_set1_pd(r.t_end); 2];
+        let mut inside = [_mm256_castsi256_pd(_mm256_set1_epi64x(-1)); 2];
+        for k in 0..3 {
+            let o = _mm256_set1_pd(r.o[k]);
+            let inv = _mm256_set1_pd(r.inv[k]);
+            for h in 0..2 {
+                let lo = _mm256_load_pd(b.lo[k].as_ptr().add(4 * h));
+                let hi = _mm256_load_pd(b.hi[k].as_ptr().add(4 * h));
                 if r.flat[k] {
                     let ok = _mm256_and_pd(
                         _mm256_cmp_pd::<_CMP_GE_OQ>(o, lo),
                         _mm256_cmp_pd::<_CMP_LE_OQ>(o, hi),
                     );
-                    inside = _mm256_and_pd(inside, ok);
+                    inside[h] = _mm256_and_pd(inside[h], ok);
                     continue;
                 }
-                let inv = _mm256_set1_pd(r.inv[k]);
                 let a = _mm256_mul_pd(_mm256_sub_pd(lo, o), inv);
                 let c = _mm256_mul_pd(_mm256_sub_pd(hi, o), inv);
-                t0 = _mm256_max_pd(t0, _mm256_min_pd(a, c));
-                t1 = _mm256_min_pd(t1, _mm256_max_pd(a, c));
+                t0[h] = _mm256_max_pd(t0[h], _mm256_min_pd(a, c));
+                t1[h] = _mm256_min_pd(t1[h], _mm256_max_pd(a, c));
             }
-            let pass = _mm256_and_pd(inside, _mm256_cmp_pd::<_CMP_LE_OQ>(t0, t1));
-            mask |= (_mm256_movemask_pd(pass) as u8) << (4 * half);
         }
-        mask
+        let pass = |h: usize| _mm256_and_pd(inside[h], _mm256_cmp_pd::<_CMP_LE_OQ>(t0[h], t1[h]));
+        (_mm256_movemask_pd(pass(0)) | _mm256_movemask_pd(pass(1)) << 4) as u8
     }
 }
 
@@ -249,7 +192,7 @@ mod tests {
     fn every_path_decides_as_clip_does() {
         let mut rng = stream(&[0x51ab, 1]);
         let grid = [-1.0, -0.5, 0.0, 0.25, 0.5, 1.0];
-        let mut pick = |rng: &mut crate::sample::rng::Stream| -> f64 {
+        let pick = |rng: &mut crate::sample::rng::Stream| -> f64 {
             if rng.gen_bool(0.5) {
                 grid[rng.gen_range(0..grid.len())]
             } else {
@@ -310,7 +253,7 @@ mod tests {
             }
             met += want.count_ones();
             missed += 8 - want.count_ones();
-            for path in SlabPath::all_available() {
+            for path in SimdPath::all_available() {
                 assert_eq!(path.test8(&ray, &b), want, "{path:?}, case {case}");
             }
         }
