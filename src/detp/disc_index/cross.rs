@@ -46,6 +46,35 @@ pub fn crossed(
     scalar(seg, discs, &cands[done..], hit);
 }
 
+/// Calls `hit(k)` for every segment `segs[k]` (k in `idx`) that crosses the disc (c, n, d)
+/// ([`crosses`]' decision), in the order of `idx`: the sphere cache's test of a point against its
+/// deepest list, the segments' fields gathered from the store, four or eight at a time.
+#[inline]
+pub fn crossing_segments(
+    path: SimdPath,
+    segs: &[Segment],
+    idx: &[u32],
+    disc: (DVec3, DVec3, f64),
+    hit: &mut impl FnMut(u32),
+) {
+    let done = match path {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as in `crossed`.
+        SimdPath::Avx512 => unsafe { x86::segments_avx512(segs, idx, disc, hit) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as in `crossed`.
+        SimdPath::Avx2 => unsafe { x86::segments_avx2(segs, idx, disc, hit) },
+        _ => 0,
+    };
+    let (c, n, d) = disc;
+    for &k in &idx[done..] {
+        let s = &segs[k as usize];
+        if crosses(s.o(), s.d(), s.t_end(), c, n, d) {
+            hit(k);
+        }
+    }
+}
+
 /// One candidate at a time (the portable path and the vector paths' tails).
 #[inline]
 fn scalar(seg: &Segment, discs: &LocalDiscs, cands: &[u32], hit: &mut impl FnMut(u32)) {
@@ -69,7 +98,179 @@ fn parts(seg: &Segment) -> ([f64; 3], [f64; 3], f64) {
 mod x86 {
     use std::arch::x86_64::*;
 
+    use glam::DVec3;
+
     use super::{parts, LocalDiscs, Segment};
+
+    /// Byte offsets of a segment's origin, direction and end in the store.
+    const O: i64 = std::mem::offset_of!(Segment, origin) as i64;
+    const D: i64 = std::mem::offset_of!(Segment, dir) as i64;
+    const TE: i64 = std::mem::offset_of!(Segment, t_end) as i64;
+    const SIZE: i64 = std::mem::size_of::<Segment>() as i64;
+
+    /// `crosses` for segments `idx` (gathered from `segs`, 8 at a time) against one disc; returns
+    /// how many it decided.
+    ///
+    /// # Safety
+    /// The CPU must have AVX-512 F; every index in `idx` must be below `segs.len()`.
+    #[target_feature(enable = "avx512f")]
+    pub unsafe fn segments_avx512(
+        segs: &[Segment],
+        idx: &[u32],
+        (c, n, d): (DVec3, DVec3, f64),
+        hit: &mut impl FnMut(u32),
+    ) -> usize {
+        let base = segs.as_ptr().cast::<u8>();
+        let (cx, cy, cz) = (
+            _mm512_set1_pd(c.x),
+            _mm512_set1_pd(c.y),
+            _mm512_set1_pd(c.z),
+        );
+        let (nx, ny, nz) = (
+            _mm512_set1_pd(n.x),
+            _mm512_set1_pd(n.y),
+            _mm512_set1_pd(n.z),
+        );
+        let dd = _mm512_set1_pd(d * d);
+        let zero = _mm512_setzero_pd();
+        let size = _mm512_set1_epi64(SIZE);
+        debug_assert!(idx.iter().all(|&k| (k as usize) < segs.len()));
+        let mut j = 0;
+        while j + 8 <= idx.len() {
+            let k = _mm512_cvtepu32_epi64(_mm256_loadu_si256(idx.as_ptr().add(j).cast()));
+            // k·SIZE: `mul_epu32` multiplies the low 32 bits of each 64-bit lane (all of k) into
+            // a 64-bit product (AVX-512 F; `mullo_epi64` would need DQ).
+            let at = _mm512_mul_epu32(k, size);
+            let g64 = |off: i64| {
+                _mm512_i64gather_pd::<1>(_mm512_add_epi64(at, _mm512_set1_epi64(off)), base.cast())
+            };
+            let g32 = |off: i64| {
+                _mm512_cvtps_pd(_mm512_i64gather_ps::<1>(
+                    _mm512_add_epi64(at, _mm512_set1_epi64(off)),
+                    base.cast(),
+                ))
+            };
+            let (ox, oy, oz) = (g64(O), g64(O + 8), g64(O + 16));
+            let (vx, vy, vz) = (g32(D), g32(D + 4), g32(D + 8));
+            let te = g32(TE);
+            let denom = _mm512_add_pd(
+                _mm512_add_pd(_mm512_mul_pd(vx, nx), _mm512_mul_pd(vy, ny)),
+                _mm512_mul_pd(vz, nz),
+            );
+            let (wx, wy, wz) = (
+                _mm512_sub_pd(cx, ox),
+                _mm512_sub_pd(cy, oy),
+                _mm512_sub_pd(cz, oz),
+            );
+            let num = _mm512_add_pd(
+                _mm512_add_pd(_mm512_mul_pd(wx, nx), _mm512_mul_pd(wy, ny)),
+                _mm512_mul_pd(wz, nz),
+            );
+            let t = _mm512_div_pd(num, denom);
+            let x = _mm512_sub_pd(_mm512_mul_pd(vx, t), wx);
+            let y = _mm512_sub_pd(_mm512_mul_pd(vy, t), wy);
+            let z = _mm512_sub_pd(_mm512_mul_pd(vz, t), wz);
+            let len2 = _mm512_add_pd(
+                _mm512_add_pd(_mm512_mul_pd(x, x), _mm512_mul_pd(y, y)),
+                _mm512_mul_pd(z, z),
+            );
+            let mut m = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(denom, zero)
+                & _mm512_cmp_pd_mask::<_CMP_LT_OQ>(num, zero)
+                & _mm512_cmp_pd_mask::<_CMP_LE_OQ>(t, te)
+                & _mm512_cmp_pd_mask::<_CMP_LE_OQ>(len2, dd);
+            while m != 0 {
+                hit(idx[j + m.trailing_zeros() as usize]);
+                m &= m - 1;
+            }
+            j += 8;
+        }
+        j
+    }
+
+    /// [`segments_avx512`] 4 at a time.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2; every index in `idx` must be below `segs.len()`.
+    #[target_feature(enable = "avx2")]
+    pub unsafe fn segments_avx2(
+        segs: &[Segment],
+        idx: &[u32],
+        (c, n, d): (DVec3, DVec3, f64),
+        hit: &mut impl FnMut(u32),
+    ) -> usize {
+        let base = segs.as_ptr().cast::<u8>();
+        let (cx, cy, cz) = (
+            _mm256_set1_pd(c.x),
+            _mm256_set1_pd(c.y),
+            _mm256_set1_pd(c.z),
+        );
+        let (nx, ny, nz) = (
+            _mm256_set1_pd(n.x),
+            _mm256_set1_pd(n.y),
+            _mm256_set1_pd(n.z),
+        );
+        let dd = _mm256_set1_pd(d * d);
+        let zero = _mm256_setzero_pd();
+        let size = _mm256_set1_epi64x(SIZE);
+        debug_assert!(idx.iter().all(|&k| (k as usize) < segs.len()));
+        let mut j = 0;
+        while j + 4 <= idx.len() {
+            let k = _mm256_cvtepu32_epi64(_mm_loadu_si128(idx.as_ptr().add(j).cast()));
+            // k·SIZE without a 64-bit multiply: k < 2³², SIZE < 2³¹, `mul_epu32` takes the low
+            // 32 bits of each 64-bit lane and forms the full 64-bit product.
+            let at = _mm256_mul_epu32(k, size);
+            let g64 = |off: i64| {
+                _mm256_i64gather_pd::<1>(base.cast(), _mm256_add_epi64(at, _mm256_set1_epi64x(off)))
+            };
+            let g32 = |off: i64| {
+                _mm256_cvtps_pd(_mm256_i64gather_ps::<1>(
+                    base.cast(),
+                    _mm256_add_epi64(at, _mm256_set1_epi64x(off)),
+                ))
+            };
+            let (ox, oy, oz) = (g64(O), g64(O + 8), g64(O + 16));
+            let (vx, vy, vz) = (g32(D), g32(D + 4), g32(D + 8));
+            let te = g32(TE);
+            let denom = _mm256_add_pd(
+                _mm256_add_pd(_mm256_mul_pd(vx, nx), _mm256_mul_pd(vy, ny)),
+                _mm256_mul_pd(vz, nz),
+            );
+            let (wx, wy, wz) = (
+                _mm256_sub_pd(cx, ox),
+                _mm256_sub_pd(cy, oy),
+                _mm256_sub_pd(cz, oz),
+            );
+            let num = _mm256_add_pd(
+                _mm256_add_pd(_mm256_mul_pd(wx, nx), _mm256_mul_pd(wy, ny)),
+                _mm256_mul_pd(wz, nz),
+            );
+            let t = _mm256_div_pd(num, denom);
+            let x = _mm256_sub_pd(_mm256_mul_pd(vx, t), wx);
+            let y = _mm256_sub_pd(_mm256_mul_pd(vy, t), wy);
+            let z = _mm256_sub_pd(_mm256_mul_pd(vz, t), wz);
+            let len2 = _mm256_add_pd(
+                _mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(y, y)),
+                _mm256_mul_pd(z, z),
+            );
+            let ok = _mm256_and_pd(
+                _mm256_and_pd(
+                    _mm256_cmp_pd::<_CMP_LT_OQ>(denom, zero),
+                    _mm256_cmp_pd::<_CMP_LT_OQ>(num, zero),
+                ),
+                _mm256_and_pd(
+                    _mm256_cmp_pd::<_CMP_LE_OQ>(t, te),
+                    _mm256_cmp_pd::<_CMP_LE_OQ>(len2, dd),
+                ),
+            );
+            let mut m = _mm256_movemask_pd(ok) as u32;
+            while m != 0 {
+                hit(idx[j + m.trailing_zeros() as usize]);
+                m &= m - 1;
+            }
+            j += 4;
+        }
+        j
+    }
 
     /// Candidates in blocks of 8; returns how many it decided (the rest is the caller's tail).
     ///
@@ -281,5 +482,57 @@ mod tests {
             }
         }
         assert!(yes > 800 && no > 5_000, "{yes} crossings, {no} misses");
+    }
+
+    /// One disc against gathered segments (the sphere cache's deepest-list test): every path
+    /// reports exactly the segments `crosses` accepts, in order, with segments aimed at the rim.
+    #[test]
+    fn every_path_finds_the_segments_crosses_accepts() {
+        let mut rng = stream(&[0xc2055, 2]);
+        let mut segs = Vec::new();
+        for k in 0..3000u32 {
+            let o = uniform_on_sphere(&mut rng) * rng.gen_range(0.0..1.0);
+            let d = if k % 9 == 0 {
+                -DVec3::Z
+            } else {
+                uniform_on_sphere(&mut rng)
+            };
+            let t_end = if k % 3 == 0 {
+                f64::INFINITY
+            } else {
+                rng.gen_range(0.0..2.0)
+            };
+            segs.push(Segment::new(o, d, 0.0, t_end, 1, k));
+        }
+        let (mut yes, mut no) = (0, 0);
+        for case in 0..200 {
+            let c = uniform_on_sphere(&mut rng) * 0.2;
+            let n = if case % 5 == 0 {
+                DVec3::Z
+            } else {
+                uniform_on_sphere(&mut rng)
+            };
+            let d = rng.gen_range(0.05..0.6);
+            let len = rng.gen_range(0..segs.len());
+            let idx: Vec<u32> = (0..len)
+                .map(|_| rng.gen_range(0..segs.len() as u32))
+                .collect();
+            let want: Vec<u32> = idx
+                .iter()
+                .copied()
+                .filter(|&k| {
+                    let s = &segs[k as usize];
+                    crosses(s.o(), s.d(), s.t_end(), c, n, d)
+                })
+                .collect();
+            yes += want.len();
+            no += idx.len() - want.len();
+            for path in SimdPath::all_available() {
+                let mut got = Vec::new();
+                crossing_segments(path, &segs, &idx, (c, n, d), &mut |k| got.push(k));
+                assert_eq!(got, want, "{path:?}, case {case}");
+            }
+        }
+        assert!(yes > 5_000 && no > 5_000, "{yes} crossings, {no} misses");
     }
 }
