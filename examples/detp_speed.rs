@@ -6,7 +6,7 @@
 //! ```text
 //! cargo run --release --example detp_speed -- ENGINE [LOG2_RAYS] [POINTS] [REPEATS]
 //! ```
-//! ENGINE: `grid` (cells of width 2d), `octree` (leaves ≤ 32 discs, sides ≥ 2d: the bench's),
+//! ENGINE: `grid` (cells of width 2d; `gridK`: width K·d), `octree` (leaves ≤ 32 discs, sides ≥ 2d: the bench's),
 //! `octree8` (leaves ≤ 8: the quasi-static specs'), `cache` (sphere cache, Q = 2/3, threshold 100),
 //! `cache-q9` (Q = 0.9); an index engine with `-walk` appended (`grid-walk`, …) runs
 //! [`DiscIndex::traversal_only`]: the same walk, no disc tested. Defaults: 2¹⁶ lines, 10⁴ points, 1 repeat. Prints the counters (they must
@@ -57,6 +57,11 @@ fn main() {
     let t = Instant::now();
     let index: Option<Box<dyn DiscIndex>> = match engine.as_str() {
         "grid" => Some(Box::new(GridIndex::build(&discs, 2.0 * d))),
+        // `gridK`: cells of width K·d (the bench's grid is `grid2`).
+        e if e.starts_with("grid") => {
+            let k: f64 = e[4..].parse().expect("gridK with K a number");
+            Some(Box::new(GridIndex::build(&discs, k * d)))
+        }
         "octree" => Some(Box::new(Octree::build(&discs, 32, 2.0 * d))),
         "octree8" => Some(Box::new(Octree::build(&discs, 8, 2.0 * d))),
         "cache" | "cache-q9" => None,
