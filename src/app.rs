@@ -8,15 +8,15 @@ use crate::cli::{Cli, Command, EyeArg, TheoryCommand};
 use crate::error::Error;
 use crate::experiment::plan::Plan;
 use crate::experiment::runner::{self, RunOptions};
-use crate::scene::{RadiusClass, RadiusDist, RadiusDraw};
+use crate::sample::radius::{RadiusClass, RadiusDist, RadiusDraw};
 use crate::theory::grid::{self as th, Eye, GridTheoryInput};
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> crate::error::Result<()> {
     match cli.command {
         Command::Run(a) => {
-            thread_pool(a.threads)?;
-            let plan = Plan::load(&a.spec, &a.set)?;
+            let threads = thread_pool(a.threads)?;
+            let plan = Plan::load(&a.spec, &a.set, threads)?;
             let opts = RunOptions {
                 out: a.out,
                 force: a.force,
@@ -24,6 +24,7 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
                 quiet: a.quiet,
                 shard: a.shard,
                 sets: a.set,
+                threads,
             };
             let (written, summary) = runner::run(&plan, &opts)?;
             if !a.quiet {
@@ -36,7 +37,7 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             Ok(())
         }
         Command::Check(a) => {
-            let plan = Plan::load(&a.spec, &a.set)?;
+            let plan = Plan::load(&a.spec, &a.set, thread_pool(None)?)?;
             let text = if a.json {
                 json_text(&plan.describe_json())
             } else {
@@ -163,8 +164,8 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             m.quiet,
         )?),
         Command::Render(r) => {
-            thread_pool(r.threads)?;
-            let plan = Plan::load(&r.spec, &r.set)?;
+            let threads = thread_pool(r.threads)?;
+            let plan = Plan::load(&r.spec, &r.set, threads)?;
             let frames = match (r.frame, r.frames.is_empty()) {
                 (Some(f), _) => vec![f],
                 (None, true) => vec![0],
@@ -203,9 +204,14 @@ fn json_text(v: &serde_json::Value) -> String {
 }
 
 /// Starts the global thread pool with `n` threads (`--threads`), refusing 0 and more than 8 per
-/// CPU (which only add scheduling cost, and a huge count takes minutes to start).
-fn thread_pool(n: Option<usize>) -> crate::error::Result<()> {
-    let Some(n) = n else { return Ok(()) };
+/// CPU (which only add scheduling cost, and a huge count takes minutes to start). Returns the
+/// number of worker threads, which is then passed to whatever depends on it (memory needs, the
+/// metadata, timings), never read back from the pool; without `--threads`, rayon's default pool
+/// size.
+fn thread_pool(n: Option<usize>) -> crate::error::Result<usize> {
+    let Some(n) = n else {
+        return Ok(rayon::current_num_threads());
+    };
     if n == 0 {
         return Err(Error::Usage("--threads must be at least 1".into()));
     }
@@ -220,7 +226,7 @@ fn thread_pool(n: Option<usize>) -> crate::error::Result<()> {
         .num_threads(n)
         .build_global()
         .context("could not start the thread pool")?;
-    Ok(())
+    Ok(n)
 }
 
 /// An optional point given as X,Y,Z.

@@ -8,7 +8,6 @@ pub mod inputs;
 pub mod kind;
 pub mod lines_in_sphere;
 pub mod machine;
-pub mod metric;
 pub mod plan;
 pub mod quasi_static;
 pub mod reference;

@@ -31,6 +31,8 @@ pub struct Plan {
     pub normalized: toml::Table,
     /// SHA-256 of the normalised spec: identifies runs that can be resumed and merged.
     pub hash: String,
+    /// Worker threads the points will run on (their memory is checked for that many).
+    pub threads: usize,
 }
 
 impl std::fmt::Debug for Plan {
@@ -45,13 +47,14 @@ impl std::fmt::Debug for Plan {
 }
 
 impl Plan {
-    /// Reads `path` with the `--set` overrides and validates every point.
-    pub fn load(path: &Path, sets: &[String]) -> Result<Plan, InputError> {
-        Self::from_spec(Spec::read(path, sets)?)
+    /// Reads `path` with the `--set` overrides and validates every point, to run on `threads`
+    /// worker threads.
+    pub fn load(path: &Path, sets: &[String], threads: usize) -> Result<Plan, InputError> {
+        Self::from_spec(Spec::read(path, sets)?, threads)
     }
 
     /// Validates an expanded spec.
-    pub fn from_spec(spec: Spec) -> Result<Plan, InputError> {
+    pub fn from_spec(spec: Spec, threads: usize) -> Result<Plan, InputError> {
         let name = spec.experiment.kind.clone();
         let kind = registry::find(&name).ok_or_else(|| InputError {
             file: spec.path.clone(),
@@ -62,11 +65,15 @@ impl Plan {
                 registry::names()
             ),
         })?;
-        Self::with_kind(spec, kind)
+        Self::with_kind(spec, kind, threads)
     }
 
     /// Validates an expanded spec as kind `kind` (the registry's, or a test's own).
-    pub(crate) fn with_kind(spec: Spec, kind: &'static dyn DynKind) -> Result<Plan, InputError> {
+    pub(crate) fn with_kind(
+        spec: Spec,
+        kind: &'static dyn DynKind,
+        threads: usize,
+    ) -> Result<Plan, InputError> {
         // The file as written, by the kind's own struct: unknown keys and tables, wrong types and
         // out-of-range values, located by line and column.
         kind.check_text(&spec.text).map_err(|e| {
@@ -101,7 +108,7 @@ impl Plan {
                 ConfigError::Key(k) => spec.locate(Some(p.index), k),
                 ConfigError::Input(i) => i,
             })?;
-            check_memory(&spec, p.index, point.as_ref())?;
+            check_memory(&spec, p.index, point.as_ref(), threads)?;
             points.push(point);
         }
         let mut normalized = toml::Table::new();
@@ -126,6 +133,7 @@ impl Plan {
             inputs: inputs.files(),
             normalized,
             hash,
+            threads,
         })
     }
 
@@ -199,7 +207,7 @@ impl Plan {
                     })
                     .collect();
                 let work = point.work();
-                let memory = point.memory();
+                let memory = point.memory(self.threads);
                 let needs: Vec<serde_json::Value> = memory
                     .needs
                     .iter()
@@ -238,8 +246,13 @@ impl Plan {
 
 /// Refuses a point whose structures would not fit: over the spec's budget key, or over the memory
 /// this machine has available (the error names the spec key that drives the largest need).
-fn check_memory(spec: &Spec, index: usize, point: &dyn DynPoint) -> Result<(), InputError> {
-    let m = point.memory();
+fn check_memory(
+    spec: &Spec,
+    index: usize,
+    point: &dyn DynPoint,
+    threads: usize,
+) -> Result<(), InputError> {
+    let m = point.memory(threads);
     let Some(largest) = m.needs.iter().max_by(|a, b| a.bytes.total_cmp(&b.bytes)) else {
         return Ok(());
     };

@@ -7,10 +7,9 @@
 
 use std::fmt::Write as _;
 
-use super::kind::DynKind;
 use super::registry::KINDS;
 use crate::output::column::Shape;
-use crate::spec::keys::{fields, KeyDoc};
+use crate::toml_text::keys::{fields, KeyDoc};
 
 /// Every declared spec key, in the order `docs/spec.md` lists them.
 pub fn spec_keys() -> Vec<&'static KeyDoc> {
@@ -26,15 +25,10 @@ pub fn spec_keys() -> Vec<&'static KeyDoc> {
     .collect()
 }
 
-/// Every key kind `k`'s spec struct accepts, found by probing its deserializer.
-pub fn accepted_keys(k: &dyn DynKind) -> Vec<String> {
-    fields(&|t: &toml::Table| k.normalize(t).map(|_| ()).map_err(|e| e.message))
-}
-
 /// Every key the scene format's struct accepts.
 pub fn scene_file_keys() -> Vec<String> {
     fields(&|t: &toml::Table| {
-        crate::spec::de::from_tree::<crate::lt::format::RawScene>(t)
+        crate::toml_text::de::from_tree::<crate::lt::format::RawScene>(t)
             .map(|_| ())
             .map_err(|e| e.message)
     })
@@ -93,10 +87,7 @@ pub fn spec() -> String {
          units (the unit ball for lines and the Poisson scenes are unitless; the shipped Cornell \
          box is in millimetres). *kinds* lists the kinds whose spec accepts the key.\n\n",
     );
-    let accepted: Vec<(&str, Vec<String>)> = KINDS
-        .iter()
-        .map(|k| (k.name(), accepted_keys(*k)))
-        .collect();
+    let accepted: Vec<(&str, Vec<String>)> = KINDS.iter().map(|k| (k.name(), k.keys())).collect();
     let kinds_of = |key: &str| {
         let names: Vec<&str> = accepted
             .iter()
@@ -260,7 +251,7 @@ pub fn columns() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::spec::keys::IfAbsent;
+    use crate::toml_text::keys::IfAbsent;
     use std::collections::BTreeSet;
 
     /// The committed reference equals what the code declares (regenerate with
@@ -292,7 +283,7 @@ mod tests {
     /// some kind: adding a serde field without a declaration (or the reverse) fails here.
     #[test]
     fn declared_spec_keys_equal_the_structs() {
-        let accepted: BTreeSet<String> = KINDS.iter().flat_map(|k| accepted_keys(*k)).collect();
+        let accepted: BTreeSet<String> = KINDS.iter().flat_map(|k| k.keys()).collect();
         assert!(accepted.contains("detp.q") && accepted.contains("scene.class[].radius"));
         assert_eq!(accepted, declared(&spec_keys()));
     }
@@ -455,7 +446,7 @@ mod tests {
     fn declared_spec_defaults_are_the_structs_defaults() {
         let keys = spec_keys();
         for k in KINDS {
-            let accepted = accepted_keys(*k);
+            let accepted = k.keys();
             let mine: Vec<&KeyDoc> = keys
                 .iter()
                 .copied()
@@ -510,7 +501,7 @@ mod tests {
         let keys: Vec<&KeyDoc> = crate::lt::format::KEYS.iter().collect();
         check_defaults(fixture, &keys, &|t| {
             let raw: crate::lt::format::RawScene =
-                crate::spec::de::from_tree(t).map_err(|e| e.message)?;
+                crate::toml_text::de::from_tree(t).map_err(|e| e.message)?;
             toml::Value::try_from(&raw).map_err(|e| e.to_string())
         });
     }

@@ -63,6 +63,8 @@ pub struct RunOptions {
     pub shard: Option<Shard>,
     /// `--set` overrides (recorded in the metadata).
     pub sets: Vec<String>,
+    /// Worker threads (`--threads`, or the machine's): passed to every point and recorded.
+    pub threads: usize,
 }
 
 /// The file stem of a run.
@@ -100,6 +102,7 @@ fn start_meta(plan: &Plan, opts: &RunOptions, warnings: Vec<String>) -> Meta {
         .map_or("all".into(), |s| format!("{}/{}", s.k, s.n));
     meta.run.set = opts.sets.clone();
     meta.run.points_total = plan.points.len();
+    meta.run.threads = opts.threads;
     meta.inputs = plan.inputs.clone();
     meta.warnings = warnings;
     meta.spec = plan.normalized.clone();
@@ -253,7 +256,7 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
     };
     meta.run.started = sink.started().to_string();
     // The keys the kind accepts, found once per run (the parameter columns of every row).
-    let accepted = crate::experiment::reference::accepted_keys(kind);
+    let accepted = kind.keys();
     if let Some(then) = sink.previous() {
         meta.columns = then.columns.clone();
     }
@@ -298,6 +301,7 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
         let start = Instant::now();
         let ctx = Context {
             index: i as u64,
+            threads: opts.threads,
             progress: &|k| bar.inc(k),
         };
         let out = kind
@@ -354,22 +358,17 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
         let mut out = out;
         // Every built-in check gets a summary line, failed or not.
         for c in &out.checks {
-            out.summary.push((
-                c.name.to_string(),
-                crate::stats::Estimate {
+            out.summary.push(summary::SummaryLine {
+                metric: c.name.to_string(),
+                measured: crate::stats::Estimate {
                     mean: c.failures as f64,
                     se: 0.0,
                     n: c.checked,
                     clusters: c.checked,
                 },
-                format!("0 of {}", c.checked),
-                if c.failures == 0 {
-                    "ok (exact)"
-                } else {
-                    "FAIL"
-                }
-                .into(),
-            ));
+                theory: format!("0 of {}", c.checked),
+                verdict: crate::stats::Verdict::of_check(c.failures),
+            });
         }
         finished.push((i, params, out, wall));
     }
@@ -432,7 +431,7 @@ fn check_declared(kind: &dyn DynKind, table: &str, rows: &[Row]) -> Result<(), E
     let declared = columns
         .iter()
         .find(|(t, _)| *t == table)
-        .map_or(&[][..], |(_, c)| *c);
+        .map_or(&[][..], |(_, c)| c.as_slice());
     // Column name → may it be infinite.
     let mut checked: std::collections::HashMap<&str, bool> = std::collections::HashMap::new();
     for row in rows {
@@ -511,18 +510,18 @@ mod tests {
     use super::*;
     use crate::experiment::inputs::Inputs;
     use crate::experiment::kind::{
-        Check, ConfigError, Context, Kind, NoTables, PointOutput, Rate, Registered, Work,
+        col, Cell, Check, ConfigError, Context, Kind, NoTables, Output, Rate, Registered, Table,
+        Work,
     };
     use crate::experiment::lines_in_sphere::LinesSpec;
     use crate::output::column::{Class, Column};
 
     const VALUE: Column = Column::value("value", "1", Class::Measured, "the point's value");
     const BAD: Column = Column::value("bad", "1", Class::Check, "failures");
-    const UNDECLARED: Column = Column::value("stray", "1", Class::Measured, "not in the table");
 
     /// A test kind whose point misbehaves as its parameter `lines.inner_radius` says: 0.2 fails its
-    /// built-in check, 0.3 overflows to ∞, 0.4 writes a column the table does not declare; any
-    /// other value is a good point.
+    /// built-in check, 0.3 overflows to ∞, 0.4 gives a cell that does not fit its column's shape;
+    /// any other value is a good point.
     struct Planted;
 
     impl Kind for Planted {
@@ -530,11 +529,26 @@ mod tests {
         const ABOUT: &'static str = "a test kind";
         type Raw = LinesSpec;
         type Point = f64;
+        type Measured = u64;
         type Tables = NoTables;
         type Shared = ();
-        fn columns() -> Vec<(&'static str, &'static [Column])> {
-            vec![("main", &[VALUE, BAD])]
-        }
+        const MAIN: Table<f64, u64> = Table::of(&[
+            col(&VALUE, |p, _| {
+                if *p == 0.3 {
+                    f64::INFINITY.into()
+                } else if *p == 0.4 {
+                    Cell::Estimate(crate::stats::Estimate {
+                        mean: 1.0,
+                        se: 0.0,
+                        n: 1,
+                        clusters: 1,
+                    })
+                } else {
+                    (*p).into()
+                }
+            }),
+            col(&BAD, |_, failures| (*failures).into()),
+        ]);
         fn configure(raw: LinesSpec, _: &mut Inputs) -> Result<f64, ConfigError> {
             Ok(raw.lines.inner_radius)
         }
@@ -550,18 +564,11 @@ mod tests {
         fn shared(_: &[&f64]) -> Result<(), Error> {
             Ok(())
         }
-        fn run(p: &f64, _: &(), _: &Context) -> Result<PointOutput<NoTables>, Error> {
+        fn run(p: &f64, _: &(), _: &Context) -> Result<Output<u64, NoTables>, Error> {
             let failures = u64::from(*p == 0.2);
-            let mut row = Row::default();
-            row.put(&VALUE, if *p == 0.3 { f64::INFINITY } else { *p })
-                .put(&BAD, failures);
-            if *p == 0.4 {
-                row.put(&UNDECLARED, 1u64);
-            }
-            Ok(PointOutput {
-                row,
+            Ok(Output {
+                measured: failures,
                 tables: NoTables,
-                summary: Vec::new(),
                 checks: vec![Check {
                     name: "bad",
                     what: "a planted failure",
@@ -587,7 +594,7 @@ mod tests {
         let path = dir.path().join("p.toml");
         std::fs::write(&path, text).unwrap();
         let spec = crate::spec::Spec::read(&path, &[]).unwrap();
-        let plan = Plan::with_kind(spec, &PLANTED).unwrap();
+        let plan = Plan::with_kind(spec, &PLANTED, 1).unwrap();
         let opts = RunOptions {
             out: dir.path().join("out"),
             force: false,
@@ -595,6 +602,7 @@ mod tests {
             quiet: true,
             shard: None,
             sets: Vec::new(),
+            threads: 1,
         };
         let e = run(&plan, &opts).expect_err("a planted fault");
         let table = ["out/p/p.csv", "out/p/p.csv.partial"]
@@ -619,16 +627,19 @@ mod tests {
         assert!(table[2].ends_with(",1"), "{table:?}");
     }
 
-    /// An overflow is never written (the run stops before the point's row), and neither is a column
-    /// the kind did not declare.
+    /// An overflow is never written (the run stops before the point's row), and neither is a cell
+    /// that does not fit its declared column.
     #[test]
-    fn overflows_and_undeclared_columns_never_reach_a_table() {
+    fn overflows_and_misdeclared_cells_never_reach_a_table() {
         for (sweep, want) in [
             ("[0.1, 0.3]", "main.value overflowed to inf"),
-            ("[0.1, 0.4]", "column main.stray is not declared"),
+            (
+                "[0.1, 0.4]",
+                "column value is declared Value but its accessor gave Estimate",
+            ),
         ] {
             let (e, table) = run_planted(sweep);
-            let msg = e.to_string();
+            let msg = format!("{e:#}");
             assert!(msg.contains(want), "{msg}");
             assert_eq!(table.len(), 2, "only point 0 is written: {table:?}");
             assert!(!table.iter().any(|l| l.contains("inf")));

@@ -21,7 +21,8 @@
 
 use serde::{de::Error as _, Deserialize, Deserializer, Serialize};
 
-use crate::spec::keys::{key, IfAbsent::*, KeyDoc};
+use crate::toml_text::de::{number, opt_positive, positive};
+use crate::toml_text::keys::{key, IfAbsent::*, KeyDoc};
 
 /// Every key of a TOML scene file (`raycost doc scene`; a test checks them against the structs
 /// below, defaults included). Serialize exists only for that test: it shows the defaults serde
@@ -323,29 +324,6 @@ fn points<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<[f64; 3]>, D::Error> {
             }
         })
         .collect()
-}
-
-fn number<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    match toml::Value::deserialize(d)? {
-        toml::Value::Float(x) => Ok(x),
-        toml::Value::Integer(i) => Ok(i as f64),
-        other => Err(D::Error::custom(format!("got {other}, expected a number"))),
-    }
-}
-
-fn positive<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    let x = number(d)?;
-    if x.is_finite() && x > 0.0 {
-        Ok(x)
-    } else {
-        Err(D::Error::custom(format!(
-            "got {x}, expected a finite number > 0"
-        )))
-    }
-}
-
-fn opt_positive<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
-    positive(d).map(Some)
 }
 
 fn albedo<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {

@@ -25,7 +25,8 @@ use self::format::{AnalyticKind, LightKind, PathKind, RawScene, SurfaceKind};
 use self::motion::{Motion, Mover, MoverPart};
 use self::shapes::{Ball, Triangle};
 use crate::geom::Aabb;
-use crate::toml_text::{find_key, line_col};
+use crate::toml_text::de::from_text;
+use crate::toml_text::find_key;
 
 pub use crate::error::InputError;
 
@@ -215,17 +216,12 @@ impl Scene {
 
     /// A TOML scene from its text; `path` names it in errors and anchors relative OBJ paths.
     pub fn parse(text: &str, path: &Path) -> Result<Scene, InputError> {
-        let name = path.display().to_string();
-        let de = toml::Deserializer::new(text);
-        let raw: RawScene = serde_path_to_error::deserialize(de).map_err(|e| {
-            let key = e.path().to_string();
-            let inner = e.into_inner();
-            InputError {
-                file: name.clone(),
-                at: inner.span().map(|s| line_col(text, s.start)),
-                key: (!key.is_empty() && key != ".").then_some(key),
-                message: inner.message().trim().to_string(),
-            }
+        // The spec's own reader: located by line, column and dotted key.
+        let raw: RawScene = from_text(text).map_err(|e| InputError {
+            file: path.display().to_string(),
+            at: e.at,
+            key: e.key,
+            message: e.message,
         })?;
         Self::from_raw(raw, path, text)
     }

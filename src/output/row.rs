@@ -101,6 +101,17 @@ pub struct Cell {
 pub struct Row(pub Vec<Cell>);
 
 impl Row {
+    /// Appends one cell (the declared-table builder of `output::table`).
+    pub(crate) fn push_cell(
+        &mut self,
+        name: String,
+        class: Class,
+        unit: &'static str,
+        value: Value,
+    ) -> &mut Self {
+        self.push(name, class, unit, value)
+    }
+
     fn push(&mut self, name: String, class: Class, unit: &'static str, value: Value) -> &mut Self {
         debug_assert!(
             self.0.iter().all(|c| c.name != name),

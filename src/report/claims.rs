@@ -13,25 +13,28 @@
 //! # or a text that states its own uncertainty: measured = "40 of 40 points inside"
 //! unit = "steps"                       # optional
 //! verdict = "ok (99% CI)"              # optional with `column` and a numeric `paper`
+//! outcome = "holds"                    # optional: holds | holds-in-part | differs | refuted | inconclusive
 //! note = "…"                           # optional
 //! ```
 //!
 //! With `column`, the measured value and its CI come from the table itself (they cannot drift from
 //! it), and without a `verdict` the claim is judged against the paper's number by the summary's own
-//! rule ([`z_verdict`]). Every problem is an [`InputError`] naming the file, line and key.
+//! rule ([`z_verdict`]). A claim is coloured by its `outcome`, or without one by its verdict read as
+//! an outcome or a verdict ([`claim_tone`]). Every problem is an [`InputError`] naming the file,
+//! line and key.
 
 use std::path::Path;
 
 use serde::Deserialize;
 
 use crate::error::InputError;
-use crate::experiment::metric::z_verdict;
 use crate::output::summary::measured;
-use crate::spec::de::from_text;
+use crate::stats::verdict::z_verdict;
 use crate::stats::Estimate;
+use crate::toml_text::de::from_text;
 
 use super::table::{display, Table};
-use super::verdicts::Tone;
+use super::verdicts::{claim_tone, Outcome, Tone};
 
 /// The file name looked for in RESULTS.
 pub const FILE: &str = "claims.toml";
@@ -73,6 +76,8 @@ struct Entry {
     unit: Option<String>,
     #[serde(default)]
     verdict: Option<String>,
+    #[serde(default)]
+    outcome: Option<Outcome>,
     #[serde(default)]
     note: Option<String>,
 }
@@ -211,7 +216,7 @@ fn resolve(e: Entry, results: &Path) -> Result<PaperClaim, (&'static str, String
     };
     let verdict = match (e.verdict, est, paper_number) {
         (Some(v), _, _) => v,
-        (None, Some(est), Some(p)) => z_verdict(&est, p),
+        (None, Some(est), Some(p)) => z_verdict(&est, p).to_string(),
         (None, _, _) => {
             return Err((
                 "verdict",
@@ -224,7 +229,7 @@ fn resolve(e: Entry, results: &Path) -> Result<PaperClaim, (&'static str, String
         reference: e.reference.unwrap_or_default(),
         paper,
         measured: measured_text,
-        tone: Tone::of(&verdict),
+        tone: claim_tone(e.outcome, &verdict),
         verdict,
         source: e.source,
         link: path.canonicalize().unwrap_or(path),

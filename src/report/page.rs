@@ -338,6 +338,6 @@ fn tone(t: Tone) -> &'static str {
     match t {
         Tone::Agrees => "agrees",
         Tone::Disagrees => "disagrees",
-        Tone::Neutral => "neutral",
+        Tone::Inconclusive | Tone::NotJudged => "neutral",
     }
 }

@@ -16,9 +16,9 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::de::{from_text, from_tree, KeyError, TextError};
-use super::keys::{key, IfAbsent::*, KeyDoc};
 use crate::error::InputError;
+use crate::toml_text::de::{from_text, from_tree, KeyError, TextError};
+use crate::toml_text::keys::{key, IfAbsent::*, KeyDoc};
 use crate::toml_text::{find_key, line_col};
 
 /// Largest number of points one spec may expand into.
@@ -39,7 +39,7 @@ pub struct RawExperiment {
     /// Rays per sweep point (grid kinds; DETP counts its rays in `detp.photons`).
     #[serde(
         default,
-        deserialize_with = "super::de::opt_count",
+        deserialize_with = "crate::toml_text::de::opt_count",
         skip_serializing_if = "Option::is_none"
     )]
     pub rays: Option<u64>,

@@ -21,8 +21,8 @@ use crate::detp::sphere_cache::{ListMode, PopRule, SphereCacheParams};
 use crate::experiment::inputs::{Inputs, PointsFile, SceneFile};
 use crate::experiment::kind::{refuse, ConfigError};
 use crate::geom::Aabb;
-use crate::spec::de::{count, open_unit, opt_count, opt_positive, positive};
 use crate::spec::RawExperiment;
+use crate::toml_text::de::{count, open_unit, opt_count, opt_positive, positive};
 
 /// The keys of `[detp]` (kinds `detp` and `quasi-static`; `raycost doc spec`, checked against
 /// [`RawDetp`] by a test).
@@ -236,7 +236,7 @@ pub const EDGE_MIN_RADIUS: f64 = 0.25;
 pub const EDGE_GAP: f64 = 0.05;
 
 use crate::choice;
-use crate::spec::keys::{key, IfAbsent::*, KeyDoc};
+use crate::toml_text::keys::{key, IfAbsent::*, KeyDoc};
 
 choice!(
     /// Where the rays come from.
@@ -328,10 +328,10 @@ impl<'de> Deserialize<'de> for DiscRadius {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         match toml::Value::deserialize(d)? {
             toml::Value::String(s) if s == "spacing" => Ok(DiscRadius::Spacing),
-            toml::Value::Float(x) => crate::spec::de::check_positive(x)
+            toml::Value::Float(x) => crate::toml_text::de::check_positive(x)
                 .map(DiscRadius::Value)
                 .map_err(D::Error::custom),
-            toml::Value::Integer(i) => crate::spec::de::check_positive(i as f64)
+            toml::Value::Integer(i) => crate::toml_text::de::check_positive(i as f64)
                 .map(DiscRadius::Value)
                 .map_err(D::Error::custom),
             other => Err(D::Error::custom(format!(

@@ -5,8 +5,8 @@ use glam::DVec3;
 
 use super::spec::{Extent, GridSpec, RawDist, RawDraw, RawRadius};
 use crate::grid::build::estimated_bytes;
+use crate::sample::radius::{RadiusClass, RadiusDist, RadiusDraw};
 use crate::scene::finite::{FiniteScene, FiniteSize};
-use crate::scene::{RadiusClass, RadiusDist, RadiusDraw};
 use crate::spec::KeyError;
 use crate::theory::grid::Eye;
 

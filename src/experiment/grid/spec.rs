@@ -5,11 +5,11 @@
 
 use serde::{de::Error as _, Deserialize, Deserializer, Serialize};
 
-use crate::spec::de::{
+use crate::spec::RawExperiment;
+use crate::toml_text::de::{
     check_positive, count, fraction, opt_count, opt_finite3, opt_positive, positive,
 };
-use crate::spec::keys::{key, IfAbsent::*, KeyDoc};
-use crate::spec::RawExperiment;
+use crate::toml_text::keys::{key, IfAbsent::*, KeyDoc};
 
 /// The keys of the grid kinds' tables (`raycost doc spec`; a test checks them against the structs).
 pub const KEYS: &[KeyDoc] = &[

@@ -13,9 +13,9 @@ use crate::experiment::detp::spec::{DetpConfig, DynamicEngine, Points, RawDetp, 
 use crate::experiment::inputs::{Inputs, SceneFile};
 use crate::experiment::kind::{refuse, ConfigError};
 use crate::lt::Scene;
-use crate::spec::de::{count, count_or_zero, number, opt_count, opt_count_or_zero};
-use crate::spec::keys::{key, IfAbsent::*, KeyDoc};
 use crate::spec::RawExperiment;
+use crate::toml_text::de::{count, count_or_zero, number, opt_count, opt_count_or_zero};
+use crate::toml_text::keys::{key, IfAbsent::*, KeyDoc};
 
 /// The keys of `[dynamic]` (`raycost doc spec`, checked against [`RawDynamicSpec`] by a test).
 pub const KEYS: &[KeyDoc] = &[

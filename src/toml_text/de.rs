@@ -10,7 +10,7 @@
 use serde::de::DeserializeOwned;
 use serde::{de::Error as _, Deserialize, Deserializer};
 
-use crate::toml_text::line_col;
+use super::line_col;
 
 /// A problem with one dotted key, before it is located in a file (the spec layer adds file, line
 /// and column, or the `--set` flag it came from).

@@ -159,7 +159,7 @@ mod tests {
     #[test]
     fn probing_finds_every_field() {
         let de = |t: &toml::Table| {
-            crate::spec::de::from_tree::<Outer>(t)
+            crate::toml_text::de::from_tree::<Outer>(t)
                 .map(|_| ())
                 .map_err(|e| e.message)
         };
