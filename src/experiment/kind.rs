@@ -33,6 +33,7 @@ use crate::output::summary::SummaryLine;
 use crate::output::table;
 pub use crate::output::table::{col, Cell, Cells, Entry, Line, Table};
 use crate::toml_text::de::{from_text, from_tree, KeyError, TextError};
+use crate::toml_text::keys::{keys_of, KeyDoc, SpecTable};
 
 /// What a point does, for progress and ETA: `units` of `unit` (rays, photons, photon-frames).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -191,8 +192,9 @@ pub trait Kind: Send + Sync + 'static {
     const ABOUT: &'static str;
     /// Keys that cannot be swept, and why.
     const FIXED: &'static [(&'static str, &'static str)] = &[];
-    /// The spec file of this kind: `[experiment]`, `[sweep]` and the kind's own tables.
-    type Raw: DeserializeOwned + Serialize;
+    /// The spec file of this kind: `[experiment]`, `[sweep]` and the kind's own tables, declared
+    /// with [`crate::spec_file!`] (its keys, defaults and docs declared once).
+    type Raw: DeserializeOwned + Serialize + SpecTable;
     /// One point, validated, in the engines' own types.
     type Point: Send + Sync + 'static;
     /// What one point measures (its main row).
@@ -303,9 +305,9 @@ pub trait DynKind: Send + Sync {
     fn table_names(&self) -> &'static [&'static str];
     /// Column declarations per table (`main` first).
     fn columns(&self) -> Vec<(&'static str, Vec<Column>)>;
-    /// Every key this kind's spec struct accepts, in declaration order (`[]` after an array of
-    /// tables).
-    fn keys(&self) -> Vec<String>;
+    /// Every key this kind's spec accepts, in declaration order (`[]` after an array of tables),
+    /// with its reference entry.
+    fn keys(&self) -> Vec<KeyDoc>;
     /// Reads the whole file with this kind's serde struct (errors located by line and column).
     fn check_text(&self, text: &str) -> Result<(), TextError>;
     /// The tree read and written back with defaults filled in (the normalised spec).
@@ -367,10 +369,8 @@ impl<K: Kind> DynKind for Registered<K> {
             )
             .collect()
     }
-    fn keys(&self) -> Vec<String> {
-        crate::toml_text::keys::fields(&|t: &toml::Table| {
-            self.normalize(t).map(|_| ()).map_err(|e| e.message)
-        })
+    fn keys(&self) -> Vec<KeyDoc> {
+        keys_of::<K::Raw>()
     }
     fn check_text(&self, text: &str) -> Result<(), TextError> {
         from_text::<K::Raw>(text).map(|_| ())

@@ -9,7 +9,6 @@
 //! ([`LinesInSphereKind::MAIN`]), and its runner.
 
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 
 use super::inputs::Inputs;
 use super::kind::{col, Cell, ConfigError, Context, Kind, NoTables, Output, Rate, Table, Work};
@@ -17,54 +16,25 @@ use crate::error::Error;
 use crate::output::column::{Class, Column};
 use crate::sample::lines::uniform_line;
 use crate::sample::rng::{domain, stream};
-use crate::spec::RawExperiment;
 use crate::stats::{ClusteredMean, Estimate, Theory};
 use crate::toml_text::de::{count, open_unit};
-use crate::toml_text::keys::{key, IfAbsent::*, KeyDoc};
 
-/// The keys of `[lines]` (`raycost doc spec`, checked against [`RawLines`] by a test).
-pub const KEYS: &[KeyDoc] = &[
-    key(
-        "lines.count",
-        "integer",
-        "lines",
-        Required,
-        "≥ 1",
-        "Lines drawn per point.",
-    ),
-    key(
-        "lines.inner_radius",
-        "number",
-        "",
-        Required,
-        "(0, 1)",
-        "r: radius of the inner sphere, relative to the unit sphere the lines are drawn through.",
-    ),
-];
-
-/// The spec file: `[experiment]`, `[lines]` and `[sweep]`.
-#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct LinesSpec {
-    /// `[experiment]`.
-    pub experiment: RawExperiment,
-    /// `[lines]`.
-    pub lines: RawLines,
-    /// `[sweep]`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub sweep: Option<toml::Table>,
+crate::spec_file! {
+    /// The spec file: `[experiment]`, `[lines]` and `[sweep]`.
+    pub struct LinesSpec {
+        /// `[lines]`.
+        lines: RawLines = {table};
+    }
 }
 
-/// `[lines]`.
-#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct RawLines {
-    /// Lines per point.
-    #[serde(deserialize_with = "count")]
-    pub count: u64,
-    /// Radius r of the inner sphere, in (0, 1).
-    #[serde(deserialize_with = "open_unit")]
-    pub inner_radius: f64,
+crate::spec_table! {
+    /// `[lines]`.
+    pub struct RawLines {
+        /// Lines drawn per point.
+        count: u64 = {required} read count, "integer", "lines", "≥ 1";
+        /// r: radius of the inner sphere, relative to the unit sphere the lines are drawn through.
+        inner_radius: f64 = {required} read open_unit, "number", "", "(0, 1)";
+    }
 }
 
 /// A validated point.

@@ -256,7 +256,7 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
     };
     meta.run.started = sink.started().to_string();
     // The keys the kind accepts, found once per run (the parameter columns of every row).
-    let accepted = kind.keys();
+    let accepted: Vec<String> = kind.keys().into_iter().map(|k| k.key).collect();
     if let Some(then) = sink.previous() {
         meta.columns = then.columns.clone();
     }

@@ -14,58 +14,58 @@
 
 use std::path::{Path, PathBuf};
 
-use serde::{Deserialize, Serialize};
+use serde::Deserialize;
 
 use crate::error::InputError;
+use crate::toml_text::de::opt_count;
 use crate::toml_text::de::{from_text, from_tree, KeyError, TextError};
-use crate::toml_text::keys::{key, IfAbsent::*, KeyDoc};
 use crate::toml_text::{find_key, line_col};
 
 /// Largest number of points one spec may expand into.
 pub const MAX_POINTS: usize = 10_000;
 
-/// `[experiment]`: what every spec names, whatever its kind.
-#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct RawExperiment {
-    /// Result folder and file stem: letters, digits, `-` and `_`.
-    #[serde(deserialize_with = "name")]
-    pub name: String,
-    /// The experiment kind (`raycost doc spec` lists them).
-    pub kind: String,
-    /// Master seed of every random stream.
-    #[serde(default = "default_seed")]
-    pub seed: u64,
-    /// Rays per sweep point (grid kinds; DETP counts its rays in `detp.photons`).
-    #[serde(
-        default,
-        deserialize_with = "crate::toml_text::de::opt_count",
-        skip_serializing_if = "Option::is_none"
-    )]
-    pub rays: Option<u64>,
-    /// Free text copied into the metadata.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub description: Option<String>,
+crate::spec_table! {
+    /// `[experiment]`: what every spec names, whatever its kind.
+    pub struct RawExperiment {
+        /// Names the results: `DIR/NAME/NAME.csv`, `NAME.meta.toml`, `NAME.TABLE.csv`.
+        name: String = {required} read name, "string", "", "1–100 letters, digits, `-`, `_`";
+        /// What the experiment measures; decides which tables below the spec may have.
+        kind: String = {required}, "string", "", "a kind of `raycost doc kinds`";
+        /// Master seed of every random stream: the same spec and seed give the same measured
+        /// columns on any machine, thread count or shard split.
+        seed: u64 = {default 1}, "integer", "", "0 … 2⁶⁴ − 1";
+        /// Rays traced per sweep point (DETP kinds count their rays in `detp.photons`, lines in
+        /// `lines.count`).
+        rays: Option<u64> = {absent "required by the grid kinds, unused by others"}
+            read opt_count, "integer", "rays", "≥ 1 (grid: ≤ 10¹⁰)";
+        /// Free text copied into `NAME.meta.toml`.
+        description: Option<String> = {absent "none"}, "string", "", "any text";
+    }
 }
 
-/// The keys every spec has: `[experiment]` and `[sweep]` (`raycost doc spec`).
-pub const KEYS: &[KeyDoc] = &[
-    key("experiment.name", "string", "", Required, "1–100 letters, digits, `-`, `_`",
-        "Names the results: `DIR/NAME/NAME.csv`, `NAME.meta.toml`, `NAME.TABLE.csv`."),
-    key("experiment.kind", "string", "", Required, "a kind of `raycost doc kinds`",
-        "What the experiment measures; decides which tables below the spec may have."),
-    key("experiment.seed", "integer", "", Value("1"), "0 … 2⁶⁴ − 1",
-        "Master seed of every random stream: the same spec and seed give the same measured columns on any machine, thread count or shard split."),
-    key("experiment.rays", "integer", "rays", Absent("required by the grid kinds, unused by others"), "≥ 1 (grid: ≤ 10¹⁰)",
-        "Rays traced per sweep point (DETP kinds count their rays in `detp.photons`, lines in `lines.count`)."),
-    key("experiment.description", "string", "", Absent("none"), "any text",
-        "Free text copied into `NAME.meta.toml`."),
-    key("sweep", "table", "", Absent("one point"), "dotted spec key = array of values",
-        "The sweep: every combination of the arrays is one point (the first key varies slowest, the last fastest; at most 10 000 points). Each swept key becomes a column; `--set` on a swept key stops it being swept."),
-];
-
-fn default_seed() -> u64 {
-    1
+/// Declares the spec file of a kind: `[experiment]` ([`RawExperiment`]), the kind's own tables as
+/// given, and `[sweep]` (declared here, once for every kind), with [`crate::spec_table!`]'s
+/// field syntax.
+#[macro_export]
+macro_rules! spec_file {
+    (
+        $(#[$m:meta])*
+        pub struct $name:ident { $($fields:tt)* }
+    ) => {
+        $crate::spec_table! {
+            $(#[$m])*
+            pub struct $name {
+                /// `[experiment]`.
+                experiment: $crate::spec::RawExperiment = {table};
+                $($fields)*
+                /// The sweep: every combination of the arrays is one point (the first key varies
+                /// slowest, the last fastest; at most 10 000 points). Each swept key becomes a
+                /// column; `--set` on a swept key stops it being swept.
+                sweep: Option<toml::Table> = {absent "one point"}, "table", "",
+                    "dotted spec key = array of values";
+            }
+        }
+    };
 }
 
 fn name<'de, D: serde::Deserializer<'de>>(d: D) -> Result<String, D::Error> {

@@ -67,6 +67,24 @@ pub fn from_tree<T: DeserializeOwned>(tree: &toml::Table) -> Result<T, KeyError>
     })
 }
 
+/// A reader of one key's value: a range-checked function of this module, or a type's own
+/// `Deserialize` (what [`crate::spec_table!`] reads each field with).
+pub trait Reader {
+    /// What it reads.
+    type Value;
+    /// Reads the value, refusing it with "got …, expected …".
+    fn read<'de, D: Deserializer<'de>>(d: D) -> Result<Self::Value, D::Error>;
+}
+
+/// A value read by the reader `R` (a field of a [`crate::spec_table!`] struct's shadow).
+pub struct Checked<R: Reader>(pub R::Value);
+
+impl<'de, R: Reader> Deserialize<'de> for Checked<R> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        R::read(d).map(Checked)
+    }
+}
+
 /// `Ok(x)` when x is finite and > 0, else "got x, expected a finite number > 0".
 pub fn check_positive(x: f64) -> Result<f64, crate::error::Invalid> {
     if x.is_finite() && x > 0.0 {
@@ -212,6 +230,7 @@ macro_rules! choice {
             fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> { s.serialize_str(self.as_str()) }
         }
         impl Default for $name { fn default() -> Self { $name::$d } }
+        impl $crate::toml_text::keys::Omit for $name {}
     };
 }
 

@@ -14,220 +14,125 @@ use serde::{de::Error as _, Deserialize, Deserializer, Serialize};
 
 use glam::DVec3;
 
+use crate::detp::disc_index::IndexKind;
 use crate::detp::edge::EdgeMode;
 use crate::detp::order::Order;
-use crate::detp::quasi_static::IndexKind;
 use crate::detp::sphere_cache::{ListMode, PopRule, SphereCacheParams};
 use crate::experiment::inputs::{Inputs, PointsFile, SceneFile};
 use crate::experiment::kind::{refuse, ConfigError};
 use crate::geom::Aabb;
-use crate::spec::RawExperiment;
 use crate::toml_text::de::{count, open_unit, opt_count, opt_positive, positive};
 
-/// The keys of `[detp]` (kinds `detp` and `quasi-static`; `raycost doc spec`, checked against
-/// [`RawDetp`] by a test).
-pub const KEYS: &[KeyDoc] = &[
-    key("detp.source", "string", "", Value("\"lines\""), "`\"lines\"`, `\"scene\"`",
-        "Where the rays come from: μ-random lines through the unit ball, or photons traced from `detp.scene`."),
-    key("detp.scene", "string (path)", "", Absent("none; required with `source = \"scene\"`"),
-        "a `.toml` scene (`raycost doc scene`) or a BART `.aff`/`.nff` file",
-        "The scene file, relative to the spec's folder."),
-    key("detp.photons", "integer", "photons", Required, "≥ 1",
-        "n_R: lines drawn, or photons emitted from the scene's lights (their paths' segments are the rays)."),
-    key("detp.points", "integer", "points", Absent("required with `point_source = \"ball\"`"), "≥ 1",
-        "n_P: sample points uniform in the unit ball (a file name here is refused with a hint to `points_file`)."),
-    key("detp.point_source", "string", "", Absent("`\"ball\"` for lines, `\"surface\"` for a scene"),
-        "`\"ball\"`, `\"surface\"`, `\"file\"`",
-        "Where the sample points come from: uniform in the unit ball with uniform normals, on the scene's surfaces, or a CSV."),
-    key("detp.points_file", "string (path)", "", Absent("none; required with `point_source = \"file\"`"),
-        "a CSV with header `x,y,z,nx,ny,nz`",
-        "The sample points, relative to the spec's folder (normals need not be unit length)."),
-    key("detp.point_spacing", "number", "length", Absent("2·d (the paper's optimum)"), "> 0",
-        "Spacing of surface points."),
-    key("detp.disc_radius", "number or string", "length", Required, "> 0, or `\"spacing\"`",
-        "d: the discs' radius, or the points' mean spacing ((4π/3/n_P)^⅓ in the ball, `point_spacing` on surfaces), the paper's d for Theorem 1."),
-    key("detp.q", "number", "", Value("0.6666666666666666"), "(0, 1)",
-        "Q: ratio of consecutive sphere radii of the sphere cache (Proposition 1: 2/3 is optimal)."),
-    key("detp.threshold", "integer", "rays", Value("100"), "≥ 1",
-        "A sphere holding fewer rays is not subdivided."),
-    key("detp.order", "string", "", Value("\"hilbert\""), "`\"none\"`, `\"morton\"`, `\"hilbert\"`",
-        "Order in which the sphere cache visits the points."),
-    key("detp.order_bits", "integer", "bits", Value("10"), "1 … 21",
-        "Bits per axis of the ordering keys."),
-    key("detp.list_mode", "string", "", Value("\"inherited\""), "`\"inherited\"`, `\"exact\"`",
-        "The paper's cache: a new sphere's list is the parent's rays meeting it (`inherited`); or raycost's variant, exactly the rays meeting it, from the deepest enclosing ancestor (`exact`)."),
-    key("detp.pop_rule", "string", "", Value("\"chain\""), "`\"chain\"`, `\"paper\"`",
-        "Which levels a new point keeps: the chain of levels that all contain its disc, or the paper's rule (pop the deepest while it does not; exact with exact lists, cut back to the chain with inherited lists, repairs counted)."),
-    key("detp.chunk_points", "integer", "points", Value("16384"), "≥ 1",
-        "Points per independent sphere-cache run (chunks run in parallel; a spec value, never the thread count, so counts do not depend on threads)."),
-    key("detp.engines", "array of strings", "", Value("[\"sphere-cache\"]"),
-        "`\"sphere-cache\"`, `\"disc-index\"`, `\"brute-force\"`, `\"photon-map\"`, `\"reference\"`",
-        "Kind `detp`: the engines run on every point (columns per engine)."),
-    key("detp.index", "string", "", Value("\"octree\""), "`\"octree\"`, `\"grid\"`",
-        "The disc index's structure."),
-    key("detp.index_cell_width", "number", "length", Absent("2·d"), "> 0",
-        "Cell width of the grid disc index."),
-    key("detp.octree_leaf", "integer", "discs", Value("8"), "≥ 1",
-        "Most discs in an octree leaf before it splits (it also stops at side ≤ d)."),
-    key("detp.brute_force_points", "integer", "points", Value("256"), "≥ 0",
-        "Points whose sums are checked against brute force, bit for bit (0: none); failures fail the run (exit 1)."),
-    key("detp.photon_map_k", "integer", "photons", Value("64"), "≥ 1",
-        "k nearest photons of the photon map."),
-    key("detp.photon_map_filter", "string", "", Value("\"cone\""), "`\"cone\"`, `\"disc\"`",
-        "The photon map's density estimation filter."),
-    key("detp.replicas", "integer", "", Value("1"), "≥ 1",
-        "Independent realisations (new rays and points each): with one, standard errors are Poisson estimates; with several, the spread across replicas."),
-    key("detp.reference_samples", "integer", "paths", Value("1024"), "≥ 2",
-        "Paths per point of engine `reference` (path tracing with next-event estimation: the ground truth, with its SE)."),
-    key("detp.edge", "string", "", Value("\"paper\""), "`\"paper\"`, `\"clamp-radius\"`, `\"first-hit\"`, `\"clamp-first-hit\"`",
-        "Discs near edges: the paper's method, or a remedy (a disc shrunk to the nearest other surface; crossings cut just past the first impact; both). Scenes only; every engine stays exact."),
-    key("detp.edge_min_radius", "number", "× d", Absent("0.25 with a clamping remedy"), "(0, 1]",
-        "Smallest disc radius a clamping remedy allows, as a fraction of d."),
-    key("detp.edge_gap", "number", "× d", Absent("0.05 with a cutting remedy"), "> 0",
-        "How far past a segment's first impact a cutting remedy still counts crossings, as a fraction of d."),
-    key("detp.write_points", "bool", "", Value("false"), "`true`, `false`",
-        "Also write the per-sample-point irradiance table `NAME.points.csv`."),
-    key("detp.engine", "string", "", Absent("`\"hybrid\"`"),
-        "`\"hybrid\"`, `\"sphere-cache\"`, `\"disc-index\"`, `\"predicted\"`",
-        "Kind `quasi-static`: how dynamic points are recomputed (hybrid: Theorem 2 picks per object; predicted: the §4.1 predictor picks)."),
-    key("detp.memory_budget_gib", "number", "GiB", Value("8.0"), "> 0",
-        "Memory the ray store and engines may take; a point needing more is refused before it allocates."),
-];
-
-/// A spec file of kind `detp`.
-#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct DetpSpec {
-    /// `[experiment]`.
-    pub experiment: RawExperiment,
-    /// `[detp]`.
-    pub detp: RawDetp,
-    /// `[sweep]` (expanded by the spec layer).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub sweep: Option<toml::Table>,
+crate::spec_file! {
+    /// A spec file of kind `detp`.
+    pub struct DetpSpec {
+        /// `[detp]`.
+        detp: RawDetp = {table};
+    }
 }
 
-/// `[detp]`.
-#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct RawDetp {
-    /// `"lines"` (default) or `"scene"`.
-    #[serde(default)]
-    pub source: RaySource,
-    /// Scene file (TOML), relative to the spec's folder; `source = "scene"` only.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub scene: Option<String>,
-    /// n_R: lines, or photons emitted.
-    #[serde(deserialize_with = "count")]
-    pub photons: u64,
-    /// n_P for points uniform in the unit ball.
-    #[serde(
-        default,
-        deserialize_with = "point_count",
-        skip_serializing_if = "Option::is_none"
-    )]
-    pub points: Option<u64>,
-    /// `"ball"` (uniform in the unit ball, uniform normals), `"grid"` (eq. 4's layout: a cubic
-    /// lattice of k = round(∛points) per side filling the cube inscribed in the unit ball, spacing
-    /// 2/(√3·k), uniform normals), `"surface"` (on the scene's surfaces) or `"file"` (a CSV of x, y,
-    /// z, nx, ny, nz). Default: ball for lines, surface for a scene.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub point_source: Option<PointSourceKind>,
-    /// The CSV of `point_source = "file"`, relative to the spec's folder.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub points_file: Option<String>,
-    /// Spacing of surface points (default 2·d, the paper's optimum: d ≈ half the spacing).
-    #[serde(
-        default,
-        deserialize_with = "opt_positive",
-        skip_serializing_if = "Option::is_none"
-    )]
-    pub point_spacing: Option<f64>,
-    /// d: a disc radius, or `"spacing"`: the points' mean spacing (uniform in the ball:
-    /// (4π/3 / n_P)^(1/3); on surfaces: `point_spacing`), the paper's d for Theorem 1.
-    pub disc_radius: DiscRadius,
-    /// Q ∈ (0, 1): ratio of consecutive sphere radii.
-    #[serde(default = "two_thirds", deserialize_with = "open_unit")]
-    pub q: f64,
-    /// A sphere holding fewer rays is not subdivided.
-    #[serde(default = "hundred", deserialize_with = "count")]
-    pub threshold: u64,
-    /// Point ordering: `"none"`, `"morton"` (Lebesgue) or `"hilbert"`.
-    #[serde(default)]
-    pub order: OrderChoice,
-    /// Bits per axis of the ordering keys (1–21).
-    #[serde(default = "ten", deserialize_with = "bits")]
-    pub order_bits: u64,
-    /// `"inherited"` (default): a new list is the parent's rays meeting the new sphere (the paper's
-    /// rule, §3); `"exact"`: it comes from the deepest enclosing ancestor, so every list holds
-    /// exactly the rays meeting its sphere (raycost's variant for the rays-per-level law).
-    #[serde(default)]
-    pub list_mode: ListModeChoice,
-    /// `"chain"` (default): a point keeps the levels that all contain its disc; `"paper"`: the
-    /// paper's rule, popping the deepest level while it does not contain the disc (with inherited
-    /// lists cut back to the chain where that would lose rays; see `docs/detp-costs.md`).
-    #[serde(default)]
-    pub pop_rule: PopRuleChoice,
-    /// Points per independent sphere-cache run (chunks run in parallel; a spec value, never the
-    /// thread count, so counters do not depend on threads).
-    #[serde(default = "default_chunk", deserialize_with = "count")]
-    pub chunk_points: u64,
-    /// Engines to run on every point: `sphere-cache`, `disc-index`, `brute-force`, `photon-map`,
-    /// `reference`.
-    #[serde(default = "default_engines")]
-    pub engines: Vec<EngineChoice>,
-    /// Disc index kind: `"octree"` (default) or `"grid"`.
-    #[serde(default)]
-    pub index: IndexChoice,
-    /// Cell width of the grid disc index (default 2·d).
-    #[serde(
-        default,
-        deserialize_with = "opt_positive",
-        skip_serializing_if = "Option::is_none"
-    )]
-    pub index_cell_width: Option<f64>,
-    /// Most discs in an octree leaf before it splits (it also stops at side ≤ d).
-    #[serde(default = "eight", deserialize_with = "count")]
-    pub octree_leaf: u64,
-    /// Points whose sums are checked against brute force, bit for bit (0: none).
-    #[serde(default = "default_bf_points")]
-    pub brute_force_points: u64,
-    /// k of the photon map.
-    #[serde(default = "default_k", deserialize_with = "count")]
-    pub photon_map_k: u64,
-    /// Photon-map filter: `"disc"` or `"cone"`.
-    #[serde(default)]
-    pub photon_map_filter: FilterChoice,
-    /// Paths per sample point of engine `reference` (the path-traced ground truth).
-    #[serde(default = "default_reference_samples", deserialize_with = "count")]
-    pub reference_samples: u64,
-    /// Independent realisations (new rays and points each); standard errors are across them.
-    #[serde(default = "one_u", deserialize_with = "count")]
-    pub replicas: u64,
-    /// Write the per-sample-point irradiance table `NAME.points.csv`.
-    #[serde(default)]
-    pub write_points: bool,
-    /// Kind `quasi-static`: `"hybrid"` (Theorem 2 picks per object), `"sphere-cache"` or
-    /// `"disc-index"`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub engine: Option<DynamicEngine>,
-    /// Memory the ray store and engines may take, GiB.
-    #[serde(default = "default_budget", deserialize_with = "positive")]
-    pub memory_budget_gib: f64,
-    /// Where a disc reaches past an edge: `"paper"` (the paper's method, default),
-    /// `"clamp-radius"` (per-disc radius limited by the nearest other surface) or `"first-hit"`
-    /// (crossings counted up to `edge_gap`·d beyond the first impact) or `"clamp-first-hit"` (both).
-    /// See docs/hard-cases.md.
-    #[serde(default)]
-    pub edge: EdgeChoice,
-    /// `"clamp-radius"`, `"clamp-first-hit"`: the smallest disc radius, as a fraction of d (in
-    /// (0, 1]; default 0.25).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub edge_min_radius: Option<f64>,
-    /// `"first-hit"`, `"clamp-first-hit"`: how far beyond the first impact a crossing still counts,
-    /// as a fraction of d (≥ 0; default 0.05).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub edge_gap: Option<f64>,
+crate::spec_table! {
+    /// `[detp]` (kinds `detp` and `quasi-static`).
+    pub struct RawDetp {
+        /// Where the rays come from: μ-random lines through the unit ball, or photons traced from
+        /// `detp.scene`.
+        source: RaySource = {default RaySource::Lines}, "string", "", "`\"lines\"`, `\"scene\"`";
+        /// The scene file, relative to the spec's folder.
+        scene: Option<String> = {absent "none; required with `source = \"scene\"`"},
+            "string (path)", "",
+            "a `.toml` scene (`raycost doc scene`) or a BART `.aff`/`.nff` file";
+        /// n_R: lines drawn, or photons emitted from the scene's lights (their paths' segments
+        /// are the rays).
+        photons: u64 = {required} read count, "integer", "photons", "≥ 1";
+        /// n_P: sample points uniform in the unit ball (a file name here is refused with a hint
+        /// to `points_file`).
+        points: Option<u64> = {absent "required with `point_source = \"ball\"`"}
+            read point_count, "integer", "points", "≥ 1";
+        /// Where the sample points come from: uniform in the unit ball with uniform normals, on
+        /// the scene's surfaces, or a CSV.
+        point_source: Option<PointSourceKind> =
+            {absent "`\"ball\"` for lines, `\"surface\"` for a scene"},
+            "string", "", "`\"ball\"`, `\"surface\"`, `\"file\"`";
+        /// The sample points, relative to the spec's folder (normals need not be unit length).
+        points_file: Option<String> = {absent "none; required with `point_source = \"file\"`"},
+            "string (path)", "", "a CSV with header `x,y,z,nx,ny,nz`";
+        /// Spacing of surface points.
+        point_spacing: Option<f64> = {absent "2·d (the paper's optimum)"} read opt_positive,
+            "number", "length", "> 0";
+        /// d: the discs' radius, or the points' mean spacing ((4π/3/n_P)^⅓ in the ball,
+        /// `point_spacing` on surfaces), the paper's d for Theorem 1.
+        disc_radius: DiscRadius = {required}, "number or string", "length",
+            "> 0, or `\"spacing\"`";
+        /// Q: ratio of consecutive sphere radii of the sphere cache (Proposition 1: 2/3 is
+        /// optimal).
+        q: f64 = {default 2.0 / 3.0} read open_unit, "number", "", "(0, 1)";
+        /// A sphere holding fewer rays is not subdivided.
+        threshold: u64 = {default 100} read count, "integer", "rays", "≥ 1";
+        /// Order in which the sphere cache visits the points.
+        order: OrderChoice = {default OrderChoice::Hilbert}, "string", "",
+            "`\"none\"`, `\"morton\"`, `\"hilbert\"`";
+        /// Bits per axis of the ordering keys.
+        order_bits: u64 = {default 10} read bits, "integer", "bits", "1 … 21";
+        /// The paper's cache: a new sphere's list is the parent's rays meeting it (`inherited`);
+        /// or raycost's variant, exactly the rays meeting it, from the deepest enclosing ancestor
+        /// (`exact`).
+        list_mode: ListModeChoice = {default ListModeChoice::Inherited}, "string", "",
+            "`\"inherited\"`, `\"exact\"`";
+        /// Which levels a new point keeps: the chain of levels that all contain its disc, or the
+        /// paper's rule (pop the deepest while it does not; exact with exact lists, cut back to
+        /// the chain with inherited lists, repairs counted).
+        pop_rule: PopRuleChoice = {default PopRuleChoice::Chain}, "string", "",
+            "`\"chain\"`, `\"paper\"`";
+        /// Points per independent sphere-cache run (chunks run in parallel; a spec value, never
+        /// the thread count, so counts do not depend on threads).
+        chunk_points: u64 = {default 16_384} read count, "integer", "points", "≥ 1";
+        /// Kind `detp`: the engines run on every point (columns per engine).
+        engines: Vec<EngineChoice> = {default vec![EngineChoice::SphereCache]},
+            "array of strings", "",
+            "`\"sphere-cache\"`, `\"disc-index\"`, `\"brute-force\"`, `\"photon-map\"`, `\"reference\"`";
+        /// The disc index's structure.
+        index: IndexChoice = {default IndexChoice::Octree}, "string", "",
+            "`\"octree\"`, `\"grid\"`";
+        /// Cell width of the grid disc index.
+        index_cell_width: Option<f64> = {absent "2·d"} read opt_positive, "number", "length",
+            "> 0";
+        /// Most discs in an octree leaf before it splits (it also stops at side ≤ d).
+        octree_leaf: u64 = {default 8} read count, "integer", "discs", "≥ 1";
+        /// Points whose sums are checked against brute force, bit for bit (0: none); failures
+        /// fail the run (exit 1).
+        brute_force_points: u64 = {default 256}, "integer", "points", "≥ 0";
+        /// k nearest photons of the photon map.
+        photon_map_k: u64 = {default 64} read count, "integer", "photons", "≥ 1";
+        /// The photon map's density estimation filter.
+        photon_map_filter: FilterChoice = {default FilterChoice::Cone}, "string", "",
+            "`\"cone\"`, `\"disc\"`";
+        /// Paths per point of engine `reference` (path tracing with next-event estimation: the
+        /// ground truth, with its SE).
+        reference_samples: u64 = {default 1024} read count, "integer", "paths", "≥ 2";
+        /// Independent realisations (new rays and points each): with one, standard errors are
+        /// Poisson estimates; with several, the spread across replicas.
+        replicas: u64 = {default 1} read count, "integer", "", "≥ 1";
+        /// Also write the per-sample-point irradiance table `NAME.points.csv`.
+        write_points: bool = {default false}, "bool", "", "`true`, `false`";
+        /// Kind `quasi-static`: how dynamic points are recomputed (hybrid: Theorem 2 picks per
+        /// object; predicted: the §4.1 predictor picks).
+        engine: Option<DynamicEngine> = {absent "`\"hybrid\"`"}, "string", "",
+            "`\"hybrid\"`, `\"sphere-cache\"`, `\"disc-index\"`, `\"predicted\"`";
+        /// Memory the ray store and engines may take; a point needing more is refused before it
+        /// allocates.
+        memory_budget_gib: f64 = {default 8.0} read positive, "number", "GiB", "> 0";
+        /// Discs near edges: the paper's method, or a remedy (a disc shrunk to the nearest other
+        /// surface; crossings cut just past the first impact; both). Scenes only; every engine
+        /// stays exact.
+        edge: EdgeChoice = {default EdgeChoice::Paper}, "string", "",
+            "`\"paper\"`, `\"clamp-radius\"`, `\"first-hit\"`, `\"clamp-first-hit\"`";
+        /// Smallest disc radius a clamping remedy allows, as a fraction of d.
+        edge_min_radius: Option<f64> = {absent "0.25 with a clamping remedy"}, "number", "× d",
+            "(0, 1]";
+        /// How far past a segment's first impact a cutting remedy still counts crossings, as a
+        /// fraction of d.
+        edge_gap: Option<f64> = {absent "0.05 with a cutting remedy"}, "number", "× d", "> 0";
+    }
 }
 
 /// Default `detp.edge_min_radius`.
@@ -236,7 +141,6 @@ pub const EDGE_MIN_RADIUS: f64 = 0.25;
 pub const EDGE_GAP: f64 = 0.05;
 
 use crate::choice;
-use crate::toml_text::keys::{key, IfAbsent::*, KeyDoc};
 
 choice!(
     /// Where the rays come from.
@@ -341,6 +245,8 @@ impl<'de> Deserialize<'de> for DiscRadius {
     }
 }
 
+impl crate::toml_text::keys::Omit for DiscRadius {}
+
 impl Serialize for DiscRadius {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         match self {
@@ -348,40 +254,6 @@ impl Serialize for DiscRadius {
             DiscRadius::Spacing => s.serialize_str("spacing"),
         }
     }
-}
-
-fn two_thirds() -> f64 {
-    2.0 / 3.0
-}
-fn hundred() -> u64 {
-    100
-}
-fn ten() -> u64 {
-    10
-}
-fn eight() -> u64 {
-    8
-}
-fn one_u() -> u64 {
-    1
-}
-fn default_chunk() -> u64 {
-    16_384
-}
-fn default_bf_points() -> u64 {
-    256
-}
-fn default_k() -> u64 {
-    64
-}
-fn default_reference_samples() -> u64 {
-    1024
-}
-fn default_budget() -> f64 {
-    8.0
-}
-fn default_engines() -> Vec<EngineChoice> {
-    vec![EngineChoice::SphereCache]
 }
 
 /// `detp.points`: a count; a file name gets a hint to the keys that read one.

@@ -205,9 +205,6 @@ impl GridConfig {
                 ));
             }
         }
-        if variant == Variant::Scaling && scene == SceneModel::Infinite {
-            return Err(e("scene.spheres", "kind grid-scaling needs a finite scene: set scene.spheres (or scene.extent to a side)".into()));
-        }
         if raw.scaling.is_some() && variant != Variant::Scaling {
             return Err(e(
                 "scaling",
@@ -216,6 +213,9 @@ impl GridConfig {
                     variant.name()
                 ),
             ));
+        }
+        if variant == Variant::Scaling && scene == SceneModel::Infinite {
+            return Err(e("scene.spheres", "kind grid-scaling needs a finite scene: set scene.spheres (or scene.extent to a side)".into()));
         }
         let a = g.cell_width;
         // Memory of a finite grid, estimated before anything is allocated.
