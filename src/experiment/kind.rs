@@ -32,7 +32,7 @@ pub use crate::output::summary::Rate;
 use crate::output::summary::SummaryLine;
 use crate::output::table;
 pub use crate::output::table::{col, Cell, Cells, Entry, Line, Table};
-use crate::toml_text::de::{from_text, from_tree, KeyError, TextError};
+use crate::toml_text::de::{from_tree, KeyError};
 use crate::toml_text::keys::{keys_of, KeyDoc, SpecTable};
 
 /// What a point does, for progress and ETA: `units` of `unit` (rays, photons, photon-frames).
@@ -194,7 +194,7 @@ pub trait Kind: Send + Sync + 'static {
     const FIXED: &'static [(&'static str, &'static str)] = &[];
     /// The spec file of this kind: `[experiment]`, `[sweep]` and the kind's own tables, declared
     /// with [`crate::spec_file!`] (its keys, defaults and docs declared once).
-    type Raw: DeserializeOwned + Serialize + SpecTable;
+    type Raw: DeserializeOwned + Serialize + SpecTable + Send + Sync + 'static;
     /// One point, validated, in the engines' own types.
     type Point: Send + Sync + 'static;
     /// What one point measures (its main row).
@@ -206,8 +206,8 @@ pub trait Kind: Send + Sync + 'static {
     /// The main table: every column with the accessor that reads it from a measurement.
     const MAIN: Table<Self::Point, Self::Measured>;
 
-    /// Validates one point's raw spec into a runnable point.
-    fn configure(raw: Self::Raw, inputs: &mut Inputs) -> Result<Self::Point, ConfigError>;
+    /// Validates one point's spec, read once, into a runnable point.
+    fn configure(raw: &Self::Raw, inputs: &mut Inputs) -> Result<Self::Point, ConfigError>;
     /// One line for `raycost check`.
     fn describe(p: &Self::Point) -> String;
     /// Work, for progress.
@@ -239,6 +239,14 @@ pub trait Kind: Send + Sync + 'static {
         shared: &Self::Shared,
         ctx: &Context,
     ) -> Result<Output<Self::Measured, Self::Tables>, Error>;
+}
+
+/// A spec tree read once by a kind ([`DynKind::read`]).
+pub struct Reading {
+    /// The kind's typed spec ([`Kind::Raw`]).
+    raw: Box<dyn Any + Send + Sync>,
+    /// Its values written back, defaults filled in.
+    pub normalized: toml::Value,
 }
 
 /// A point of some kind, type-erased.
@@ -308,14 +316,13 @@ pub trait DynKind: Send + Sync {
     /// Every key this kind's spec accepts, in declaration order (`[]` after an array of tables),
     /// with its reference entry.
     fn keys(&self) -> Vec<KeyDoc>;
-    /// Reads the whole file with this kind's serde struct (errors located by line and column).
-    fn check_text(&self, text: &str) -> Result<(), TextError>;
-    /// The tree read and written back with defaults filled in (the normalised spec).
-    fn normalize(&self, tree: &toml::Table) -> Result<toml::Value, KeyError>;
-    /// Validates one point's tree.
+    /// Reads a spec tree with this kind's spec struct, once: the typed spec and its values
+    /// written back with defaults filled in (the normalised spec, the parameter columns).
+    fn read(&self, tree: &toml::Table) -> Result<Reading, KeyError>;
+    /// Validates one point's reading.
     fn configure(
         &self,
-        tree: &toml::Table,
+        reading: &Reading,
         inputs: &mut Inputs,
     ) -> Result<Box<dyn DynPoint>, ConfigError>;
     /// The shared measurement of a run.
@@ -372,19 +379,24 @@ impl<K: Kind> DynKind for Registered<K> {
     fn keys(&self) -> Vec<KeyDoc> {
         keys_of::<K::Raw>()
     }
-    fn check_text(&self, text: &str) -> Result<(), TextError> {
-        from_text::<K::Raw>(text).map(|_| ())
-    }
-    fn normalize(&self, tree: &toml::Table) -> Result<toml::Value, KeyError> {
+    fn read(&self, tree: &toml::Table) -> Result<Reading, KeyError> {
         let raw: K::Raw = from_tree(tree)?;
-        toml::Value::try_from(&raw).map_err(|e| KeyError::new("", e.to_string()))
+        let normalized =
+            toml::Value::try_from(&raw).map_err(|e| KeyError::new("", e.to_string()))?;
+        Ok(Reading {
+            raw: Box::new(raw),
+            normalized,
+        })
     }
     fn configure(
         &self,
-        tree: &toml::Table,
+        reading: &Reading,
         inputs: &mut Inputs,
     ) -> Result<Box<dyn DynPoint>, ConfigError> {
-        let raw: K::Raw = from_tree(tree)?;
+        let raw = reading
+            .raw
+            .downcast_ref::<K::Raw>()
+            .expect("a reading is configured by the kind that read it");
         Ok(Box::new(PointOf::<K>(K::configure(raw, inputs)?)))
     }
     fn shared(&self, points: &[&dyn DynPoint]) -> Result<Box<dyn Any + Send + Sync>, Error> {

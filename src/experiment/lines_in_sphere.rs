@@ -92,7 +92,7 @@ impl Kind for LinesInSphereKind {
         col(&LINES_PER_S, |_, m| m.lines_per_s.into()),
     ]);
 
-    fn configure(raw: LinesSpec, _: &mut Inputs) -> Result<LinesPoint, ConfigError> {
+    fn configure(raw: &LinesSpec, _: &mut Inputs) -> Result<LinesPoint, ConfigError> {
         Ok(LinesPoint {
             seed: raw.experiment.seed,
             count: raw.lines.count,

@@ -109,58 +109,6 @@ fn start_meta(plan: &Plan, opts: &RunOptions, warnings: Vec<String>) -> Meta {
     meta
 }
 
-/// A point's parameter value as a CSV cell: integers stay integers.
-fn param_value(v: &toml::Value) -> Value {
-    match v {
-        toml::Value::Float(x) => Value::F(*x),
-        toml::Value::Integer(i) if *i >= 0 => Value::U(*i as u64),
-        toml::Value::Integer(i) => Value::F(*i as f64),
-        toml::Value::String(s) => Value::S(s.clone()),
-        other => Value::S(other.to_string()),
-    }
-}
-
-/// Keys of the spec that are not parameters of a point: names, free text and the sweep itself.
-const NOT_PARAMETERS: &[&str] = &[
-    "experiment.name",
-    "experiment.kind",
-    "experiment.description",
-    "sweep",
-];
-
-/// Every parameter of a point, in column order: the swept or `--set` keys first (as `check`
-/// lists them), then every other key the kind accepts, in its declaration order, with the value in
-/// force (defaults filled in); a key without a value (an optional key left out) is missing (NaN).
-/// An array of tables (`scene.class`) is one column with its TOML text.
-pub fn all_params(
-    kind: &dyn DynKind,
-    accepted: &[String],
-    swept: &[(String, toml::Value)],
-    tree: &toml::Table,
-) -> Vec<(String, Value)> {
-    let normalized = kind.normalize(tree).ok();
-    let mut out: Vec<(String, Value)> = swept
-        .iter()
-        .map(|(k, v)| (k.clone(), param_value(v)))
-        .collect();
-    for key in accepted {
-        // `scene.class[].radius` → the column `scene.class`.
-        let key = match key.split_once("[]") {
-            Some((head, _)) => head,
-            None => key.as_str(),
-        };
-        if NOT_PARAMETERS.contains(&key) || out.iter().any(|(k, _)| k == key) {
-            continue;
-        }
-        let value = normalized
-            .as_ref()
-            .and_then(|v| key.split('.').try_fold(v, |v, seg| v.get(seg)))
-            .map_or(Value::F(f64::NAN), param_value);
-        out.push((key.to_string(), value));
-    }
-    out
-}
-
 /// Prepends `point` and the parameter columns to a result row.
 fn with_point_columns(index: usize, params: &[(String, Value)], row: &Row) -> Row {
     let mut r = Row::default();
@@ -255,8 +203,6 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
         return Ok((Vec::new(), msg));
     };
     meta.run.started = sink.started().to_string();
-    // The keys the kind accepts, found once per run (the parameter columns of every row).
-    let accepted: Vec<String> = kind.keys().into_iter().map(|k| k.key).collect();
     if let Some(then) = sink.previous() {
         meta.columns = then.columns.clone();
     }
@@ -312,8 +258,7 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
         for (name, rows) in &out.tables {
             check_declared(kind, name, rows)?;
         }
-        let params = all_params(kind, &accepted, &p.params, &p.tree);
-        let row = with_point_columns(i, &params, &out.row);
+        let row = with_point_columns(i, &plan.params[i], &out.row);
         let side: Vec<(&'static str, Vec<Row>)> = out
             .tables
             .iter()
@@ -549,7 +494,7 @@ mod tests {
             }),
             col(&BAD, |_, failures| (*failures).into()),
         ]);
-        fn configure(raw: LinesSpec, _: &mut Inputs) -> Result<f64, ConfigError> {
+        fn configure(raw: &LinesSpec, _: &mut Inputs) -> Result<f64, ConfigError> {
             Ok(raw.lines.inner_radius)
         }
         fn describe(p: &f64) -> String {

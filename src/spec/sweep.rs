@@ -17,9 +17,9 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::error::InputError;
-use crate::toml_text::de::opt_count;
-use crate::toml_text::de::{from_text, from_tree, KeyError, TextError};
-use crate::toml_text::{find_key, line_col};
+use crate::toml_text::de::{from_tree, opt_count, KeyError};
+use crate::toml_text::document::Document;
+use crate::toml_text::find_key;
 
 /// Largest number of points one spec may expand into.
 pub const MAX_POINTS: usize = 10_000;
@@ -119,6 +119,8 @@ pub struct Spec {
     pub dir: PathBuf,
     /// Its text.
     pub text: String,
+    /// Where each key and value of the text sits (its one parse).
+    pub doc: Document,
     /// `[experiment]`, after `--set`.
     pub experiment: RawExperiment,
     /// The file's tree with `--set` applied and `[sweep]` removed.
@@ -156,15 +158,17 @@ impl Spec {
                 key,
                 message,
             };
-        let mut tree: toml::Table = text.parse().map_err(|e: toml::de::Error| {
+        // The one parse of the text: its tree, and where every key and value sits.
+        let doc = Document::parse(text).map_err(|e| file_err(e.at, e.key, e.message))?;
+        let mut tree = doc.tree.clone();
+        // The header as written, before any --set.
+        from_tree::<Header>(&tree).map_err(|e| {
             file_err(
-                e.span().map(|s| line_col(text, s.start)),
-                None,
-                e.message().trim().to_string(),
+                doc.place(text, &e.key, &e.message),
+                (!e.key.is_empty()).then(|| e.key.clone()),
+                e.message,
             )
         })?;
-        // The header as written (located by serde), before any --set.
-        from_text::<Header>(text).map_err(|e: TextError| file_err(e.at, e.key, e.message))?;
 
         // The sweep axes, flattened to dotted keys.
         let mut flat = Vec::new();
@@ -255,6 +259,7 @@ impl Spec {
                 .map(Path::to_path_buf)
                 .unwrap_or_default(),
             text: text.to_string(),
+            doc,
             experiment: header.experiment,
             tree,
             sweep,
@@ -300,6 +305,17 @@ impl Spec {
     /// `None`): at the `--set` flag that set it, at the `[sweep]` entry that produced it (naming the
     /// point), or at the key in the file.
     pub fn locate(&self, point: Option<usize>, e: KeyError) -> InputError {
+        self.locate_as(point, e, false)
+    }
+
+    /// As [`Spec::locate`], for an error found reading the tree with a kind's serde struct: in the
+    /// file it is placed as serde reading the text would place it (a bad value at the value, an
+    /// unknown key at the key, a missing key at its table), not at the key's line.
+    pub fn locate_read(&self, point: Option<usize>, e: KeyError) -> InputError {
+        self.locate_as(point, e, true)
+    }
+
+    fn locate_as(&self, point: Option<usize>, e: KeyError, read: bool) -> InputError {
         let KeyError { key, message } = e;
         let related = |s: &str| {
             key == s || key.starts_with(&format!("{s}.")) || s.starts_with(&format!("{key}."))
@@ -336,7 +352,11 @@ impl Spec {
             },
             None => InputError {
                 file: self.path.clone(),
-                at: find_key(&self.text, &key).filter(|_| !key.is_empty()),
+                at: if read {
+                    self.doc.place(&self.text, &key, &message)
+                } else {
+                    find_key(&self.text, &key).filter(|_| !key.is_empty())
+                },
                 key: (!key.is_empty()).then_some(key),
                 message: format!("{message}{suffix}"),
             },
@@ -354,16 +374,6 @@ impl Spec {
             at: find_key(&self.text, axis),
             key: Some(flag_key),
             message,
-        }
-    }
-
-    /// Locates a serde error of the file's text (line and column from the parser).
-    pub fn locate_text(&self, e: TextError) -> InputError {
-        InputError {
-            file: self.path.clone(),
-            at: e.at,
-            key: e.key,
-            message: e.message,
         }
     }
 

@@ -335,7 +335,7 @@ impl Kind for DetpKind {
     type Shared = ReferenceCache;
     const MAIN: Table<DetpConfig, DetpMeasured> = col::MAIN;
 
-    fn configure(raw: DetpSpec, inputs: &mut Inputs) -> Result<DetpConfig, ConfigError> {
+    fn configure(raw: &DetpSpec, inputs: &mut Inputs) -> Result<DetpConfig, ConfigError> {
         if raw.detp.engine.is_some() {
             return refuse(
                 "detp.engine",

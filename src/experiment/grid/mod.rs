@@ -112,8 +112,8 @@ impl<V: GridVariant> Kind for Grid<V> {
     type Shared = V::Shared;
     const MAIN: Table<GridConfig, GridMeasured> = columns::MAIN;
 
-    fn configure(raw: GridSpec, _: &mut Inputs) -> Result<GridConfig, ConfigError> {
-        Ok(GridConfig::from_spec(&raw, V::VARIANT)?)
+    fn configure(raw: &GridSpec, _: &mut Inputs) -> Result<GridConfig, ConfigError> {
+        Ok(GridConfig::from_spec(raw, V::VARIANT)?)
     }
     fn describe(p: &GridConfig) -> String {
         describe(p)

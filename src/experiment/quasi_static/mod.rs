@@ -299,10 +299,10 @@ impl Kind for QuasiStaticKind {
     const MAIN: Table<QuasiStaticConfig, QsMeasured> = col::MAIN;
 
     fn configure(
-        raw: QuasiStaticSpec,
+        raw: &QuasiStaticSpec,
         inputs: &mut Inputs,
     ) -> Result<QuasiStaticConfig, ConfigError> {
-        QuasiStaticConfig::from_raw(&raw, inputs)
+        QuasiStaticConfig::from_raw(raw, inputs)
     }
     fn describe(p: &QuasiStaticConfig) -> String {
         describe(p)
