@@ -1,5 +1,8 @@
-//! The TOML scene format: what a user writes. Every table denies unknown keys and every number is
-//! checked where it is read, so an error names the file, line, column and key (as specs do).
+//! The TOML scene format: what a user writes, and its validation into a scene's parts. Every table
+//! denies unknown keys and every number is checked where it is read, so an error names the file,
+//! line, column and key (as specs do); the rules within a table are checked by that table's own
+//! code ([`RawSurface`] by its kind, [`RawLight`], `[analytic]`, [`RawDynamic`]), and those across
+//! tables by [`RawScene::into_parts`].
 //!
 //! ```toml
 //! [[surface]]              # one per surface: kind = "triangle" | "quad" | "sphere" | "obj"
@@ -19,7 +22,16 @@
 //! [analytic]               # kind = "point-over-plane" | "closed-sphere": the exact irradiance
 //! ```
 
+use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
 use serde::{de::Error as _, Deserialize, Deserializer, Serialize};
+
+use super::motion::{Motion, Mover, MoverPart};
+use super::shapes::{Ball, Triangle};
+use super::{Camera, InputError, Light, SceneParts, Surface};
+use crate::toml_text::find_key;
 
 use crate::toml_text::de::{number, opt_positive, positive};
 
@@ -273,4 +285,437 @@ fn albedo<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
             "got {x}, expected an albedo in [0, 1) (1 would never absorb: photon paths without end)"
         )))
     }
+}
+
+/// Where a scene file's problems are reported: the file, its text (for the key's line) and its
+/// folder (OBJ paths are relative to it).
+struct Cx<'a> {
+    name: String,
+    text: &'a str,
+    dir: &'a Path,
+}
+
+impl Cx<'_> {
+    /// A problem with `key`, at its line.
+    fn err(&self, key: String, message: impl Into<String>) -> InputError {
+        InputError {
+            file: self.name.clone(),
+            at: find_key(self.text, &key).filter(|_| !key.is_empty()),
+            key: Some(key),
+            message: message.into(),
+        }
+    }
+}
+
+impl RawScene {
+    /// The scene's parts, validated table by table ([`RawSurface`] by its kind, [`RawLight`],
+    /// `[analytic]`, [`RawDynamic`]), then the rules that span tables: a light, some geometry, a
+    /// closed form whose conditions hold, and dynamic objects that surfaces name. `path` names the
+    /// file in errors and anchors relative OBJ paths; `text` gives each key's line.
+    pub fn into_parts(self, path: &Path, text: &str) -> Result<SceneParts, InputError> {
+        let cx = Cx {
+            name: path.display().to_string(),
+            text,
+            dir: path.parent().unwrap_or(Path::new("")),
+        };
+        let mut parts = SceneParts::default();
+        // Geometry of each [[dynamic]] object, gathered from the surfaces naming it.
+        let mut moving: Vec<(Vec<Triangle>, Vec<Ball>)> =
+            vec![Default::default(); self.dynamic.len()];
+        for (si, s) in self.surface.iter().enumerate() {
+            s.add_to(si, &self.dynamic, &cx, &mut parts, &mut moving)?;
+        }
+        for (li, l) in self.light.iter().enumerate() {
+            parts.lights.push(l.light(li, &cx)?);
+        }
+        if parts.lights.is_empty() {
+            return Err(cx.err(
+                "light".into(),
+                "the scene has no light: add a [[light]] or a surface with emission > 0",
+            ));
+        }
+        if parts.triangles.is_empty() && parts.balls.is_empty() {
+            return Err(cx.err("surface".into(), "the scene has no surface"));
+        }
+        parts.analytic = self.analytic.map(|a| a.kind);
+        check_analytic(&parts, &cx)?;
+        parts.camera = self.camera.map(|c| Camera {
+            eye: DVec3::from_array(c.eye),
+            look_at: DVec3::from_array(c.look_at),
+            up: DVec3::from_array(c.up),
+            fov_deg: c.fov_deg,
+            width: c.width,
+            height: c.height,
+        });
+        parts.movers = movers(&self.dynamic, moving, &cx)?;
+        Ok(parts)
+    }
+}
+
+impl RawSurface {
+    /// Adds surface `si` to `parts`: its geometry by its kind (degenerate triangles skipped and
+    /// counted), its material, its light if it emits, or to its dynamic object's geometry.
+    fn add_to(
+        &self,
+        si: usize,
+        dynamic: &[RawDynamic],
+        cx: &Cx,
+        parts: &mut SceneParts,
+        moving: &mut [(Vec<Triangle>, Vec<Ball>)],
+    ) -> Result<(), InputError> {
+        let key = |k: &str| format!("surface[{si}].{k}");
+        let id = si as u32;
+        let first = parts.triangles.len();
+        let label = self.name.clone().unwrap_or_else(|| format!("surface {si}"));
+        self.geometry(si, cx, parts)?;
+        // Degenerate triangles are skipped and counted, never traced.
+        let before = parts.triangles.len();
+        let kept: Vec<Triangle> = parts
+            .triangles
+            .drain(first..)
+            .filter(|t| !t.degenerate())
+            .collect();
+        if kept.len() < before - first {
+            parts.warnings.push(format!(
+                "{}: {label}: skipped {} degenerate triangle(s) (zero area or not finite)",
+                cx.name,
+                before - first - kept.len()
+            ));
+        }
+        parts.triangles.extend(kept);
+        if let Some(dname) = &self.dynamic {
+            let Some(k) = dynamic.iter().position(|d| &d.name == dname) else {
+                return Err(cx.err(
+                    key("dynamic"),
+                    format!("no [[dynamic]] object is named \"{dname}\""),
+                ));
+            };
+            if self.emission.is_some() {
+                return Err(cx.err(
+                    key("emission"),
+                    "a dynamic surface cannot emit (lights are static)",
+                ));
+            }
+            moving[k].0.extend(parts.triangles.drain(first..));
+            if self.kind == SurfaceKind::Sphere {
+                moving[k].1.extend(parts.balls.pop());
+            }
+        }
+        if let Some(le) = self.emission {
+            let tris: Vec<u32> = (first as u32..parts.triangles.len() as u32).collect();
+            let ball = (self.kind == SurfaceKind::Sphere).then(|| parts.balls.len() as u32 - 1);
+            let area: f64 = tris
+                .iter()
+                .map(|&t| parts.triangles[t as usize].area())
+                .sum::<f64>()
+                + ball.map_or(0.0, |b| parts.balls[b as usize].area());
+            if area <= 0.0 {
+                return Err(cx.err(key("emission"), "an emitting surface has no area"));
+            }
+            parts.lights.push(Light::Area {
+                surface: id,
+                triangles: tris,
+                ball,
+                power: PI * le * area,
+            });
+        }
+        parts.surfaces.push(Surface {
+            name: label,
+            albedo: self.albedo,
+            emission: self.emission.unwrap_or(0.0),
+        });
+        Ok(())
+    }
+
+    /// Adds its geometry to `parts`, by its kind.
+    fn geometry(&self, si: usize, cx: &Cx, parts: &mut SceneParts) -> Result<(), InputError> {
+        let key = |k: &str| format!("surface[{si}].{k}");
+        let id = si as u32;
+        match self.kind {
+            SurfaceKind::Triangle => {
+                let v = self.vertices(3, si, cx)?;
+                parts.triangles.push(Triangle {
+                    v: [v[0], v[1], v[2]],
+                    surface: id,
+                });
+            }
+            SurfaceKind::Quad => {
+                let v = self.vertices(4, si, cx)?;
+                parts.triangles.extend(quad(&v, id, si, cx)?);
+            }
+            SurfaceKind::Sphere => {
+                let (Some(c), Some(r)) = (self.center, self.radius) else {
+                    return Err(cx.err(key("radius"), "a sphere needs center and radius"));
+                };
+                parts.balls.push(Ball {
+                    center: DVec3::from_array(c),
+                    radius: r,
+                    inside: self.inside,
+                    surface: id,
+                });
+            }
+            SurfaceKind::Obj => {
+                let Some(p) = &self.path else {
+                    return Err(cx.err(key("path"), "an obj surface needs a path"));
+                };
+                let file: PathBuf = cx.dir.join(p);
+                parts.sources.push((file.clone(), "obj"));
+                parts.triangles.extend(obj(&file, id, &key("path"), cx)?);
+            }
+        }
+        Ok(())
+    }
+
+    /// Its `n` vertices (a triangle has 3, a quad 4).
+    fn vertices(&self, n: usize, si: usize, cx: &Cx) -> Result<Vec<DVec3>, InputError> {
+        let v: Vec<DVec3> = self
+            .vertices
+            .iter()
+            .map(|&p| DVec3::from_array(p))
+            .collect();
+        if v.len() == n {
+            Ok(v)
+        } else {
+            Err(cx.err(
+                format!("surface[{si}].vertices"),
+                format!("a {:?} needs {n} vertices, got {}", self.kind, v.len()).to_lowercase(),
+            ))
+        }
+    }
+}
+
+/// A quad's two triangles, split along v0–v2: it must be planar and its vertices in order around
+/// it, or the two halves are not the quad the user meant.
+fn quad(v: &[DVec3], id: u32, si: usize, cx: &Cx) -> Result<[Triangle; 2], InputError> {
+    let n1 = (v[1] - v[0]).cross(v[2] - v[0]);
+    let n2 = (v[2] - v[0]).cross(v[3] - v[0]);
+    let size = (v[2] - v[0]).length().max((v[3] - v[1]).length());
+    let key = || format!("surface[{si}].vertices");
+    if n1.length() > 0.0 && n2.length() > 0.0 {
+        // Measured data is not exactly planar (the Cornell box's walls are off by 0.4 % of their
+        // size, as published): up to 1 % of the quad's size is accepted as measurement error,
+        // beyond it the quad is refused.
+        let off = (v[3] - v[0]).dot(n1.normalize()).abs();
+        if off > 0.01 * size {
+            return Err(cx.err(
+                key(),
+                format!("the quad is not planar: its 4th vertex is {off:.3e} off the plane of the first three, over 1 % of its size {size:.3e} (split it into two triangles)"),
+            ));
+        }
+        if n1.dot(n2) < 0.0 {
+            return Err(cx.err(
+                key(),
+                "the quad's vertices are not in order around it (a bow-tie): list them along its edge",
+            ));
+        }
+    }
+    Ok([
+        Triangle {
+            v: [v[0], v[1], v[2]],
+            surface: id,
+        },
+        Triangle {
+            v: [v[0], v[2], v[3]],
+            surface: id,
+        },
+    ])
+}
+
+/// The triangles of a Wavefront OBJ mesh (named by spec key `key`), triangulated.
+fn obj(file: &Path, id: u32, key: &str, cx: &Cx) -> Result<Vec<Triangle>, InputError> {
+    let bad = |message: String| InputError {
+        file: file.display().to_string(),
+        at: None,
+        key: None,
+        message,
+    };
+    let (models, _) = tobj::load_obj(
+        file,
+        &tobj::LoadOptions {
+            triangulate: true,
+            single_index: true,
+            ..Default::default()
+        },
+    )
+    .map_err(|e| {
+        bad(format!(
+            "cannot read this OBJ (named by {}, {key}): {e}",
+            cx.name
+        ))
+    })?;
+    if models.iter().all(|m| m.mesh.indices.len() < 3) {
+        return Err(bad(format!(
+            "the OBJ (named by {}, {key}) has no faces",
+            cx.name
+        )));
+    }
+    let mut out = Vec::new();
+    for m in models {
+        let p = &m.mesh.positions;
+        let vert = |i: u32| {
+            let i = i as usize * 3;
+            DVec3::new(f64::from(p[i]), f64::from(p[i + 1]), f64::from(p[i + 2]))
+        };
+        for f in m.mesh.indices.chunks_exact(3) {
+            out.push(Triangle {
+                v: [vert(f[0]), vert(f[1]), vert(f[2])],
+                surface: id,
+            });
+        }
+    }
+    Ok(out)
+}
+
+impl RawLight {
+    /// Light `li`: a point light, or a spot with a non-zero axis and a cone of at most 180°.
+    fn light(&self, li: usize, cx: &Cx) -> Result<Light, InputError> {
+        let position = DVec3::from_array(self.position);
+        Ok(match self.kind {
+            LightKind::Point => Light::Point {
+                position,
+                power: self.power,
+            },
+            LightKind::Spot => {
+                let (Some(dir), Some(cone)) = (self.direction, self.cone_deg) else {
+                    return Err(cx.err(
+                        format!("light[{li}].direction"),
+                        "a spot light needs direction and cone_deg",
+                    ));
+                };
+                let axis = DVec3::from_array(dir);
+                if axis.length() == 0.0 || cone > 180.0 {
+                    return Err(cx.err(
+                        format!("light[{li}].cone_deg"),
+                        "a spot needs a non-zero direction and cone_deg in (0, 180]",
+                    ));
+                }
+                Light::Spot {
+                    position,
+                    axis: axis.normalize(),
+                    cos_cone: cone.to_radians().cos(),
+                    power: self.power,
+                }
+            }
+        })
+    }
+}
+
+/// `[analytic]`: the closed form's conditions hold in the scene.
+fn check_analytic(parts: &SceneParts, cx: &Cx) -> Result<(), InputError> {
+    let refuse = |m: &str| Err(cx.err("analytic.kind".into(), m));
+    match parts.analytic {
+        Some(AnalyticKind::PointOverPlane)
+            if !parts.lights.iter().any(|l| matches!(l, Light::Point { .. })) =>
+        {
+            refuse("point-over-plane needs a point light")
+        }
+        Some(AnalyticKind::ClosedSphere)
+            if !parts
+                .balls
+                .iter()
+                .any(|b| b.inside && parts.surfaces[b.surface as usize].emission > 0.0) =>
+        {
+            refuse("closed-sphere needs an emitting sphere seen from inside")
+        }
+        Some(AnalyticKind::DirectLight)
+            if parts.surfaces.iter().any(|s| s.albedo != 0.0)
+                || parts.lights.iter().any(|l| matches!(l, Light::Area { .. })) =>
+        {
+            refuse("direct-light needs every albedo 0 and point or spot lights only (no emitting surface): then the irradiance is the lights' direct light")
+        }
+        _ => Ok(()),
+    }
+}
+
+/// The dynamic objects: each named once, with geometry (`moving`: what the surfaces naming it
+/// gave) and a motion.
+fn movers(
+    dynamic: &[RawDynamic],
+    moving: Vec<(Vec<Triangle>, Vec<Ball>)>,
+    cx: &Cx,
+) -> Result<Vec<Mover>, InputError> {
+    for (k, d) in dynamic.iter().enumerate() {
+        if let Some(first) = dynamic[..k].iter().position(|e| e.name == d.name) {
+            return Err(cx.err(
+                format!("dynamic[{k}].name"),
+                format!(
+                    "\"{}\" names two [[dynamic]] tables (the {} and the {}); each object needs its own name",
+                    d.name,
+                    ordinal(first),
+                    ordinal(k)
+                ),
+            ));
+        }
+    }
+    let mut out = Vec::new();
+    for (k, (d, (tris, bls))) in dynamic.iter().zip(moving).enumerate() {
+        if tris.is_empty() && bls.is_empty() {
+            return Err(cx.err(
+                format!("dynamic[{k}].name"),
+                format!("no surface names dynamic = \"{}\"", d.name),
+            ));
+        }
+        out.push(Mover::new(
+            d.name.clone(),
+            vec![MoverPart {
+                triangles: tris,
+                balls: bls,
+                motion: d.motion(k, cx)?,
+            }],
+        ));
+    }
+    Ok(out)
+}
+
+impl RawDynamic {
+    /// The motion of `[[dynamic]]` number `k`: a circle (centre, radius, axis, turns) or a
+    /// polyline of at least two points, with its spin.
+    fn motion(&self, k: usize, cx: &Cx) -> Result<Motion, InputError> {
+        let key = |f: &str| format!("dynamic[{k}].{f}");
+        let unit = |v: Option<[f64; 3]>, f: &str| -> Result<DVec3, InputError> {
+            let a = DVec3::from_array(v.unwrap_or([0.0, 1.0, 0.0]));
+            if a.length() > 0.0 {
+                Ok(a.normalize())
+            } else {
+                Err(cx.err(key(f), "an axis must be non-zero"))
+            }
+        };
+        let spin_axis = unit(self.spin_axis, "spin_axis")?;
+        match self.path {
+            PathKind::Circle => {
+                let (Some(c), Some(r)) = (self.center, self.radius) else {
+                    return Err(cx.err(key("path"), "a circle path needs center and radius"));
+                };
+                Ok(Motion::Circle {
+                    center: DVec3::from_array(c),
+                    radius: r,
+                    axis: unit(self.axis, "axis")?,
+                    turns: self.turns,
+                    spin_deg: self.spin_deg,
+                    spin_axis,
+                })
+            }
+            PathKind::Line if self.points.len() < 2 => {
+                Err(cx.err(key("points"), "a line path needs at least two points"))
+            }
+            PathKind::Line => Ok(Motion::Path {
+                points: self.points.iter().map(|&p| DVec3::from_array(p)).collect(),
+                spin_deg: self.spin_deg,
+                spin_axis,
+            }),
+        }
+    }
+}
+
+/// "1st", "2nd", … for messages.
+fn ordinal(k: usize) -> String {
+    let n = k + 1;
+    let suffix = match (n % 10, n % 100) {
+        (1, 11) | (2, 12) | (3, 13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("{n}{suffix}")
 }

@@ -33,8 +33,8 @@ use crate::detp::edge::{clamped_radii, clip_to_first_hit, EdgeMode};
 use crate::detp::quasi_static::QuasiStatic;
 use crate::detp::store::SegmentStore;
 use crate::error::Error;
-use crate::experiment::detp::spec::{DynamicEngine, Points};
 use crate::experiment::detp::DetpKind;
+use crate::experiment::detp::{DynamicEngine, Points};
 use crate::experiment::plan::Plan;
 use crate::experiment::quasi_static as eq;
 use crate::experiment::quasi_static::spec::QuasiStaticConfig;
@@ -448,7 +448,7 @@ fn edge(
 /// `--compare-edge MODE`: a remedy of `detp.edge`, with the default parameters (the spec's replace
 /// them in [`run`] when it gives them).
 pub fn edge_mode(name: &str) -> Result<EdgeMode, Error> {
-    use crate::experiment::detp::spec::{EDGE_GAP, EDGE_MIN_RADIUS};
+    use crate::experiment::detp::{EDGE_GAP, EDGE_MIN_RADIUS};
     let (min, gap) = (EDGE_MIN_RADIUS, EDGE_GAP);
     match name {
         "clamp-radius" => Ok(EdgeMode::ClampRadius { min }),

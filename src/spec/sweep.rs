@@ -191,51 +191,7 @@ impl Spec {
         }
 
         // --set overrides: an axis under `sweep`, or a value (which is then no longer swept).
-        let mut flags: Vec<SetFlag> = Vec::new();
-        for s in sets {
-            let flag = format!("--set {s}");
-            let flag_err = |key: Option<String>, m: String| InputError {
-                file: flag.clone(),
-                at: None,
-                key,
-                message: m,
-            };
-            let (path, value) = parse_set(s).map_err(|m| flag_err(None, m))?;
-            let key = path.join(".");
-            if path.first().map(String::as_str) == Some("sweep") {
-                let axis = path[1..].join(".");
-                if axis.is_empty() {
-                    return Err(flag_err(
-                        Some(key),
-                        "name the swept key: sweep.\"grid.cell_width\"=[…]".into(),
-                    ));
-                }
-                check_axis(&axis, &value).map_err(|m| flag_err(Some(key.clone()), m))?;
-                let values = value.as_array().cloned().unwrap_or_default();
-                match sweep.iter_mut().find(|(k, _)| *k == axis) {
-                    Some(existing) => existing.1 = values,
-                    None => sweep.push((axis.clone(), values)),
-                }
-            } else {
-                set_path(&mut tree, &path, value).map_err(|m| flag_err(Some(key.clone()), m))?;
-                sweep.retain(|(k, _)| *k != key);
-            }
-            flags.push(SetFlag { flag, key });
-        }
-        for f in &flags {
-            if let Some(axis) = f.key.strip_prefix("sweep.") {
-                if let Some(other) = flags.iter().find(|g| g.key == axis) {
-                    return Err(InputError::new(
-                        &f.flag,
-                        format!(
-                            "{} sets the same key to one value; give one or the other",
-                            other.flag
-                        ),
-                    )
-                    .key(&f.key));
-                }
-            }
-        }
+        let flags = apply_sets(sets, &mut tree, &mut sweep)?;
 
         // The header again, after --set (experiment.seed or .kind may have been set).
         let header: Header = from_tree(&tree).map_err(|e| locate_key(name, text, &flags, e))?;
@@ -381,6 +337,61 @@ impl Spec {
     pub fn resolve(&self, relative: &str) -> PathBuf {
         self.dir.join(relative)
     }
+}
+
+/// Applies the `--set` flags to the tree and the sweep axes: a key under `sweep` replaces (or adds)
+/// that axis, any other key sets the value and stops it being swept; a key set both ways is refused.
+fn apply_sets(
+    sets: &[String],
+    tree: &mut toml::Table,
+    sweep: &mut Vec<(String, Vec<toml::Value>)>,
+) -> Result<Vec<SetFlag>, InputError> {
+    let mut flags: Vec<SetFlag> = Vec::new();
+    for s in sets {
+        let flag = format!("--set {s}");
+        let flag_err = |key: Option<String>, m: String| InputError {
+            file: flag.clone(),
+            at: None,
+            key,
+            message: m,
+        };
+        let (path, value) = parse_set(s).map_err(|m| flag_err(None, m))?;
+        let key = path.join(".");
+        if path.first().map(String::as_str) == Some("sweep") {
+            let axis = path[1..].join(".");
+            if axis.is_empty() {
+                return Err(flag_err(
+                    Some(key),
+                    "name the swept key: sweep.\"grid.cell_width\"=[…]".into(),
+                ));
+            }
+            check_axis(&axis, &value).map_err(|m| flag_err(Some(key.clone()), m))?;
+            let values = value.as_array().cloned().unwrap_or_default();
+            match sweep.iter_mut().find(|(k, _)| *k == axis) {
+                Some(existing) => existing.1 = values,
+                None => sweep.push((axis.clone(), values)),
+            }
+        } else {
+            set_path(tree, &path, value).map_err(|m| flag_err(Some(key.clone()), m))?;
+            sweep.retain(|(k, _)| *k != key);
+        }
+        flags.push(SetFlag { flag, key });
+    }
+    for f in &flags {
+        if let Some(axis) = f.key.strip_prefix("sweep.") {
+            if let Some(other) = flags.iter().find(|g| g.key == axis) {
+                return Err(InputError::new(
+                    &f.flag,
+                    format!(
+                        "{} sets the same key to one value; give one or the other",
+                        other.flag
+                    ),
+                )
+                .key(&f.key));
+            }
+        }
+    }
+    Ok(flags)
 }
 
 /// A `[sweep]` axis must be a non-empty array and may not sweep `[experiment]` (the name and kind

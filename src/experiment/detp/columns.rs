@@ -4,11 +4,12 @@
 //! [`DISC_INDEX`], [`BRUTE_FORCE`], [`PHOTON_MAP`], [`REFERENCE`]), [`LEVELS`] and [`POINTS_TABLE`].
 //! Engine columns are families, one member per engine (`tests_{}` → `tests_sphere_cache`).
 
+use super::config::DetpConfig;
 use super::engines::{
     BruteMeasured, CacheMeasured, EngineMeasured, IndexMeasured, LevelRow, MapMeasured, Sizes,
 };
 use super::measure::{DetpMeasured, PointRow};
-use super::spec::{DetpConfig, EngineChoice};
+use super::spec::EngineChoice;
 use crate::output::column::{Class, Column};
 use crate::output::table::{cells, col, Against, Cell, Cells, Entry, Line, Table};
 use crate::stats::Theory;

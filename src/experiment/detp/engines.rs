@@ -10,7 +10,8 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-use super::spec::{DetpConfig, EngineChoice, FilterChoice};
+use super::config::DetpConfig;
+use super::spec::{EngineChoice, FilterChoice};
 use super::{PointSet, RaySet};
 use crate::detp::disc_index::{DiscIndex, IndexKind, IndexStats};
 use crate::detp::fixed::Acc;

@@ -6,8 +6,9 @@
 
 use glam::DVec3;
 
+use super::config::DetpConfig;
 use super::engines::{self, EngineMeasured, Law, LevelRow, Output, Pooled, ReferenceCache, Sizes};
-use super::spec::{DetpConfig, EngineChoice};
+use super::spec::EngineChoice;
 use super::{agree, points, rays, PointSet};
 use crate::error::Error;
 use crate::stats::Estimate;

@@ -16,25 +16,41 @@
 //! random subset of `brute_force_points` discs is re-computed by brute force. Any difference is the
 //! `mismatches` [`Check`]: the runner writes the row and fails the run (exit 1).
 //!
-//! Columns are declared in `columns.rs` (counts are totals over the point's replicas; estimates have
-//! one cluster per replica, so their standard errors cover independent ray sets).
+//! The spec's `[detp]` table is declared in `spec.rs` and validated in `config.rs`; a point's run and
+//! its typed measurement are in `measure.rs`; columns are declared with their accessors in
+//! `columns.rs` (counts are totals over the point's replicas; estimates have one cluster per
+//! replica, so their standard errors cover independent ray sets).
+//!
+//! # Interface for other kinds and commands
+//!
+//! Kind `quasi-static` reads the same `[detp]` table and `raycost render` draws a DETP point; both
+//! use only what is re-exported here: [`RawDetp`] (the table as written), [`DetpConfig`] (it
+//! validated: [`Rays`], [`Points`], d, the sphere cache's parameters, the index), [`memory`],
+//! [`describe`], [`DynamicEngine`] (quasi-static's engine choice), [`EngineChoice`], the edge
+//! remedies' defaults [`EDGE_MIN_RADIUS`] and [`EDGE_GAP`], and [`lattice_spacing`].
 
 use glam::DVec3;
 use rand::seq::index::sample as sample_indices;
 use rayon::prelude::*;
 
 pub mod columns;
+pub mod config;
 pub mod engines;
 mod lines;
 pub mod measure;
 mod scene;
 pub mod spec;
 
+// The DETP module's interface for kind `quasi-static` and `raycost render`: the validated `[detp]`
+// table and its parts, what a point needs in memory, the one-line description, and the defaults of
+// the edge remedies.
+pub use self::config::{lattice_spacing, DetpConfig, Points, Rays};
+pub use self::spec::{DynamicEngine, EngineChoice, RawDetp, EDGE_GAP, EDGE_MIN_RADIUS};
+
 use self::columns as col;
 use self::engines::{LevelRow, ReferenceCache};
 use self::measure::{DetpMeasured, PointRow};
-pub use self::spec::DetpConfig;
-use self::spec::{DetpSpec, EngineChoice, Points};
+use self::spec::DetpSpec;
 use super::inputs::Inputs;
 use super::kind::{
     refuse, Check, ConfigError, Context, Kind, Memory, Need, Output, Rate, Table, Work,
@@ -129,7 +145,7 @@ pub(crate) fn points(cfg: &DetpConfig, point: u64) -> Result<PointSet, Error> {
 /// in the unit ball (spacing 2/(√3·k), so r_0 = √3·spacing·k/2 = 1), with uniform normals drawn
 /// from the same keyed streams as points in the ball.
 fn lattice(seed: u64, point: u64, k: u64) -> (Vec<DVec3>, Vec<DVec3>) {
-    let s = spec::lattice_spacing(k);
+    let s = config::lattice_spacing(k);
     let a = 1.0 / 3f64.sqrt();
     let n = k.pow(3);
     let at = move |i: u64| -a + s * (i as f64 + 0.5);
@@ -229,7 +245,7 @@ pub fn describe(cfg: &DetpConfig) -> String {
         Points::Grid(k) => format!(
             "{} points on a {k}³ lattice of spacing {:.6} in the unit ball",
             k.pow(3),
-            spec::lattice_spacing(*k)
+            config::lattice_spacing(*k)
         ),
         Points::Surface(s) => format!("surface points at spacing {s}"),
         Points::File(p) => format!("{} points from {}", p.centers.len(), p.path.display()),

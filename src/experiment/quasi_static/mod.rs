@@ -25,7 +25,7 @@ pub mod spec;
 use self::columns as col;
 use self::measure::{FrameRow, QsMeasured, QsPointRow, ReplicaRun};
 use self::spec::{QuasiStaticConfig, QuasiStaticSpec};
-use super::detp::spec::DynamicEngine;
+use super::detp::DynamicEngine;
 use super::inputs::Inputs;
 use super::kind::{Check, ConfigError, Context, Kind, Memory, Output, Rate, Table, Work};
 use crate::detp::quasi_static::{mismatches, Engine, FrameStats, Params, QuasiStatic, Used};

@@ -7,7 +7,7 @@
 //! as the scene, leave the scene's box at any frame, or overlap another object.
 
 use crate::detp::quasi_static::Feed;
-use crate::experiment::detp::spec::{DetpConfig, DynamicEngine, Points, RawDetp, Rays};
+use crate::experiment::detp::{DetpConfig, DynamicEngine, EngineChoice, Points, RawDetp, Rays};
 use crate::experiment::inputs::{Inputs, SceneFile};
 use crate::experiment::kind::{refuse, ConfigError};
 use crate::lt::Scene;
@@ -150,28 +150,13 @@ impl QuasiStaticConfig {
                 "kind quasi-static runs the paper's method only (its incremental updates keep the stored segments and d); the remedies are measured by kind \"detp\"",
             );
         }
-        if detp.engines != [crate::experiment::detp::spec::EngineChoice::SphereCache] {
+        if detp.engines != [EngineChoice::SphereCache] {
             return refuse(
                 "detp.engines",
                 "kind quasi-static chooses its engine per object with detp.engine (hybrid, sphere-cache, disc-index, predicted)",
             );
         }
-        if let Some(n) = dy.reference_photons {
-            if n > 1 << 31 {
-                return refuse("dynamic.reference_photons", format!("got {n}, at most 2³¹"));
-            }
-        }
-        if dy.frames > 1 << 20 {
-            return refuse("dynamic.frames", format!("got {}, at most 2²⁰", dy.frames));
-        }
-        if let Some(f) = dy.points_frame {
-            if f >= dy.frames {
-                return refuse(
-                    "dynamic.points_frame",
-                    format!("got {f}, the frames are 0…{}", dy.frames - 1),
-                );
-            }
-        }
+        dy.check()?;
         let scene = scaled(file, dy.ratio)?;
         // A size or motion problem is the scene's, or the ratio's when the spec rescales.
         let blame = if dy.ratio.is_some() {
@@ -203,6 +188,33 @@ impl QuasiStaticConfig {
                 .or((d.engine == Some(DynamicEngine::Predicted)).then_some(0.05)),
             warnings,
         })
+    }
+}
+
+impl RawDynamicSpec {
+    /// The rules within `[dynamic]`: at most 2²⁰ frames, a points frame among them, at most 2³¹
+    /// reference photons.
+    fn check(&self) -> Result<(), ConfigError> {
+        if let Some(n) = self.reference_photons {
+            if n > 1 << 31 {
+                return refuse("dynamic.reference_photons", format!("got {n}, at most 2³¹"));
+            }
+        }
+        if self.frames > 1 << 20 {
+            return refuse(
+                "dynamic.frames",
+                format!("got {}, at most 2²⁰", self.frames),
+            );
+        }
+        if let Some(f) = self.points_frame {
+            if f >= self.frames {
+                return refuse(
+                    "dynamic.points_frame",
+                    format!("got {f}, the frames are 0…{}", self.frames - 1),
+                );
+            }
+        }
+        Ok(())
     }
 }
 
