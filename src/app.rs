@@ -14,28 +14,7 @@ use crate::theory::grid::{self as th, Eye, GridTheoryInput};
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> crate::error::Result<()> {
     match cli.command {
-        Command::Run(a) => {
-            let threads = thread_pool(a.threads)?;
-            let plan = Plan::load(&a.spec, &a.set, threads)?;
-            let opts = RunOptions {
-                out: a.out,
-                force: a.force,
-                resume: a.resume,
-                quiet: a.quiet,
-                shard: a.shard,
-                sets: a.set,
-                threads,
-            };
-            let (written, summary) = runner::run(&plan, &opts)?;
-            if !a.quiet {
-                let mut out = std::io::stdout().lock();
-                write!(out, "{summary}")?;
-                for p in written {
-                    writeln!(out, "wrote {}", p.display())?;
-                }
-            }
-            Ok(())
-        }
+        Command::Run(a) => run_spec(a),
         Command::Check(a) => {
             let plan = Plan::load(&a.spec, &a.set, thread_pool(None)?)?;
             let text = if a.json {
@@ -47,81 +26,8 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             Ok(())
         }
         Command::Theory(t) => match t.which {
-            TheoryCommand::Grid(g) => {
-                for (name, v) in [
-                    ("--intensity", g.intensity),
-                    ("--radius", g.radius),
-                    ("--cell-width", g.cell_width),
-                ] {
-                    if !(v.is_finite() && v > 0.0) {
-                        return Err(Error::Usage(format!(
-                            "{name}: got {v}, expected a finite number > 0"
-                        )));
-                    }
-                }
-                let classes = [RadiusClass {
-                    fraction: 1.0,
-                    radius: RadiusDist::Constant(g.radius),
-                }];
-                let inp = GridTheoryInput {
-                    intensity: g.intensity,
-                    classes: &classes,
-                    draw: RadiusDraw::PerSphere,
-                    cell_width: g.cell_width,
-                };
-                let eye = match g.eye {
-                    EyeArg::Corner => Eye::Corner,
-                    EyeArg::Uniform => Eye::Uniform,
-                };
-                let text = if g.json {
-                    json_text(&grid_theory_json(&inp, eye))
-                } else {
-                    grid_theory_table(&inp, eye)
-                };
-                write!(std::io::stdout().lock(), "{text}")?;
-                Ok(())
-            }
-            TheoryCommand::Detp(d) => {
-                let ok = |name: &str, v: f64, good: bool, want: &str| {
-                    if good {
-                        Ok(())
-                    } else {
-                        Err(Error::Usage(format!("{name}: got {v}, expected {want}")))
-                    }
-                };
-                ok(
-                    "--rays",
-                    d.rays,
-                    d.rays.is_finite() && d.rays >= 1.0,
-                    "a count ≥ 1",
-                )?;
-                ok(
-                    "--points",
-                    d.points,
-                    d.points.is_finite() && d.points >= 1.0,
-                    "a count ≥ 1",
-                )?;
-                ok("--q", d.q, d.q > 0.0 && d.q < 1.0, "a ratio in (0, 1)")?;
-                ok(
-                    "--ratio",
-                    d.ratio,
-                    d.ratio > 0.0 && d.ratio <= 1.0,
-                    "r_D/r_0 in (0, 1]",
-                )?;
-                ok(
-                    "--threshold",
-                    d.threshold,
-                    d.threshold.is_finite() && d.threshold >= 1.0,
-                    "a count ≥ 1",
-                )?;
-                let text = if d.json {
-                    json_text(&detp_theory_json(&d))
-                } else {
-                    detp_theory_table(&d)
-                };
-                write!(std::io::stdout().lock(), "{text}")?;
-                Ok(())
-            }
+            TheoryCommand::Grid(g) => theory_grid(&g),
+            TheoryCommand::Detp(d) => theory_detp(&d),
         },
         Command::Doc(d) => {
             let text = match d.what {
@@ -163,37 +69,134 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             m.force,
             m.quiet,
         )?),
-        Command::Render(r) => {
-            let threads = thread_pool(r.threads)?;
-            let plan = Plan::load(&r.spec, &r.set, threads)?;
-            let frames = match (r.frame, r.frames.is_empty()) {
-                (Some(f), _) => vec![f],
-                (None, true) => vec![0],
-                (None, false) => r.frames,
-            };
-            let opts = crate::render::RenderOptions {
-                frames,
-                point: r.point,
-                out: r.out,
-                gif: r.gif,
-                diff: r.diff,
-                width: r.width,
-                colormap: r.colormap,
-                force: r.force,
-                eye: vec3("--eye", &r.eye)?,
-                look_at: vec3("--look-at", &r.look_at)?,
-                fov: r.fov,
-                compare_edge: r
-                    .compare_edge
-                    .as_deref()
-                    .map(crate::render::edge_mode)
-                    .transpose()?,
-            };
-            let log = crate::render::run(&plan, &opts)?;
-            write!(std::io::stdout().lock(), "{log}")?;
-            Ok(())
+        Command::Render(r) => render(r),
+    }
+}
+
+/// `raycost run`.
+fn run_spec(a: crate::cli::RunArgs) -> crate::error::Result<()> {
+    let threads = thread_pool(a.threads)?;
+    let plan = Plan::load(&a.spec, &a.set, threads)?;
+    let opts = RunOptions {
+        out: a.out,
+        force: a.force,
+        resume: a.resume,
+        quiet: a.quiet,
+        shard: a.shard,
+        sets: a.set,
+        threads,
+    };
+    let (written, summary) = runner::run(&plan, &opts)?;
+    if !a.quiet {
+        let mut out = std::io::stdout().lock();
+        write!(out, "{summary}")?;
+        for p in written {
+            writeln!(out, "wrote {}", p.display())?;
         }
     }
+    Ok(())
+}
+
+/// `raycost theory grid`.
+fn theory_grid(g: &crate::cli::GridTheoryArgs) -> crate::error::Result<()> {
+    for (name, v) in [
+        ("--intensity", g.intensity),
+        ("--radius", g.radius),
+        ("--cell-width", g.cell_width),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(Error::Usage(format!(
+                "{name}: got {v}, expected a finite number > 0"
+            )));
+        }
+    }
+    let classes = [RadiusClass {
+        fraction: 1.0,
+        radius: RadiusDist::Constant(g.radius),
+    }];
+    let inp = GridTheoryInput {
+        intensity: g.intensity,
+        classes: &classes,
+        draw: RadiusDraw::PerSphere,
+        cell_width: g.cell_width,
+    };
+    let eye = match g.eye {
+        EyeArg::Corner => Eye::Corner,
+        EyeArg::Uniform => Eye::Uniform,
+    };
+    let text = if g.json {
+        json_text(&grid_theory_json(&inp, eye))
+    } else {
+        grid_theory_table(&inp, eye)
+    };
+    write!(std::io::stdout().lock(), "{text}")?;
+    Ok(())
+}
+
+/// `raycost theory detp`.
+fn theory_detp(d: &crate::cli::DetpTheoryArgs) -> crate::error::Result<()> {
+    let ok = |name: &str, v: f64, good: bool, want: &str| {
+        if good {
+            Ok(())
+        } else {
+            Err(Error::Usage(format!("{name}: got {v}, expected {want}")))
+        }
+    };
+    let count = |v: f64| v.is_finite() && v >= 1.0;
+    ok("--rays", d.rays, count(d.rays), "a count ≥ 1")?;
+    ok("--points", d.points, count(d.points), "a count ≥ 1")?;
+    ok("--q", d.q, d.q > 0.0 && d.q < 1.0, "a ratio in (0, 1)")?;
+    ok(
+        "--ratio",
+        d.ratio,
+        d.ratio > 0.0 && d.ratio <= 1.0,
+        "r_D/r_0 in (0, 1]",
+    )?;
+    ok(
+        "--threshold",
+        d.threshold,
+        count(d.threshold),
+        "a count ≥ 1",
+    )?;
+    let text = if d.json {
+        json_text(&detp_theory_json(d))
+    } else {
+        detp_theory_table(d)
+    };
+    write!(std::io::stdout().lock(), "{text}")?;
+    Ok(())
+}
+
+/// `raycost render`.
+fn render(r: crate::cli::RenderArgs) -> crate::error::Result<()> {
+    let threads = thread_pool(r.threads)?;
+    let plan = Plan::load(&r.spec, &r.set, threads)?;
+    let frames = match (r.frame, r.frames.is_empty()) {
+        (Some(f), _) => vec![f],
+        (None, true) => vec![0],
+        (None, false) => r.frames,
+    };
+    let opts = crate::render::RenderOptions {
+        frames,
+        point: r.point,
+        out: r.out,
+        gif: r.gif,
+        diff: r.diff,
+        width: r.width,
+        colormap: r.colormap,
+        force: r.force,
+        eye: vec3("--eye", &r.eye)?,
+        look_at: vec3("--look-at", &r.look_at)?,
+        fov: r.fov,
+        compare_edge: r
+            .compare_edge
+            .as_deref()
+            .map(crate::render::edge_mode)
+            .transpose()?,
+    };
+    let log = crate::render::run(&plan, &opts)?;
+    write!(std::io::stdout().lock(), "{log}")?;
+    Ok(())
 }
 
 /// Pretty JSON with a final newline.

@@ -120,27 +120,62 @@ fn with_point_columns(index: usize, params: &[(String, Value)], row: &Row) -> Ro
     r
 }
 
-/// What Ctrl-C says: the points kept so far and the command that resumes (updated after every
-/// point; the handler prints it and exits with 130).
-static ON_INTERRUPT: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
+/// Ctrl-C during a run. The handler asks the runner to stop ([`interrupt::requested`]); the runner
+/// stops after the point in progress (its row kept) and returns [`Error::Interrupted`], whose exit
+/// code is 130, with the command that resumes. A point that does not finish within a second of the
+/// signal is not waited for: the handler then says what was kept (the point in progress is lost,
+/// as a kill would lose it) and exits with 130 itself.
+mod interrupt {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Mutex;
+    use std::time::{Duration, Instant};
 
-/// Installs the Ctrl-C handler once per process.
-fn catch_interrupt() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    ONCE.call_once(|| {
-        let _ = ctrlc::set_handler(|| {
-            let msg = ON_INTERRUPT
-                .lock()
-                .ok()
-                .and_then(|m| m.clone())
-                .unwrap_or_else(|| "interrupted before any point finished".into());
-            eprintln!("\ninterrupted: {msg}");
-            std::process::exit(130);
+    static REQUESTED: AtomicBool = AtomicBool::new(false);
+    static HEEDED: AtomicBool = AtomicBool::new(false);
+    /// What was kept so far and how to resume (updated after every point).
+    static KEPT: Mutex<Option<String>> = Mutex::new(None);
+    /// How long the handler waits for the runner to heed it.
+    const GRACE: Duration = Duration::from_secs(1);
+
+    /// Installs the handler once per process.
+    pub fn install() {
+        static ONCE: std::sync::Once = std::sync::Once::new();
+        ONCE.call_once(|| {
+            let _ = ctrlc::set_handler(|| {
+                REQUESTED.store(true, Ordering::SeqCst);
+                let t0 = Instant::now();
+                while t0.elapsed() < GRACE {
+                    if HEEDED.load(Ordering::SeqCst) {
+                        return;
+                    }
+                    std::thread::sleep(Duration::from_millis(10));
+                }
+                let kept = KEPT.lock().ok().and_then(|m| m.clone());
+                let kept = kept.unwrap_or_else(|| "before any point finished".into());
+                eprintln!("\nerror: interrupted: {kept} (the point in progress is lost)");
+                std::process::exit(130);
+            });
         });
-    });
+    }
+
+    /// Records what Ctrl-C should say now.
+    pub fn kept(line: String) {
+        if let Ok(mut m) = KEPT.lock() {
+            *m = Some(line);
+        }
+    }
+
+    /// Whether Ctrl-C was pressed (and, if so, the runner now heeds it).
+    pub fn requested() -> bool {
+        let r = REQUESTED.load(Ordering::SeqCst);
+        if r {
+            HEEDED.store(true, Ordering::SeqCst);
+        }
+        r
+    }
 }
 
-/// The line Ctrl-C prints after `done` of `total` points are in `partial`.
+/// What Ctrl-C says after `done` of `total` points are in `partial`.
 fn interrupt_line(
     plan: &Plan,
     opts: &RunOptions,
@@ -160,9 +195,27 @@ fn interrupt_line(
         cmd.push_str(&format!(" --set '{s}'"));
     }
     format!(
-        "{done} of {total} point(s) kept in {} (the point in progress is lost); continue with: {cmd}",
+        "{done} of {total} point(s) kept in {}; continue with: {cmd}",
         partial.display()
     )
+}
+
+/// One finished point: its index, its parameters as the summary shows them, what it produced, its
+/// wall seconds.
+type Finished = (usize, String, ErasedOutput, f64);
+
+/// The warnings of this shard's points known before running, each once.
+fn known_warnings(plan: &Plan, mine: &[usize]) -> Vec<String> {
+    let mut warnings: Vec<String> = Vec::new();
+    for &i in mine {
+        for w in plan.points[i].warnings() {
+            let w = format!("point {i}: {w}");
+            if !warnings.contains(&w) {
+                warnings.push(w);
+            }
+        }
+    }
+    warnings
 }
 
 /// Runs `plan`; returns the written paths and the summary text.
@@ -174,27 +227,13 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
     let mine: Vec<usize> = (0..plan.points.len())
         .filter(|i| opts.shard.is_none_or(|s| i % s.n == s.k))
         .collect();
-    let mut warnings: Vec<String> = Vec::new();
-    for &i in &mine {
-        for w in plan.points[i].warnings() {
-            let w = format!("point {i}: {w}");
-            if !warnings.contains(&w) {
-                warnings.push(w);
-            }
-        }
-    }
-    let mut meta = start_meta(plan, opts, warnings);
-    let sink = Sink::open(
-        &dir,
-        &stem,
-        &meta,
-        SinkOptions {
-            force: opts.force,
-            resume: opts.resume,
-            tables: kind.table_names(),
-        },
-    )?;
-    let Some(mut sink) = sink else {
+    let mut meta = start_meta(plan, opts, known_warnings(plan, &mine));
+    let sink_options = SinkOptions {
+        force: opts.force,
+        resume: opts.resume,
+        tables: kind.table_names(),
+    };
+    let Some(mut sink) = Sink::open(&dir, &stem, &meta, sink_options)? else {
         // --resume on a finished table: nothing to do, and nothing is touched.
         let msg = format!(
             "{}: finished already, nothing to resume\n",
@@ -211,120 +250,12 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
         eprintln!("warning: {w}");
     }
     let t0 = Instant::now();
-    let resumed: Vec<usize> = mine
-        .iter()
-        .copied()
-        .filter(|i| sink.done().contains(i))
-        .collect();
-    let todo: Vec<usize> = mine
-        .iter()
-        .copied()
-        .filter(|i| !sink.done().contains(i))
-        .collect();
-    let todo_points: Vec<&dyn super::kind::DynPoint> =
-        todo.iter().map(|&i| plan.points[i].as_ref()).collect();
-    let shared = kind.shared(&todo_points)?;
-    meta.extra = kind.shared_meta(shared.as_ref());
-
-    let total: u64 = todo_points.iter().map(|p| p.work().units).sum();
-    let unit = todo_points.first().map_or("rays", |p| p.work().unit);
-    let bar = progress(total, unit, todo.len(), opts.quiet);
-    let partial = dir.join(format!("{stem}.csv.partial"));
-    if let Ok(mut m) = ON_INTERRUPT.lock() {
-        *m = Some(interrupt_line(
-            plan,
-            opts,
-            &partial,
-            resumed.len(),
-            mine.len(),
-        ));
-    }
-    catch_interrupt();
-    let mut finished: Vec<(usize, String, ErasedOutput, f64)> = Vec::new();
-    for (n, &i) in todo.iter().enumerate() {
-        bar.point(n, todo.len());
-        let p = &plan.spec.points[i];
-        let start = Instant::now();
-        let ctx = Context {
-            index: i as u64,
-            threads: opts.threads,
-            progress: &|k| bar.inc(k),
-        };
-        let out = kind
-            .run(plan.points[i].as_ref(), shared.as_ref(), &ctx)
-            .context_with(|| format!("point {i}"))?;
-        let wall = start.elapsed().as_secs_f64();
-        check_declared(kind, "main", std::slice::from_ref(&out.row))?;
-        for (name, rows) in &out.tables {
-            check_declared(kind, name, rows)?;
-        }
-        let row = with_point_columns(i, &plan.params[i], &out.row);
-        let side: Vec<(&'static str, Vec<Row>)> = out
-            .tables
-            .iter()
-            .map(|(name, rows)| {
-                let rows = rows.iter().map(|r| with_point_columns(i, &[], r)).collect();
-                (*name, rows)
-            })
-            .collect();
-        record_columns(&mut meta.columns, "main", &row);
-        for (name, rows) in &side {
-            if let Some(r) = rows.first() {
-                record_columns(&mut meta.columns, name, r);
-            }
-        }
-        sink.append(&row, &side)
-            .map_err(|e| Error::Internal(e.into()))
-            .context_with(|| format!("could not append point {i} to {}", dir.display()))?;
-        for w in &out.warnings {
-            let w = format!("point {i}: {w}");
-            eprintln!("warning: {w}");
-            if !meta.warnings.contains(&w) {
-                meta.warnings.push(w);
-            }
-        }
-        let params = p
-            .params
-            .iter()
-            .map(|(k, v)| format!("{}={v}", short(k)))
-            .collect::<Vec<_>>()
-            .join(" ");
-        meta.run.points.push(i);
-        meta.run.point_wall_s.push(wall);
-        if let Ok(mut m) = ON_INTERRUPT.lock() {
-            *m = Some(interrupt_line(
-                plan,
-                opts,
-                &partial,
-                resumed.len() + n + 1,
-                mine.len(),
-            ));
-        }
-        let mut out = out;
-        // Every built-in check gets a summary line, failed or not.
-        for c in &out.checks {
-            out.summary.push(summary::SummaryLine {
-                metric: c.name.to_string(),
-                measured: crate::stats::Estimate {
-                    mean: c.failures as f64,
-                    se: 0.0,
-                    n: c.checked,
-                    clusters: c.checked,
-                },
-                theory: format!("0 of {}", c.checked),
-                verdict: crate::stats::Verdict::of_check(c.failures),
-            });
-        }
-        finished.push((i, params, out, wall));
-    }
-    bar.finish();
-    if let Ok(mut m) = ON_INTERRUPT.lock() {
-        *m = Some(
-            "the run was finishing its files; run the same command with --resume to complete it"
-                .into(),
-        );
-    }
-
+    let (resumed, todo): (Vec<usize>, Vec<usize>) =
+        mine.iter().partition(|i| sink.done().contains(i));
+    let finished = run_points(plan, opts, &todo, resumed.len(), &mut meta, &mut sink)?;
+    interrupt::kept(
+        "the run was finishing its files; run the same command with --resume to complete it".into(),
+    );
     meta.end(t0.elapsed().as_secs_f64());
     if meta.busy() {
         if let Some(w) = meta.warnings.last() {
@@ -363,6 +294,122 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
         })
         .collect();
     Ok((written, summary::render(&shown)))
+}
+
+/// Runs the points `todo` (after `resumed` points of an earlier run), appending each to the sink
+/// as it finishes; stops with [`Error::Interrupted`] after the point in progress on Ctrl-C.
+fn run_points(
+    plan: &Plan,
+    opts: &RunOptions,
+    todo: &[usize],
+    resumed: usize,
+    meta: &mut Meta,
+    sink: &mut Sink,
+) -> Result<Vec<Finished>, Error> {
+    let kind = plan.kind;
+    let todo_points: Vec<&dyn super::kind::DynPoint> =
+        todo.iter().map(|&i| plan.points[i].as_ref()).collect();
+    let shared = kind.shared(&todo_points)?;
+    meta.extra = kind.shared_meta(shared.as_ref());
+    let total: u64 = todo_points.iter().map(|p| p.work().units).sum();
+    let unit = todo_points.first().map_or("rays", |p| p.work().unit);
+    let bar = progress(total, unit, todo.len(), opts.quiet);
+    let name = &plan.spec.experiment.name;
+    let partial = opts
+        .out
+        .join(name)
+        .join(format!("{}.csv.partial", stem(name, opts.shard)));
+    let all = resumed + todo.len();
+    interrupt::kept(interrupt_line(plan, opts, &partial, resumed, all));
+    interrupt::install();
+    let mut finished: Vec<Finished> = Vec::new();
+    for (n, &i) in todo.iter().enumerate() {
+        bar.point(n, todo.len());
+        let start = Instant::now();
+        let ctx = Context {
+            index: i as u64,
+            threads: opts.threads,
+            progress: &|k| bar.inc(k),
+        };
+        let out = kind
+            .run(plan.points[i].as_ref(), shared.as_ref(), &ctx)
+            .context_with(|| format!("point {i}"))?;
+        let wall = start.elapsed().as_secs_f64();
+        finished.push(keep_point(plan, i, out, wall, meta, sink)?);
+        let line = interrupt_line(plan, opts, &partial, resumed + n + 1, all);
+        if interrupt::requested() {
+            bar.finish();
+            return Err(Error::Interrupted(line));
+        }
+        interrupt::kept(line);
+    }
+    bar.finish();
+    Ok(finished)
+}
+
+/// Appends point `i`'s rows (with `point` and its parameters) to the sink, records its columns,
+/// warnings and wall time in the metadata, and adds its checks' summary lines.
+fn keep_point(
+    plan: &Plan,
+    i: usize,
+    mut out: ErasedOutput,
+    wall: f64,
+    meta: &mut Meta,
+    sink: &mut Sink,
+) -> Result<Finished, Error> {
+    let kind = plan.kind;
+    check_declared(kind, "main", std::slice::from_ref(&out.row))?;
+    for (name, rows) in &out.tables {
+        check_declared(kind, name, rows)?;
+    }
+    let row = with_point_columns(i, &plan.params[i], &out.row);
+    let side: Vec<(&'static str, Vec<Row>)> = out
+        .tables
+        .iter()
+        .map(|(name, rows)| {
+            let rows = rows.iter().map(|r| with_point_columns(i, &[], r)).collect();
+            (*name, rows)
+        })
+        .collect();
+    record_columns(&mut meta.columns, "main", &row);
+    for (name, rows) in &side {
+        if let Some(r) = rows.first() {
+            record_columns(&mut meta.columns, name, r);
+        }
+    }
+    sink.append(&row, &side)
+        .map_err(|e| Error::Internal(e.into()))
+        .context_with(|| format!("could not append point {i}"))?;
+    for w in &out.warnings {
+        let w = format!("point {i}: {w}");
+        eprintln!("warning: {w}");
+        if !meta.warnings.contains(&w) {
+            meta.warnings.push(w);
+        }
+    }
+    meta.run.points.push(i);
+    meta.run.point_wall_s.push(wall);
+    // Every built-in check gets a summary line, failed or not.
+    for c in &out.checks {
+        out.summary.push(summary::SummaryLine {
+            metric: c.name.to_string(),
+            measured: crate::stats::Estimate {
+                mean: c.failures as f64,
+                se: 0.0,
+                n: c.checked,
+                clusters: c.checked,
+            },
+            theory: format!("0 of {}", c.checked),
+            verdict: crate::stats::Verdict::of_check(c.failures),
+        });
+    }
+    let params = plan.spec.points[i]
+        .params
+        .iter()
+        .map(|(k, v)| format!("{}={v}", short(k)))
+        .collect::<Vec<_>>()
+        .join(" ");
+    Ok((i, params, out, wall))
 }
 
 /// Every cell of a kind's rows of `table` must come from the kind's declaration of that table, with
