@@ -16,7 +16,7 @@
 //! [`crate::output::table`] turns the measurements into rows, summary lines and verdicts
 //! ([`Registered`] does it for every kind alike).
 //!
-//! Adding a kind is one module and one line in [`super::registry::KINDS`].
+//! Adding a kind is one module and one line in the registry ([`super::KINDS`]).
 
 use std::any::Any;
 use std::marker::PhantomData;

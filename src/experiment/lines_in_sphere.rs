@@ -3,7 +3,7 @@
 //! (Crofton: the measure of lines meeting a convex body is proportional to its surface area). The
 //! sphere cache's rays-per-level law n_R·Q^(2i) is this fact once per level.
 //!
-//! A kind is this one module and one line in [`super::registry::KINDS`]: its spec struct (serde
+//! A kind is this one module and one line in the registry ([`super::KINDS`]): its spec struct (serde
 //! denies unknown keys, so a mistyped key is refused with its line), its validated point, what it
 //! measures ([`Measured`]: typed values, no cells), its one table of columns with their accessors
 //! ([`LinesInSphereKind::MAIN`]), and its runner.

@@ -1,5 +1,5 @@
 //! Reference documentation generated from the declarations (`raycost doc kinds|columns|spec|scene`):
-//! the kinds of [`super::registry::KINDS`], every column they declare (unit, class, meaning), every
+//! the kinds of [`super::KINDS`], every column they declare (unit, class, meaning), every
 //! spec key (each kind hands the registry its spec's keys, declared once with the struct that reads
 //! them, [`crate::spec_table!`]; a key several kinds share is listed once, with the kinds that
 //! accept it) and every scene-file key. The committed `docs/kinds.md`, `docs/columns.md`,

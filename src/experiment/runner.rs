@@ -505,13 +505,28 @@ mod tests {
         col, Cell, Check, ConfigError, Context, Kind, NoTables, Output, Rate, Registered, Table,
         Work,
     };
-    use crate::experiment::lines_in_sphere::LinesSpec;
     use crate::output::column::{Class, Column};
+
+    crate::spec_file! {
+        /// The planted kind's spec.
+        pub struct PlantedSpec {
+            /// `[planted]`.
+            planted: PlantedTable = {table};
+        }
+    }
+
+    crate::spec_table! {
+        /// `[planted]`.
+        pub struct PlantedTable {
+            /// What the point does (see [`Planted`]).
+            value: f64 = {required}, "number", "", "any";
+        }
+    }
 
     const VALUE: Column = Column::value("value", "1", Class::Measured, "the point's value");
     const BAD: Column = Column::value("bad", "1", Class::Check, "failures");
 
-    /// A test kind whose point misbehaves as its parameter `lines.inner_radius` says: 0.2 fails its
+    /// A test kind whose point misbehaves as its parameter `planted.value` says: 0.2 fails its
     /// built-in check, 0.3 overflows to ∞, 0.4 gives a cell that does not fit its column's shape;
     /// any other value is a good point.
     struct Planted;
@@ -519,7 +534,7 @@ mod tests {
     impl Kind for Planted {
         const NAME: &'static str = "planted";
         const ABOUT: &'static str = "a test kind";
-        type Raw = LinesSpec;
+        type Raw = PlantedSpec;
         type Point = f64;
         type Measured = u64;
         type Tables = NoTables;
@@ -541,8 +556,8 @@ mod tests {
             }),
             col(&BAD, |_, failures| (*failures).into()),
         ]);
-        fn configure(raw: &LinesSpec, _: &mut Inputs) -> Result<f64, ConfigError> {
-            Ok(raw.lines.inner_radius)
+        fn configure(raw: &PlantedSpec, _: &mut Inputs) -> Result<f64, ConfigError> {
+            Ok(raw.planted.value)
         }
         fn describe(p: &f64) -> String {
             p.to_string()
@@ -578,11 +593,11 @@ mod tests {
 
     static PLANTED: Registered<Planted> = Registered::NEW;
 
-    /// Runs kind `planted` over `lines.inner_radius` = `sweep`; returns its error and the lines of
-    /// the main table (finished or partial).
+    /// Runs kind `planted` over `planted.value` = `sweep`; returns its error and the lines of the
+    /// main table (finished or partial).
     fn run_planted(sweep: &str) -> (Error, Vec<String>) {
         let dir = tempfile::tempdir().unwrap();
-        let text = format!("[experiment]\nname = \"p\"\nkind = \"planted\"\n[lines]\ncount = 1\ninner_radius = 0.5\n[sweep]\n\"lines.inner_radius\" = {sweep}\n");
+        let text = format!("[experiment]\nname = \"p\"\nkind = \"planted\"\n[planted]\nvalue = 0.5\n[sweep]\n\"planted.value\" = {sweep}\n");
         let path = dir.path().join("p.toml");
         std::fs::write(&path, text).unwrap();
         let spec = crate::spec::Spec::read(&path, &[]).unwrap();
