@@ -9,8 +9,11 @@
 
 pub mod aff;
 pub mod bvh;
+pub mod cast;
+pub mod direct;
 pub mod format;
 pub mod motion;
+pub mod pathtrace;
 pub mod reference;
 pub mod shapes;
 pub mod spline;
@@ -20,7 +23,7 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
-use self::bvh::{Bvh, TwoNearest};
+use self::bvh::Bvh;
 use self::format::{AnalyticKind, RawScene};
 use self::motion::Mover;
 use self::shapes::{Ball, Triangle};
@@ -160,6 +163,20 @@ pub struct Scene {
     bounds: Aabb,
 }
 
+impl Scene {
+    /// Traverses its hierarchies with `path` from now on (tests and `raycost bench` force each
+    /// instruction set; answers do not depend on it).
+    pub fn set_bvh_path(&mut self, path: bvh::Path) {
+        self.bvh = std::mem::take(&mut self.bvh).with_path(path);
+        self.dyn_bvh = std::mem::take(&mut self.dyn_bvh).with_path(path);
+    }
+
+    /// The instruction-set path its hierarchies are traversed with.
+    pub fn bvh_path(&self) -> bvh::Path {
+        self.bvh.path()
+    }
+}
+
 /// What a scene is made of, before its hierarchy and bounds are built (from a TOML scene file or an
 /// AFF file).
 #[derive(Debug, Default)]
@@ -296,7 +313,8 @@ impl Scene {
             self.triangles.extend(p.triangles);
             self.balls.extend(p.balls);
         }
-        self.dyn_bvh = Bvh::build(&self.triangles[self.n_static_tris..]);
+        let path = self.bvh.path();
+        self.dyn_bvh = Bvh::build(&self.triangles[self.n_static_tris..]).with_path(path);
         self.tau = tau;
     }
 
@@ -341,17 +359,13 @@ impl Scene {
             Some(Prim::Triangle(i)) => i,
             _ => u32::MAX,
         };
-        let mut best = TwoNearest::default();
         let n = self.n_static_tris;
-        self.bvh
-            .two_nearest(&self.triangles[..n], o, d, t_min, skip_tri, &mut best);
+        let mut best = self.bvh.two_nearest(o, d, t_min, skip_tri);
         if !self.dyn_bvh.is_empty() {
             // Dynamic triangles after the static ones, in a fixed order: a photon's path depends only
             // on the geometry, never on which frames came before.
-            let mut dynamic = TwoNearest::default();
             let skip_dyn = skip_tri.wrapping_sub(n as u32);
-            self.dyn_bvh
-                .two_nearest(&self.triangles[n..], o, d, t_min, skip_dyn, &mut dynamic);
+            let dynamic = self.dyn_bvh.two_nearest(o, d, t_min, skip_dyn);
             for (t, id) in [dynamic.first, dynamic.second] {
                 if t.is_finite() {
                     best.offer(t, id + n as u32);
@@ -389,22 +403,29 @@ impl Scene {
     /// [`Scene::first_two_hits`] for the same ray, found without the second (cheaper: a path tracer
     /// needs only this).
     pub fn first_hit(&self, o: DVec3, d: DVec3, t_min: f64, skip: Option<Prim>) -> Option<Hit> {
+        self.first_hit_before(o, d, t_min, f64::INFINITY, skip)
+    }
+
+    /// [`Scene::first_hit`] among the crossings with t < `limit` (None if the nearest is at or
+    /// beyond it): boxes beyond `limit` are never opened.
+    pub fn first_hit_before(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        t_min: f64,
+        limit: f64,
+        skip: Option<Prim>,
+    ) -> Option<Hit> {
         let skip_tri = match skip {
             Some(Prim::Triangle(i)) => i,
             _ => u32::MAX,
         };
         let n = self.n_static_tris;
-        let (mut t, mut id) = self
-            .bvh
-            .nearest(&self.triangles[..n], o, d, t_min, skip_tri);
+        let (mut t, mut id) = self.bvh.nearest_before(o, d, t_min, limit, skip_tri);
         if !self.dyn_bvh.is_empty() {
-            let (td, idd) = self.dyn_bvh.nearest(
-                &self.triangles[n..],
-                o,
-                d,
-                t_min,
-                skip_tri.wrapping_sub(n as u32),
-            );
+            let (td, idd) =
+                self.dyn_bvh
+                    .nearest_before(o, d, t_min, limit, skip_tri.wrapping_sub(n as u32));
             if td < t {
                 (t, id) = (td, idd + n as u32);
             }
@@ -413,7 +434,7 @@ impl Scene {
         for (i, b) in self.balls.iter().enumerate() {
             if let Some((t0, t1)) = b.roots(o, d) {
                 for r in [t0, t1] {
-                    if r > t_min && r < t {
+                    if r > t_min && r < t && r < limit {
                         t = r;
                         prim = Prim::Ball(i as u32);
                     }
@@ -428,6 +449,25 @@ impl Scene {
             Prim::Ball(i) => self.balls[i as usize].surface,
         };
         Some(Hit { t, prim, surface })
+    }
+
+    /// Is there any crossing with t_min < t < `limit` (skipping triangle `skip`)? Exactly
+    /// `first_hit_before(o, d, t_min, limit, skip).is_some()`, stopping at the first crossing found
+    /// (a shadow ray).
+    pub fn occluded(&self, o: DVec3, d: DVec3, t_min: f64, limit: f64, skip: Option<Prim>) -> bool {
+        let skip_tri = match skip {
+            Some(Prim::Triangle(i)) => i,
+            _ => u32::MAX,
+        };
+        let n = self.n_static_tris as u32;
+        self.balls.iter().any(|b| {
+            b.roots(o, d)
+                .is_some_and(|(t0, t1)| [t0, t1].iter().any(|&r| r > t_min && r < limit))
+        }) || self.bvh.any_before(o, d, t_min, limit, skip_tri)
+            || (!self.dyn_bvh.is_empty()
+                && self
+                    .dyn_bvh
+                    .any_before(o, d, t_min, limit, skip_tri.wrapping_sub(n)))
     }
 
     /// Calls `f` with every triangle (static or dynamic, by its index in `triangles`) that may

@@ -1,7 +1,12 @@
 //! Estimators that every engine's counters flow into: mergeable means with honest standard errors,
-//! histograms, goodness-of-fit statistics, and the verdict of a measurement against theory. All of them merge partial results in a fixed order,
-//! so a run's numbers do not depend on how the work was split across threads.
+//! histograms, goodness-of-fit statistics, and the verdict of a measurement against theory
+//! ([`verdict`]). All of them merge partial results in a fixed order, so a run's numbers do not
+//! depend on how the work was split across threads. [`fit`] and [`crossover`] turn such summaries
+//! into the speed-against-error answers of issue 27 (time to a target error, the crossover in points
+//! or frames, bootstrap CIs over replicas).
 
+pub mod crossover;
+pub mod fit;
 pub mod gof;
 pub mod histogram;
 pub mod mean;
