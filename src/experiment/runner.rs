@@ -433,7 +433,7 @@ fn check_declared(kind: &dyn DynKind, table: &str, rows: &[Row]) -> Result<(), E
                 None => {
                     let ok = match declaration(declared, &cell.name) {
                         // A measured cell may be written as a timing where seconds decided it
-                        // (Row::decided_by_timing); never the other way.
+                        // (a column declared `decided_by_timing`); never the other way.
                         Some((column, class))
                             if class == cell.class
                                 || (class == Class::Measured && cell.class == Class::Timing) =>
