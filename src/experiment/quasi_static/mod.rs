@@ -17,6 +17,10 @@
 //! (one row per frame) and, with `detp.write_points`, `points` (the irradiance at one frame).
 //! A point's run leaves a typed measurement ([`QsMeasured`], `measure.rs`), its frames and points
 //! rows; `columns.rs` declares every column with the accessor that reads it.
+//!
+//! `raycost render` and `raycost bench` use [`QuasiStaticConfig`] (a validated point), [`start`],
+//! [`params`] and [`apply_ratio`]; the DETP settings inside come from the DETP module's interface
+//! ([`super::detp`]).
 
 pub mod columns;
 pub mod measure;
@@ -24,7 +28,7 @@ pub mod spec;
 
 use self::columns as col;
 use self::measure::{FrameRow, QsMeasured, QsPointRow, ReplicaRun};
-use self::spec::{QuasiStaticConfig, QuasiStaticSpec};
+use self::spec::QuasiStaticSpec;
 use super::detp::DynamicEngine;
 use super::inputs::Inputs;
 use super::kind::{Check, ConfigError, Context, Kind, Memory, Output, Rate, Table, Work};
@@ -33,7 +37,7 @@ use crate::error::Error;
 use crate::stats::ClusteredMean;
 use crate::theory::detp as th;
 
-pub use self::spec::apply_ratio;
+pub use self::spec::{apply_ratio, QuasiStaticConfig};
 
 /// The engines' settings for a validated point and one of its replicas.
 pub fn params(cfg: &QuasiStaticConfig, n_dynamic_points: f64, replica: u64) -> Params {
