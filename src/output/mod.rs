@@ -13,6 +13,7 @@ pub mod progress;
 pub mod row;
 pub mod sink;
 pub mod summary;
+pub mod table;
 pub mod time;
 
 pub use crate::error::OutputError;

@@ -22,20 +22,22 @@
 //!
 //! With `column`, the measured value and its CI come from the table itself (they cannot drift from
 //! it), and without a `verdict` the claim is judged against the paper's number by the summary's own
-//! rule ([`z_verdict`]). Every problem is an [`InputError`] naming the file, line and key.
+//! rule ([`z_verdict`]). A claim is coloured by its `outcome`, or without one by its verdict read as
+//! an outcome or a verdict ([`claim_tone`]). Every problem is an [`InputError`] naming the file,
+//! line and key.
 
 use std::path::Path;
 
 use serde::Deserialize;
 
 use crate::error::InputError;
-use crate::experiment::metric::z_verdict;
 use crate::output::summary::measured;
-use crate::spec::de::from_text;
+use crate::stats::verdict::z_verdict;
 use crate::stats::Estimate;
+use crate::toml_text::de::from_text;
 
 use super::table::{display, Table};
-use super::verdicts::Tone;
+use super::verdicts::{claim_tone, Outcome, Tone};
 
 /// The file name looked for in RESULTS.
 pub const FILE: &str = "claims.toml";
@@ -89,13 +91,14 @@ struct Entry {
     note: Option<String>,
 }
 
-/// The outcomes a claim can have (`outcome` in the file; scripts/claims_rules.py writes them).
+/// The outcomes a claim can have (`outcome` in the file; scripts/claims_rules.py writes them):
+/// the spellings of [`Outcome`].
 pub const OUTCOMES: [&str; 5] = [
-    "holds",
-    "holds-in-part",
-    "differs",
-    "refuted",
-    "inconclusive",
+    Outcome::ALL[0].0,
+    Outcome::ALL[1].0,
+    Outcome::ALL[2].0,
+    Outcome::ALL[3].0,
+    Outcome::ALL[4].0,
 ];
 
 /// One claim, resolved, as the page shows it.
@@ -240,7 +243,7 @@ fn resolve(e: Entry, results: &Path) -> Result<PaperClaim, (&'static str, String
     };
     let verdict = match (e.verdict, est, paper_number) {
         (Some(v), _, _) => v,
-        (None, Some(est), Some(p)) => z_verdict(&est, p),
+        (None, Some(est), Some(p)) => z_verdict(&est, p).to_string(),
         (None, _, _) => {
             return Err((
                 "verdict",
@@ -248,20 +251,17 @@ fn resolve(e: Entry, results: &Path) -> Result<PaperClaim, (&'static str, String
             ))
         }
     };
-    if let Some(o) = &e.outcome {
-        if !OUTCOMES.contains(&o.as_str()) {
-            return Err((
-                "outcome",
-                format!("got {o:?}, expected one of {}", OUTCOMES.join(", ")),
-            ));
-        }
-    }
+    // The typed outcome, read by the enum the page's colours come from.
+    let outcome: Option<Outcome> = match &e.outcome {
+        Some(o) => Some(o.parse().map_err(|m| ("outcome", m))?),
+        None => None,
+    };
     Ok(PaperClaim {
         claim: e.claim,
         reference: e.reference.unwrap_or_default(),
         paper,
         measured: measured_text,
-        tone: Tone::of(&verdict),
+        tone: claim_tone(outcome, &verdict),
         verdict,
         outcome: e.outcome,
         rule: e.rule.unwrap_or_default(),

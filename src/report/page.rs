@@ -409,7 +409,7 @@ fn tone(t: Tone) -> &'static str {
     match t {
         Tone::Agrees => "agrees",
         Tone::Disagrees => "disagrees",
-        Tone::Neutral => "neutral",
+        Tone::Inconclusive | Tone::NotJudged => "neutral",
     }
 }
 
@@ -424,7 +424,7 @@ mod tests {
             paper: "0.35".into(),
             measured: "0.29 [0.28, 0.44] · beside: seconds <3>".into(),
             verdict: verdict.into(),
-            tone: Tone::of(verdict),
+            tone: super::super::verdicts::claim_tone(outcome.and_then(|o| o.parse().ok()), verdict),
             outcome: outcome.map(str::to_string),
             rule: "theorem-2/2".into(),
             accounting: "paper".into(),
