@@ -108,6 +108,90 @@ mod x86 {
     const TE: i64 = std::mem::offset_of!(Segment, t_end) as i64;
     const SIZE: i64 = std::mem::size_of::<Segment>() as i64;
 
+    /// `crosses`' arithmetic on a vector of lanes, once for both widths, in `crosses`' order (the
+    /// module doc): for origins `o`, directions `v`, centres `c` and normals `n` it returns
+    /// `[v·n, (c − o)·n, t, |v·t − (c − o)|²]`, each dot product `(a_x b_x + a_y b_y) + a_z b_z`.
+    macro_rules! plane {
+        ($name:ident, $feature:literal, $v:ty, $add:ident, $sub:ident, $mul:ident, $div:ident) => {
+            #[inline]
+            #[target_feature(enable = $feature)]
+            unsafe fn $name(o: [$v; 3], v: [$v; 3], c: [$v; 3], n: [$v; 3]) -> [$v; 4] {
+                let dot = |a: [$v; 3], b: [$v; 3]| {
+                    $add($add($mul(a[0], b[0]), $mul(a[1], b[1])), $mul(a[2], b[2]))
+                };
+                let denom = dot(v, n);
+                let w = [$sub(c[0], o[0]), $sub(c[1], o[1]), $sub(c[2], o[2])];
+                let num = dot(w, n);
+                let t = $div(num, denom);
+                let x = [
+                    $sub($mul(v[0], t), w[0]),
+                    $sub($mul(v[1], t), w[1]),
+                    $sub($mul(v[2], t), w[2]),
+                ];
+                [denom, num, t, dot(x, x)]
+            }
+        };
+    }
+    plane!(
+        plane8,
+        "avx512f",
+        __m512d,
+        _mm512_add_pd,
+        _mm512_sub_pd,
+        _mm512_mul_pd,
+        _mm512_div_pd
+    );
+    plane!(
+        plane4,
+        "avx2",
+        __m256d,
+        _mm256_add_pd,
+        _mm256_sub_pd,
+        _mm256_mul_pd,
+        _mm256_div_pd
+    );
+
+    /// The lanes `crosses` accepts, as bits: `denom < 0`, `num < 0`, `t ≤ t_end`, `|x|² ≤ r²`
+    /// (ordered comparisons: false on NaN).
+    #[inline]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn accept8([denom, num, t, len2]: [__m512d; 4], te: __m512d, rr: __m512d) -> u32 {
+        let zero = _mm512_setzero_pd();
+        u32::from(
+            _mm512_cmp_pd_mask::<_CMP_LT_OQ>(denom, zero)
+                & _mm512_cmp_pd_mask::<_CMP_LT_OQ>(num, zero)
+                & _mm512_cmp_pd_mask::<_CMP_LE_OQ>(t, te)
+                & _mm512_cmp_pd_mask::<_CMP_LE_OQ>(len2, rr),
+        )
+    }
+
+    /// [`accept8`] on 4 lanes.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    unsafe fn accept4([denom, num, t, len2]: [__m256d; 4], te: __m256d, rr: __m256d) -> u32 {
+        let zero = _mm256_setzero_pd();
+        let ok = _mm256_and_pd(
+            _mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_LT_OQ>(denom, zero),
+                _mm256_cmp_pd::<_CMP_LT_OQ>(num, zero),
+            ),
+            _mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_LE_OQ>(t, te),
+                _mm256_cmp_pd::<_CMP_LE_OQ>(len2, rr),
+            ),
+        );
+        _mm256_movemask_pd(ok) as u32
+    }
+
+    /// `hit(ids[lane])` for every set bit of `m`, in lane order.
+    #[inline]
+    fn report(mut m: u32, ids: &[u32], hit: &mut impl FnMut(u32)) {
+        while m != 0 {
+            hit(ids[m.trailing_zeros() as usize]);
+            m &= m - 1;
+        }
+    }
+
     /// `crosses` for segments `idx` (gathered from `segs`, 8 at a time) against one disc; returns
     /// how many it decided.
     ///
@@ -121,18 +205,9 @@ mod x86 {
         hit: &mut impl FnMut(u32),
     ) -> usize {
         let base = segs.as_ptr().cast::<u8>();
-        let (cx, cy, cz) = (
-            _mm512_set1_pd(c.x),
-            _mm512_set1_pd(c.y),
-            _mm512_set1_pd(c.z),
-        );
-        let (nx, ny, nz) = (
-            _mm512_set1_pd(n.x),
-            _mm512_set1_pd(n.y),
-            _mm512_set1_pd(n.z),
-        );
+        let c = c.to_array().map(|x| _mm512_set1_pd(x));
+        let n = n.to_array().map(|x| _mm512_set1_pd(x));
         let dd = _mm512_set1_pd(d * d);
-        let zero = _mm512_setzero_pd();
         let size = _mm512_set1_epi64(SIZE);
         debug_assert!(idx.iter().all(|&k| (k as usize) < segs.len()));
         let mut j = 0;
@@ -150,38 +225,9 @@ mod x86 {
                     base.cast(),
                 ))
             };
-            let (ox, oy, oz) = (g64(O), g64(O + 8), g64(O + 16));
-            let (vx, vy, vz) = (g32(D), g32(D + 4), g32(D + 8));
-            let te = g32(TE);
-            let denom = _mm512_add_pd(
-                _mm512_add_pd(_mm512_mul_pd(vx, nx), _mm512_mul_pd(vy, ny)),
-                _mm512_mul_pd(vz, nz),
-            );
-            let (wx, wy, wz) = (
-                _mm512_sub_pd(cx, ox),
-                _mm512_sub_pd(cy, oy),
-                _mm512_sub_pd(cz, oz),
-            );
-            let num = _mm512_add_pd(
-                _mm512_add_pd(_mm512_mul_pd(wx, nx), _mm512_mul_pd(wy, ny)),
-                _mm512_mul_pd(wz, nz),
-            );
-            let t = _mm512_div_pd(num, denom);
-            let x = _mm512_sub_pd(_mm512_mul_pd(vx, t), wx);
-            let y = _mm512_sub_pd(_mm512_mul_pd(vy, t), wy);
-            let z = _mm512_sub_pd(_mm512_mul_pd(vz, t), wz);
-            let len2 = _mm512_add_pd(
-                _mm512_add_pd(_mm512_mul_pd(x, x), _mm512_mul_pd(y, y)),
-                _mm512_mul_pd(z, z),
-            );
-            let mut m = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(denom, zero)
-                & _mm512_cmp_pd_mask::<_CMP_LT_OQ>(num, zero)
-                & _mm512_cmp_pd_mask::<_CMP_LE_OQ>(t, te)
-                & _mm512_cmp_pd_mask::<_CMP_LE_OQ>(len2, dd);
-            while m != 0 {
-                hit(idx[j + m.trailing_zeros() as usize]);
-                m &= m - 1;
-            }
+            let o = [g64(O), g64(O + 8), g64(O + 16)];
+            let v = [g32(D), g32(D + 4), g32(D + 8)];
+            report(accept8(plane8(o, v, c, n), g32(TE), dd), &idx[j..], hit);
             j += 8;
         }
         j
@@ -199,18 +245,9 @@ mod x86 {
         hit: &mut impl FnMut(u32),
     ) -> usize {
         let base = segs.as_ptr().cast::<u8>();
-        let (cx, cy, cz) = (
-            _mm256_set1_pd(c.x),
-            _mm256_set1_pd(c.y),
-            _mm256_set1_pd(c.z),
-        );
-        let (nx, ny, nz) = (
-            _mm256_set1_pd(n.x),
-            _mm256_set1_pd(n.y),
-            _mm256_set1_pd(n.z),
-        );
+        let c = c.to_array().map(|x| _mm256_set1_pd(x));
+        let n = n.to_array().map(|x| _mm256_set1_pd(x));
         let dd = _mm256_set1_pd(d * d);
-        let zero = _mm256_setzero_pd();
         let size = _mm256_set1_epi64x(SIZE);
         debug_assert!(idx.iter().all(|&k| (k as usize) < segs.len()));
         let mut j = 0;
@@ -228,45 +265,9 @@ mod x86 {
                     _mm256_add_epi64(at, _mm256_set1_epi64x(off)),
                 ))
             };
-            let (ox, oy, oz) = (g64(O), g64(O + 8), g64(O + 16));
-            let (vx, vy, vz) = (g32(D), g32(D + 4), g32(D + 8));
-            let te = g32(TE);
-            let denom = _mm256_add_pd(
-                _mm256_add_pd(_mm256_mul_pd(vx, nx), _mm256_mul_pd(vy, ny)),
-                _mm256_mul_pd(vz, nz),
-            );
-            let (wx, wy, wz) = (
-                _mm256_sub_pd(cx, ox),
-                _mm256_sub_pd(cy, oy),
-                _mm256_sub_pd(cz, oz),
-            );
-            let num = _mm256_add_pd(
-                _mm256_add_pd(_mm256_mul_pd(wx, nx), _mm256_mul_pd(wy, ny)),
-                _mm256_mul_pd(wz, nz),
-            );
-            let t = _mm256_div_pd(num, denom);
-            let x = _mm256_sub_pd(_mm256_mul_pd(vx, t), wx);
-            let y = _mm256_sub_pd(_mm256_mul_pd(vy, t), wy);
-            let z = _mm256_sub_pd(_mm256_mul_pd(vz, t), wz);
-            let len2 = _mm256_add_pd(
-                _mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(y, y)),
-                _mm256_mul_pd(z, z),
-            );
-            let ok = _mm256_and_pd(
-                _mm256_and_pd(
-                    _mm256_cmp_pd::<_CMP_LT_OQ>(denom, zero),
-                    _mm256_cmp_pd::<_CMP_LT_OQ>(num, zero),
-                ),
-                _mm256_and_pd(
-                    _mm256_cmp_pd::<_CMP_LE_OQ>(t, te),
-                    _mm256_cmp_pd::<_CMP_LE_OQ>(len2, dd),
-                ),
-            );
-            let mut m = _mm256_movemask_pd(ok) as u32;
-            while m != 0 {
-                hit(idx[j + m.trailing_zeros() as usize]);
-                m &= m - 1;
-            }
+            let o = [g64(O), g64(O + 8), g64(O + 16)];
+            let v = [g32(D), g32(D + 4), g32(D + 8)];
+            report(accept4(plane4(o, v, c, n), g32(TE), dd), &idx[j..], hit);
             j += 4;
         }
         j
@@ -284,18 +285,9 @@ mod x86 {
         hit: &mut impl FnMut(u32),
     ) -> usize {
         let (o, v, t_end) = parts(seg);
-        let (ox, oy, oz) = (
-            _mm512_set1_pd(o[0]),
-            _mm512_set1_pd(o[1]),
-            _mm512_set1_pd(o[2]),
-        );
-        let (vx, vy, vz) = (
-            _mm512_set1_pd(v[0]),
-            _mm512_set1_pd(v[1]),
-            _mm512_set1_pd(v[2]),
-        );
+        let o = o.map(|x| _mm512_set1_pd(x));
+        let v = v.map(|x| _mm512_set1_pd(x));
         let te = _mm512_set1_pd(t_end);
-        let zero = _mm512_setzero_pd();
         let base = discs.packed.as_ptr().cast::<f64>();
         let radii = discs.discs.radii.as_deref();
         let d = discs.discs.radius;
@@ -305,40 +297,12 @@ mod x86 {
             let ids = _mm256_loadu_si256(cands.as_ptr().add(j).cast());
             let at = _mm256_mullo_epi32(ids, six);
             let g = |f: usize| _mm512_i32gather_pd::<8>(at, base.add(f));
-            let (cx, cy, cz, nx, ny, nz) = (g(0), g(1), g(2), g(3), g(4), g(5));
-            let denom = _mm512_add_pd(
-                _mm512_add_pd(_mm512_mul_pd(vx, nx), _mm512_mul_pd(vy, ny)),
-                _mm512_mul_pd(vz, nz),
-            );
-            let (wx, wy, wz) = (
-                _mm512_sub_pd(cx, ox),
-                _mm512_sub_pd(cy, oy),
-                _mm512_sub_pd(cz, oz),
-            );
-            let num = _mm512_add_pd(
-                _mm512_add_pd(_mm512_mul_pd(wx, nx), _mm512_mul_pd(wy, ny)),
-                _mm512_mul_pd(wz, nz),
-            );
-            let t = _mm512_div_pd(num, denom);
-            let x = _mm512_sub_pd(_mm512_mul_pd(vx, t), wx);
-            let y = _mm512_sub_pd(_mm512_mul_pd(vy, t), wy);
-            let z = _mm512_sub_pd(_mm512_mul_pd(vz, t), wz);
-            let len2 = _mm512_add_pd(
-                _mm512_add_pd(_mm512_mul_pd(x, x), _mm512_mul_pd(y, y)),
-                _mm512_mul_pd(z, z),
-            );
             let r = match radii {
                 Some(r) => _mm512_i32gather_pd::<8>(ids, r.as_ptr()),
                 None => _mm512_set1_pd(d),
             };
-            let mut m = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(denom, zero)
-                & _mm512_cmp_pd_mask::<_CMP_LT_OQ>(num, zero)
-                & _mm512_cmp_pd_mask::<_CMP_LE_OQ>(t, te)
-                & _mm512_cmp_pd_mask::<_CMP_LE_OQ>(len2, _mm512_mul_pd(r, r));
-            while m != 0 {
-                hit(cands[j + m.trailing_zeros() as usize]);
-                m &= m - 1;
-            }
+            let lanes = plane8(o, v, [g(0), g(1), g(2)], [g(3), g(4), g(5)]);
+            report(accept8(lanes, te, _mm512_mul_pd(r, r)), &cands[j..], hit);
             j += 8;
         }
         j
@@ -356,18 +320,9 @@ mod x86 {
         hit: &mut impl FnMut(u32),
     ) -> usize {
         let (o, v, t_end) = parts(seg);
-        let (ox, oy, oz) = (
-            _mm256_set1_pd(o[0]),
-            _mm256_set1_pd(o[1]),
-            _mm256_set1_pd(o[2]),
-        );
-        let (vx, vy, vz) = (
-            _mm256_set1_pd(v[0]),
-            _mm256_set1_pd(v[1]),
-            _mm256_set1_pd(v[2]),
-        );
+        let o = o.map(|x| _mm256_set1_pd(x));
+        let v = v.map(|x| _mm256_set1_pd(x));
         let te = _mm256_set1_pd(t_end);
-        let zero = _mm256_setzero_pd();
         let base = discs.packed.as_ptr().cast::<f64>();
         let radii = discs.discs.radii.as_deref();
         let d = discs.discs.radius;
@@ -377,47 +332,12 @@ mod x86 {
             let ids = _mm_loadu_si128(cands.as_ptr().add(j).cast());
             let at = _mm_mullo_epi32(ids, six);
             let g = |f: usize| _mm256_i32gather_pd::<8>(base.add(f), at);
-            let (cx, cy, cz, nx, ny, nz) = (g(0), g(1), g(2), g(3), g(4), g(5));
-            let denom = _mm256_add_pd(
-                _mm256_add_pd(_mm256_mul_pd(vx, nx), _mm256_mul_pd(vy, ny)),
-                _mm256_mul_pd(vz, nz),
-            );
-            let (wx, wy, wz) = (
-                _mm256_sub_pd(cx, ox),
-                _mm256_sub_pd(cy, oy),
-                _mm256_sub_pd(cz, oz),
-            );
-            let num = _mm256_add_pd(
-                _mm256_add_pd(_mm256_mul_pd(wx, nx), _mm256_mul_pd(wy, ny)),
-                _mm256_mul_pd(wz, nz),
-            );
-            let t = _mm256_div_pd(num, denom);
-            let x = _mm256_sub_pd(_mm256_mul_pd(vx, t), wx);
-            let y = _mm256_sub_pd(_mm256_mul_pd(vy, t), wy);
-            let z = _mm256_sub_pd(_mm256_mul_pd(vz, t), wz);
-            let len2 = _mm256_add_pd(
-                _mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(y, y)),
-                _mm256_mul_pd(z, z),
-            );
             let r = match radii {
                 Some(r) => _mm256_i32gather_pd::<8>(r.as_ptr(), ids),
                 None => _mm256_set1_pd(d),
             };
-            let ok = _mm256_and_pd(
-                _mm256_and_pd(
-                    _mm256_cmp_pd::<_CMP_LT_OQ>(denom, zero),
-                    _mm256_cmp_pd::<_CMP_LT_OQ>(num, zero),
-                ),
-                _mm256_and_pd(
-                    _mm256_cmp_pd::<_CMP_LE_OQ>(t, te),
-                    _mm256_cmp_pd::<_CMP_LE_OQ>(len2, _mm256_mul_pd(r, r)),
-                ),
-            );
-            let mut m = _mm256_movemask_pd(ok) as u32;
-            while m != 0 {
-                hit(cands[j + m.trailing_zeros() as usize]);
-                m &= m - 1;
-            }
+            let lanes = plane4(o, v, [g(0), g(1), g(2)], [g(3), g(4), g(5)]);
+            report(accept4(lanes, te, _mm256_mul_pd(r, r)), &cands[j..], hit);
             j += 4;
         }
         j
