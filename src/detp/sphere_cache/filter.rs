@@ -137,8 +137,9 @@ impl RayList {
         m * (1.0 + 1e-6)
     }
 
-    fn clear(&mut self) {
-        for v in [
+    /// The seven per-lane columns (not `idx`), for what is done to each alike.
+    fn lanes_mut(&mut self) -> [&mut Vec<f32>; 7] {
+        [
             &mut self.ox,
             &mut self.oy,
             &mut self.oz,
@@ -146,22 +147,18 @@ impl RayList {
             &mut self.dy,
             &mut self.dz,
             &mut self.te,
-        ] {
+        ]
+    }
+
+    fn clear(&mut self) {
+        for v in self.lanes_mut() {
             v.clear();
         }
         self.idx.clear();
     }
 
     fn reserve(&mut self, n: usize) {
-        for v in [
-            &mut self.ox,
-            &mut self.oy,
-            &mut self.oz,
-            &mut self.dx,
-            &mut self.dy,
-            &mut self.dz,
-            &mut self.te,
-        ] {
+        for v in self.lanes_mut() {
             v.reserve(n);
         }
         self.idx.reserve(n);
@@ -191,15 +188,7 @@ impl RayList {
         // SAFETY: the caller wrote the first `len` lanes of every column.
         unsafe { set_lanes(self, len) };
         let more = len.max(FIRST_ROOM) + 16;
-        for v in [
-            &mut self.ox,
-            &mut self.oy,
-            &mut self.oz,
-            &mut self.dx,
-            &mut self.dy,
-            &mut self.dz,
-            &mut self.te,
-        ] {
+        for v in self.lanes_mut() {
             v.reserve(more);
         }
         self.idx.reserve(more);
