@@ -65,6 +65,9 @@ pub struct RunOptions {
     pub sets: Vec<String>,
     /// Worker threads (`--threads`, or the machine's): passed to every point and recorded.
     pub threads: usize,
+    /// `raycost merge` of photon shards: each point's parts, one per shard in shard order
+    /// (`super::photon_shards`); points measure these instead of tracing.
+    pub merged: Option<BTreeMap<usize, Vec<serde_json::Value>>>,
 }
 
 /// The file stem of a run.
@@ -330,6 +333,11 @@ fn run_points(
             index: i as u64,
             threads: opts.threads,
             progress: &|k| bar.inc(k),
+            merged: opts
+                .merged
+                .as_ref()
+                .and_then(|m| m.get(&i))
+                .map(Vec::as_slice),
         };
         let out = kind
             .run(plan.points[i].as_ref(), shared.as_ref(), &ctx)
@@ -610,6 +618,7 @@ mod tests {
             shard: None,
             sets: Vec::new(),
             threads: 1,
+            merged: None,
         };
         let e = run(&plan, &opts).expect_err("a planted fault");
         let table = ["out/p/p.csv", "out/p/p.csv.partial"]
