@@ -1,12 +1,16 @@
 //! `--photon-shard K/N` (issue 29 item 5): one run's photons split over N shards, run in any order,
 //! merged by `raycost merge` into the table the unsplit run writes, every measured column (main
-//! table and side tables) equal bit for bit; incomplete or mixed shard sets, kinds without photons
-//! and engines whose counts do not add are refused with exit code 2 and nothing written.
+//! table and side tables) equal bit for bit — for kind `detp`, and for kind `quasi-static` frame by
+//! frame, where only the segment index's own work (summed over the shards' indexes) is set apart
+//! as timing; incomplete or mixed shard sets, kinds without photons and engines whose counts do not
+//! add are refused with exit code 2 and nothing written.
 
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use crate::common::{files_below, measured_columns, raycost, root, run_quiet, write_spec};
+use crate::common::{
+    files_below, measured_columns, raycost, read_csv, root, run_quiet, write_spec,
+};
 use crate::merge::assert_same_measured;
 
 /// Photons from the Cornell box onto its surface points, two replicas, a two-point sweep, every
@@ -110,6 +114,150 @@ fn photon_shards_of_lines_merge_into_the_unsplit_table() {
     split_equals_whole(&lines_spec(tmp.path()), "ps-lines", 3, &[1, 2, 0]);
 }
 
+/// A sphere and a box moving through the Cornell box over 4 frames, every frame checked against a
+/// full recalculation, two replicas, the points table at frame 2; the dynamic points by the disc
+/// index, fed every segment (the paper's model) or the segment index's answer. `extra`: more
+/// `[dynamic]` lines, `engine`: `detp.engine`.
+fn quasi_static_spec(dir: &Path, name: &str, engine: &str, extra: &str) -> PathBuf {
+    let scene = root().join("experiments/scenes/cornell-dynamic.toml");
+    write_spec(
+        dir,
+        name,
+        &format!(
+            r#"[experiment]
+name = "{name}"
+kind = "quasi-static"
+seed = 7
+
+[detp]
+source = "scene"
+scene = "{}"
+photons = 3001
+point_spacing = 60.0
+disc_radius = 20.0
+engine = "{engine}"
+replicas = 2
+write_points = true
+
+[dynamic]
+frames = 4
+check_every = 1
+points_frame = 2
+{extra}
+[sweep]
+"dynamic.feed" = ["paper", "segment-index"]
+"#,
+            scene.display().to_string().replace('\\', "/")
+        ),
+    )
+}
+
+/// The stems of the columns that count the segment index's work: a photon shard searches an index
+/// of its own segments, so a merged table sums them and classes them timing.
+const INDEX_WORK: &[&str] = &[
+    "search_cells",
+    "search_tests",
+    "search_listings",
+    "dynamic_feed",
+];
+
+/// `whole` and `merged` (the same table of an unsplit and a merged run) have the same header and
+/// rows, and the same cells in every column the merged run's metadata calls reproducible; the
+/// columns it does not, beyond the unsplit run's timings, are exactly the index's work. Returns
+/// the rows.
+fn assert_same_but_index_work(whole: &Path, merged: &Path) -> usize {
+    assert_eq!(
+        read_csv(whole).0,
+        read_csv(merged).0,
+        "{}: headers",
+        merged.display()
+    );
+    let (w, m) = (measured_columns(whole), measured_columns(merged));
+    assert_eq!(w.len(), m.len(), "{}: rows", merged.display());
+    for (n, (a, b)) in w.iter().zip(&m).enumerate() {
+        let kept: Vec<&(String, String)> = a
+            .iter()
+            .filter(|(c, _)| b.iter().any(|(d, _)| d == c))
+            .collect();
+        assert_eq!(
+            kept.len(),
+            b.len(),
+            "row {n}: merged columns the unsplit run times"
+        );
+        for ((c, u), (_, v)) in kept.into_iter().zip(b) {
+            assert_eq!(
+                u,
+                v,
+                "{} row {n} column {c}: unsplit {u}, merged {v}",
+                merged.display()
+            );
+        }
+        let demoted: Vec<&String> = a
+            .iter()
+            .map(|(c, _)| c)
+            .filter(|c| !b.iter().any(|(d, _)| d == *c))
+            .collect();
+        assert!(
+            !demoted.is_empty(),
+            "row {n}: the index's work is not set apart"
+        );
+        for c in demoted {
+            assert!(
+                INDEX_WORK.iter().any(|s| c.starts_with(s)),
+                "row {n}: column {c} is not the index's work but differs in class"
+            );
+        }
+    }
+    w.len()
+}
+
+#[test]
+fn photon_shards_of_moving_objects_merge_into_the_unsplit_tables() {
+    let tmp = tempfile::tempdir().unwrap();
+    let name = "ps-moving";
+    let spec = quasi_static_spec(tmp.path(), name, "disc-index", "");
+    let (whole, split) = (tmp.path().join("whole"), tmp.path().join("split"));
+    run_quiet(&spec, &whole).assert().success();
+    for k in [2, 0, 1] {
+        run_quiet(&spec, &split)
+            .args(["--threads", "1", "--photon-shard", &format!("{k}/3")])
+            .assert()
+            .success();
+    }
+    let dir = split.join(name);
+    raycost()
+        .args(["merge", "--quiet"])
+        .arg(&dir)
+        .assert()
+        .success();
+    let table = |d: &Path, t: &str| d.join(name).join(format!("{name}{t}.csv"));
+    assert_eq!(
+        assert_same_but_index_work(&table(&whole, ""), &table(&split, "")),
+        2
+    );
+    // Every frame of both replicas of both points, and objects that did move: photons re-traced.
+    let frames = table(&whole, ".frames");
+    assert_eq!(
+        assert_same_but_index_work(&frames, &table(&split, ".frames")),
+        16
+    );
+    let (h, rows) = read_csv(&frames);
+    let at = |c: &str| h.iter().position(|x| x == c).unwrap();
+    let retraced: u64 = rows
+        .iter()
+        .filter(|r| r[at("frame")] != "0")
+        .map(|r| r[at("photons_retraced")].parse::<u64>().unwrap())
+        .sum();
+    assert!(retraced > 0, "no photon was re-traced: the test is vacuous");
+    assert!(rows
+        .iter()
+        .all(|r| ["NaN", "0"].contains(&r[at("full_mismatch")].as_str())));
+    let points = |d: &Path| measured_columns(&table(d, ".points"));
+    let (a, b) = (points(&whole), points(&split));
+    assert!(a.len() > 100, "the points table holds every point");
+    assert_eq!(a, b, "{name}.points.csv differs");
+}
+
 /// `raycost merge DIR` fails with exit 2, saying `what`, and writes no table.
 fn merge_refused(dir: &Path, what: &str) {
     let before = files_below(dir);
@@ -191,16 +339,23 @@ fn kinds_and_engines_whose_counts_do_not_add_are_refused() {
         &text.replace(r#"["disc-index"]"#, r#"["sphere-cache", "disc-index"]"#),
     );
     shard_refused(&cache, "detp.engines has sphere-cache");
-    let scene = root().join("experiments/scenes/cornell-dynamic.toml");
-    let qs = write_spec(
-        tmp.path(),
-        "ps-qs",
-        &format!(
-            "[experiment]\nname = \"ps-qs\"\nkind = \"quasi-static\"\nseed = 1\n\n[detp]\nsource = \"scene\"\nscene = \"{}\"\nphotons = 1000\npoint_spacing = 60.0\ndisc_radius = 20.0\n\n[dynamic]\nframes = 3\n",
-            scene.display().to_string().replace('\\', "/")
+    // Quasi-static: only the disc index's counts add; the predictor and the reference run need
+    // every photon.
+    for (engine, extra, what) in [
+        ("hybrid", "", r#"detp.engine is "hybrid""#),
+        ("sphere-cache", "", r#"detp.engine is "sphere-cache""#),
+        ("predicted", "", r#"detp.engine is "predicted""#),
+        ("disc-index", "predict = 0.1\n", "dynamic.predict"),
+        (
+            "disc-index",
+            "reference_photons = 100\n",
+            "dynamic.reference_photons",
         ),
-    );
-    shard_refused(&qs, "kind quasi-static cannot split its photons");
+    ] {
+        let qs = quasi_static_spec(tmp.path(), "ps-qs", engine, extra);
+        shard_refused(&qs, what);
+    }
+    let qs = quasi_static_spec(tmp.path(), "ps-qs", "hybrid", "");
     // With --shard: clap refuses the pair (usage, exit 2).
     let out = run_quiet(&qs, tmp.path())
         .args(["--photon-shard", "0/2", "--shard", "0/2"])

@@ -436,7 +436,11 @@ impl<T: Clone> Answers<T> {
 
 /// How many rays got a different answer (`key`) on one thread than on all.
 fn differing<T, K: PartialEq>(a: &Answers<T>, key: impl Fn(&T) -> K) -> u64 {
-    a.one.iter().zip(&a.all).filter(|(x, y)| key(x) != key(y)).count() as u64
+    a.one
+        .iter()
+        .zip(&a.all)
+        .filter(|(x, y)| key(x) != key(y))
+        .count() as u64
 }
 
 /// Embree's first hit per ray: (sphere, t).

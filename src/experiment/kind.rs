@@ -454,7 +454,8 @@ impl<K: Kind> DynKind for Registered<K> {
         let shared = shared_of::<K>(shared);
         let p = point_of::<K>(point);
         let out = K::run(p, shared, ctx)?;
-        rows_of::<K>(p, out).map_err(|e| Error::internal(format!("kind {}: {e}", K::NAME)))
+        rows_of::<K>(p, out, ctx.merged.is_some())
+            .map_err(|e| Error::internal(format!("kind {}: {e}", K::NAME)))
     }
     fn photon_refusal(&self, point: &dyn DynPoint) -> Option<String> {
         K::photon_refusal(point_of::<K>(point))
@@ -472,19 +473,24 @@ impl<K: Kind> DynKind for Registered<K> {
 }
 
 /// The rows and summary lines of one point's output, from the kind's declared tables.
+/// `photon_merged`: the point was measured from photon shards' parts.
 fn rows_of<K: Kind>(
     p: &K::Point,
     out: Output<K::Measured, K::Tables>,
+    photon_merged: bool,
 ) -> Result<ErasedOutput, String> {
-    let timed = K::timed_decision(p);
+    let demote = table::Demote {
+        timed: K::timed_decision(p),
+        photon_merged,
+    };
     let main = table::cells(K::MAIN.entries, p, &out.measured);
-    let (row, judged) = table::row(&main, timed, true)?;
+    let (row, judged) = table::row(&main, demote, true)?;
     let mut summary = Vec::new();
     let mut tables = Vec::new();
     for (name, rows, lines) in out.tables.cells(p) {
         let rows = rows
             .iter()
-            .map(|cells| table::row(cells, timed, false).map(|(r, _)| r))
+            .map(|cells| table::row(cells, demote, false).map(|(r, _)| r))
             .collect::<Result<Vec<Row>, String>>()?;
         summary.extend(lines.iter().map(Line::judge));
         tables.push((name, rows));

@@ -80,6 +80,11 @@ pub struct Column {
     /// predictor's engine pick): in a row where a clock decided, its measured cells are written as
     /// timings (`output::table`).
     pub decided_by_timing: bool,
+    /// Whether it counts an accelerator's work that depends on every photon of the run (the
+    /// quasi-static segment index's cells, listings and tests: each photon shard searches an index
+    /// of its own segments): in a row merged from photon shards it holds the work summed across
+    /// them, and its measured cells are written as timings (`output::table`).
+    pub accelerator_work: bool,
 }
 
 /// One expanded CSV column: what metadata records and `raycost doc columns` prints.
@@ -109,6 +114,7 @@ impl Column {
             doc,
             infinite_ok: false,
             decided_by_timing: false,
+            accelerator_work: false,
         }
     }
 
@@ -122,6 +128,7 @@ impl Column {
             doc,
             infinite_ok: false,
             decided_by_timing: false,
+            accelerator_work: false,
         }
     }
 
@@ -135,6 +142,7 @@ impl Column {
             doc,
             infinite_ok: false,
             decided_by_timing: false,
+            accelerator_work: false,
         }
     }
 
@@ -148,6 +156,7 @@ impl Column {
             doc,
             infinite_ok: false,
             decided_by_timing: false,
+            accelerator_work: false,
         }
     }
 
@@ -161,6 +170,7 @@ impl Column {
             doc,
             infinite_ok: false,
             decided_by_timing: false,
+            accelerator_work: false,
         }
     }
 
@@ -177,6 +187,15 @@ impl Column {
     pub const fn decided_by_timing(self) -> Self {
         Self {
             decided_by_timing: true,
+            ..self
+        }
+    }
+
+    /// The same column, counting an accelerator's work whose photon shards do not add up to the
+    /// whole run's (see [`Column::accelerator_work`](Self::accelerator_work)).
+    pub const fn accelerator_work(self) -> Self {
+        Self {
+            accelerator_work: true,
             ..self
         }
     }

@@ -14,8 +14,9 @@
 //! `tests_sphere_cache`).
 //!
 //! Cells of a column declared [`Column::decided_by_timing`] are written as timings in a row whose
-//! values a clock decided (the quasi-static predictor's engine pick), so the reproducibility checks
-//! do not compare them there.
+//! values a clock decided (the quasi-static predictor's engine pick), and cells of a column declared
+//! [`Column::accelerator_work`] in a row merged from photon shards (the work summed across the
+//! shards' own accelerators), so the reproducibility checks do not compare them there ([`Demote`]).
 
 use super::column::{Class, Column, Shape};
 use super::row::{Row, Value};
@@ -208,13 +209,29 @@ impl Line {
     }
 }
 
+/// Which of a row's measured cells are written as timings (see the module doc).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Demote {
+    /// A clock decided this row's values: the columns declared `decided_by_timing`.
+    pub timed: bool,
+    /// The row was merged from photon shards: the columns declared `accelerator_work`.
+    pub photon_merged: bool,
+}
+
+impl Demote {
+    /// Whether `c`'s measured cells are written as timings in this row.
+    fn demotes(self, c: &Column) -> bool {
+        (self.timed && c.decided_by_timing) || (self.photon_merged && c.accelerator_work)
+    }
+}
+
 /// Turns `cells` into a row: every column's cells with their declared names, classes and units, and
-/// the summary lines of its judged cells (when `judged_lines`). `timed`: a clock decided this row's
-/// values (see the module doc). A cell whose kind does not fit its column's shape is a bug in the
-/// kind's table (an error naming the column).
+/// the summary lines of its judged cells (when `judged_lines`). `demote`: which measured cells are
+/// written as timings (see the module doc). A cell whose kind does not fit its column's shape is a
+/// bug in the kind's table (an error naming the column).
 pub fn row(
     cells: &Cells,
-    timed: bool,
+    demote: Demote,
     judged_lines: bool,
 ) -> Result<(Row, Vec<SummaryLine>), String> {
     let mut row = Row::default();
@@ -222,7 +239,7 @@ pub fn row(
     for (c, cell) in cells {
         let start = row.0.len();
         write(&mut row, &mut lines, c, c.name, cell, judged_lines)?;
-        if timed && c.decided_by_timing {
+        if demote.demotes(c) {
             for cell in &mut row.0[start..] {
                 if cell.class == Class::Measured {
                     cell.class = Class::Timing;
@@ -327,7 +344,8 @@ mod tests {
 
     static COUNT: Column =
         Column::value("count", "1", Class::Measured, "a count").decided_by_timing();
-    static TESTS: Column = Column::value("tests_{}", "tests", Class::Measured, "per engine");
+    static TESTS: Column =
+        Column::value("tests_{}", "tests", Class::Measured, "per engine").accelerator_work();
     static N_I: Column = Column::vs_band("n_i", "tests", "ray-sphere tests");
     static FINITE: Column = Column::value("finite", "1", Class::Measured, "finite scenes only");
 
@@ -365,7 +383,8 @@ mod tests {
     /// gave by hand before (issue 28), and a column absent from a row is not written.
     #[test]
     fn a_declared_table_builds_its_row_and_lines() {
-        let (row, lines) = row(&cells(ENTRIES, &5.1, &measured()), false, true).expect("fits");
+        let (row, lines) =
+            row(&cells(ENTRIES, &5.1, &measured()), Demote::default(), true).expect("fits");
         let names: Vec<&str> = row.0.iter().map(|c| c.name.as_str()).collect();
         assert_eq!(
             names,
@@ -388,22 +407,41 @@ mod tests {
         assert_eq!(lines.len(), 1);
         assert_eq!(lines[0].verdict, Verdict::Inside);
         assert_eq!(lines[0].theory, "5.100 [1.000, 10.000]");
-        let (_, none) = super::row(&cells(ENTRIES, &5.1, &measured()), false, false).expect("fits");
+        let (_, none) =
+            super::row(&cells(ENTRIES, &5.1, &measured()), Demote::default(), false).expect("fits");
         assert!(none.is_empty());
     }
 
     #[test]
     fn a_timed_decision_demotes_only_its_columns_measured_cells() {
-        let (row, _) = row(&cells(ENTRIES, &5.1, &measured()), true, false).expect("fits");
+        let timed = Demote {
+            timed: true,
+            ..Demote::default()
+        };
+        let (row, _) = row(&cells(ENTRIES, &5.1, &measured()), timed, false).expect("fits");
         let class = |n: &str| row.0.iter().find(|c| c.name == n).map(|c| c.class);
         assert_eq!(class("count"), Some(Class::Timing));
         assert_eq!(class("tests_grid"), Some(Class::Measured));
+        assert_eq!(class("n_i_mean"), Some(Class::Measured));
+    }
+
+    #[test]
+    fn a_photon_merge_demotes_only_accelerator_work() {
+        let merged = Demote {
+            photon_merged: true,
+            ..Demote::default()
+        };
+        let (row, _) = row(&cells(ENTRIES, &5.1, &measured()), merged, false).expect("fits");
+        let class = |n: &str| row.0.iter().find(|c| c.name == n).map(|c| c.class);
+        assert_eq!(class("tests_grid"), Some(Class::Timing));
+        assert_eq!(class("count"), Some(Class::Measured));
+        assert_eq!(class("n_i_mean"), Some(Class::Measured));
     }
 
     #[test]
     fn a_cell_that_does_not_fit_its_column_is_refused() {
         static BAD: &[Entry<f64, M>] = &[col(&COUNT, |_, m| Cell::Estimate(m.n_i))];
-        let e = row(&cells(BAD, &0.0, &measured()), false, true).expect_err("shape");
+        let e = row(&cells(BAD, &0.0, &measured()), Demote::default(), true).expect_err("shape");
         assert!(e.contains("column count"), "{e}");
     }
 }

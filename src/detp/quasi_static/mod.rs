@@ -27,6 +27,7 @@
 
 pub mod segment_index;
 
+use std::ops::Range;
 use std::time::Instant;
 
 use glam::DVec3;
@@ -36,7 +37,7 @@ use super::disc::Discs;
 use super::disc_index::{DiscIndex, GridIndex, IndexStats, Octree};
 use super::fixed::{Acc, PowerScale};
 use super::order::{permutation, Order};
-use super::photon::{retrace, trace_photons};
+use super::photon::{retrace, trace_photon_range, trace_photons};
 use super::sphere_cache::{self, CacheStats, SphereCacheParams};
 use super::store::{Segment, SegmentStore};
 use super::surface_points::points_on;
@@ -56,7 +57,7 @@ pub enum Engine {
 }
 
 /// What one mover's points were computed with.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Used {
     /// Sphere cache.
     SphereCache,
@@ -138,7 +139,7 @@ impl IndexKind {
 }
 
 /// Counts and times of one frame.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FrameStats {
     /// Frame number.
     pub frame: u32,
@@ -246,6 +247,8 @@ pub struct QuasiStatic {
     /// The scene, posed at the current frame.
     pub scene: Scene,
     params: Params,
+    /// The photons traced: `0..photons`, or a `--photon-shard`'s range of them.
+    ids: Range<u64>,
     /// Segments in slots; a dead slot has power 0 and t_end = −1 (it crosses nothing).
     store: SegmentStore,
     /// Per photon: its slots `start..start + len`.
@@ -297,13 +300,25 @@ impl QuasiStatic {
     /// Frame 0: poses the scene, traces every photon, builds the segment index, the static disc
     /// index and every sample point's sum. Returns the state and frame 0's stats (its `frame_s` is
     /// the full cost).
-    pub fn start(mut scene: Scene, params: Params) -> (Self, FrameStats) {
+    pub fn start(scene: Scene, params: Params) -> (Self, FrameStats) {
+        let ids = 0..params.photons;
+        Self::start_photons(scene, params, ids)
+    }
+
+    /// [`Self::start`] with only the photons `ids` of the run's `params.photons` (`--photon-shard`):
+    /// each is the photon the whole run traces, and every later frame re-traces only those of them
+    /// that an object meets, so each frame's sums and counts are this range's share of the whole
+    /// run's — they add across disjoint ranges, except the counts of the accelerators whose work
+    /// depends on the other photons (the segment index, sized and compacted by this range's own
+    /// segments; the sphere cache, which subdivides by the rays a sphere holds).
+    pub fn start_photons(mut scene: Scene, params: Params, ids: Range<u64>) -> (Self, FrameStats) {
         let t_all = Instant::now();
         scene.set_tau(tau(0, params.frames));
         let (st, sb) = scene.static_geometry();
         let (c, n) = points_on(st, sb, &scene.surfaces, params.spacing);
         let static_discs = Discs::new(c, n, params.disc_radius).expect("surface points are finite");
-        let (store, trace_s) = timed(|| trace_photons(&scene, params.photons, params.seed));
+        let (store, trace_s) =
+            timed(|| trace_photon_range(&scene, ids.clone(), params.photons, params.seed));
         let paths = (0..params.photons as usize)
             .map(|p| {
                 let (a, b) = (store.photon_start[p], store.photon_start[p + 1]);
@@ -329,6 +344,7 @@ impl QuasiStatic {
                 .collect(),
             scene,
             params,
+            ids,
             store,
             paths,
             dead: 0,
@@ -348,7 +364,7 @@ impl QuasiStatic {
         let mut stats = FrameStats {
             retrace_s: trace_s,
             segments_added: qs.store.len() as u64,
-            photons_retraced: qs.params.photons,
+            photons_retraced: qs.ids.end - qs.ids.start,
             ..Default::default()
         };
         let ((acc, t), s) = timed(|| qs.static_sums(&qs.store, None));
@@ -780,11 +796,17 @@ impl QuasiStatic {
         SegmentStore::new(segs, self.store.scale)
     }
 
-    /// A full recalculation of the current frame: every photon traced again, every sum afresh with
-    /// the same engines. Returns the sums (in [`Self::sums`] order), the fresh store, and seconds.
+    /// A full recalculation of the current frame: every photon (of the run's range) traced again,
+    /// every sum afresh with the same engines. Returns the sums (in [`Self::sums`] order), the fresh
+    /// store, and seconds.
     pub fn full_recalculation(&self) -> (Vec<Acc>, SegmentStore, f64) {
         let t = Instant::now();
-        let store = trace_photons(&self.scene, self.params.photons, self.params.seed);
+        let store = trace_photon_range(
+            &self.scene,
+            self.ids.clone(),
+            self.params.photons,
+            self.params.seed,
+        );
         let (mut sums, _) = self.static_sums(&store, None);
         for (_, acc, ..) in self.dynamic_sums(&store, false) {
             sums.extend(acc);
@@ -847,6 +869,44 @@ impl Counts {
 }
 
 impl FrameStats {
+    /// The stats of the same frame over the union of two disjoint photon ranges (`--photon-shard`):
+    /// every count adds — the search's cells, listings and tests and the feed's as the work the
+    /// ranges' own segment indexes did, not what one index over all segments would do — and seconds
+    /// add; None where the frames or the engines used differ.
+    pub fn add(&self, o: &Self) -> Option<Self> {
+        if self.frame != o.frame || self.used != o.used {
+            return None;
+        }
+        let mut search = self.search;
+        search.add(&o.search);
+        Some(Self {
+            frame: self.frame,
+            affected_segments: self.affected_segments + o.affected_segments,
+            meeting_new: self.meeting_new + o.meeting_new,
+            photons_retraced: self.photons_retraced + o.photons_retraced,
+            segments_removed: self.segments_removed + o.segments_removed,
+            segments_added: self.segments_added + o.segments_added,
+            segments_retraced: self.segments_retraced + o.segments_retraced,
+            search,
+            static_disc_tests: self.static_disc_tests + o.static_disc_tests,
+            static_sphere_tests: self.static_sphere_tests + o.static_sphere_tests,
+            dynamic_disc_tests: self.dynamic_disc_tests + o.dynamic_disc_tests,
+            dynamic_sphere_tests: self.dynamic_sphere_tests + o.dynamic_sphere_tests,
+            dynamic_traversal: self.dynamic_traversal + o.dynamic_traversal,
+            dynamic_rays_copied: self.dynamic_rays_copied + o.dynamic_rays_copied,
+            dynamic_spheres_built: self.dynamic_spheres_built + o.dynamic_spheres_built,
+            dynamic_feed: self.dynamic_feed + o.dynamic_feed,
+            static_traversal: self.static_traversal + o.static_traversal,
+            static_rays_copied: self.static_rays_copied + o.static_rays_copied,
+            used: self.used.clone(),
+            search_s: self.search_s + o.search_s,
+            retrace_s: self.retrace_s + o.retrace_s,
+            static_s: self.static_s + o.static_s,
+            dynamic_s: self.dynamic_s + o.dynamic_s,
+            frame_s: self.frame_s + o.frame_s,
+        })
+    }
+
     /// The dynamic points' counted cost, weight 1 per ray–sphere test, ray–disc test, box test and
     /// DDA step (the feed's query and the copies are counted apart; `docs/detp-costs.md`).
     pub fn dynamic_counted_cost(&self) -> u64 {

@@ -21,7 +21,7 @@ use crate::geom::{Aabb, Ray};
 use crate::grid::{Dda, GridFrame};
 
 /// What a search cost: exact counts.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct SearchStats {
     /// Cells whose lists were read.
     pub cells: u64,

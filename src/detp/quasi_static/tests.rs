@@ -190,3 +190,77 @@ fn every_feed_gives_both_engines_the_same_sums() {
     assert_eq!(traversal[0], traversal[2]);
     assert!(traversal[1] * 2 < traversal[2], "traversal {traversal:?}");
 }
+
+/// `--photon-shard` at the core: three disjoint photon ranges, each run frame by frame on its own
+/// (its own segment index, sized and compacted by its own segments), add up to the whole run —
+/// every point's sum and every count that is not the segment index's work, at every frame, for
+/// both feeds that give the disc index something different.
+#[test]
+fn photon_ranges_add_up_to_the_whole_run_frame_by_frame() {
+    let (photons, frames) = (2400, 6);
+    for feed in [Feed::Paper, Feed::SegmentIndex] {
+        let p = Params {
+            feed,
+            ..params(Engine::DiscIndex, photons, frames)
+        };
+        let (mut whole, w0) = QuasiStatic::start(scene(), p.clone());
+        let mut parts: Vec<(QuasiStatic, FrameStats)> = [0..700, 700..1650, 1650..photons]
+            .into_iter()
+            .map(|ids| QuasiStatic::start_photons(scene(), p.clone(), ids))
+            .collect();
+        let additive = |s: &FrameStats| {
+            [
+                s.affected_segments,
+                s.meeting_new,
+                s.photons_retraced,
+                s.segments_removed,
+                s.segments_added,
+                s.segments_retraced,
+                s.static_disc_tests,
+                s.static_traversal,
+                s.dynamic_disc_tests,
+                s.dynamic_traversal,
+            ]
+        };
+        let check =
+            |f: u32, whole: &QuasiStatic, w: &FrameStats, parts: &[(QuasiStatic, FrameStats)]| {
+                let mut sums = vec![0; whole.sums().len()];
+                for (qs, _) in parts {
+                    for (a, b) in sums.iter_mut().zip(qs.sums()) {
+                        *a += b;
+                    }
+                }
+                assert_eq!(sums, whole.sums(), "{feed:?} frame {f}: the ranges' sums");
+                let total = parts[1..]
+                    .iter()
+                    .try_fold(parts[0].1.clone(), |a, (_, s)| a.add(s))
+                    .expect("the same frame and engines");
+                assert_eq!(additive(&total), additive(w), "{feed:?} frame {f}: counts");
+                assert_eq!(total.used, w.used);
+            };
+        check(0, &whole, &w0, &parts);
+        let mut retraced = 0;
+        for f in 1..frames {
+            let w = whole.step(f);
+            retraced += w.photons_retraced;
+            for (qs, st) in &mut parts {
+                *st = qs.step(f);
+            }
+            check(f, &whole, &w, &parts);
+        }
+        assert!(
+            retraced > 0,
+            "no photon was re-traced: the check is vacuous"
+        );
+        // A range's full recalculation is its share of the whole run's.
+        let mut full = vec![0; whole.sums().len()];
+        for (qs, _) in &parts {
+            let (sums, ..) = qs.full_recalculation();
+            assert_eq!(mismatches(&qs.sums(), &sums), 0);
+            for (a, b) in full.iter_mut().zip(sums) {
+                *a += b;
+            }
+        }
+        assert_eq!(full, whole.sums());
+    }
+}

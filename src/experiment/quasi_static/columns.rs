@@ -112,14 +112,14 @@ pub const SEGMENTS_CHANGED: Column =
 pub const SEARCH_TESTS: Column = Column::estimate(
     "search_tests",
     "tests",
-    "segment–object tests finding the affected segments, per frame",
-);
+    "segment–object tests finding the affected segments, per frame (with --photon-shard: summed over the shards' own indexes, and classed timing)",
+).accelerator_work();
 /// Search cells.
 pub const SEARCH_CELLS: Column = Column::estimate(
     "search_cells",
     "cells",
-    "segment-index cells visited by the search, per frame",
-);
+    "segment-index cells visited by the search, per frame (with --photon-shard: summed over the shards' own indexes, and classed timing)",
+).accelerator_work();
 /// Static points' tests.
 pub const STATIC_TESTS: Column = Column::estimate(
     "static_tests",
@@ -183,9 +183,10 @@ pub const DYNAMIC_SPHERES_BUILT: Column = Column::estimate(
 pub const DYNAMIC_FEED: Column = Column::estimate(
     "dynamic_feed",
     "steps",
-    "segment-index cells read + segments tested to feed the dynamic points' engine (dynamic.feed; 0 when it gets every segment); not in dynamic_counted_cost, per frame",
+    "segment-index cells read + segments tested to feed the dynamic points' engine (dynamic.feed; 0 when it gets every segment); not in dynamic_counted_cost, per frame (with --photon-shard: summed over the shards' own indexes, and classed timing)",
 )
-.decided_by_timing();
+.decided_by_timing()
+.accelerator_work();
 /// the dynamic points' counted cost with the engine used, per frame.
 pub const DYNAMIC_COUNTED_COST: Column = Column::estimate(
     "dynamic_counted_cost",
@@ -510,8 +511,8 @@ pub const SEGMENTS_ADDED: Column = measured("segments_added", "segments", "segme
 pub const SEARCH_LISTINGS: Column = measured(
     "search_listings",
     "listings",
-    "segment-index listings the search read",
-);
+    "segment-index listings the search read (with --photon-shard: summed over the shards' own indexes, and classed timing)",
+).accelerator_work();
 /// Static disc tests.
 pub const STATIC_DISC_TESTS: Column = measured(
     "static_disc_tests",
@@ -556,14 +557,14 @@ pub mod frame {
     pub const SEARCH_CELLS: Column = measured(
         "search_cells",
         "cells",
-        "segment-index cells the search visited",
-    );
+        "segment-index cells the search visited (with --photon-shard: summed over the shards' own indexes, and classed timing)",
+    ).accelerator_work();
     /// Search tests.
     pub const SEARCH_TESTS: Column = measured(
         "search_tests",
         "tests",
-        "segment–object tests of the search",
-    );
+        "segment–object tests of the search (with --photon-shard: summed over the shards' own indexes, and classed timing)",
+    ).accelerator_work();
     /// Dynamic sphere tests.
     pub const DYNAMIC_SPHERE_TESTS: Column = measured(
         "dynamic_sphere_tests",
@@ -614,9 +615,10 @@ pub mod frame {
     pub const DYNAMIC_FEED: Column = measured(
         "dynamic_feed",
         "steps",
-        "segment-index cells read + segments tested to feed the dynamic points' engine (dynamic.feed; 0 when it gets every segment); not in dynamic_counted_cost",
+        "segment-index cells read + segments tested to feed the dynamic points' engine (dynamic.feed; 0 when it gets every segment); not in dynamic_counted_cost (with --photon-shard: summed over the shards' own indexes, and classed timing)",
     )
-.decided_by_timing();
+    .decided_by_timing()
+    .accelerator_work();
     /// the dynamic points' counted cost with the engine used.
     pub const DYNAMIC_COUNTED_COST: Column = measured(
         "dynamic_counted_cost",

@@ -4,28 +4,94 @@
 //! consecutive frames, or one cluster per replica, as clusters). `columns.rs` declares how each
 //! value becomes a column, with the theory of Theorem 2 for the same n.
 
+use super::columns as col;
+use super::shards::{Facts, PointsAt, ReplicaPart};
 use super::spec::QuasiStaticConfig;
 use super::Predictions;
-use crate::detp::disc::Discs;
-use crate::detp::fixed::Acc;
-use crate::detp::quasi_static::{FrameStats, Prediction, QuasiStatic};
+use crate::detp::fixed::PowerScale;
+use crate::detp::quasi_static::{FrameStats, Prediction};
 use crate::stats::{ClusteredMean, Estimate};
 use crate::theory::detp as th;
 
-/// What one replica's run leaves for the point's row.
-pub(super) struct ReplicaRun {
-    /// The run after its last frame (its scene, parameters and sums).
-    pub(super) qs: QuasiStatic,
-    /// Frame 0.
-    pub(super) f0: FrameStats,
-    /// Segments live after frame 0 (n_R).
-    pub(super) n_r: f64,
+/// What an unsplit replica's run leaves beside its part (refused with `--photon-shard`).
+#[derive(Default)]
+pub(super) struct Extras {
     /// The predictor's run, where asked.
     pub(super) predictions: Option<Predictions>,
     /// The relative RMSE of the last frame against a high-photon reference and its seconds.
     pub(super) reference: Option<(f64, f64)>,
-    /// The points table's sums and discs, where asked.
-    pub(super) points_at: Option<(Vec<Acc>, Discs)>,
+}
+
+/// IEEE bits of three numbers (exact through JSON).
+pub(super) fn f64_bits(v: [f64; 3]) -> [u64; 3] {
+    v.map(f64::to_bits)
+}
+
+/// The numbers of [`f64_bits`].
+pub(super) fn from_bits(b: [u64; 3]) -> [f64; 3] {
+    b.map(f64::from_bits)
+}
+
+/// Frames per cluster of the per-frame estimates: 16 batches of consecutive frames (or one frame
+/// each when there are fewer than 32).
+fn batch(frames: u32) -> u32 {
+    if frames <= 32 {
+        1
+    } else {
+        (frames - 1).div_ceil(16)
+    }
+}
+
+/// The per-frame accumulators over every replica's frames 1 … F − 1, in replica then frame order.
+struct PerFrame {
+    means: Vec<ClusteredMean>,
+    full_s: ClusteredMean,
+    /// (points differing, frames checked).
+    full: (u64, u64),
+    rows: Vec<FrameRow>,
+}
+
+/// Adds each replica's frames to the per-frame estimates (one cluster per replica when there are
+/// several, batches of consecutive frames otherwise), its checks and its frames table rows.
+fn per_frame(cfg: &QuasiStaticConfig, parts: &[ReplicaPart]) -> PerFrame {
+    let mut acc = PerFrame {
+        means: vec![ClusteredMean::default(); col::PER_FRAME_VALUES.len()],
+        full_s: ClusteredMean::default(),
+        full: (0, 0),
+        rows: Vec::new(),
+    };
+    // One replica: batches of consecutive frames (correlated) are the clusters; several: each
+    // replica is one cluster, so the standard error is across independent realisations.
+    let b = if parts.len() > 1 {
+        u32::MAX
+    } else {
+        batch(cfg.frames)
+    };
+    for (replica, part) in (0u64..).zip(parts) {
+        for (f, fp) in (0u32..).zip(&part.frames) {
+            let full = fp.full.as_ref().map(|c| (c.seconds, c.diffs.len() as u64));
+            if f > 0 {
+                for (m, (_, value)) in acc.means.iter_mut().zip(col::PER_FRAME_VALUES) {
+                    m.push(value(&fp.stats));
+                }
+                if let Some((s, bad)) = full {
+                    acc.full.0 += bad;
+                    acc.full.1 += 1;
+                    acc.full_s.push(s);
+                }
+                if f % b == 0 || f == cfg.frames - 1 {
+                    acc.means.iter_mut().for_each(ClusteredMean::end_batch);
+                    acc.full_s.end_batch();
+                }
+            }
+            acc.rows.push(FrameRow {
+                replica,
+                stats: fp.stats.clone(),
+                full,
+            });
+        }
+    }
+    acc
 }
 
 /// What one quasi-static point measured.
@@ -131,37 +197,35 @@ pub struct QsPointRow {
     pub se: f64,
 }
 
-/// The point's measurement from its replicas' runs and the per-frame accumulators.
+/// The point's measurement and its frames table from its replicas' parts.
 pub(super) fn measure(
     cfg: &QuasiStaticConfig,
-    runs: &[ReplicaRun],
-    means: &[ClusteredMean],
-    full_s: &ClusteredMean,
-    (full_mismatch, full_checked): (u64, u64),
-) -> QsMeasured {
+    parts: &[ReplicaPart],
+    extras: &[Extras],
+) -> (QsMeasured, Vec<FrameRow>) {
+    let acc = per_frame(cfg, parts);
     let mean_of =
-        |f: &dyn Fn(&ReplicaRun) -> f64| runs.iter().map(f).sum::<f64>() / runs.len() as f64;
-    let first = &runs[0];
-    let qs = &first.qs;
-    let r0 = qs.root().1;
-    let (n_s, n_dyn) = qs.point_counts();
-    let used: Vec<&str> = first.f0.used.iter().map(|u| u.as_str()).collect();
-    QsMeasured {
-        segments: first.n_r as u64,
-        n_r: mean_of(&|r| r.n_r),
-        points_static: n_s,
-        points_dynamic: n_dyn.iter().sum(),
-        ratios: qs.scene.movers.iter().map(|m| m.radius() / r0).collect(),
-        r0,
-        crossover: qs.params().crossover,
+        |f: &dyn Fn(&ReplicaPart) -> f64| parts.iter().map(f).sum::<f64>() / parts.len() as f64;
+    let first = &parts[0];
+    let facts = &first.facts;
+    let used: Vec<&str> = first.frames[0].stats.used.iter().map(|u| u.as_str()).collect();
+    let reference = |r: &Extras| r.reference;
+    let m = QsMeasured {
+        segments: first.n_r,
+        n_r: mean_of(&|r| r.n_r as f64),
+        points_static: facts.points_static as usize,
+        points_dynamic: facts.points_dynamic.iter().sum::<u64>() as usize,
+        ratios: facts.ratios.iter().map(|&b| f64::from_bits(b)).collect(),
+        r0: f64::from_bits(facts.r0),
+        crossover: f64::from_bits(facts.crossover),
         engine_used: used.join("+"),
-        per_frame: means.iter().map(ClusteredMean::estimate).collect(),
-        full_frame_s: full_s.estimate(),
-        frame0_s: mean_of(&|r| r.f0.frame_s),
-        static_index_build_s: mean_of(&|r| r.qs.static_index_build_s),
-        full_mismatch,
-        full_checked,
-        predictor: first
+        per_frame: acc.means.iter().map(ClusteredMean::estimate).collect(),
+        full_frame_s: acc.full_s.estimate(),
+        frame0_s: mean_of(&|r| r.frames[0].stats.frame_s),
+        static_index_build_s: mean_of(&|r| r.static_index_build_s),
+        full_mismatch: acc.full.0,
+        full_checked: acc.full.1,
+        predictor: extras[0]
             .predictions
             .as_ref()
             .map(|(fraction, preds, rule)| Predictor {
@@ -174,48 +238,47 @@ pub(super) fn measure(
                     .filter(|(p, r)| p.best == **r)
                     .count(),
             }),
-        reference: first.reference.map(|_| {
-            (
-                mean_of(&|r| r.reference.map_or(f64::NAN, |x| x.0)),
-                mean_of(&|r| r.reference.map_or(f64::NAN, |x| x.1)),
-                cfg.reference_photons.unwrap_or(0),
-            )
+        reference: reference(&extras[0]).map(|_| {
+            let of = |i: usize| {
+                extras.iter().map(|e| reference(e).map_or(f64::NAN, |x| [x.0, x.1][i]))
+                    .sum::<f64>()
+                    / extras.len() as f64
+            };
+            (of(0), of(1), cfg.reference_photons.unwrap_or(0))
         }),
-    }
+    };
+    (m, acc.rows)
 }
 
 /// The irradiance at every sample point at one frame, with its Poisson standard error
-/// (√(E·w̄/πd²), w̄ the mean segment power).
+/// (√(E·w̄/πd²), w̄ the mean power of the frame's live segments, from their exact integer sum).
 pub(super) fn point_rows(
-    qs: &QuasiStatic,
-    sums: &[Acc],
-    discs: &Discs,
-    frame: u32,
+    cfg: &QuasiStaticConfig,
+    facts: &Facts,
+    at: &PointsAt,
     n_static: usize,
 ) -> Vec<QsPointRow> {
-    let d = qs.params().disc_radius;
+    let d = cfg.detp.disc_radius;
     let area = std::f64::consts::PI * d * d;
-    let scale = qs.scale();
-    let store = qs.live_store();
-    let w = if store.is_empty() {
+    let scale = PowerScale {
+        watts_per_unit: f64::from_bits(facts.scale),
+    };
+    let w = if at.live_segments == 0 {
         0.0
     } else {
-        store
-            .segments
-            .iter()
-            .map(|s| scale.watts(Acc::from(s.power)))
-            .sum::<f64>()
-            / store.len() as f64
+        let units = at.power_units().expect("parts are checked when they are added");
+        units as f64 * scale.watts_per_unit / at.live_segments as f64
     };
-    (0..discs.len())
+    let (centers, normals) = at.discs();
+    (0..at.sums.len())
         .map(|i| {
-            let e = scale.watts(sums[i]) / area;
+            let e = scale.watts(at.sums[i]) / area;
             QsPointRow {
                 sample: i,
-                frame,
+                frame: at.frame,
                 dynamic: u64::from(i >= n_static),
-                center: discs.centers[i],
-                normal: discs.normals[i],
+                center: centers[i],
+                normal: normals[i],
                 irradiance: e,
                 se: (e.max(0.0) * w / area).sqrt(),
             }

@@ -24,17 +24,20 @@
 
 pub mod columns;
 pub mod measure;
+pub mod shards;
 pub mod spec;
 
+use std::ops::Range;
+
 use self::columns as col;
-use self::measure::{FrameRow, QsMeasured, QsPointRow, ReplicaRun};
+use self::measure::{Extras, FrameRow, QsMeasured, QsPointRow};
+use self::shards::{Facts, FullCheck, FramePart, PointsAt, ReplicaPart};
 use self::spec::QuasiStaticSpec;
 use super::detp::DynamicEngine;
 use super::inputs::Inputs;
 use super::kind::{Check, ConfigError, Context, Kind, Memory, Output, Rate, Table, Work};
-use crate::detp::quasi_static::{mismatches, Engine, FrameStats, Params, QuasiStatic, Used};
+use crate::detp::quasi_static::{Engine, FrameStats, Params, QuasiStatic, Used};
 use crate::error::Error;
-use crate::stats::ClusteredMean;
 use crate::theory::detp as th;
 
 pub use self::spec::{apply_ratio, QuasiStaticConfig};
@@ -79,6 +82,15 @@ fn replica_seed(seed: u64, replica: u64) -> u64 {
 
 /// Starts a run of one replica: frame 0 and its stats.
 pub fn start(cfg: &QuasiStaticConfig, replica: u64) -> (QuasiStatic, FrameStats) {
+    start_photons(cfg, replica, 0..cfg.detp.photons)
+}
+
+/// [`start`] with the photons `ids` only (`--photon-shard`).
+fn start_photons(
+    cfg: &QuasiStaticConfig,
+    replica: u64,
+    ids: Range<u64>,
+) -> (QuasiStatic, FrameStats) {
     // n_D for Theorem 2's finite-n crossover: the dynamic points of the first object, estimated
     // from its area (the run counts them exactly afterwards).
     let n_d = cfg
@@ -92,39 +104,25 @@ pub fn start(cfg: &QuasiStaticConfig, replica: u64) -> (QuasiStatic, FrameStats)
             area / (cfg.spacing * cfg.spacing)
         })
         .unwrap_or(1.0);
-    QuasiStatic::start(cfg.scene.clone(), params(cfg, n_d, replica))
-}
-
-/// Frames per cluster of the per-frame estimates: 16 batches of consecutive frames (or one frame
-/// each when there are fewer than 32).
-fn batch(frames: u32) -> u32 {
-    if frames <= 32 {
-        1
-    } else {
-        (frames - 1).div_ceil(16)
-    }
+    QuasiStatic::start_photons(cfg.scene.clone(), params(cfg, n_d, replica), ids)
 }
 
 /// The predictor's run (engine "predicted" or `dynamic.predict`): its fraction, its predictions per
 /// object, and the engine Theorem 2's rule would have picked per object.
 pub(super) type Predictions = (f64, Vec<crate::detp::quasi_static::Prediction>, Vec<Used>);
 
-/// Runs every frame of one replica, adding its per-frame values to `means` (one cluster per
-/// replica when there are several, batches of consecutive frames otherwise), its checks to
-/// `full_*`, and its frames to the frames table.
-#[allow(clippy::too_many_arguments)]
-fn run_replica(
+/// Runs every frame of one replica over the photons `ids`: its part (what adds across photon
+/// shards), and the predictor's and the reference run's figures (unsplit runs only: they are
+/// refused with `--photon-shard`).
+fn trace_replica(
     cfg: &QuasiStaticConfig,
     replica: u64,
+    ids: Range<u64>,
     progress: &(dyn Fn(u64) + Sync),
-    means: &mut [ClusteredMean],
-    full_s: &mut ClusteredMean,
-    full: &mut (u64, u64),
-    frames: &mut Vec<FrameRow>,
-) -> ReplicaRun {
-    let replicas = cfg.detp.replicas.max(1);
-    let (mut qs, f0) = start(cfg, replica);
-    progress(cfg.detp.photons);
+) -> (ReplicaPart, Extras) {
+    let photons = ids.end - ids.start;
+    let (mut qs, f0) = start_photons(cfg, replica, ids.clone());
+    progress(photons);
     let predictions: Option<Predictions> = cfg.predict.map(|fraction| {
         let rule: Vec<Used> = (0..qs.scene.movers.len())
             .map(|m| qs.rule_engine(m))
@@ -132,78 +130,73 @@ fn run_replica(
         let p = qs.predict_and_pick(fraction, cfg.engine == DynamicEngine::Predicted);
         (fraction, p, rule)
     });
-    let n_r = qs.live_segments() as f64;
-    // One replica: batches of consecutive frames (correlated) are the clusters; several: each
-    // replica is one cluster, so the standard error is across independent realisations.
-    let b = if replicas > 1 {
-        u32::MAX
-    } else {
-        batch(cfg.frames)
-    };
-    frames.push(FrameRow {
-        replica,
-        stats: f0.clone(),
-        full: None,
-    });
+    let n_r = qs.live_segments() as u64;
     let points_frame = cfg.points_frame.unwrap_or(cfg.frames - 1);
     let write_points = cfg.detp.write_points && replica == 0;
-    let mut points_at = (points_frame == 0 && write_points).then(|| (qs.sums(), qs.discs()));
+    let mut points_at = (points_frame == 0 && write_points).then(|| PointsAt::of(&qs));
+    let mut frames = vec![FramePart {
+        stats: f0,
+        full: None,
+    }];
     for f in 1..cfg.frames {
-        let st = qs.step(f);
-        progress(cfg.detp.photons);
-        for (m, (_, value)) in means.iter_mut().zip(col::PER_FRAME_VALUES) {
-            m.push(value(&st));
-        }
+        let stats = qs.step(f);
+        progress(photons);
         let check =
             cfg.check_every > 0 && (u64::from(f) % cfg.check_every == 0 || f == cfg.frames - 1);
-        let checked = check.then(|| {
-            let (sums, _, s) = qs.full_recalculation();
-            let bad = mismatches(&qs.sums(), &sums);
-            full.0 += bad;
-            full.1 += 1;
-            full_s.push(s);
-            (s, bad)
+        let full = check.then(|| {
+            let (sums, _, seconds) = qs.full_recalculation();
+            let diffs = qs
+                .sums()
+                .iter()
+                .zip(&sums)
+                .enumerate()
+                .filter(|(_, (a, b))| a != b)
+                .map(|(i, (a, b))| (i as u32, a - b))
+                .collect();
+            FullCheck { seconds, diffs }
         });
-        if f % b == 0 || f == cfg.frames - 1 {
-            means.iter_mut().for_each(ClusteredMean::end_batch);
-            full_s.end_batch();
-        }
-        frames.push(FrameRow {
-            replica,
-            stats: st,
-            full: checked,
-        });
+        frames.push(FramePart { stats, full });
         if f == points_frame && write_points {
-            points_at = Some((qs.sums(), qs.discs()));
+            points_at = Some(PointsAt::of(&qs));
         }
     }
-    // Error of the last frame against a high-photon reference (relative RMSE over the points; the
-    // reference's own noise is part of it, a floor of about 1/√(crossings per disc) of the reference).
-    let reference = cfg.reference_photons.map(|n| {
-        let mine = qs.irradiance();
-        let t = std::time::Instant::now();
-        let refr = qs.reference_irradiance(
-            n,
-            crate::sample::rng::hash_key(&[cfg.detp.seed, 0x7265_6665, replica]),
-        );
-        let ref_s = t.elapsed().as_secs_f64();
-        let mean_ref = refr.iter().sum::<f64>() / refr.len().max(1) as f64;
-        let mse = mine
-            .iter()
-            .zip(&refr)
-            .map(|(a, b)| (a - b).powi(2))
-            .sum::<f64>()
-            / mine.len().max(1) as f64;
-        (mse.sqrt() / mean_ref, ref_s)
-    });
-    ReplicaRun {
-        qs,
-        f0,
+    let reference = cfg.reference_photons.map(|n| reference_error(&qs, cfg, n, replica));
+    let part = ReplicaPart {
+        ids: (ids.start, ids.end),
+        facts: Facts::of(&qs),
         n_r,
-        predictions,
-        reference,
+        static_index_build_s: qs.static_index_build_s,
+        frames,
         points_at,
-    }
+    };
+    (
+        part,
+        Extras {
+            predictions,
+            reference,
+        },
+    )
+}
+
+/// Error of the last frame against a high-photon reference (relative RMSE over the points; the
+/// reference's own noise is part of it, a floor of about 1/√(crossings per disc) of the
+/// reference), and the reference's seconds.
+fn reference_error(qs: &QuasiStatic, cfg: &QuasiStaticConfig, n: u64, replica: u64) -> (f64, f64) {
+    let mine = qs.irradiance();
+    let t = std::time::Instant::now();
+    let refr = qs.reference_irradiance(
+        n,
+        crate::sample::rng::hash_key(&[cfg.detp.seed, 0x7265_6665, replica]),
+    );
+    let ref_s = t.elapsed().as_secs_f64();
+    let mean_ref = refr.iter().sum::<f64>() / refr.len().max(1) as f64;
+    let mse = mine
+        .iter()
+        .zip(&refr)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        / mine.len().max(1) as f64;
+    (mse.sqrt() / mean_ref, ref_s)
 }
 
 /// One quasi-static point: `detp.replicas` independent runs of every frame (new photons each),
@@ -212,32 +205,22 @@ pub fn run_point(
     cfg: &QuasiStaticConfig,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Output<QsMeasured, QuasiStaticTables> {
-    let replicas = cfg.detp.replicas.max(1);
-    let mut means = vec![ClusteredMean::default(); col::PER_FRAME_VALUES.len()];
-    let mut full_s = ClusteredMean::default();
-    let mut full = (0u64, 0u64);
-    let mut frames = Vec::new();
-    let runs: Vec<ReplicaRun> = (0..replicas)
-        .map(|r| {
-            run_replica(
-                cfg,
-                r,
-                progress,
-                &mut means,
-                &mut full_s,
-                &mut full,
-                &mut frames,
-            )
-        })
-        .collect();
-    let m = measure::measure(cfg, &runs, &means, &full_s, full);
-    let points = runs[0]
-        .points_at
-        .as_ref()
-        .map_or_else(Vec::new, |(sums, discs)| {
-            let frame = cfg.points_frame.unwrap_or(cfg.frames - 1);
-            measure::point_rows(&runs[0].qs, sums, discs, frame, m.points_static)
-        });
+    let (parts, extras): (Vec<ReplicaPart>, Vec<Extras>) = (0..cfg.detp.replicas.max(1))
+        .map(|r| trace_replica(cfg, r, 0..cfg.detp.photons, progress))
+        .unzip();
+    output(cfg, &parts, &extras)
+}
+
+/// The point's output from its replicas' parts (a whole run's, or the sum of its photon shards').
+fn output(
+    cfg: &QuasiStaticConfig,
+    parts: &[ReplicaPart],
+    extras: &[Extras],
+) -> Output<QsMeasured, QuasiStaticTables> {
+    let (m, frames) = measure::measure(cfg, parts, extras);
+    let points = parts[0].points_at.as_ref().map_or_else(Vec::new, |at| {
+        measure::point_rows(cfg, &parts[0].facts, at, m.points_static)
+    });
     let rate = Rate {
         per_s: m.per_frame[3].mean / m.frame_s().mean.max(1e-12),
         unit: "segments",
@@ -255,6 +238,24 @@ pub fn run_point(
         // Its scene warnings are known before running (`Kind::warnings`).
         warnings: Vec::new(),
     }
+}
+
+/// `raycost merge` of photon shards: the point's parts, one list of replicas per shard, added and
+/// measured as a whole run.
+fn merged_point(
+    cfg: &QuasiStaticConfig,
+    parts: &[serde_json::Value],
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Output<QsMeasured, QuasiStaticTables>, Error> {
+    let shards = parts
+        .iter()
+        .map(|v| serde_json::from_value(v.clone()))
+        .collect::<Result<Vec<Vec<ReplicaPart>>, _>>()
+        .map_err(|e| Error::usage(format!("a photon shard's part does not read: {e}")))?;
+    let total = shards::add_parts(cfg, &shards).map_err(Error::usage)?;
+    let extras: Vec<Extras> = total.iter().map(|_| Extras::default()).collect();
+    progress(<QuasiStaticKind as Kind>::work(cfg).units);
+    Ok(output(cfg, &total, &extras))
 }
 
 crate::side_tables!(
@@ -340,14 +341,29 @@ impl Kind for QuasiStaticKind {
     fn shared(_: &[&QuasiStaticConfig]) -> Result<(), Error> {
         Ok(())
     }
-    fn photon_refusal(_: &QuasiStaticConfig) -> Option<String> {
-        Some("kind quasi-static cannot split its photons: its per-frame counts do not add across photon shards (the segment index is sized by the frame's segments, the sphere cache subdivides by the rays a sphere holds); split its sweep points with --shard instead".into())
+    fn photon_refusal(p: &QuasiStaticConfig) -> Option<String> {
+        shards::refusal(p)
     }
     fn run(
         p: &QuasiStaticConfig,
         _: &(),
         ctx: &Context,
     ) -> Result<Output<QsMeasured, QuasiStaticTables>, Error> {
-        Ok(run_point(p, ctx.progress))
+        match ctx.merged {
+            None => Ok(run_point(p, ctx.progress)),
+            Some(parts) => merged_point(p, parts, ctx.progress),
+        }
+    }
+    fn trace_part(
+        p: &QuasiStaticConfig,
+        _: &(),
+        ctx: &Context,
+        (k, n): (u64, u64),
+    ) -> Result<serde_json::Value, Error> {
+        let ids = super::detp::shards::photon_range(p.detp.photons, k, n);
+        let parts: Vec<ReplicaPart> = (0..p.detp.replicas.max(1))
+            .map(|r| trace_replica(p, r, ids.clone(), ctx.progress).0)
+            .collect();
+        serde_json::to_value(parts).map_err(Error::internal)
     }
 }
