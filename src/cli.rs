@@ -245,8 +245,8 @@ pub struct RunArgs {
     /// Continue a partial run, skipping the points it finished.
     #[arg(long)]
     pub resume: bool,
-    /// Trace only photons [K·P/N, (K+1)·P/N) of every point and replica (kind detp); writes
-    /// NAME.photon-shard-K-of-N.json for raycost merge.
+    /// Trace only photons [K·P/N, (K+1)·P/N) of every point and replica (kinds detp and
+    /// quasi-static); writes NAME.photon-shard-K-of-N.json for raycost merge.
     #[arg(long, value_name = "K/N", conflicts_with_all = ["shard", "resume"])]
     pub photon_shard: Option<Shard>,
 }

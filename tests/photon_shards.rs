@@ -165,7 +165,7 @@ const INDEX_WORK: &[&str] = &[
 /// rows, and the same cells in every column the merged run's metadata calls reproducible; the
 /// columns it does not, beyond the unsplit run's timings, are exactly the index's work. Returns
 /// the rows.
-fn assert_same_but_index_work(whole: &Path, merged: &Path) -> usize {
+pub fn assert_same_but_index_work(whole: &Path, merged: &Path) -> usize {
     assert_eq!(
         read_csv(whole).0,
         read_csv(merged).0,

@@ -8,6 +8,7 @@ use std::process::Command;
 
 use crate::common::{raycost, root};
 use crate::merge::{assert_same_measured, run_ok, sweep_spec};
+use crate::photon_shards::assert_same_but_index_work;
 
 fn script(name: &str) -> PathBuf {
     root().join("scripts/slurm").join(name)
@@ -150,15 +151,14 @@ fn array_tasks_then_merge_job_give_the_local_table() {
     );
 }
 
-#[test]
-fn photon_shard_array_tasks_then_merge_job_give_the_unsplit_table() {
-    let tmp = tempfile::tempdir().expect("tempdir");
-    let out = tmp.path().join("cluster");
-    let spec = root().join("tests/specs/slurm-photons.toml");
+/// `spec` (experiment `name`) as 3 photon-shard array tasks run in the order 2, 0, 1 and the merge
+/// job, and as a local unsplit run: the merged and the local results folders.
+fn photon_array(tmp: &Path, spec: &Path, name: &str) -> (PathBuf, PathBuf) {
+    let out = tmp.join("cluster");
     let bin = assert_cmd::cargo::cargo_bin("raycost");
     for k in [2, 0, 1] {
         let o = bash(&script("sweep.sbatch"))
-            .env("SPEC", &spec)
+            .env("SPEC", spec)
             .env("OUT", &out)
             .env("SHARDS", "3")
             .env("SPLIT", "photons")
@@ -171,10 +171,17 @@ fn photon_shard_array_tasks_then_merge_job_give_the_unsplit_table() {
         assert!(o.status.success(), "task {k}: {err}");
         assert!(err.contains("split=photons"), "task {k} log: {err}");
     }
-    merge_job(&out, "slurm-photons");
-    let local = tmp.path().join("local");
-    run_ok(&spec, &local, &[]);
-    let (m, l) = (out.join("slurm-photons"), local.join("slurm-photons"));
+    merge_job(&out, name);
+    let local = tmp.join("local");
+    run_ok(spec, &local, &[]);
+    (out.join(name), local.join(name))
+}
+
+#[test]
+fn photon_shard_array_tasks_then_merge_job_give_the_unsplit_table() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let spec = root().join("tests/specs/slurm-photons.toml");
+    let (m, l) = photon_array(tmp.path(), &spec, "slurm-photons");
     assert_eq!(
         assert_same_measured(&m.join("slurm-photons.csv"), &l.join("slurm-photons.csv")),
         2
@@ -184,13 +191,29 @@ fn photon_shard_array_tasks_then_merge_job_give_the_unsplit_table() {
     // SPLIT must be one of the two.
     let o = bash(&script("sweep.sbatch"))
         .env("SPEC", &spec)
-        .env("OUT", &out)
+        .env("OUT", tmp.path().join("cluster"))
         .env("SHARDS", "3")
         .env("SPLIT", "rays")
         .env("SLURM_ARRAY_TASK_ID", "0")
         .output()
         .expect("bash sweep.sbatch");
     assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn quasi_static_photon_shard_array_gives_the_unsplit_tables() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let spec = root().join("tests/specs/slurm-photons-qs.toml");
+    let name = "slurm-photons-qs";
+    let (m, l) = photon_array(tmp.path(), &spec, name);
+    let t = |d: &Path, t: &str| d.join(format!("{name}{t}.csv"));
+    assert_eq!(assert_same_but_index_work(&t(&l, ""), &t(&m, "")), 2);
+    assert_eq!(
+        assert_same_but_index_work(&t(&l, ".frames"), &t(&m, ".frames")),
+        16
+    );
+    let points = |d: &Path| crate::common::measured_columns(&t(d, ".points"));
+    assert_eq!(points(&m), points(&l));
 }
 
 #[test]

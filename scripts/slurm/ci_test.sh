@@ -13,11 +13,14 @@
 # Then the same with one run's photons split (issue 29 item 5): tests/specs/slurm-photons.toml as
 # an array of PHOTON_SHARDS tasks (`submit.sh --photons`: task K runs `--photon-shard
 # K/PHOTON_SHARDS`) and the dependent merge, compared with a local unsplit run: every non-timing
-# column of the main and points tables byte for byte.
+# column of every table (main, points; a quasi-static run's frames) byte for byte; then the same
+# for a quasi-static run's photons, tests/specs/slurm-photons-qs.toml (objects moving over four
+# frames).
 #
 # Builds nothing. Environment: RAYCOST (default target/release/raycost in the repository), SPEC
 # (default tests/specs/slurm-sweep.toml), SHARDS (default 4), PHOTON_SPEC (default
-# tests/specs/slurm-photons.toml), PHOTON_SHARDS (default 3), RAYCOST_SLURM_* (see cluster.sh).
+# tests/specs/slurm-photons.toml), QS_PHOTON_SPEC (default tests/specs/slurm-photons-qs.toml),
+# PHOTON_SHARDS (default 3), RAYCOST_SLURM_* (see cluster.sh).
 # Exit codes: 0 passed, or skipped because Slurm cannot be made available here (a line
 # "SKIP slurm: <reason>"); 1 failed.
 set -euo pipefail
@@ -29,6 +32,7 @@ SPEC=${SPEC:-$ROOT/tests/specs/slurm-sweep.toml}
 SHARDS=${SHARDS:-4}
 PHOTON_SPEC=${PHOTON_SPEC:-$ROOT/tests/specs/slurm-photons.toml}
 PHOTON_SHARDS=${PHOTON_SHARDS:-3}
+QS_PHOTON_SPEC=${QS_PHOTON_SPEC:-$ROOT/tests/specs/slurm-photons-qs.toml}
 
 say() { printf 'slurm: %s\n' "$*"; }
 fail() { printf 'slurm: FAIL: %s\n' "$*" >&2; exit 1; }
@@ -38,6 +42,7 @@ fail() { printf 'slurm: FAIL: %s\n' "$*" >&2; exit 1; }
 RAYCOST=$(realpath "$RAYCOST")
 [[ -f $SPEC ]] || fail "spec $SPEC: no such file"
 [[ -f $PHOTON_SPEC ]] || fail "spec $PHOTON_SPEC: no such file"
+[[ -f $QS_PHOTON_SPEC ]] || fail "spec $QS_PHOTON_SPEC: no such file"
 command -v python3 >/dev/null 2>&1 || fail "python3 is needed for the table comparison"
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/raycost-slurm-ci.XXXXXX")
@@ -148,19 +153,21 @@ print(f"slurm: merged table identical to local run ({points} points)")
 EOF
 
 # --- one run's photons as a job array, merged by the dependent job ------------------------------
-pname=$(spec_name "$PHOTON_SPEC")
-[[ -n $pname ]] || fail "could not read experiment.name of $PHOTON_SPEC"
-say "submitting $PHOTON_SPEC ($pname) as $PHOTON_SHARDS photon shards + merge"
-t0=$SECONDS
-RAYCOST=$RAYCOST bash "$HERE/submit.sh" --wait --timeout 900 --photons "$PHOTON_SPEC" "$PHOTON_SHARDS" "$work/photons" ||
-    fail "submit.sh --wait --photons failed"
-say "photon array and merge done in $((SECONDS - t0)) s"
-pmerged=$work/photons/$pname
-for k in $(seq 0 $((PHOTON_SHARDS - 1))); do
-    [[ -s $pmerged/$pname.photon-shard-$k-of-$PHOTON_SHARDS.json ]] || fail "photon task $k wrote no shard file"
-done
-"$RAYCOST" run "$PHOTON_SPEC" --out "$work/plocal" --quiet
-python3 - "$pmerged" "$work/plocal/$pname" "$pname" <<'EOF'
+photon_array() { # SPEC: its photons as PHOTON_SHARDS array tasks + merge, against a local run
+    local spec=$1 pname pmerged k
+    pname=$(spec_name "$spec")
+    [[ -n $pname ]] || fail "could not read experiment.name of $spec"
+    say "submitting $spec ($pname) as $PHOTON_SHARDS photon shards + merge"
+    t0=$SECONDS
+    RAYCOST=$RAYCOST bash "$HERE/submit.sh" --wait --timeout 900 --photons "$spec" "$PHOTON_SHARDS" "$work/photons-$pname" ||
+        fail "submit.sh --wait --photons $spec failed"
+    say "photon array and merge done in $((SECONDS - t0)) s"
+    pmerged=$work/photons-$pname/$pname
+    for k in $(seq 0 $((PHOTON_SHARDS - 1))); do
+        [[ -s $pmerged/$pname.photon-shard-$k-of-$PHOTON_SHARDS.json ]] || fail "photon task $k wrote no shard file"
+    done
+    "$RAYCOST" run "$spec" --out "$work/plocal-$pname" --quiet
+    python3 - "$pmerged" "$work/plocal-$pname/$pname" "$pname" <<'EOF'
 import csv, sys, tomllib
 
 merged, local, name = sys.argv[1:]
@@ -172,9 +179,13 @@ def table(path):
         rows = list(csv.reader(f))
     return rows[0], rows[1:]
 
-compared = 0
-for table_name, suffix in [("main", "csv"), ("points", "points.csv")]:
-    classes = {c["name"]: c["class"] for c in meta["columns"][table_name]}
+# Every table the merged run declares (main, points, frames). Column classes come from the merged
+# run's metadata: there the segment index's own work of a quasi-static run (each shard searched an
+# index of its own segments) is classed timing, beside the seconds.
+compared, tables = 0, []
+for table_name, declared in meta["columns"].items():
+    suffix = "csv" if table_name == "main" else f"{table_name}.csv"
+    classes = {c["name"]: c["class"] for c in declared}
     hm, rm = table(f"{merged}/{name}.{suffix}")
     hl, rl = table(f"{local}/{name}.{suffix}")
     if hm != hl or len(rm) != len(rl) or not rm:
@@ -186,5 +197,9 @@ for table_name, suffix in [("main", "csv"), ("points", "points.csv")]:
             print(f"slurm: {suffix} row {n} column {c}: merged {a!r}, local {b!r}", file=sys.stderr)
         sys.exit(f"slurm: FAIL: {len(bad)} measured cells of {name}.{suffix} differ")
     compared += len(keep) * len(rm)
-print(f"slurm: photon-sharded run identical to the unsplit run ({compared} measured cells, main and points tables)")
+    tables.append(table_name)
+print(f"slurm: photon-sharded {name} identical to the unsplit run ({compared} measured cells; tables {', '.join(tables)})")
 EOF
+}
+photon_array "$PHOTON_SPEC"
+photon_array "$QS_PHOTON_SPEC"
