@@ -339,3 +339,53 @@ pub fn merge(
     };
     runner::run(&plan, &opts)
 }
+
+/// A replica's part over a range of its photon ids, which adds to the part of the range that
+/// follows it (a kind's `--photon-shard` part).
+pub trait RangePart: Clone {
+    /// The photon ids it covers, `[lo, hi)`.
+    fn ids(&self) -> (u64, u64);
+    /// The part of its photons and those of `next`, whose range follows it, or what does not fit.
+    fn then(&self, next: &Self) -> Result<Self, String>;
+}
+
+/// Every replica's part summed over the shards (`shards`: one list of `replicas` parts per shard,
+/// in shard order), checked to cover photons `0..photons` of every replica once, in order.
+pub fn add_replica_parts<P: RangePart>(
+    replicas: usize,
+    photons: u64,
+    shards: &[Vec<P>],
+) -> Result<Vec<P>, String> {
+    if let Some(s) = shards.iter().position(|s| s.len() != replicas) {
+        return Err(format!(
+            "shard {s} has {} replica(s), the spec {replicas}",
+            shards[s].len()
+        ));
+    }
+    (0..replicas)
+        .map(|r| {
+            let mut it = shards.iter().map(|s| &s[r]);
+            let first = it.next().ok_or("no shards")?.clone();
+            if first.ids().0 != 0 {
+                return Err(format!("replica {r}: no shard starts at photon 0"));
+            }
+            let total = it.try_fold(first, |acc, p| {
+                let (a, b) = (acc.ids(), p.ids());
+                if b.0 != a.1 {
+                    return Err(format!(
+                        "photons {}..{} do not follow photons {}..{}",
+                        b.0, b.1, a.0, a.1
+                    ));
+                }
+                acc.then(p)
+            })?;
+            if total.ids().1 != photons {
+                return Err(format!(
+                    "replica {r}: the shards cover photons 0..{}, the spec has {photons}",
+                    total.ids().1
+                ));
+            }
+            Ok(total)
+        })
+        .collect()
+}

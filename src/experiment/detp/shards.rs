@@ -21,6 +21,7 @@ use serde::{Deserialize, Serialize};
 use super::engines::EnginePart;
 use super::spec::EngineChoice;
 use super::{DetpConfig, RaySet};
+use crate::experiment::photon_shards::{add_replica_parts, RangePart};
 use crate::detp::fixed::{Acc, PowerScale};
 
 /// One replica's counts over a range of its photons (see the module doc).
@@ -91,15 +92,18 @@ impl ReplicaPart {
             .expect("parts are checked when they are read")
     }
 
-    /// The part of the union of `self`'s photons and `o`'s, which follow them (`o.ids.0 ==
-    /// self.ids.1`), or what does not fit.
-    fn add(&self, o: &Self) -> Result<Self, String> {
-        if o.ids.0 != self.ids.1 {
-            return Err(format!(
-                "photons {}..{} do not follow photons {}..{}",
-                o.ids.0, o.ids.1, self.ids.0, self.ids.1
-            ));
-        }
+    /// Whether the decimal power sum reads.
+    fn valid(&self) -> bool {
+        self.power_units.parse::<u128>().is_ok()
+    }
+}
+
+impl RangePart for ReplicaPart {
+    fn ids(&self) -> (u64, u64) {
+        self.ids
+    }
+    /// The part of the union of `self`'s photons and `o`'s, which follow them.
+    fn then(&self, o: &Self) -> Result<Self, String> {
         let same = |what: &str, a: u64, b: u64| {
             (a == b)
                 .then_some(())
@@ -138,11 +142,6 @@ impl ReplicaPart {
                 .collect::<Result<_, _>>()?,
         })
     }
-
-    /// Whether the decimal power sum reads.
-    fn valid(&self) -> bool {
-        self.power_units.parse::<u128>().is_ok()
-    }
 }
 
 /// The photons `[K·P/N, (K+1)·P/N)` of shard K of N, for P photons.
@@ -173,33 +172,10 @@ pub fn add_parts(
     cfg: &DetpConfig,
     shards: &[Vec<ReplicaPart>],
 ) -> Result<Vec<ReplicaPart>, String> {
-    let replicas = cfg.replicas as usize;
-    if let Some(s) = shards.iter().position(|s| s.len() != replicas) {
-        return Err(format!(
-            "shard {s} has {} replica(s), the spec {replicas}",
-            shards[s].len()
-        ));
-    }
     if shards.iter().flatten().any(|p| !p.valid()) {
         return Err("a power sum is not a whole number".into());
     }
-    (0..replicas)
-        .map(|r| {
-            let mut it = shards.iter().map(|s| &s[r]);
-            let first = it.next().ok_or("no shards")?.clone();
-            if first.ids.0 != 0 {
-                return Err(format!("replica {r}: no shard starts at photon 0"));
-            }
-            let total = it.try_fold(first, |acc, p| acc.add(p))?;
-            if total.ids.1 != cfg.photons {
-                return Err(format!(
-                    "replica {r}: the shards cover photons 0..{}, the spec has {}",
-                    total.ids.1, cfg.photons
-                ));
-            }
-            Ok(total)
-        })
-        .collect()
+    add_replica_parts(cfg.replicas as usize, cfg.photons, shards)
 }
 
 #[cfg(test)]

@@ -31,6 +31,7 @@ use super::spec::QuasiStaticConfig;
 use crate::detp::fixed::Acc;
 use crate::detp::quasi_static::{FrameStats, QuasiStatic};
 use crate::experiment::detp::DynamicEngine;
+use crate::experiment::photon_shards::{add_replica_parts, RangePart};
 
 /// A full recalculation of one frame: its seconds, and incremental minus full at every point
 /// where they differ.
@@ -138,16 +139,11 @@ pub struct ReplicaPart {
     pub points_at: Option<PointsAt>,
 }
 
-impl ReplicaPart {
-    /// The part of the union of `self`'s photons and `o`'s, which follow them, or what does not
-    /// fit.
-    fn add(&self, o: &Self) -> Result<Self, String> {
-        if o.ids.0 != self.ids.1 {
-            return Err(format!(
-                "photons {}..{} do not follow photons {}..{}",
-                o.ids.0, o.ids.1, self.ids.0, self.ids.1
-            ));
-        }
+impl RangePart for ReplicaPart {
+    fn ids(&self) -> (u64, u64) {
+        self.ids
+    }
+    fn then(&self, o: &Self) -> Result<Self, String> {
         if self.facts != o.facts {
             return Err("the shards' scenes, points or engines differ".into());
         }
@@ -261,30 +257,7 @@ pub fn add_parts(
     cfg: &QuasiStaticConfig,
     shards: &[Vec<ReplicaPart>],
 ) -> Result<Vec<ReplicaPart>, String> {
-    let replicas = cfg.detp.replicas.max(1) as usize;
-    if let Some(s) = shards.iter().position(|s| s.len() != replicas) {
-        return Err(format!(
-            "shard {s} has {} replica(s), the spec {replicas}",
-            shards[s].len()
-        ));
-    }
-    (0..replicas)
-        .map(|r| {
-            let mut it = shards.iter().map(|s| &s[r]);
-            let first = it.next().ok_or("no shards")?.clone();
-            if first.ids.0 != 0 {
-                return Err(format!("replica {r}: no shard starts at photon 0"));
-            }
-            let total = it.try_fold(first, |acc, p| acc.add(p))?;
-            if total.ids.1 != cfg.detp.photons {
-                return Err(format!(
-                    "replica {r}: the shards cover photons 0..{}, the spec has {}",
-                    total.ids.1, cfg.detp.photons
-                ));
-            }
-            Ok(total)
-        })
-        .collect()
+    add_replica_parts(cfg.detp.replicas.max(1) as usize, cfg.detp.photons, shards)
 }
 
 #[cfg(test)]
