@@ -278,7 +278,7 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         .chain(detp_rows.iter().map(|_| Vec::new()))
         .chain(qs_rows.iter().map(|_| Vec::new()));
     for (row, side) in table::union_columns(&rows).iter().zip(sides) {
-        sink.append(row, &side)
+        sink.append(row, &side, &meta)
             .context("could not append to the bench table")?;
     }
     let mut bench = toml::Table::new();

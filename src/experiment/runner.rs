@@ -184,6 +184,7 @@ fn catch_interrupt() {
                 .and_then(|m| m.clone())
                 .unwrap_or_else(|| "interrupted before any point finished".into());
             eprintln!("\ninterrupted: {msg}");
+            crate::output::folder::release_locks();
             std::process::exit(130);
         });
     });
@@ -257,6 +258,7 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
     if let Some(then) = sink.previous() {
         meta.columns = then.columns.clone();
     }
+    meta.warnings.extend(sink.notes().iter().cloned());
     // Warnings are printed even with --quiet (which silences progress and the summary only).
     for w in &meta.warnings {
         eprintln!("warning: {w}");
@@ -324,7 +326,7 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
                 record_columns(&mut meta.columns, name, r);
             }
         }
-        sink.append(&row, &side)
+        sink.append(&row, &side, &meta)
             .map_err(|e| Error::Internal(e.into()))
             .context_with(|| format!("could not append point {i} to {}", dir.display()))?;
         for w in &out.warnings {

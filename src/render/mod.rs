@@ -357,6 +357,7 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
             data: &data,
             palette: pal,
         },
+        o.force,
     )?;
     let frames_txt: Vec<String> = o.frames.iter().map(u32::to_string).collect();
     writeln!(
@@ -367,7 +368,7 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
         frames_txt.join(", ")
     )?;
     if let Some(g) = &o.gif {
-        encode::write_gif(g, w, h, &images, &rgb, 50)?;
+        encode::write_gif(g, w, h, &images, &rgb, 50, o.force)?;
         writeln!(log, "wrote {} ({w}×{h}, {k} frame(s))", g.display())?;
     }
     if let Some(dpath) = &o.diff {
@@ -401,6 +402,7 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
                 data: &data,
                 palette: Some(&red),
             },
+            o.force,
         )?;
         writeln!(
             log,
