@@ -12,6 +12,7 @@ mod lt;
 mod merge;
 mod never_panics;
 mod oracle;
+mod protocol;
 mod quasi_static;
 mod reference;
 mod render;

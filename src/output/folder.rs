@@ -159,6 +159,32 @@ fn temporary(path: &Path) -> io::Result<(PathBuf, File)> {
     }
 }
 
+/// Removes the temporary files a killed writer left beside `targets` (`.NAME.tmp-PID-N`). Call it
+/// holding the lock of the result the targets belong to: no live writer can own them then.
+pub fn remove_stale_temporaries(targets: &[PathBuf]) -> io::Result<()> {
+    let mut by_dir: Vec<(&Path, Vec<String>)> = Vec::new();
+    for t in targets {
+        let Some(name) = t.file_name() else { continue };
+        let prefix = format!(".{}.tmp-", name.to_string_lossy());
+        match by_dir.iter_mut().find(|(d, _)| *d == parent(t)) {
+            Some((_, p)) => p.push(prefix),
+            None => by_dir.push((parent(t), vec![prefix])),
+        }
+    }
+    for (dir, prefixes) in by_dir {
+        let Ok(entries) = fs::read_dir(dir) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            if prefixes.iter().any(|p| name.starts_with(p.as_str())) {
+                remove_if_exists(&e.path())?;
+            }
+        }
+    }
+    Ok(())
+}
+
 /// A finished temporary file (written and fsynced), not yet in place: [`Staged::commit`] renames it,
 /// dropping it removes it.
 #[derive(Debug)]
@@ -509,11 +535,16 @@ impl Lock {
             let text = format!(
                 "# raycost: a run is writing this result. Delete only if that process is gone.\n{mine}"
             );
-            f.set_len(0)
+            let written = f
+                .set_len(0)
                 .and_then(|()| f.rewind())
                 .and_then(|()| f.write_all(text.as_bytes()))
-                .and_then(|()| f.sync_all())
-                .map_err(|e| refuse(format!("cannot write the lock file: {e}")))?;
+                .and_then(|()| f.sync_all());
+            if let Err(e) = written {
+                // Still holding the flock: nobody else can be using this file. Leave no lock.
+                let _ = fs::remove_file(&path);
+                return Err(refuse(format!("cannot write the lock file: {e}")));
+            }
             if let Ok(mut held) = HELD.lock() {
                 held.push(path.clone());
             }

@@ -285,6 +285,12 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>, force: bool) -> Result<Merg
         .file_name()
         .map_or_else(String::new, |f| f.to_string_lossy().into_owned());
     let _out_lock = Lock::acquire(out_dir, &out_stem)?;
+    folder::remove_stale_temporaries(&outputs).map_err(|e| {
+        err(
+            out_dir,
+            format!("cannot remove a killed merge's temporary files: {e}"),
+        )
+    })?;
     for p in &outputs {
         if p.exists() && !force {
             return Err(err(

@@ -150,6 +150,12 @@ impl Sink {
         let csv_p = Self::partial(dir, stem, "csv");
         let meta_p = Self::partial(dir, stem, "meta.toml");
         let final_csv = Self::path(dir, stem, "csv");
+        let mine: Vec<PathBuf> = ["csv", "meta.toml"]
+            .into_iter()
+            .chain(suffixes.iter().map(String::as_str))
+            .flat_map(|s| [Self::path(dir, stem, s), Self::partial(dir, stem, s)])
+            .collect();
+        folder::remove_stale_temporaries(&mine).map_err(|e| failed(dir, e))?;
         if final_csv.exists() && opts.resume && !csv_p.exists() {
             // Finished already: a no-op, but only for the same spec and the same input files.
             let then = Meta::read(&Self::path(dir, stem, "meta.toml"))?;

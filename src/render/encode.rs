@@ -39,6 +39,7 @@ fn atomic(
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
     let _lock = Lock::acquire(dir, &name)?;
+    folder::remove_stale_temporaries(&[path.to_path_buf()])?;
     if path.exists() && !force {
         return Err(OutputError::new(path, "exists; add --force to replace it").into());
     }
