@@ -97,6 +97,8 @@ impl Plan {
         let mut inputs = Inputs::new(&spec.dir);
         let mut points = Vec::with_capacity(spec.points.len());
         for p in &spec.points {
+            crate::spec::magnitude::check_point(&p.tree)
+                .map_err(|k| spec.locate(Some(p.index), k))?;
             let point = kind.configure(&p.tree, &mut inputs).map_err(|e| match e {
                 ConfigError::Key(k) => spec.locate(Some(p.index), k),
                 ConfigError::Input(i) => i,
@@ -151,7 +153,7 @@ impl Plan {
             let params = p
                 .params
                 .iter()
-                .map(|(k, v)| format!("{k} = {v}"))
+                .map(|(k, v)| format!("{k} = {}", crate::spec::sweep::show(v)))
                 .collect::<Vec<_>>()
                 .join(", ");
             let _ = writeln!(

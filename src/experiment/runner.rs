@@ -224,15 +224,12 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
     let mine: Vec<usize> = (0..plan.points.len())
         .filter(|i| opts.shard.is_none_or(|s| i % s.n == s.k))
         .collect();
-    let mut warnings: Vec<String> = Vec::new();
-    for &i in &mine {
-        for w in plan.points[i].warnings() {
-            let w = format!("point {i}: {w}");
-            if !warnings.contains(&w) {
-                warnings.push(w);
-            }
-        }
-    }
+    let warnings = crate::output::meta::point_warnings(
+        &mine
+            .iter()
+            .flat_map(|&i| plan.points[i].warnings().into_iter().map(move |w| (i, w)))
+            .collect::<Vec<_>>(),
+    );
     let mut meta = start_meta(plan, opts, warnings);
     let sink = Sink::open(
         &dir,
@@ -306,9 +303,23 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
             .run(plan.points[i].as_ref(), shared.as_ref(), &ctx)
             .context_with(|| format!("point {i}"))?;
         let wall = start.elapsed().as_secs_f64();
-        check_declared(kind, "main", std::slice::from_ref(&out.row))?;
+        // An overflow names the point and its parameters, not only the column.
+        let at = || {
+            format!(
+                "point {i} ({})",
+                plan.spec.points[i]
+                    .params
+                    .iter()
+                    .map(|(k, v)| format!("{k} = {}", crate::spec::sweep::show(v)))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        };
+        check_declared(kind, "main", std::slice::from_ref(&out.row))
+            .map_err(|e| Error::internal(format!("{}: {e:#}", at())))?;
         for (name, rows) in &out.tables {
-            check_declared(kind, name, rows)?;
+            check_declared(kind, name, rows)
+                .map_err(|e| Error::internal(format!("{}: {e:#}", at())))?;
         }
         let params = all_params(kind, &accepted, &p.params, &p.tree);
         let row = with_point_columns(i, &params, &out.row);

@@ -324,6 +324,9 @@ impl Scene {
                         return Err(err(key("path"), "an obj surface needs a path".into()));
                     };
                     let file: PathBuf = dir.join(p);
+                    if let Err(why) = crate::error::regular_input(&file) {
+                        return Err(err(key("path"), format!("{}: {why}", file.display())));
+                    }
                     sources.push((file.clone(), "obj"));
                     let (models, _) = tobj::load_obj(
                         &file,

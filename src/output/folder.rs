@@ -38,7 +38,7 @@ use std::sync::Mutex;
 use serde::{Deserialize, Serialize};
 
 use super::meta::host_name;
-use crate::error::OutputError;
+use crate::error::{file_kind, OutputError};
 
 /// Creates `path` as a new, empty file opened for writing; fails if anything exists there, a
 /// symlink included (`O_CREAT | O_EXCL` never follows one).
@@ -68,39 +68,10 @@ pub fn open_existing(path: &Path, append: bool) -> io::Result<File> {
     if !kind.is_file() {
         return Err(io::Error::other(format!(
             "is {}, not a regular file",
-            describe_file_type(&kind)
+            file_kind(&kind)
         )));
     }
     Ok(f)
-}
-
-/// What a non-regular file is, in words (for messages about special files).
-pub fn describe_file_type(t: &fs::FileType) -> &'static str {
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        if t.is_fifo() {
-            return "a FIFO (named pipe)";
-        }
-        if t.is_socket() {
-            return "a socket";
-        }
-        if t.is_char_device() {
-            return "a character device";
-        }
-        if t.is_block_device() {
-            return "a block device";
-        }
-    }
-    if t.is_dir() {
-        "a folder"
-    } else if t.is_symlink() {
-        "a symlink"
-    } else if t.is_file() {
-        "a regular file"
-    } else {
-        "a special file"
-    }
 }
 
 #[cfg(target_os = "linux")]
@@ -479,7 +450,7 @@ impl Lock {
             if !meta.is_file() {
                 return Err(refuse(format!(
                     "is {}, not a lock file: remove it",
-                    describe_file_type(&meta.file_type())
+                    file_kind(&meta.file_type())
                 )));
             }
             let flock = try_flock(&f).map_err(|e| refuse(format!("cannot lock it: {e}")))?;

@@ -1,4 +1,6 @@
-//! `raycost render`: the DETP irradiance of a quasi-static run, seen from the scene's camera.
+//! `raycost render`: the DETP radiosity of a quasi-static run (B = albedo·E/π from the DETP irradiance
+//! E), seen from the scene's camera. A picture with no lit pixel is written with a warning saying
+//! why (no surface in view, every surface of albedo 0, or no light reaching them).
 //!
 //! For each frame asked for, the quasi-static engine is advanced incrementally (frame 0 is a full
 //! trace; later frames are reached by [`QuasiStatic::step`], whose poses are pure functions of
@@ -153,6 +155,33 @@ fn radiosity(view: &View, discs: &Discs, acc: &[i64], watts_per_unit: f64) -> Ve
         .collect()
 }
 
+/// Why a frame whose pixels `b` show no light at all is black, or `None` if some pixel is lit (an
+/// emitter, or a surface with B > 0).
+fn black(view: &View, b: &[Radiosity]) -> Option<String> {
+    if b.iter().any(|&x| x > 0.0) {
+        return None;
+    }
+    let albedos: Vec<f64> = view
+        .pixels
+        .iter()
+        .filter_map(|p| match *p {
+            Pixel::Disc { albedo, .. } => Some(albedo),
+            _ => None,
+        })
+        .collect();
+    Some(if albedos.is_empty() {
+        "the camera sees no surface (every pixel misses the scene): check [camera] eye, look_at and fov_deg".into()
+    } else if albedos.iter().all(|&a| a == 0.0) {
+        "every surface in view has albedo 0, and a pixel shows radiosity B = albedo·E/π, which is 0 \
+         whatever the irradiance E (give the surfaces an albedo > 0, or measure E with raycost run)"
+            .into()
+    } else {
+        "no light reached the surfaces in view (E = 0 at every pixel): do the lights face them, \
+         and are there enough detp.photons?"
+            .into()
+    })
+}
+
 fn default_out(plan: &Plan, frames: &[u32]) -> PathBuf {
     let f: Vec<String> = frames.iter().map(u32::to_string).collect();
     let which = if frames.len() == 1 {
@@ -237,6 +266,7 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
     )?;
     let (mut step_s, mut gather_s, mut full_s) = (0.0, 0.0, 0.0);
     let mut shown: Vec<Frame> = Vec::new();
+    let mut black_frames: Vec<(u32, String)> = Vec::new();
     for &f in &o.frames {
         if f != qs.frame {
             let t = Instant::now();
@@ -256,6 +286,9 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
         let acc = gather::gather(&discs, live_e);
         let b = radiosity(&view, &discs, &acc, live.scale.watts_per_unit);
         gather_s += t.elapsed().as_secs_f64();
+        if let Some(why) = black(&view, &b) {
+            black_frames.push((f, why));
+        }
         let diff = if o.diff.is_some() {
             let t = Instant::now();
             let (_, full, _) = qs.full_recalculation();
@@ -316,6 +349,13 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
             continue;
         }
         shown.push(Frame { b, diff });
+    }
+
+    // An all-black picture is almost always a scene or spec mistake: say why, once.
+    if black_frames.len() == o.frames.len() {
+        if let Some((_, why)) = black_frames.first() {
+            eprintln!("warning: every pixel of the picture is black: {why}");
+        }
     }
 
     // Tone map and encode.

@@ -9,6 +9,7 @@
 
 pub mod de;
 pub mod keys;
+pub mod magnitude;
 pub mod sweep;
 
 pub use crate::error::InputError;

@@ -33,8 +33,8 @@ pub struct RawExperiment {
     pub name: String,
     /// The experiment kind (`raycost doc spec` lists them).
     pub kind: String,
-    /// Master seed of every random stream.
-    #[serde(default = "default_seed")]
+    /// Master seed of every random stream, 0 … 2⁶³ − 1 (TOML's largest integer).
+    #[serde(default = "default_seed", deserialize_with = "super::de::seed")]
     pub seed: u64,
     /// Rays per sweep point (grid kinds; DETP counts its rays in `detp.photons`).
     #[serde(
@@ -54,7 +54,7 @@ pub const KEYS: &[KeyDoc] = &[
         "Names the results: `DIR/NAME/NAME.csv`, `NAME.meta.toml`, `NAME.TABLE.csv`."),
     key("experiment.kind", "string", "", Required, "a kind of `raycost doc kinds`",
         "What the experiment measures; decides which tables below the spec may have."),
-    key("experiment.seed", "integer", "", Value("1"), "0 … 2⁶⁴ − 1",
+    key("experiment.seed", "integer", "", Value("1"), "0 … 2⁶³ − 1 (TOML's largest integer)",
         "Master seed of every random stream: the same spec and seed give the same measured columns on any machine, thread count or shard split."),
     key("experiment.rays", "integer", "rays", Absent("required by the grid kinds, unused by others"), "≥ 1 (grid: ≤ 10¹⁰)",
         "Rays traced per sweep point (DETP kinds count their rays in `detp.photons`, lines in `lines.count`)."),
@@ -63,6 +63,43 @@ pub const KEYS: &[KeyDoc] = &[
     key("sweep", "table", "", Absent("one point"), "dotted spec key = array of values",
         "The sweep: every combination of the arrays is one point (the first key varies slowest, the last fastest; at most 10 000 points). Each swept key becomes a column; `--set` on a swept key stops it being swept."),
 ];
+
+/// The dotted key assigned on the line holding byte `at` of a TOML text (its `[table]` header
+/// prefixed), and the value text from `at` to the end of that token.
+fn key_and_value_at(text: &str, at: usize) -> (Option<String>, String) {
+    let line_start = text[..at].rfind('\n').map_or(0, |i| i + 1);
+    let line = &text[line_start..];
+    let line = &line[..line.find('\n').unwrap_or(line.len())];
+    let number: String = text[at..]
+        .chars()
+        .take_while(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '+' | '-' | '.'))
+        .collect();
+    let Some((key, _)) = line.split_once('=') else {
+        return (None, number);
+    };
+    let table = text[..line_start]
+        .lines()
+        .rev()
+        .map(str::trim)
+        .find(|l| l.starts_with('[') && !l.starts_with("[["))
+        .map(|l| l.trim_matches(|c| c == '[' || c == ']').trim().to_string());
+    let key = key.trim().trim_matches('"');
+    let key = match table {
+        Some(t) if !t.is_empty() => format!("{t}.{key}"),
+        _ => key.to_string(),
+    };
+    (Some(key), number)
+}
+
+/// A value as a message shows it: floats in their shortest form, in scientific notation when very
+/// large or small (`1e-200`, not 200 zeros), everything else as TOML writes it.
+pub fn show(v: &toml::Value) -> String {
+    match v {
+        toml::Value::Float(x) => format!("{x:?}"),
+        toml::Value::Array(a) => format!("[{}]", a.iter().map(show).collect::<Vec<_>>().join(", ")),
+        other => other.to_string(),
+    }
+}
 
 fn default_seed() -> u64 {
     1
@@ -157,11 +194,23 @@ impl Spec {
                 message,
             };
         let mut tree: toml::Table = text.parse().map_err(|e: toml::de::Error| {
-            file_err(
-                e.span().map(|s| line_col(text, s.start)),
-                None,
-                e.message().trim().to_string(),
-            )
+            let at = e.span().map(|s| line_col(text, s.start));
+            let message = e.message().trim().to_string();
+            match e.span().filter(|_| message.starts_with("number too large")) {
+                // Name the key and TOML's range rather than serde's "target type".
+                Some(span) => {
+                    let (key, number) = key_and_value_at(text, span.start);
+                    file_err(
+                        at,
+                        key,
+                        format!(
+                            "{number} is larger than TOML's largest integer, 2⁶³ − 1 = {}",
+                            i64::MAX
+                        ),
+                    )
+                }
+                None => file_err(at, None, message),
+            }
         })?;
         // The header as written (located by serde), before any --set.
         from_text::<Header>(text).map_err(|e: TextError| file_err(e.at, e.key, e.message))?;
@@ -320,7 +369,7 @@ impl Spec {
                 p.index,
                 p.params
                     .iter()
-                    .map(|(k, v)| format!("{k} = {v}"))
+                    .map(|(k, v)| format!("{k} = {}", show(v)))
                     .collect::<Vec<_>>()
                     .join(", ")
             ),

@@ -351,6 +351,12 @@ impl Loader {
         let f = cx.tok("the file to include")?;
         let fname = f.show();
         let candidates = [dir.join(&fname), self.root.join(&fname)];
+        // The first that exists; a folder, FIFO or device there is refused by what it is.
+        if let Some(p) = candidates.iter().find(|p| p.exists()) {
+            if let Err(why) = crate::error::regular_input(p) {
+                return Err(cx.err_at((f.line, f.col), format!("include `{}`: {why}", p.display())));
+            }
+        }
         let Some(p) = candidates.iter().find(|p| p.is_file()) else {
             return Err(cx.err_at(
                 (f.line, f.col),
