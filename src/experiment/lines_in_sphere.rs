@@ -123,6 +123,7 @@ impl Kind for LinesInSphereKind {
         Work {
             units: p.count,
             unit: "lines",
+            points: 1,
         }
     }
     fn shared(_: &[&LinesPoint]) -> Result<(), Error> {

@@ -167,6 +167,14 @@ impl Plan {
                 let _ = writeln!(s, "      warning: {w}");
             }
         }
+        let works: Vec<_> = self.points.iter().map(|p| p.work()).collect();
+        let (lines, warning) = crate::output::work::total(
+            &works.iter().map(|w| (w.units, w.unit, w.points)).collect::<Vec<_>>(),
+        );
+        let warning = warning.map(|w| format!("warning: {w}"));
+        for l in lines.iter().chain(warning.iter()) {
+            let _ = writeln!(s, "  {l}");
+        }
         for f in &self.inputs {
             let _ = writeln!(
                 s,
@@ -211,7 +219,7 @@ impl Plan {
                     "point": p.index,
                     "params": params,
                     "describe": point.describe(),
-                    "work": { "units": work.units, "unit": work.unit },
+                    "work": { "units": work.units, "unit": work.unit, "points": work.points },
                     "memory": {
                         "bytes": memory.needs.iter().map(|n| n.bytes).sum::<f64>(),
                         "needs": needs,
@@ -228,11 +236,16 @@ impl Plan {
                 |f| json!({ "path": f.path, "role": f.role, "sha256": f.sha256, "bytes": f.bytes }),
             )
             .collect();
+        let works: Vec<_> = self.points.iter().map(|p| p.work()).collect();
+        let (total, warning) = crate::output::work::total(
+            &works.iter().map(|w| (w.units, w.unit, w.points)).collect::<Vec<_>>(),
+        );
         json!({
             "spec": self.spec.path,
             "kind": self.kind.name(),
             "spec_hash": self.hash,
             "points": points,
+            "total_work": { "lines": total, "warning": warning },
             "inputs": inputs,
         })
     }

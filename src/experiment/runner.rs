@@ -558,6 +558,7 @@ mod tests {
             Work {
                 units: 1,
                 unit: "points",
+                points: 1,
             }
         }
         fn shared(_: &[&f64]) -> Result<(), Error> {

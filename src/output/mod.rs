@@ -18,5 +18,6 @@ pub mod row;
 pub mod sink;
 pub mod summary;
 pub mod time;
+pub mod work;
 
 pub use crate::error::OutputError;

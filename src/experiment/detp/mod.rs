@@ -625,6 +625,7 @@ impl Kind for DetpKind {
             } else {
                 "lines"
             },
+            points: p.point_count(),
         }
     }
     fn memory(p: &DetpConfig) -> Memory {

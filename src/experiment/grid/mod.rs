@@ -120,6 +120,7 @@ impl<V: GridVariant> Kind for Grid<V> {
         Work {
             units: p.rays,
             unit: "rays",
+            points: 1,
         }
     }
     fn memory(p: &GridConfig) -> Memory {
