@@ -383,6 +383,13 @@ impl Scene {
                     before - first - kept.len()
                 ));
             }
+            let (kept, duplicates) = shapes::without_duplicates(kept);
+            if duplicates > 0 {
+                warnings.push(format!(
+                    "{name}: {label}: skipped {duplicates} duplicate triangle(s) (the same three \
+                     vertices, wound the same way, as another triangle of this surface)"
+                ));
+            }
             triangles.extend(kept);
             if let Some(dname) = &s.dynamic {
                 let Some(k) = raw.dynamic.iter().position(|d| &d.name == dname) else {

@@ -228,8 +228,14 @@ impl AffScene {
         } else {
             (0.0, 0.0)
         };
-        let mut triangles = self.triangles;
+        let (mut triangles, duplicates) = super::shapes::without_duplicates(self.triangles);
         let mut warnings = self.warnings;
+        if duplicates > 0 {
+            warnings.push(format!(
+                "{duplicates} duplicate triangle(s) skipped (the same three vertices, wound the same \
+                 way and of the same material, as another)"
+            ));
+        }
         if !self.patches.is_empty() {
             warnings.push(format!(
                 "{} animated triangle(s) (tpa) deform rather than move rigidly: frozen at t = {start}",
