@@ -154,7 +154,7 @@ fn emit<R: Rng>(scene: &Scene, rng: &mut R) -> (DVec3, DVec3, Option<Prim>) {
 /// One photon's path.
 fn trace_one(scene: &Scene, seed: u64, photon: u32, units: Units) -> Vec<Segment> {
     let mut rng = stream(&[domain::PHOTON, seed, u64::from(photon)]);
-    let eps = 1e-9 * scene.magnitude();
+    let eps = scene.precision().offset();
     let (mut o, mut d, mut leaving) = emit(scene, &mut rng);
     let mut path = Vec::new();
     for bounce in 0..=MAX_BOUNCES {

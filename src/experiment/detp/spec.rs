@@ -846,6 +846,10 @@ impl DetpConfig {
                 format!("d = {disc_radius:e} is larger than {}: a tangent disc must be small against the scene", reach.1),
             );
         }
+        // Enough of f64 left for d and the scene at the scene's coordinates (issue 26).
+        if let Rays::Scene(s) = &rays {
+            s.scene.precision().check(disc_radius).or_else(|m| refuse("detp.scene", m))?;
+        }
         let edge = edge_mode(d, &rays)?;
         let cfg = Self {
             seed,
