@@ -21,3 +21,4 @@ mod reproducible;
 mod resume;
 mod sanity;
 mod slurm;
+mod stability;

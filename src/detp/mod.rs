@@ -22,7 +22,8 @@
 //! - [`photon`]: photon tracing into the store, one keyed stream per photon;
 //! - [`surface_points`]: sample points on a scene's surfaces at spacing ≈ d;
 //! - [`quasi_static`]: frame-by-frame incremental recalculation as dynamic objects move;
-//! - [`photon_map`]: Jensen's k-nearest-neighbour estimate over the same photons (the baseline).
+//! - [`photon_map`]: Jensen's k-nearest-neighbour estimate over the same photons (the baseline);
+//! - [`stability`]: the same irradiance wherever the scene is placed (issue 26's stability suite and table).
 
 pub mod brute;
 pub mod disc;
@@ -34,5 +35,6 @@ pub mod photon;
 pub mod photon_map;
 pub mod quasi_static;
 pub mod sphere_cache;
+pub mod stability;
 pub mod store;
 pub mod surface_points;

@@ -169,7 +169,10 @@ impl Plan {
         }
         let works: Vec<_> = self.points.iter().map(|p| p.work()).collect();
         let (lines, warning) = crate::output::work::total(
-            &works.iter().map(|w| (w.units, w.unit, w.points)).collect::<Vec<_>>(),
+            &works
+                .iter()
+                .map(|w| (w.units, w.unit, w.points))
+                .collect::<Vec<_>>(),
         );
         let warning = warning.map(|w| format!("warning: {w}"));
         for l in lines.iter().chain(warning.iter()) {
@@ -238,7 +241,10 @@ impl Plan {
             .collect();
         let works: Vec<_> = self.points.iter().map(|p| p.work()).collect();
         let (total, warning) = crate::output::work::total(
-            &works.iter().map(|w| (w.units, w.unit, w.points)).collect::<Vec<_>>(),
+            &works
+                .iter()
+                .map(|w| (w.units, w.unit, w.points))
+                .collect::<Vec<_>>(),
         );
         json!({
             "spec": self.spec.path,

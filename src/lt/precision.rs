@@ -101,7 +101,10 @@ mod tests {
     use glam::DVec3;
 
     fn cornell_at(t: f64) -> Precision {
-        Precision::of(&Aabb::new(DVec3::splat(t), DVec3::splat(t) + DVec3::new(556.0, 548.8, 559.2)))
+        Precision::of(&Aabb::new(
+            DVec3::splat(t),
+            DVec3::splat(t) + DVec3::new(556.0, 548.8, 559.2),
+        ))
     }
 
     #[test]
@@ -133,7 +136,10 @@ mod tests {
             e.contains("disc radius d = 10;") && e.contains("18.8 bits") && e.contains("1.000e11"),
             "{e}"
         );
-        assert!(cornell_at(0.0).check(1e-9).is_err(), "a sub-nm disc in a mm box");
+        assert!(
+            cornell_at(0.0).check(1e-9).is_err(),
+            "a sub-nm disc in a mm box"
+        );
         assert!(cornell_at(0.0).check(1e-3).is_ok());
     }
 }

@@ -245,9 +245,17 @@ pub fn point_warnings(warnings: &[(usize, String)]) -> Vec<String> {
             [p] => format!("point {p}: {w}"),
             ps if ps.len() <= 10 => format!(
                 "points {}: {w}",
-                ps.iter().map(usize::to_string).collect::<Vec<_>>().join(", ")
+                ps.iter()
+                    .map(usize::to_string)
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ),
-            ps => format!("points {} … {} ({} points): {w}", ps[0], ps[ps.len() - 1], ps.len()),
+            ps => format!(
+                "points {} … {} ({} points): {w}",
+                ps[0],
+                ps[ps.len() - 1],
+                ps.len()
+            ),
         })
         .collect()
 }

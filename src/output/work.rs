@@ -67,7 +67,10 @@ mod tests {
     fn photons_times_points_is_summed_and_warned_above_the_threshold() {
         // The case: 10⁴ points × 5·10⁶ photons.
         let (lines, w) = total(&[(5_000_000, "photons", 10_000)]);
-        assert!(lines[0].contains("5.000e10 photons × sample points"), "{lines:?}");
+        assert!(
+            lines[0].contains("5.000e10 photons × sample points"),
+            "{lines:?}"
+        );
         assert!(w.expect("a warning").contains("above 1e10"));
         let (lines, w) = total(&[(200_000, "rays", 1), (200_000, "rays", 1)]);
         assert_eq!(lines, ["total work: 4.000e5 rays"]);

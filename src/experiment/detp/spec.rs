@@ -848,7 +848,10 @@ impl DetpConfig {
         }
         // Enough of f64 left for d and the scene at the scene's coordinates (issue 26).
         if let Rays::Scene(s) = &rays {
-            s.scene.precision().check(disc_radius).or_else(|m| refuse("detp.scene", m))?;
+            s.scene
+                .precision()
+                .check(disc_radius)
+                .or_else(|m| refuse("detp.scene", m))?;
         }
         let edge = edge_mode(d, &rays)?;
         let cfg = Self {

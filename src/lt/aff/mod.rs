@@ -608,19 +608,29 @@ mod tests {
         std::fs::write(dir.path().join("f40.aff"), "p 3 0 0 0 1 0 0 0 1 0\n").unwrap();
         let t = std::time::Instant::now();
         let e = load_aff(&dir.path().join("f0.aff")).unwrap_err();
-        assert!(e.message.contains("fan-out") && e.message.contains("100000"), "{e}");
+        assert!(
+            e.message.contains("fan-out") && e.message.contains("100000"),
+            "{e}"
+        );
         assert!(t.elapsed().as_secs() < 10, "{:?}", t.elapsed());
         // A 2 MiB file included 100 times from one file: under the inclusion bound, over the size one.
         let big = "% padding\n".repeat(200_000);
         std::fs::write(dir.path().join("big.aff"), big).unwrap();
         std::fs::write(dir.path().join("top.aff"), "i 0 big.aff\n".repeat(100)).unwrap();
         let e = load_aff(&dir.path().join("top.aff")).unwrap_err();
-        assert!(e.message.contains("MiB") && e.message.contains("fan-out"), "{e}");
+        assert!(
+            e.message.contains("MiB") && e.message.contains("fan-out"),
+            "{e}"
+        );
         // A FIFO is refused by what it is, not called missing.
         #[cfg(unix)]
         {
             let fifo = dir.path().join("pipe.aff");
-            if std::process::Command::new("mkfifo").arg(&fifo).status().is_ok_and(|s| s.success()) {
+            if std::process::Command::new("mkfifo")
+                .arg(&fifo)
+                .status()
+                .is_ok_and(|s| s.success())
+            {
                 std::fs::write(dir.path().join("p.aff"), "i 0 pipe.aff\n").unwrap();
                 let e = load_aff(&dir.path().join("p.aff")).unwrap_err();
                 assert!(e.message.contains("FIFO"), "{e}");
