@@ -99,13 +99,15 @@ fn measure(name: &str, scene: &Scene, eye: DVec3, rays: usize, brute_rays: usize
     let crate_s = t2.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let (mut mismatches, mut crate_mismatches) = (0, 0);
+    // Only t is compared: the tie order (ranks) does not matter here.
+    let ranks: Vec<u32> = (0..scene.triangles.len() as u32).collect();
     for ((d, a), c) in dirs
         .iter()
         .zip(&answers)
         .zip(&crate_answers)
         .take(brute_rays)
     {
-        let b = two_nearest_brute(&scene.triangles, eye, *d, 1e-9, u32::MAX);
+        let b = two_nearest_brute(&scene.triangles, &ranks, eye, *d, 1e-9, u32::MAX);
         let first = b.first.0.is_finite().then_some(b.first.0);
         mismatches += usize::from((first, b.second.0) != *a);
         crate_mismatches += usize::from((first, b.second.0) != *c);

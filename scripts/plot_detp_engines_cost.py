@@ -6,7 +6,7 @@ T = u·n_R·∛n_P. Left: counted tests over Theorem 1's count, against n_R·∛
 time against the cost the counted tests imply, t·(ray–sphere tests) + u·(ray–disc tests) for the sphere
 cache and u_idx·(ray–disc tests) + v·(nodes visited) for each index, each plus a cost per segment
 (building the root list, walking the index), fitted here by non-negative least squares on relative
-residuals (raycost_stats.engine_cost_fits), with 95 % CIs by a parametric bootstrap over the replicas'
+residuals (raycost_stats.engine_cost_fits), with 95 % CIs by a bootstrap that resamples the rows (the fit's misfit inside them) and the replicas'
 timings; the fit and its residuals are printed and shown. Right: the residuals in %.
 """
 
@@ -31,7 +31,7 @@ def plot(args):
     size = nr * np.cbrt(npts)
     sc_t = np.array(rp.col(rows, "cost_sphere_cache_s"))
     copied = np.array([held.get(r["point"], 0.0) for r in rows])
-    (c_sc, t, u, h), sc_res, sc_ci = fits["sphere-cache"]
+    (c_sc, t, u, h), sc_res, sc_ci = fits["sphere-cache"][:3]
     sc_res = np.array(sc_res)
     fig, axes = rp.subplots(1, 3, panel_w=5.2, panel_h=4.2)
     ax_c, ax_t, ax_r = axes[0]
@@ -52,7 +52,7 @@ def plot(args):
         tests = np.array(rp.col(sub, "tests_disc_index"))
         nodes = np.array(rp.col(sub, "nodes_disc_index"))
         seg = np.array(rp.col(sub, "segments"))
-        (ci, ui, v), res, cis = fits["disc-index (%s)" % index]
+        (ci, ui, v), res, cis = fits["disc-index (%s)" % index][:3]
         res = np.array(res)
         color = "C%d" % (j + 1)
         ax_c.plot(s, tests / np.array(rp.col(sub, "tests_disc_index_theory")), "s", color=color,

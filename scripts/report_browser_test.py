@@ -2,15 +2,18 @@
 """Opens a `raycost report` page in a real headless Chromium and checks it as a reader would see it.
 
 Asserts that the page loads, that nothing is logged as an error (console errors, uncaught
-exceptions, resources that failed to load), and that every <img> was decoded (naturalWidth > 0);
-then writes a PNG screenshot of the top of the page.
+exceptions, resources that failed to load), that every <img> was decoded (naturalWidth > 0), that
+every claim's verdict cell is coloured by its outcome (class outcome-OUTCOME and the computed
+background of that class: holds green, holds-in-part yellow, differs and refuted one red,
+inconclusive grey), and that every measured cell lies inside the viewport's width (readable without
+scrolling at 1280 px); then writes a PNG screenshot of the top of the page.
 
 Drives the system Chromium over the DevTools protocol through --remote-debugging-pipe (JSON
 messages separated by NUL on file descriptors 3 and 4), so it needs only the Python standard
 library and a Chromium binary: nothing is downloaded.
 
 Usage: report_browser_test.py PAGE.html --screenshot OUT.png [--chrome PATH] [--width 1280]
-       [--height 2000] [--timeout 60]
+       [--height 2000] [--timeout 60] [--expect-claims]
 Exit 0 when every check passes, 1 with the failures listed otherwise, 2 for a usage problem.
 """
 
@@ -146,6 +149,67 @@ def problems_in(events):
     return out
 
 
+# The background a verdict cell must have for each outcome (page.rs's style sheet): differs and
+# refuted share one tone, as they share a meaning for a reader (the paper is not borne out).
+OUTCOME_COLOURS = {
+    "holds": "rgb(220, 241, 216)",
+    "holds-in-part": "rgb(246, 239, 200)",
+    "differs": "rgb(249, 220, 215)",
+    "refuted": "rgb(249, 220, 215)",
+    "inconclusive": "rgb(236, 236, 236)",
+}
+
+# The claims table's cells, found by its header (so a page that lacks the classes is still read):
+# each verdict cell with its outcome, class and computed background, each measured cell's box.
+CLAIMS_JS = """(() => {
+  const t = document.querySelector('#claims table');
+  if (!t) return JSON.stringify(null);
+  const heads = Array.from(t.rows[0].cells).map(c => c.textContent.trim());
+  const vi = heads.findIndex(h => h.startsWith('verdict'));
+  const mi = heads.findIndex(h => h.startsWith('measured'));
+  const rows = Array.from(t.rows).slice(1);
+  const box = td => { const r = td.getBoundingClientRect();
+    return {left: r.left, right: r.right, width: r.width, text: td.textContent.trim().slice(0, 60)}; };
+  return JSON.stringify({
+    verdicts: vi < 0 ? [] : rows.map(r => r.cells[vi]).map(td => ({
+      outcome: td.dataset.outcome || null, cls: td.className,
+      bg: getComputedStyle(td).backgroundColor,
+      text: (td.querySelector('strong') || td).textContent.trim()})),
+    measured: mi < 0 ? [] : rows.map(r => box(r.cells[mi])),
+    columns: heads});
+})()"""
+
+# The measured cells of the experiments' tables (class "measured", page.rs).
+MEASURED_JS = """JSON.stringify(Array.from(document.querySelectorAll('section:not(#claims) td.measured')).map(td => {
+  const r = td.getBoundingClientRect();
+  return {left: r.left, right: r.right, width: r.width, text: td.textContent.slice(0, 60)}; }))"""
+
+
+def verdict_failures(cells):
+    """Every verdict cell of the claims table must carry its outcome, the matching class and the
+    outcome's computed colour; the bold word shown must be the outcome."""
+    out = []
+    for i, c in enumerate(cells):
+        o = c["outcome"]
+        if o not in OUTCOME_COLOURS:
+            out.append(f"claim {i}: verdict cell without a known outcome ({o!r}, class {c['cls']!r})")
+            continue
+        if f"outcome-{o}" not in c["cls"].split():
+            out.append(f"claim {i}: outcome {o} but class {c['cls']!r}")
+        if c["bg"] != OUTCOME_COLOURS[o]:
+            out.append(f"claim {i}: outcome {o} coloured {c['bg']}, expected {OUTCOME_COLOURS[o]}")
+        if c["text"] != o:
+            out.append(f"claim {i}: outcome {o} shown as {c['text']!r}")
+    return out
+
+
+def measured_failures(cells, width):
+    """Every measured cell must lie within [0, width] horizontally (no scrolling to read it)."""
+    return [f"measured cell {i} at x = {c['left']:.0f}–{c['right']:.0f} px, outside the {width} px "
+            f"viewport ({c['text']!r})" for i, c in enumerate(cells)
+            if c["left"] < 0 or c["right"] > width + 0.5 or c["width"] <= 0]
+
+
 IMAGES_JS = """JSON.stringify(Array.from(document.images).map(i => ({
   src: i.getAttribute('src'), complete: i.complete, w: i.naturalWidth, h: i.naturalHeight})))"""
 
@@ -158,6 +222,8 @@ def main():
     ap.add_argument("--width", type=int, default=1280)
     ap.add_argument("--height", type=int, default=2000)
     ap.add_argument("--timeout", type=float, default=60)
+    ap.add_argument("--expect-claims", action="store_true",
+                    help="fail when the page has no claims table (a results folder with claims.toml)")
     a = ap.parse_args()
     if not a.page.is_file():
         print(f"error: {a.page}: no such page", file=sys.stderr)
@@ -197,6 +263,30 @@ def main():
         print(f"images: {len(imgs)}, decoded (naturalWidth > 0): {len(imgs) - len(bad)}")
         failures += [f"image not loaded: {i['src']} (complete={i['complete']}, naturalWidth={i['w']})"
                      for i in bad]
+        claims = json.loads(dt.send("Runtime.evaluate", {"expression": CLAIMS_JS, "returnByValue": True},
+                                    session=session)["result"]["value"])
+        if claims is None:
+            if a.expect_claims:
+                failures.append("the page has no claims table")
+        else:
+            bad = verdict_failures(claims["verdicts"])
+            if not claims["verdicts"]:
+                bad.append("the claims table has no verdict column (columns %s)" % claims["columns"])
+            print(f"claims: {len(claims['verdicts'])} verdict cells, coloured by their outcome: "
+                  f"{len(claims['verdicts']) - len(bad)}")
+            failures += bad
+            bad = measured_failures(claims["measured"], a.width)
+            if not claims["measured"]:
+                bad.append("the claims table has no measured column (columns %s)" % claims["columns"])
+            print(f"claims: {len(claims['measured'])} measured cells, inside the {a.width} px viewport: "
+                  f"{len(claims['measured']) - len(bad)}")
+            failures += bad
+        cells = json.loads(dt.send("Runtime.evaluate", {"expression": MEASURED_JS, "returnByValue": True},
+                                   session=session)["result"]["value"])
+        bad_cells = measured_failures(cells, a.width)
+        print(f"experiments: {len(cells)} measured cells, inside the {a.width} px viewport: "
+              f"{len(cells) - len(bad_cells)}")
+        failures += bad_cells
         shot = dt.send("Page.captureScreenshot", {"format": "png"}, session=session)["data"]
         png = base64.b64decode(shot)
         a.screenshot.parent.mkdir(parents=True, exist_ok=True)

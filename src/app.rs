@@ -8,35 +8,15 @@ use crate::cli::{Cli, Command, EyeArg, TheoryCommand};
 use crate::error::Error;
 use crate::experiment::plan::Plan;
 use crate::experiment::runner::{self, RunOptions};
-use crate::scene::{RadiusClass, RadiusDist, RadiusDraw};
+use crate::sample::radius::{RadiusClass, RadiusDist, RadiusDraw};
 use crate::theory::grid::{self as th, Eye, GridTheoryInput};
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> crate::error::Result<()> {
     match cli.command {
-        Command::Run(a) => {
-            thread_pool(a.threads)?;
-            let plan = Plan::load(&a.spec, &a.set)?;
-            let opts = RunOptions {
-                out: a.out,
-                force: a.force,
-                resume: a.resume,
-                quiet: a.quiet,
-                shard: a.shard,
-                sets: a.set,
-            };
-            let (written, summary) = runner::run(&plan, &opts)?;
-            if !a.quiet {
-                let mut out = std::io::stdout().lock();
-                write!(out, "{summary}")?;
-                for p in written {
-                    writeln!(out, "wrote {}", p.display())?;
-                }
-            }
-            Ok(())
-        }
+        Command::Run(a) => run_spec(a),
         Command::Check(a) => {
-            let plan = Plan::load(&a.spec, &a.set)?;
+            let plan = Plan::load(&a.spec, &a.set, thread_pool(None)?)?;
             let text = if a.json {
                 json_text(&plan.describe_json())
             } else {
@@ -46,81 +26,8 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             Ok(())
         }
         Command::Theory(t) => match t.which {
-            TheoryCommand::Grid(g) => {
-                for (name, v) in [
-                    ("--intensity", g.intensity),
-                    ("--radius", g.radius),
-                    ("--cell-width", g.cell_width),
-                ] {
-                    if !(v.is_finite() && v > 0.0) {
-                        return Err(Error::Usage(format!(
-                            "{name}: got {v}, expected a finite number > 0"
-                        )));
-                    }
-                }
-                let classes = [RadiusClass {
-                    fraction: 1.0,
-                    radius: RadiusDist::Constant(g.radius),
-                }];
-                let inp = GridTheoryInput {
-                    intensity: g.intensity,
-                    classes: &classes,
-                    draw: RadiusDraw::PerSphere,
-                    cell_width: g.cell_width,
-                };
-                let eye = match g.eye {
-                    EyeArg::Corner => Eye::Corner,
-                    EyeArg::Uniform => Eye::Uniform,
-                };
-                let text = if g.json {
-                    json_text(&grid_theory_json(&inp, eye))
-                } else {
-                    grid_theory_table(&inp, eye)
-                };
-                write!(std::io::stdout().lock(), "{text}")?;
-                Ok(())
-            }
-            TheoryCommand::Detp(d) => {
-                let ok = |name: &str, v: f64, good: bool, want: &str| {
-                    if good {
-                        Ok(())
-                    } else {
-                        Err(Error::Usage(format!("{name}: got {v}, expected {want}")))
-                    }
-                };
-                ok(
-                    "--rays",
-                    d.rays,
-                    d.rays.is_finite() && d.rays >= 1.0,
-                    "a count ≥ 1",
-                )?;
-                ok(
-                    "--points",
-                    d.points,
-                    d.points.is_finite() && d.points >= 1.0,
-                    "a count ≥ 1",
-                )?;
-                ok("--q", d.q, d.q > 0.0 && d.q < 1.0, "a ratio in (0, 1)")?;
-                ok(
-                    "--ratio",
-                    d.ratio,
-                    d.ratio > 0.0 && d.ratio <= 1.0,
-                    "r_D/r_0 in (0, 1]",
-                )?;
-                ok(
-                    "--threshold",
-                    d.threshold,
-                    d.threshold.is_finite() && d.threshold >= 1.0,
-                    "a count ≥ 1",
-                )?;
-                let text = if d.json {
-                    json_text(&detp_theory_json(&d))
-                } else {
-                    detp_theory_table(&d)
-                };
-                write!(std::io::stdout().lock(), "{text}")?;
-                Ok(())
-            }
+            TheoryCommand::Grid(g) => theory_grid(&g),
+            TheoryCommand::Detp(d) => theory_detp(&d),
         },
         Command::Doc(d) => {
             let text = match d.what {
@@ -162,37 +69,134 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             m.force,
             m.quiet,
         )?),
-        Command::Render(r) => {
-            thread_pool(r.threads)?;
-            let plan = Plan::load(&r.spec, &r.set)?;
-            let frames = match (r.frame, r.frames.is_empty()) {
-                (Some(f), _) => vec![f],
-                (None, true) => vec![0],
-                (None, false) => r.frames,
-            };
-            let opts = crate::render::RenderOptions {
-                frames,
-                point: r.point,
-                out: r.out,
-                gif: r.gif,
-                diff: r.diff,
-                width: r.width,
-                colormap: r.colormap,
-                force: r.force,
-                eye: vec3("--eye", &r.eye)?,
-                look_at: vec3("--look-at", &r.look_at)?,
-                fov: r.fov,
-                compare_edge: r
-                    .compare_edge
-                    .as_deref()
-                    .map(crate::render::edge_mode)
-                    .transpose()?,
-            };
-            let log = crate::render::run(&plan, &opts)?;
-            write!(std::io::stdout().lock(), "{log}")?;
-            Ok(())
+        Command::Render(r) => render(r),
+    }
+}
+
+/// `raycost run`.
+fn run_spec(a: crate::cli::RunArgs) -> crate::error::Result<()> {
+    let threads = thread_pool(a.threads)?;
+    let plan = Plan::load(&a.spec, &a.set, threads)?;
+    let opts = RunOptions {
+        out: a.out,
+        force: a.force,
+        resume: a.resume,
+        quiet: a.quiet,
+        shard: a.shard,
+        sets: a.set,
+        threads,
+    };
+    let (written, summary) = runner::run(&plan, &opts)?;
+    if !a.quiet {
+        let mut out = std::io::stdout().lock();
+        write!(out, "{summary}")?;
+        for p in written {
+            writeln!(out, "wrote {}", p.display())?;
         }
     }
+    Ok(())
+}
+
+/// `raycost theory grid`.
+fn theory_grid(g: &crate::cli::GridTheoryArgs) -> crate::error::Result<()> {
+    for (name, v) in [
+        ("--intensity", g.intensity),
+        ("--radius", g.radius),
+        ("--cell-width", g.cell_width),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(Error::Usage(format!(
+                "{name}: got {v}, expected a finite number > 0"
+            )));
+        }
+    }
+    let classes = [RadiusClass {
+        fraction: 1.0,
+        radius: RadiusDist::Constant(g.radius),
+    }];
+    let inp = GridTheoryInput {
+        intensity: g.intensity,
+        classes: &classes,
+        draw: RadiusDraw::PerSphere,
+        cell_width: g.cell_width,
+    };
+    let eye = match g.eye {
+        EyeArg::Corner => Eye::Corner,
+        EyeArg::Uniform => Eye::Uniform,
+    };
+    let text = if g.json {
+        json_text(&grid_theory_json(&inp, eye))
+    } else {
+        grid_theory_table(&inp, eye)
+    };
+    write!(std::io::stdout().lock(), "{text}")?;
+    Ok(())
+}
+
+/// `raycost theory detp`.
+fn theory_detp(d: &crate::cli::DetpTheoryArgs) -> crate::error::Result<()> {
+    let ok = |name: &str, v: f64, good: bool, want: &str| {
+        if good {
+            Ok(())
+        } else {
+            Err(Error::Usage(format!("{name}: got {v}, expected {want}")))
+        }
+    };
+    let count = |v: f64| v.is_finite() && v >= 1.0;
+    ok("--rays", d.rays, count(d.rays), "a count ≥ 1")?;
+    ok("--points", d.points, count(d.points), "a count ≥ 1")?;
+    ok("--q", d.q, d.q > 0.0 && d.q < 1.0, "a ratio in (0, 1)")?;
+    ok(
+        "--ratio",
+        d.ratio,
+        d.ratio > 0.0 && d.ratio <= 1.0,
+        "r_D/r_0 in (0, 1]",
+    )?;
+    ok(
+        "--threshold",
+        d.threshold,
+        count(d.threshold),
+        "a count ≥ 1",
+    )?;
+    let text = if d.json {
+        json_text(&detp_theory_json(d))
+    } else {
+        detp_theory_table(d)
+    };
+    write!(std::io::stdout().lock(), "{text}")?;
+    Ok(())
+}
+
+/// `raycost render`.
+fn render(r: crate::cli::RenderArgs) -> crate::error::Result<()> {
+    let threads = thread_pool(r.threads)?;
+    let plan = Plan::load(&r.spec, &r.set, threads)?;
+    let frames = match (r.frame, r.frames.is_empty()) {
+        (Some(f), _) => vec![f],
+        (None, true) => vec![0],
+        (None, false) => r.frames,
+    };
+    let opts = crate::render::RenderOptions {
+        frames,
+        point: r.point,
+        out: r.out,
+        gif: r.gif,
+        diff: r.diff,
+        width: r.width,
+        colormap: r.colormap,
+        force: r.force,
+        eye: vec3("--eye", &r.eye)?,
+        look_at: vec3("--look-at", &r.look_at)?,
+        fov: r.fov,
+        compare_edge: r
+            .compare_edge
+            .as_deref()
+            .map(crate::render::edge_mode)
+            .transpose()?,
+    };
+    let log = crate::render::run(&plan, &opts)?;
+    write!(std::io::stdout().lock(), "{log}")?;
+    Ok(())
 }
 
 /// Pretty JSON with a final newline.
@@ -203,9 +207,14 @@ fn json_text(v: &serde_json::Value) -> String {
 }
 
 /// Starts the global thread pool with `n` threads (`--threads`), refusing 0 and more than 8 per
-/// CPU (which only add scheduling cost, and a huge count takes minutes to start).
-fn thread_pool(n: Option<usize>) -> crate::error::Result<()> {
-    let Some(n) = n else { return Ok(()) };
+/// CPU (which only add scheduling cost, and a huge count takes minutes to start). Returns the
+/// number of worker threads, which is then passed to whatever depends on it (memory needs, the
+/// metadata, timings), never read back from the pool; without `--threads`, rayon's default pool
+/// size.
+fn thread_pool(n: Option<usize>) -> crate::error::Result<usize> {
+    let Some(n) = n else {
+        return Ok(rayon::current_num_threads());
+    };
     if n == 0 {
         return Err(Error::Usage("--threads must be at least 1".into()));
     }
@@ -220,7 +229,7 @@ fn thread_pool(n: Option<usize>) -> crate::error::Result<()> {
         .num_threads(n)
         .build_global()
         .context("could not start the thread pool")?;
-    Ok(())
+    Ok(n)
 }
 
 /// An optional point given as X,Y,Z.

@@ -43,6 +43,8 @@
 //! Queries on a committed scene are thread-safe (Embree's documented contract), so
 //! [`EmbreeScene`] is `Sync` and may be traced from any number of rayon threads.
 
+pub mod triangles;
+
 use std::ptr;
 
 use anyhow::{bail, ensure, Result};
@@ -62,7 +64,11 @@ mod ffi {
     pub const RTC_ERROR_NONE: c_uint = 0;
     pub const RTC_BUILD_QUALITY_HIGH: c_uint = 2;
     pub const RTC_GEOMETRY_TYPE_SPHERE_POINT: c_uint = 50;
+    pub const RTC_GEOMETRY_TYPE_TRIANGLE: c_uint = 0;
+    pub const RTC_BUFFER_TYPE_INDEX: c_uint = 0;
     pub const RTC_BUFFER_TYPE_VERTEX: c_uint = 1;
+    pub const RTC_FORMAT_UINT3: c_uint = 0x5003;
+    pub const RTC_FORMAT_FLOAT3: c_uint = 0x9003;
     pub const RTC_FORMAT_FLOAT4: c_uint = 0x9004;
     pub const RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT: c_uint = 0;
     pub const RTC_INVALID_GEOMETRY_ID: c_uint = c_uint::MAX;
@@ -161,7 +167,18 @@ mod ffi {
             context: *mut RTCIntersectContext,
             rayhit: *mut RTCRayHit,
         );
+        pub fn rtcOccluded1(scene: RTCScene, context: *mut RTCIntersectContext, ray: *mut RTCRay);
     }
+}
+
+/// Turns a pending error of `device` (a live device handle) into an `Err`.
+fn check(device: ffi::RTCDevice, what: &str) -> Result<()> {
+    // SAFETY: the callers pass a live device handle.
+    let code = unsafe { ffi::rtcGetDeviceError(device) };
+    if code != ffi::RTC_ERROR_NONE {
+        bail!("Embree error {code} after {what}");
+    }
+    Ok(())
 }
 
 /// An Embree BVH over spheres, built once, queried from many threads (`&self` is `Sync`).
@@ -249,12 +266,7 @@ impl EmbreeScene {
 
     /// Turns a pending device error into an `Err`.
     fn check(&self, what: &str) -> Result<()> {
-        // SAFETY: `device` is a live device handle.
-        let code = unsafe { ffi::rtcGetDeviceError(self.device) };
-        if code != ffi::RTC_ERROR_NONE {
-            bail!("Embree error {code} after {what}");
-        }
-        Ok(())
+        check(self.device, what)
     }
 
     /// The number of spheres in the scene.

@@ -111,7 +111,7 @@ fn read_all(paths: Vec<PathBuf>) -> Vec<(PathBuf, String)> {
 /// Validates spec text as `raycost check` does (the spec named as if it sat at `path`).
 fn check_spec(path: &Path, text: &str) {
     if let Ok(spec) = raycost::spec::Spec::parse(&path.display().to_string(), text, &[]) {
-        let _ = raycost::experiment::plan::Plan::from_spec(spec);
+        let _ = raycost::experiment::plan::Plan::from_spec(spec, 1);
     }
 }
 

@@ -240,7 +240,7 @@ fn a_torn_last_row_is_dropped_reported_and_recomputed() {
         format!("{body}{cut}\n"), // mid-field, newline kept (the case)
         format!("{body}{cut}"),   // mid-field, no newline
         format!("{body}{cut}\0\0\0\0\0\0\0"), // a crash zero-filled the block
-        text[..20].to_string(), // a cut header: nothing survives
+        text[..20].to_string(),   // a cut header: nothing survives
     ];
     for (i, torn) in tears.iter().enumerate() {
         let out = tmp.path().join(format!("t{i}"));

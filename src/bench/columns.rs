@@ -3,6 +3,29 @@
 
 use crate::output::column::{Class, Column};
 
+/// instruction-set path of the light-transport core.
+pub const BVH_PATH: Column = Column::value(
+    "bvh_path",
+    "",
+    Class::Parameter,
+    "instruction-set path of the light-transport core",
+);
+/// rays whose first hit Embree places elsewhere than the exact core.
+pub const EMBREE_DISAGREE: Column = Column::value(
+    "embree_disagree",
+    "",
+    Class::Measured,
+    "rays whose first hit Embree places elsewhere than the exact core",
+);
+/// seconds per ray of the exact core over Embree's (median of paired rounds).
+pub const EMBREE_RATIO: Column = Column::value(
+    "embree_ratio",
+    "",
+    Class::Timing,
+    "seconds per ray of the exact core over Embree's (median of paired rounds)",
+);
+/// the light-transport scene.
+pub const SCENE: Column = Column::value("scene", "", Class::Parameter, "the light-transport scene");
 /// seconds building the structure.
 pub const BUILD_S: Column = Column::value(
     "build_s",

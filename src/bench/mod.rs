@@ -25,6 +25,7 @@ mod calibrate;
 pub mod columns;
 pub mod detp;
 mod infinite;
+pub mod lt;
 pub mod memory;
 pub mod quasi_static;
 mod rounds;
@@ -254,6 +255,10 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
     print_detp(&detp_rows);
     println!("\nQuasi-static DETP (one frame, incremental vs full):");
     let qs_rows = quasi_static::run(quick)?;
+    println!("\nLight transport (one thread; rays cast by the exact core and by Embree):");
+    let (lt_rows, lt_warnings) = lt::run(quick)?;
+    meta.warnings.extend(lt_warnings);
+    print_lt(&lt_rows);
     if quasi_static::find_kitchen().is_none() {
         meta.warnings.push(format!(
             "the BART kitchen ({}) was not found: the kitchen-* rows are missing",
@@ -266,6 +271,7 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         .chain(inf.rows.iter().map(infinite::InfiniteRow::row))
         .chain(detp_rows.iter().map(table::detp_row))
         .chain(qs_rows.iter().map(quasi_static::QsRow::row))
+        .chain(lt_rows.iter().map(lt::LtRow::row))
         .collect();
     let sides = measured
         .iter()
@@ -276,7 +282,8 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
                 .map(|r| vec![(infinite::ROUNDS_TABLE, r)]),
         )
         .chain(detp_rows.iter().map(|_| Vec::new()))
-        .chain(qs_rows.iter().map(|_| Vec::new()));
+        .chain(qs_rows.iter().map(|_| Vec::new()))
+        .chain(lt_rows.iter().map(|_| Vec::new()));
     for (row, side) in table::union_columns(&rows).iter().zip(sides) {
         sink.append(row, &side, &meta)
             .context("could not append to the bench table")?;
@@ -530,6 +537,38 @@ fn print_detp(rows: &[detp::DetpBenchRow]) {
             r.peak_mem_bytes as f64 / 1e6,
             r.mismatches,
             r.filter_path
+        );
+    }
+}
+
+/// The light-transport rows, one line each.
+fn print_lt(rows: &[lt::LtRow]) {
+    println!(
+        "{:<8} {:<18} {:>7} {:>10} {:>11} {:>9} {:>8} {:>5} {:>9} {:>7}",
+        "scene",
+        "engine",
+        "tris",
+        "rays",
+        "rays/s",
+        "ns/ray",
+        "/embree",
+        "mism",
+        "disagree",
+        "path"
+    );
+    for r in rows {
+        println!(
+            "{:<8} {:<18} {:>7} {:>10} {:>11.4e} {:>9.1} {:>8.3} {:>5} {:>9} {:>7}",
+            r.scene,
+            r.engine,
+            r.triangles,
+            r.rays.iter().sum::<u64>(),
+            r.rays_per_s(),
+            1e9 / r.rays_per_s(),
+            r.embree_ratio,
+            r.mismatches,
+            format!("{}/{}", r.embree_disagree, r.checked),
+            r.bvh_path
         );
     }
 }

@@ -86,9 +86,22 @@ impl EdgeMode {
 /// [min·d, d]. Parallel over discs; each radius depends only on its own disc.
 pub fn clamped_radii(scene: &Scene, c: &[DVec3], n: &[DVec3], d: f64, min: f64) -> Vec<f64> {
     let lo = (min * d).min(d);
+    let mut r = edge_distances(scene, c, n, d);
+    r.iter_mut().for_each(|s| *s = s.clamp(lo, d));
+    r
+}
+
+/// s for every point, whatever the edge mode: the distance from centre `c[i]` (normal `n[i]`) to the
+/// nearest surface of `scene` that is not the point's own plane ([`nearest_other_surface`]), capped
+/// at `reach` (`reach` itself means "none nearer"). The hard cases are read against s/d; the points
+/// table carries it (issues 25, 27). The boundary of the point's own plane is not an edge here: a
+/// disc that hangs over an open rim reaches into free space, not into a solid. Parallel over
+/// points; each value depends only on its own point.
+pub fn edge_distances(scene: &Scene, c: &[DVec3], n: &[DVec3], reach: f64) -> Vec<f64> {
+    assert_eq!(c.len(), n.len(), "one normal per point");
     c.par_iter()
         .zip(n)
-        .map(|(&p, &nn)| nearest_other_surface(scene, p, nn, d).clamp(lo, d))
+        .map(|(&p, &nn)| nearest_other_surface(scene, p, nn, reach))
         .collect()
 }
 
@@ -201,6 +214,55 @@ mod tests {
                 d <= m + 1e-12 && m - d < 3e-3,
                 "{p}: exact {d}, sampled {m}"
             );
+        }
+    }
+
+    /// A unit box standing on a floor: s per point equals the exhaustive minimum over the triangles
+    /// that are not the point's own plane, capped at the reach, and the clamped radii are s clamped.
+    #[test]
+    fn edge_distances_match_an_exhaustive_search_and_give_the_clamped_radii() {
+        let text = "[[surface]]\nkind = \"quad\"\nvertices = [[-4, 0, -4], [-4, 0, 4], [4, 0, 4], [4, 0, -4]]\nalbedo = 0.5\n\
+            [[surface]]\nkind = \"quad\"\nvertices = [[0, 1, 0], [0, 1, 1], [1, 1, 1], [1, 1, 0]]\nalbedo = 0.5\n\
+            [[surface]]\nkind = \"quad\"\nvertices = [[0, 0, 0], [1, 0, 0], [1, 0, 1], [0, 0, 1]]\nalbedo = 0.5\n\
+            [[surface]]\nkind = \"quad\"\nvertices = [[0, 0, 0], [0, 0, 1], [0, 1, 1], [0, 1, 0]]\nalbedo = 0.5\n\
+            [[surface]]\nkind = \"quad\"\nvertices = [[1, 0, 0], [1, 1, 0], [1, 1, 1], [1, 0, 1]]\nalbedo = 0.5\n\
+            [[light]]\nkind = \"point\"\nposition = [0, 3, 0]\npower = 1.0\n";
+        let s = Scene::parse(text, std::path::Path::new("box.toml")).expect("scene");
+        let mut c = vec![
+            DVec3::new(-0.3, 0.0, 0.5), // beside the face x = 0 (and the bottom's edge)
+            DVec3::new(2.0, 0.0, 2.0),  // √2 from the box's corner edge, beyond the reach
+            DVec3::new(0.5, 1.0, 0.5),  // the top: its side faces meet it 0.5 away
+        ];
+        let mut n = vec![DVec3::Y; 3];
+        let mut rng = crate::sample::rng::stream(&[42]);
+        for _ in 0..40 {
+            let (x, z): (f64, f64) = (
+                rand::Rng::gen_range(&mut rng, -2.0..3.0),
+                rand::Rng::gen_range(&mut rng, -2.0..3.0),
+            );
+            let on_top = (0.0..=1.0).contains(&x) && (0.0..=1.0).contains(&z);
+            c.push(DVec3::new(x, if on_top { 1.0 } else { 0.0 }, z));
+            n.push(DVec3::Y);
+        }
+        let reach = 1.0;
+        let got = edge_distances(&s, &c, &n, reach);
+        assert!(
+            (got[0] - 0.3).abs() < 1e-12 && got[1] == reach && (got[2] - 0.5).abs() < 1e-12,
+            "{got:?}"
+        );
+        let tol = 1e-9 * s.magnitude() + 1e-9 * reach;
+        for ((p, nn), g) in c.iter().zip(&n).zip(&got) {
+            let want = s
+                .triangles
+                .iter()
+                .filter(|t| !own_plane(t, *p, *nn, tol))
+                .map(|t| distance_to_triangle(*p, t))
+                .fold(reach, f64::min);
+            assert_eq!(*g, want, "{p}");
+        }
+        let radii = clamped_radii(&s, &c, &n, reach, 0.25);
+        for (r, g) in radii.iter().zip(&got) {
+            assert_eq!(*r, g.clamp(0.25, reach));
         }
     }
 

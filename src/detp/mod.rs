@@ -23,6 +23,7 @@
 //! - [`surface_points`]: sample points on a scene's surfaces at spacing ≈ d;
 //! - [`quasi_static`]: frame-by-frame incremental recalculation as dynamic objects move;
 //! - [`photon_map`]: Jensen's k-nearest-neighbour estimate over the same photons (the baseline);
+//! - [`indirect`]: the store's segments after the first bounce, for DETP of indirect light only;
 //! - [`stability`]: the same irradiance wherever the scene is placed (issue 26's stability suite and table).
 
 pub mod brute;
@@ -30,6 +31,7 @@ pub mod disc;
 pub mod disc_index;
 pub mod edge;
 pub mod fixed;
+pub mod indirect;
 pub mod order;
 pub mod photon;
 pub mod photon_map;

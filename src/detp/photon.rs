@@ -17,6 +17,7 @@ use rayon::prelude::*;
 
 use super::fixed::{PowerScale, Units};
 use super::store::{Segment, SegmentStore};
+use crate::lt::cast::Caster;
 use crate::lt::{Light, Prim, Scene};
 use crate::sample::directions::{cosine_about, uniform_direction};
 use crate::sample::rng::{domain, stream};
@@ -29,6 +30,17 @@ const BATCH: u64 = 1024;
 
 /// Traces `photons` photons (their ids are 0..photons) into a store, in photon order.
 pub fn trace_photons(scene: &Scene, photons: u64, seed: u64) -> SegmentStore {
+    trace_photons_with(scene, scene, photons, seed)
+}
+
+/// [`trace_photons`] with the rays cast by `caster` (the scene's own core, or Embree in
+/// `raycost bench`).
+pub fn trace_photons_with<C: Caster>(
+    scene: &Scene,
+    caster: &C,
+    photons: u64,
+    seed: u64,
+) -> SegmentStore {
     assert!(
         photons > 0 && photons <= u64::from(u32::MAX),
         "photon count out of range"
@@ -39,7 +51,7 @@ pub fn trace_photons(scene: &Scene, photons: u64, seed: u64) -> SegmentStore {
         .map(|b| {
             let hi = ((b + 1) * BATCH).min(photons);
             (b * BATCH..hi)
-                .flat_map(|p| trace_one(scene, seed, p as u32, units))
+                .flat_map(|p| trace_one(scene, caster, seed, p as u32, units))
                 .collect()
         })
         .collect();
@@ -68,7 +80,7 @@ pub fn trace_photons(scene: &Scene, photons: u64, seed: u64) -> SegmentStore {
 /// The segments of photon `photon` alone, bit-identical to those [`trace_photons`] stored for it
 /// (same scene, seed and photon count).
 pub fn retrace(scene: &Scene, seed: u64, photons: u64, photon: u32) -> Vec<Segment> {
-    trace_one(scene, seed, photon, photon_units(scene, photons).1)
+    trace_one(scene, scene, seed, photon, photon_units(scene, photons).1)
 }
 
 /// Every photon carries Φ_total / N: the scale maps that to 2³¹ units.
@@ -152,13 +164,19 @@ fn emit<R: Rng>(scene: &Scene, rng: &mut R) -> (DVec3, DVec3, Option<Prim>) {
 }
 
 /// One photon's path.
-fn trace_one(scene: &Scene, seed: u64, photon: u32, units: Units) -> Vec<Segment> {
+fn trace_one<C: Caster>(
+    scene: &Scene,
+    caster: &C,
+    seed: u64,
+    photon: u32,
+    units: Units,
+) -> Vec<Segment> {
     let mut rng = stream(&[domain::PHOTON, seed, u64::from(photon)]);
     let eps = scene.precision().offset();
     let (mut o, mut d, mut leaving) = emit(scene, &mut rng);
     let mut path = Vec::new();
     for bounce in 0..=MAX_BOUNCES {
-        let (hit, t_end) = scene.first_two_hits(o, d, eps, leaving);
+        let (hit, t_end) = caster.first_two_hits(o, d, eps, leaving);
         let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
         let mut s = Segment::new(o, d, t_hit, t_end, units, photon);
         s.bounce = bounce;

@@ -4,14 +4,19 @@
 //! A kind owns, in its own module: its name and description; its spec file's serde struct
 //! ([`Kind::Raw`], which denies unknown tables and keys, so a table another kind owns is refused by
 //! serde with the list of this kind's tables); the translation of one point's raw spec into the
-//! engines' own types ([`Kind::configure`], with input files loaded once through [`Inputs`]); its side
-//! tables, as a struct with one field per table ([`side_tables!`]: a table that is not declared cannot
-//! be written, because there is no field for it); its column declarations; its description and work
-//! count for `check` and progress; its memory needs (refused before anything is allocated); and its
-//! point runner, which returns one row, the side tables, the summary lines and a typed list of
-//! built-in [`Check`]s that the runner handles the same way for every kind (table kept, exit 1).
+//! engines' own types ([`Kind::configure`], with input files loaded once through [`Inputs`]); its
+//! description and work count for `check` and progress; its memory needs (refused before anything is
+//! allocated); and its point runner, which returns a typed measurement ([`Kind::Measured`]), typed
+//! side-table rows ([`side_tables!`]: a struct with one field per table, so a table that is not
+//! declared cannot be written) and a typed list of built-in [`Check`]s that the runner handles the
+//! same way for every kind (table kept, exit 1).
 //!
-//! Adding a kind is one module and one line in [`super::registry::KINDS`].
+//! A kind never writes a cell: it declares each table once as (column, accessor) entries
+//! ([`Kind::MAIN`], and one [`Table`] per side table), and the shared code of
+//! [`crate::output::table`] turns the measurements into rows, summary lines and verdicts
+//! ([`Registered`] does it for every kind alike).
+//!
+//! Adding a kind is one module and one line in the registry ([`super::KINDS`]).
 
 use std::any::Any;
 use std::marker::PhantomData;
@@ -25,7 +30,10 @@ use crate::output::column::Column;
 use crate::output::row::Row;
 pub use crate::output::summary::Rate;
 use crate::output::summary::SummaryLine;
-use crate::spec::de::{from_text, from_tree, KeyError, TextError};
+use crate::output::table;
+pub use crate::output::table::{col, Cell, Cells, Entry, Line, Table};
+use crate::toml_text::de::{from_tree, KeyError};
+use crate::toml_text::keys::{keys_of, KeyDoc, SpecTable};
 
 /// What a point does, for progress and ETA: `units` of `unit` (rays, photons, photon-frames); and
 /// for `raycost check`'s total, the sample points each unit meets.
@@ -75,15 +83,14 @@ pub struct Check {
     pub checked: u64,
 }
 
-/// What one point of a kind produced.
+/// What one point of a kind measured: typed values, never cells (the kind's declared tables turn
+/// them into rows).
 #[derive(Debug)]
-pub struct PointOutput<T> {
-    /// The main row (without `point` and the parameters, which the runner prepends).
-    pub row: Row,
-    /// The side tables' rows.
+pub struct Output<M, T> {
+    /// The main row's measurement ([`Kind::MAIN`] reads it).
+    pub measured: M,
+    /// The side tables' rows, typed.
     pub tables: T,
-    /// Summary lines (measured ± CI, theory, verdict), from declared metrics.
-    pub summary: Vec<SummaryLine>,
     /// Built-in checks.
     pub checks: Vec<Check>,
     /// The point's speed, for the summary.
@@ -92,26 +99,38 @@ pub struct PointOutput<T> {
     pub warnings: Vec<String>,
 }
 
-/// A kind's side tables: a struct with one `Vec<Row>` per table, declared with [`side_tables!`].
-pub trait SideTables: Default + Send + 'static {
+/// A kind's side tables: a struct with one `Vec` of typed rows per table, each read by its declared
+/// [`Table`], made with [`side_tables!`].
+pub trait SideTables<P>: Default + Send + 'static {
     /// Table names, as in `STEM.NAME.csv`.
     const NAMES: &'static [&'static str];
-    /// `(name, rows)` of every table, in [`SideTables::NAMES`] order.
-    fn into_named(self) -> Vec<(&'static str, Vec<Row>)>;
+    /// Every table's declared columns, in [`SideTables::NAMES`] order.
+    fn columns() -> Vec<(&'static str, Vec<&'static Column>)>;
+    /// Every table's rows (as cells) and summary lines, in [`SideTables::NAMES`] order.
+    fn cells(&self, p: &P) -> Vec<(&'static str, Vec<Cells>, Vec<Line>)>;
 }
 
-/// Declares a kind's side tables: `side_tables!(GridTables { hist })` makes `struct GridTables {
-/// pub hist: Vec<Row> }` and its [`SideTables`] impl (`STEM.hist.csv`).
+/// Declares a kind's side tables: `side_tables!(GridTables for GridConfig { hist: HistBin =
+/// columns::HIST })` makes `struct GridTables { pub hist: Vec<HistBin> }`, whose rows
+/// `columns::HIST` (a [`Table<GridConfig, HistBin>`]) reads into `STEM.hist.csv`.
 #[macro_export]
 macro_rules! side_tables {
-    ($(#[$m:meta])* $name:ident { $($(#[$fm:meta])* $field:ident),* $(,)? }) => {
+    ($(#[$m:meta])* $name:ident for $point:ty { $($(#[$fm:meta])* $field:ident : $row:ty = $table:expr),* $(,)? }) => {
         $(#[$m])*
         #[derive(Debug, Default)]
-        pub struct $name { $($(#[$fm])* #[doc = concat!("Rows of `NAME.", stringify!($field), ".csv`.")] pub $field: Vec<$crate::output::row::Row>),* }
-        impl $crate::experiment::kind::SideTables for $name {
+        pub struct $name { $($(#[$fm])* #[doc = concat!("Rows of `NAME.", stringify!($field), ".csv`.")] pub $field: Vec<$row>),* }
+        impl $crate::experiment::kind::SideTables<$point> for $name {
             const NAMES: &'static [&'static str] = &[$(stringify!($field)),*];
-            fn into_named(self) -> Vec<(&'static str, Vec<$crate::output::row::Row>)> {
-                vec![$((stringify!($field), self.$field)),*]
+            fn columns() -> Vec<(&'static str, Vec<&'static $crate::output::column::Column>)> {
+                vec![$((stringify!($field), $table.columns())),*]
+            }
+            fn cells(&self, p: &$point) -> Vec<(&'static str, Vec<$crate::output::table::Cells>, Vec<$crate::output::table::Line>)> {
+                vec![$({
+                    let t = &$table;
+                    let rows = self.$field.iter().map(|r| $crate::output::table::cells(t.entries, p, r)).collect();
+                    let lines = self.$field.iter().flat_map(|r| (t.lines)(p, r)).collect();
+                    (stringify!($field), rows, lines)
+                }),*]
             }
         }
     };
@@ -121,9 +140,12 @@ macro_rules! side_tables {
 #[derive(Debug, Default)]
 pub struct NoTables;
 
-impl SideTables for NoTables {
+impl<P> SideTables<P> for NoTables {
     const NAMES: &'static [&'static str] = &[];
-    fn into_named(self) -> Vec<(&'static str, Vec<Row>)> {
+    fn columns() -> Vec<(&'static str, Vec<&'static Column>)> {
+        Vec::new()
+    }
+    fn cells(&self, _: &P) -> Vec<(&'static str, Vec<Cells>, Vec<Line>)> {
         Vec::new()
     }
 }
@@ -159,6 +181,9 @@ pub fn refuse<T>(key: &str, message: impl Into<String>) -> Result<T, ConfigError
 pub struct Context<'a> {
     /// The point's index in the sweep (part of every random stream's key).
     pub index: u64,
+    /// Worker threads of the run (`--threads`, or the machine's), passed down, never read back
+    /// from the pool. Only timings may depend on it.
+    pub threads: usize,
     /// Called with the number of work units just finished.
     pub progress: &'a (dyn Fn(u64) + Sync),
 }
@@ -171,31 +196,40 @@ pub trait Kind: Send + Sync + 'static {
     const ABOUT: &'static str;
     /// Keys that cannot be swept, and why.
     const FIXED: &'static [(&'static str, &'static str)] = &[];
-    /// The spec file of this kind: `[experiment]`, `[sweep]` and the kind's own tables.
-    type Raw: DeserializeOwned + Serialize;
+    /// The spec file of this kind: `[experiment]`, `[sweep]` and the kind's own tables, declared
+    /// with [`crate::spec_file!`] (its keys, defaults and docs declared once).
+    type Raw: DeserializeOwned + Serialize + SpecTable + Send + Sync + 'static;
     /// One point, validated, in the engines' own types.
     type Point: Send + Sync + 'static;
+    /// What one point measures (its main row).
+    type Measured: 'static;
     /// The side tables.
-    type Tables: SideTables;
+    type Tables: SideTables<Self::Point>;
     /// What a run measures once and shares with its points (the cost model's machine constants).
     type Shared: Send + Sync + 'static;
+    /// The main table: every column with the accessor that reads it from a measurement.
+    const MAIN: Table<Self::Point, Self::Measured>;
 
-    /// Every column the kind can write: `("main", …)` and one entry per side table.
-    fn columns() -> Vec<(&'static str, &'static [Column])>;
-    /// Validates one point's raw spec into a runnable point.
-    fn configure(raw: Self::Raw, inputs: &mut Inputs) -> Result<Self::Point, ConfigError>;
+    /// Validates one point's spec, read once, into a runnable point.
+    fn configure(raw: &Self::Raw, inputs: &mut Inputs) -> Result<Self::Point, ConfigError>;
     /// One line for `raycost check`.
     fn describe(p: &Self::Point) -> String;
     /// Work, for progress.
     fn work(p: &Self::Point) -> Work;
-    /// Memory, refused before anything is allocated when it does not fit.
-    fn memory(_p: &Self::Point) -> Memory {
+    /// Memory on `threads` worker threads, refused before anything is allocated when it does not
+    /// fit.
+    fn memory(_p: &Self::Point, _threads: usize) -> Memory {
         Memory::default()
     }
     /// Counted warnings known before running (a scene's degenerate triangles, objects that may
     /// overlap).
     fn warnings(_p: &Self::Point) -> Vec<String> {
         Vec::new()
+    }
+    /// Whether a clock decides some of the point's measured values (the columns declared
+    /// [`Column::decided_by_timing`] are then written as timings).
+    fn timed_decision(_p: &Self::Point) -> bool {
+        false
     }
     /// What the run measures once before its points.
     fn shared(points: &[&Self::Point]) -> Result<Self::Shared, Error>;
@@ -208,7 +242,15 @@ pub trait Kind: Send + Sync + 'static {
         p: &Self::Point,
         shared: &Self::Shared,
         ctx: &Context,
-    ) -> Result<PointOutput<Self::Tables>, Error>;
+    ) -> Result<Output<Self::Measured, Self::Tables>, Error>;
+}
+
+/// A spec tree read once by a kind ([`DynKind::read`]).
+pub struct Reading {
+    /// The kind's typed spec ([`Kind::Raw`]).
+    raw: Box<dyn Any + Send + Sync>,
+    /// Its values written back, defaults filled in.
+    pub normalized: toml::Value,
 }
 
 /// A point of some kind, type-erased.
@@ -217,8 +259,8 @@ pub trait DynPoint: Send + Sync {
     fn describe(&self) -> String;
     /// Work, for progress.
     fn work(&self) -> Work;
-    /// Memory.
-    fn memory(&self) -> Memory;
+    /// Memory on `threads` worker threads.
+    fn memory(&self, threads: usize) -> Memory;
     /// Warnings known before running.
     fn warnings(&self) -> Vec<String>;
     /// For the kind's own downcast.
@@ -235,8 +277,8 @@ impl<K: Kind> DynPoint for PointOf<K> {
     fn work(&self) -> Work {
         K::work(&self.0)
     }
-    fn memory(&self) -> Memory {
-        K::memory(&self.0)
+    fn memory(&self, threads: usize) -> Memory {
+        K::memory(&self.0, threads)
     }
     fn warnings(&self) -> Vec<String> {
         K::warnings(&self.0)
@@ -246,8 +288,22 @@ impl<K: Kind> DynPoint for PointOf<K> {
     }
 }
 
-/// A point's output, type-erased (side tables by name).
-pub type ErasedOutput = PointOutput<Vec<(&'static str, Vec<Row>)>>;
+/// A point's output as the runner sees it: rows built from the kind's declared tables.
+#[derive(Debug)]
+pub struct ErasedOutput {
+    /// The main row (without `point` and the parameters, which the runner prepends).
+    pub row: Row,
+    /// The side tables' rows, by name.
+    pub tables: Vec<(&'static str, Vec<Row>)>,
+    /// Summary lines: the side tables' lines, the main row's judged cells, the main table's lines.
+    pub summary: Vec<SummaryLine>,
+    /// Built-in checks.
+    pub checks: Vec<Check>,
+    /// The point's speed.
+    pub rate: Rate,
+    /// Counted warnings found while running.
+    pub warnings: Vec<String>,
+}
 
 /// A kind as the runner, `check`, the docs and the registry see it.
 pub trait DynKind: Send + Sync {
@@ -259,16 +315,18 @@ pub trait DynKind: Send + Sync {
     fn fixed(&self) -> &'static [(&'static str, &'static str)];
     /// Side table names.
     fn table_names(&self) -> &'static [&'static str];
-    /// Column declarations per table.
-    fn columns(&self) -> Vec<(&'static str, &'static [Column])>;
-    /// Reads the whole file with this kind's serde struct (errors located by line and column).
-    fn check_text(&self, text: &str) -> Result<(), TextError>;
-    /// The tree read and written back with defaults filled in (the normalised spec).
-    fn normalize(&self, tree: &toml::Table) -> Result<toml::Value, KeyError>;
-    /// Validates one point's tree.
+    /// Column declarations per table (`main` first).
+    fn columns(&self) -> Vec<(&'static str, Vec<Column>)>;
+    /// Every key this kind's spec accepts, in declaration order (`[]` after an array of tables),
+    /// with its reference entry.
+    fn keys(&self) -> Vec<KeyDoc>;
+    /// Reads a spec tree with this kind's spec struct, once: the typed spec and its values
+    /// written back with defaults filled in (the normalised spec, the parameter columns).
+    fn read(&self, tree: &toml::Table) -> Result<Reading, KeyError>;
+    /// Validates one point's reading.
     fn configure(
         &self,
-        tree: &toml::Table,
+        reading: &Reading,
         inputs: &mut Inputs,
     ) -> Result<Box<dyn DynPoint>, ConfigError>;
     /// The shared measurement of a run.
@@ -310,24 +368,39 @@ impl<K: Kind> DynKind for Registered<K> {
         K::FIXED
     }
     fn table_names(&self) -> &'static [&'static str] {
-        <K::Tables as SideTables>::NAMES
+        <K::Tables as SideTables<K::Point>>::NAMES
     }
-    fn columns(&self) -> Vec<(&'static str, &'static [Column])> {
-        K::columns()
+    fn columns(&self) -> Vec<(&'static str, Vec<Column>)> {
+        let copy = |cols: Vec<&'static Column>| cols.into_iter().copied().collect();
+        std::iter::once(("main", copy(K::MAIN.columns())))
+            .chain(
+                <K::Tables as SideTables<K::Point>>::columns()
+                    .into_iter()
+                    .map(|(t, c)| (t, copy(c))),
+            )
+            .collect()
     }
-    fn check_text(&self, text: &str) -> Result<(), TextError> {
-        from_text::<K::Raw>(text).map(|_| ())
+    fn keys(&self) -> Vec<KeyDoc> {
+        keys_of::<K::Raw>()
     }
-    fn normalize(&self, tree: &toml::Table) -> Result<toml::Value, KeyError> {
+    fn read(&self, tree: &toml::Table) -> Result<Reading, KeyError> {
         let raw: K::Raw = from_tree(tree)?;
-        toml::Value::try_from(&raw).map_err(|e| KeyError::new("", e.to_string()))
+        let normalized =
+            toml::Value::try_from(&raw).map_err(|e| KeyError::new("", e.to_string()))?;
+        Ok(Reading {
+            raw: Box::new(raw),
+            normalized,
+        })
     }
     fn configure(
         &self,
-        tree: &toml::Table,
+        reading: &Reading,
         inputs: &mut Inputs,
     ) -> Result<Box<dyn DynPoint>, ConfigError> {
-        let raw: K::Raw = from_tree(tree)?;
+        let raw = reading
+            .raw
+            .downcast_ref::<K::Raw>()
+            .expect("a reading is configured by the kind that read it");
         Ok(Box::new(PointOf::<K>(K::configure(raw, inputs)?)))
     }
     fn shared(&self, points: &[&dyn DynPoint]) -> Result<Box<dyn Any + Send + Sync>, Error> {
@@ -349,14 +422,38 @@ impl<K: Kind> DynKind for Registered<K> {
         let shared = shared
             .downcast_ref::<K::Shared>()
             .expect("the shared measurement comes from the same kind");
-        let out = K::run(point_of::<K>(point), shared, ctx)?;
-        Ok(PointOutput {
-            row: out.row,
-            tables: out.tables.into_named(),
-            summary: out.summary,
-            checks: out.checks,
-            rate: out.rate,
-            warnings: out.warnings,
-        })
+        let p = point_of::<K>(point);
+        let out = K::run(p, shared, ctx)?;
+        rows_of::<K>(p, out).map_err(|e| Error::internal(format!("kind {}: {e}", K::NAME)))
     }
+}
+
+/// The rows and summary lines of one point's output, from the kind's declared tables.
+fn rows_of<K: Kind>(
+    p: &K::Point,
+    out: Output<K::Measured, K::Tables>,
+) -> Result<ErasedOutput, String> {
+    let timed = K::timed_decision(p);
+    let main = table::cells(K::MAIN.entries, p, &out.measured);
+    let (row, judged) = table::row(&main, timed, true)?;
+    let mut summary = Vec::new();
+    let mut tables = Vec::new();
+    for (name, rows, lines) in out.tables.cells(p) {
+        let rows = rows
+            .iter()
+            .map(|cells| table::row(cells, timed, false).map(|(r, _)| r))
+            .collect::<Result<Vec<Row>, String>>()?;
+        summary.extend(lines.iter().map(Line::judge));
+        tables.push((name, rows));
+    }
+    summary.extend(judged);
+    summary.extend((K::MAIN.lines)(p, &out.measured).iter().map(Line::judge));
+    Ok(ErasedOutput {
+        row,
+        tables,
+        summary,
+        checks: out.checks,
+        rate: out.rate,
+        warnings: out.warnings,
+    })
 }

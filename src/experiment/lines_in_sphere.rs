@@ -3,69 +3,38 @@
 //! (Crofton: the measure of lines meeting a convex body is proportional to its surface area). The
 //! sphere cache's rays-per-level law n_R·Q^(2i) is this fact once per level.
 //!
-//! A kind is this one module and one line in [`super::registry::KINDS`]: its spec struct (serde
-//! denies unknown keys, so a mistyped key is refused with its line), its validated point, its
-//! declared columns, and its runner.
+//! A kind is this one module and one line in the registry ([`super::KINDS`]): its spec struct (serde
+//! denies unknown keys, so a mistyped key is refused with its line), its validated point, what it
+//! measures ([`Measured`]: typed values, no cells), its one table of columns with their accessors
+//! ([`LinesInSphereKind::MAIN`]), and its runner.
 
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 
 use super::inputs::Inputs;
-use super::kind::{ConfigError, Context, Kind, NoTables, PointOutput, Rate, Work};
-use super::metric::{Metric, Theory};
+use super::kind::{col, Cell, ConfigError, Context, Kind, NoTables, Output, Rate, Table, Work};
 use crate::error::Error;
 use crate::output::column::{Class, Column};
-use crate::output::row::Row;
 use crate::sample::lines::uniform_line;
 use crate::sample::rng::{domain, stream};
-use crate::spec::de::{count, open_unit};
-use crate::spec::keys::{key, IfAbsent::*, KeyDoc};
-use crate::spec::RawExperiment;
-use crate::stats::ClusteredMean;
+use crate::stats::{ClusteredMean, Estimate, Theory};
+use crate::toml_text::de::{count, open_unit};
 
-/// The keys of `[lines]` (`raycost doc spec`, checked against [`RawLines`] by a test).
-pub const KEYS: &[KeyDoc] = &[
-    key(
-        "lines.count",
-        "integer",
-        "lines",
-        Required,
-        "≥ 1",
-        "Lines drawn per point.",
-    ),
-    key(
-        "lines.inner_radius",
-        "number",
-        "",
-        Required,
-        "(0, 1)",
-        "r: radius of the inner sphere, relative to the unit sphere the lines are drawn through.",
-    ),
-];
-
-/// The spec file: `[experiment]`, `[lines]` and `[sweep]`.
-#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct LinesSpec {
-    /// `[experiment]`.
-    pub experiment: RawExperiment,
-    /// `[lines]`.
-    pub lines: RawLines,
-    /// `[sweep]`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub sweep: Option<toml::Table>,
+crate::spec_file! {
+    /// The spec file: `[experiment]`, `[lines]` and `[sweep]`.
+    pub struct LinesSpec {
+        /// `[lines]`.
+        lines: RawLines = {table};
+    }
 }
 
-/// `[lines]`.
-#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct RawLines {
-    /// Lines per point.
-    #[serde(deserialize_with = "count")]
-    pub count: u64,
-    /// Radius r of the inner sphere, in (0, 1).
-    #[serde(deserialize_with = "open_unit")]
-    pub inner_radius: f64,
+crate::spec_table! {
+    /// `[lines]`.
+    pub struct RawLines {
+        /// Lines drawn per point.
+        count: u64 = {required} read count, "integer", "lines", "≥ 1";
+        /// r: radius of the inner sphere, relative to the unit sphere the lines are drawn through.
+        inner_radius: f64 = {required} read open_unit, "number", "", "(0, 1)";
+    }
 }
 
 /// A validated point.
@@ -92,6 +61,15 @@ pub const LINES_PER_S: Column = Column::value(
     "lines drawn and tested per second",
 );
 
+/// What one point measures.
+#[derive(Clone, Debug)]
+pub struct Measured {
+    /// The fraction of lines meeting the inner sphere (one cluster per batch).
+    hit_fraction: Estimate,
+    /// Lines per second.
+    lines_per_s: f64,
+}
+
 /// Lines per keyed stream (so the result does not depend on the thread count).
 const BATCH: u64 = 4096;
 
@@ -103,13 +81,18 @@ impl Kind for LinesInSphereKind {
     const ABOUT: &'static str = "μ-random lines through the unit ball meet a concentric sphere of radius r with probability r² (the law behind the sphere cache's rays per level); the smallest kind, a template for new ones.";
     type Raw = LinesSpec;
     type Point = LinesPoint;
+    type Measured = Measured;
     type Tables = NoTables;
     type Shared = ();
+    const MAIN: Table<LinesPoint, Measured> = Table::of(&[
+        col(&LINES, |p, _| p.count.into()),
+        col(&HIT_FRACTION, |p, m| {
+            Cell::Judged(m.hit_fraction, Theory::Prediction(p.r * p.r))
+        }),
+        col(&LINES_PER_S, |_, m| m.lines_per_s.into()),
+    ]);
 
-    fn columns() -> Vec<(&'static str, &'static [Column])> {
-        vec![("main", &[LINES, HIT_FRACTION, LINES_PER_S])]
-    }
-    fn configure(raw: LinesSpec, _: &mut Inputs) -> Result<LinesPoint, ConfigError> {
+    fn configure(raw: &LinesSpec, _: &mut Inputs) -> Result<LinesPoint, ConfigError> {
         Ok(LinesPoint {
             seed: raw.experiment.seed,
             count: raw.lines.count,
@@ -129,7 +112,7 @@ impl Kind for LinesInSphereKind {
     fn shared(_: &[&LinesPoint]) -> Result<(), Error> {
         Ok(())
     }
-    fn run(p: &LinesPoint, _: &(), ctx: &Context) -> Result<PointOutput<NoTables>, Error> {
+    fn run(p: &LinesPoint, _: &(), ctx: &Context) -> Result<Output<Measured, NoTables>, Error> {
         let start = std::time::Instant::now();
         // One cluster per batch: hits and hits² of its lines (a hit is 0 or 1).
         let hits: Vec<(u64, u64)> = (0..p.count.div_ceil(BATCH))
@@ -153,17 +136,13 @@ impl Kind for LinesInSphereKind {
         for (n, h) in hits {
             m.push_cluster(n, h as f64, h as f64);
         }
-        let mut row = Row::default();
-        let mut summary = Vec::new();
-        row.put(&LINES, p.count);
-        Metric::new(&HIT_FRACTION, m.estimate(), Theory::Prediction(p.r * p.r))
-            .write(&mut row, &mut summary);
         let rate = p.count as f64 / secs.max(1e-12);
-        row.put(&LINES_PER_S, rate);
-        Ok(PointOutput {
-            row,
+        Ok(Output {
+            measured: Measured {
+                hit_fraction: m.estimate(),
+                lines_per_s: rate,
+            },
             tables: NoTables,
-            summary,
             checks: Vec::new(),
             rate: Rate {
                 per_s: rate,

@@ -12,6 +12,7 @@ use super::kind::{ConfigError, DynKind, DynPoint, Kind, PointOf};
 use super::registry;
 use crate::error::InputError;
 use crate::output::meta::{available_memory, InputFile};
+use crate::output::row::Value;
 use crate::spec::{KeyError, Spec};
 use crate::toml_text::find_key;
 
@@ -25,12 +26,16 @@ pub struct Plan {
     pub kind: &'static dyn DynKind,
     /// Every point, configured (index = point index).
     pub points: Vec<Box<dyn DynPoint>>,
+    /// Every point's parameter columns (see [`parameters`]).
+    pub params: Vec<Vec<(String, Value)>>,
     /// Every file the points read, with content hashes.
     pub inputs: Vec<InputFile>,
     /// The normalised spec (`base`: the kind's struct with defaults, `sweep`).
     pub normalized: toml::Table,
     /// SHA-256 of the normalised spec: identifies runs that can be resumed and merged.
     pub hash: String,
+    /// Worker threads the points will run on (their memory is checked for that many).
+    pub threads: usize,
 }
 
 impl std::fmt::Debug for Plan {
@@ -45,13 +50,14 @@ impl std::fmt::Debug for Plan {
 }
 
 impl Plan {
-    /// Reads `path` with the `--set` overrides and validates every point.
-    pub fn load(path: &Path, sets: &[String]) -> Result<Plan, InputError> {
-        Self::from_spec(Spec::read(path, sets)?)
+    /// Reads `path` with the `--set` overrides and validates every point, to run on `threads`
+    /// worker threads.
+    pub fn load(path: &Path, sets: &[String], threads: usize) -> Result<Plan, InputError> {
+        Self::from_spec(Spec::read(path, sets)?, threads)
     }
 
     /// Validates an expanded spec.
-    pub fn from_spec(spec: Spec) -> Result<Plan, InputError> {
+    pub fn from_spec(spec: Spec, threads: usize) -> Result<Plan, InputError> {
         let name = spec.experiment.kind.clone();
         let kind = registry::find(&name).ok_or_else(|| InputError {
             file: spec.path.clone(),
@@ -62,52 +68,52 @@ impl Plan {
                 registry::names()
             ),
         })?;
-        Self::with_kind(spec, kind)
+        Self::with_kind(spec, kind, threads)
     }
 
-    /// Validates an expanded spec as kind `kind` (the registry's, or a test's own).
-    pub(crate) fn with_kind(spec: Spec, kind: &'static dyn DynKind) -> Result<Plan, InputError> {
-        // The file as written, by the kind's own struct: unknown keys and tables, wrong types and
-        // out-of-range values, located by line and column.
-        kind.check_text(&spec.text).map_err(|e| {
-            let mut e = spec.locate_text(e);
-            // A table of another kind: say so, rather than serde's "unknown field".
-            if let Some(table) = e.key.clone().filter(|k| !k.contains('.')) {
-                if e.message.starts_with("unknown field") {
-                    e.at = find_key(&spec.text, &table).or(e.at);
-                    e.message = format!(
-                        "the [{table}] table does not belong to kind {} (its tables: {})",
-                        kind.name(),
-                        e.message
-                            .split_once("expected one of ")
-                            .map_or("see raycost doc", |(_, t)| t)
-                    );
-                }
-            }
-            e
-        })?;
+    /// Validates an expanded spec as kind `kind` (the registry's, or a test's own). The spec was
+    /// parsed once ([`Spec`]); here its base tree is read once by the kind's struct, and each
+    /// point's tree once more only where a sweep changed it, each reading then configured.
+    pub(crate) fn with_kind(
+        spec: Spec,
+        kind: &'static dyn DynKind,
+        threads: usize,
+    ) -> Result<Plan, InputError> {
+        // The file with --set, by the kind's own struct: unknown keys and tables, wrong types and
+        // out-of-range values, located where they are in the text.
+        let base = kind
+            .read(&spec.tree)
+            .map_err(|e| not_this_kinds_table(&spec, kind, spec.locate_read(None, e)))?;
         for (key, why) in kind.fixed() {
             if spec.sweep.iter().any(|(k, _)| k == key) {
                 return Err(spec.locate_axis(key, format!("cannot be swept: {why}")));
             }
         }
-        let base = kind
-            .normalize(&spec.tree)
-            .map_err(|e| spec.locate(None, e))?;
+        let keys: Vec<String> = kind.keys().into_iter().map(|k| k.key).collect();
         let mut inputs = Inputs::new(&spec.dir);
         let mut points = Vec::with_capacity(spec.points.len());
+        let mut params = Vec::with_capacity(spec.points.len());
         for p in &spec.points {
             crate::spec::magnitude::check_point(&p.tree)
                 .map_err(|k| spec.locate(Some(p.index), k))?;
-            let point = kind.configure(&p.tree, &mut inputs).map_err(|e| match e {
+            // A point nothing was swept into is the base tree: its reading is the base's.
+            let own = if p.tree == spec.tree {
+                None
+            } else {
+                let r = kind.read(&p.tree);
+                Some(r.map_err(|e| spec.locate_read(Some(p.index), e))?)
+            };
+            let reading = own.as_ref().unwrap_or(&base);
+            let point = kind.configure(reading, &mut inputs).map_err(|e| match e {
                 ConfigError::Key(k) => spec.locate(Some(p.index), k),
                 ConfigError::Input(i) => i,
             })?;
-            check_memory(&spec, p.index, point.as_ref())?;
+            check_memory(&spec, p.index, point.as_ref(), threads)?;
+            params.push(parameters(&keys, &p.params, &reading.normalized));
             points.push(point);
         }
         let mut normalized = toml::Table::new();
-        normalized.insert("base".into(), base);
+        normalized.insert("base".into(), base.normalized);
         let mut sw = toml::Table::new();
         for (k, v) in &spec.sweep {
             sw.insert(k.clone(), toml::Value::Array(v.clone()));
@@ -125,9 +131,11 @@ impl Plan {
             spec,
             kind,
             points,
+            params,
             inputs: inputs.files(),
             normalized,
             hash,
+            threads,
         })
     }
 
@@ -212,7 +220,7 @@ impl Plan {
                     })
                     .collect();
                 let work = point.work();
-                let memory = point.memory();
+                let memory = point.memory(self.threads);
                 let needs: Vec<serde_json::Value> = memory
                     .needs
                     .iter()
@@ -257,10 +265,83 @@ impl Plan {
     }
 }
 
+/// A table of another kind: said so, rather than serde's "unknown field".
+fn not_this_kinds_table(spec: &Spec, kind: &dyn DynKind, mut e: InputError) -> InputError {
+    if let Some(table) = e.key.clone().filter(|k| !k.contains('.')) {
+        if e.message.starts_with("unknown field") {
+            e.at = find_key(&spec.text, &table).or(e.at);
+            e.message = format!(
+                "the [{table}] table does not belong to kind {} (its tables: {})",
+                kind.name(),
+                e.message
+                    .split_once("expected one of ")
+                    .map_or("see raycost doc", |(_, t)| t)
+            );
+        }
+    }
+    e
+}
+
+/// A point's parameter value as a CSV cell: integers stay integers.
+fn param_value(v: &toml::Value) -> Value {
+    match v {
+        toml::Value::Float(x) => Value::F(*x),
+        toml::Value::Integer(i) if *i >= 0 => Value::U(*i as u64),
+        toml::Value::Integer(i) => Value::F(*i as f64),
+        toml::Value::String(s) => Value::S(s.clone()),
+        other => Value::S(other.to_string()),
+    }
+}
+
+/// Keys of the spec that are not parameters of a point: names, free text and the sweep itself.
+const NOT_PARAMETERS: &[&str] = &[
+    "experiment.name",
+    "experiment.kind",
+    "experiment.description",
+    "sweep",
+];
+
+/// Every parameter of a point, in column order: the swept or `--set` keys first (as `check`
+/// lists them), then every other key the kind declares (`keys`), in declaration order, with the
+/// value in force (`normalized`: the point's reading, defaults filled in); a key without a value
+/// (an optional key left out) is missing (NaN). An array of tables (`scene.class`) is one column
+/// with its TOML text.
+pub fn parameters(
+    keys: &[String],
+    swept: &[(String, toml::Value)],
+    normalized: &toml::Value,
+) -> Vec<(String, Value)> {
+    let mut out: Vec<(String, Value)> = swept
+        .iter()
+        .map(|(k, v)| (k.clone(), param_value(v)))
+        .collect();
+    for key in keys {
+        // `scene.class[].radius` → the column `scene.class`.
+        let key = match key.split_once("[]") {
+            Some((head, _)) => head,
+            None => key.as_str(),
+        };
+        if NOT_PARAMETERS.contains(&key) || out.iter().any(|(k, _)| k == key) {
+            continue;
+        }
+        let value = key
+            .split('.')
+            .try_fold(normalized, |v, seg| v.get(seg))
+            .map_or(Value::F(f64::NAN), param_value);
+        out.push((key.to_string(), value));
+    }
+    out
+}
+
 /// Refuses a point whose structures would not fit: over the spec's budget key, or over the memory
 /// this machine has available (the error names the spec key that drives the largest need).
-fn check_memory(spec: &Spec, index: usize, point: &dyn DynPoint) -> Result<(), InputError> {
-    let m = point.memory();
+fn check_memory(
+    spec: &Spec,
+    index: usize,
+    point: &dyn DynPoint,
+    threads: usize,
+) -> Result<(), InputError> {
+    let m = point.memory(threads);
     let Some(largest) = m.needs.iter().max_by(|a, b| a.bytes.total_cmp(&b.bytes)) else {
         return Ok(());
     };

@@ -1,43 +1,35 @@
 //! Reference documentation generated from the declarations (`raycost doc kinds|columns|spec|scene`):
-//! the kinds of [`super::registry::KINDS`], every column they declare (unit, class, meaning), every
-//! spec key (the `KEYS` tables beside each kind's serde structs, with the kinds that accept each key
-//! found by asking the kinds' own deserializers) and every scene-file key. The committed
-//! `docs/kinds.md`, `docs/columns.md`, `docs/spec.md` and `docs/scene.md` are this output (a test
-//! keeps them equal), and the tests below keep the key tables equal to the structs.
+//! the kinds of [`super::KINDS`], every column they declare (unit, class, meaning), every
+//! spec key (each kind hands the registry its spec's keys, declared once with the struct that reads
+//! them, [`crate::spec_table!`]; a key several kinds share is listed once, with the kinds that
+//! accept it) and every scene-file key. The committed `docs/kinds.md`, `docs/columns.md`,
+//! `docs/spec.md` and `docs/scene.md` are this output (a test keeps them equal). Nothing here names
+//! a kind.
 
 use std::fmt::Write as _;
 
-use super::kind::DynKind;
 use super::registry::KINDS;
 use crate::output::column::Shape;
-use crate::spec::keys::{fields, KeyDoc};
+use crate::toml_text::keys::{keys_of, KeyDoc};
 
-/// Every declared spec key, in the order `docs/spec.md` lists them.
-pub fn spec_keys() -> Vec<&'static KeyDoc> {
-    [
-        crate::spec::sweep::KEYS,
-        super::grid::spec::KEYS,
-        super::lines_in_sphere::KEYS,
-        super::detp::spec::KEYS,
-        super::quasi_static::spec::KEYS,
-    ]
-    .into_iter()
-    .flatten()
-    .collect()
+/// Every spec key of every kind, once (the first kind to declare it gives its entry), in the
+/// registry's order, each with the kinds that accept it.
+pub fn spec_keys() -> Vec<(KeyDoc, Vec<&'static str>)> {
+    let mut out: Vec<(KeyDoc, Vec<&'static str>)> = Vec::new();
+    for k in KINDS {
+        for d in k.keys() {
+            match out.iter_mut().find(|(o, _)| o.key == d.key) {
+                Some((_, kinds)) => kinds.push(k.name()),
+                None => out.push((d, vec![k.name()])),
+            }
+        }
+    }
+    out
 }
 
-/// Every key kind `k`'s spec struct accepts, found by probing its deserializer.
-pub fn accepted_keys(k: &dyn DynKind) -> Vec<String> {
-    fields(&|t: &toml::Table| k.normalize(t).map(|_| ()).map_err(|e| e.message))
-}
-
-/// Every key the scene format's struct accepts.
-pub fn scene_file_keys() -> Vec<String> {
-    fields(&|t: &toml::Table| {
-        crate::spec::de::from_tree::<crate::lt::format::RawScene>(t)
-            .map(|_| ())
-            .map_err(|e| e.message)
-    })
+/// Every key of the scene format.
+pub fn scene_keys() -> Vec<KeyDoc> {
+    keys_of::<crate::lt::format::RawScene>()
 }
 
 /// One Markdown table of keys (`kinds`: the kinds accepting each, when given).
@@ -48,7 +40,7 @@ fn key_table(s: &mut String, keys: &[&KeyDoc], kinds: Option<&dyn Fn(&str) -> St
     });
     for d in keys {
         let kinds = kinds
-            .map(|f| format!(" {} |", f(d.key)))
+            .map(|f| format!(" {} |", f(&d.key)))
             .unwrap_or_default();
         let _ = writeln!(
             s,
@@ -93,23 +85,20 @@ pub fn spec() -> String {
          units (the unit ball for lines and the Poisson scenes are unitless; the shipped Cornell \
          box is in millimetres). *kinds* lists the kinds whose spec accepts the key.\n\n",
     );
-    let accepted: Vec<(&str, Vec<String>)> = KINDS
-        .iter()
-        .map(|k| (k.name(), accepted_keys(*k)))
-        .collect();
+    let keys = spec_keys();
     let kinds_of = |key: &str| {
-        let names: Vec<&str> = accepted
+        let names = keys
             .iter()
-            .filter(|(_, keys)| keys.iter().any(|k| k == key))
-            .map(|(n, _)| *n)
-            .collect();
-        if names.len() == accepted.len() {
+            .find(|(d, _)| d.key == key)
+            .map_or(&[][..], |(_, k)| k.as_slice());
+        if names.len() == KINDS.len() {
             "all".to_string()
         } else {
             names.join(", ")
         }
     };
-    for (table, keys) in by_table(&spec_keys()) {
+    let docs: Vec<&KeyDoc> = keys.iter().map(|(d, _)| d).collect();
+    for (table, keys) in by_table(&docs) {
         let _ = writeln!(s, "## `[{table}]`\n");
         key_table(&mut s, &keys, Some(&kinds_of));
     }
@@ -119,7 +108,8 @@ pub fn spec() -> String {
 /// `docs/scene.md`.
 pub fn scene() -> String {
     let mut s = String::from(SCENE_INTRO);
-    let keys: Vec<&KeyDoc> = crate::lt::format::KEYS.iter().collect();
+    let keys = scene_keys();
+    let keys: Vec<&KeyDoc> = keys.iter().collect();
     for (table, keys) in by_table(&keys) {
         let header = match table.strip_suffix("[]") {
             Some(t) => format!("`[[{t}]]`"),
@@ -260,7 +250,6 @@ pub fn columns() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::spec::keys::IfAbsent;
     use std::collections::BTreeSet;
 
     /// The committed reference equals what the code declares (regenerate with
@@ -282,236 +271,32 @@ mod tests {
         }
     }
 
-    fn declared(keys: &[&KeyDoc]) -> BTreeSet<String> {
-        let set: BTreeSet<String> = keys.iter().map(|d| d.key.to_string()).collect();
-        assert_eq!(set.len(), keys.len(), "a key is declared twice");
-        set
-    }
-
-    /// Every key some kind's struct accepts is declared, and every declared key is accepted by
-    /// some kind: adding a serde field without a declaration (or the reverse) fails here.
+    /// A key every kind shares is declared once (`[experiment]`, `sweep`), a table two kinds share
+    /// is listed once with both, and no kind's spec has a key twice.
     #[test]
-    fn declared_spec_keys_equal_the_structs() {
-        let accepted: BTreeSet<String> = KINDS.iter().flat_map(|k| accepted_keys(*k)).collect();
-        assert!(accepted.contains("detp.q") && accepted.contains("scene.class[].radius"));
-        assert_eq!(accepted, declared(&spec_keys()));
-    }
-
-    /// Likewise for the scene format.
-    #[test]
-    fn declared_scene_keys_equal_the_struct() {
-        let keys: Vec<&KeyDoc> = crate::lt::format::KEYS.iter().collect();
-        let accepted: BTreeSet<String> = scene_file_keys().into_iter().collect();
-        assert!(accepted.contains("surface[].emission"));
-        assert_eq!(accepted, declared(&keys));
-    }
-
-    /// The value at a dotted path (`[]`: the array's first table).
-    fn at<'a>(v: &'a toml::Value, path: &str) -> Option<&'a toml::Value> {
-        path.split('.')
-            .try_fold(v, |v, seg| match seg.strip_suffix("[]") {
-                Some(name) => v.get(name)?.get(0),
-                None => v.get(seg),
-            })
-    }
-
-    /// Removes the key at a dotted path; false when its table is not in the tree.
-    fn remove(tree: &mut toml::Value, path: &str) -> bool {
-        let (parent, last) = match path.rsplit_once('.') {
-            Some((p, l)) => (Some(p), l),
-            None => (None, path),
-        };
-        let table = match parent {
-            None => Some(tree),
-            Some(p) => p
-                .split('.')
-                .try_fold(tree, |v, seg| match seg.strip_suffix("[]") {
-                    Some(name) => v.get_mut(name)?.get_mut(0),
-                    None => v.get_mut(seg),
-                }),
-        };
-        match table.and_then(toml::Value::as_table_mut) {
-            Some(t) => {
-                t.remove(last);
-                true
-            }
-            None => false,
-        }
-    }
-
-    /// Each declared default is what the struct fills in: a `Value` default is the normalised
-    /// value, an `Absent` key stays absent, a `Required` key left out is refused. `fixture` holds
-    /// every table the keys live in.
-    fn check_defaults(
-        fixture: &str,
-        keys: &[&KeyDoc],
-        norm: &dyn Fn(&toml::Table) -> Result<toml::Value, String>,
-    ) {
-        let tree: toml::Table = toml::from_str(fixture).unwrap();
-        norm(&tree).unwrap_or_else(|e| panic!("the fixture is refused: {e}"));
-        for d in keys {
-            let mut t = toml::Value::Table(tree.clone());
-            assert!(
-                remove(&mut t, d.key),
-                "the fixture lacks the table of {}",
-                d.key
-            );
-            let t = t.as_table().unwrap();
-            match d.default {
-                IfAbsent::Required => {
-                    let e = norm(t).expect_err(d.key);
-                    assert!(e.contains("missing field"), "{}: {e}", d.key);
-                }
-                IfAbsent::Absent(_) => {
-                    let v = norm(t).unwrap_or_else(|e| panic!("{}: {e}", d.key));
-                    assert_eq!(at(&v, d.key), None, "{} is filled in", d.key);
-                }
-                IfAbsent::Value(text) => {
-                    let v = norm(t).unwrap_or_else(|e| panic!("{}: {e}", d.key));
-                    let want: toml::Table = toml::from_str(&format!("v = {text}")).unwrap();
-                    assert_eq!(at(&v, d.key), Some(&want["v"]), "{}", d.key);
-                }
-            }
-        }
-    }
-
-    const GRID: &str = r#"
-        [experiment]
-        name = "t"
-        kind = "grid"
-        seed = 3
-        rays = 10
-        description = "d"
-        [scene]
-        intensity = 1.0
-        radius = 0.1
-        class = [{ fraction = 1.0, radius = 0.1 }]
-        extent = 10.0
-        spheres = 5
-        replicas = 2
-        center = [0, 0, 0]
-        radius_draw = "per-scene"
-        [grid]
-        cell_width = 1.0
-        mailbox = false
-        eye = "corner"
-        memory_budget_gib = 1.0
-        rays_per_scene = 2
-        max_steps = 5
-        [histogram]
-        bins = 3
-        t_max_mfp = 2.0
-        [scaling]
-        brute_force_max_n = 5
-        brute_force_rays = 5
-        c = 2.0
-        [sweep]
-        "grid.cell_width" = [1.0, 2.0]
-    "#;
-
-    const DETP: &str = r#"
-        source = "scene"
-        scene = "s.toml"
-        photons = 10
-        points = 10
-        point_source = "file"
-        points_file = "p.csv"
-        point_spacing = 0.1
-        disc_radius = 0.1
-        q = 0.5
-        threshold = 5
-        order = "none"
-        order_bits = 5
-        list_mode = "inherited"
-        chunk_points = 5
-        engines = ["disc-index"]
-        index = "grid"
-        index_cell_width = 0.2
-        octree_leaf = 4
-        brute_force_points = 0
-        photon_map_k = 4
-        photon_map_filter = "disc"
-        replicas = 2
-        write_points = true
-        engine = "disc-index"
-        memory_budget_gib = 1.0
-    "#;
-
-    /// A spec of `kind` with every table of that kind.
-    fn fixture(kind: &str) -> String {
-        let head = format!("[experiment]\nname = \"t\"\nkind = \"{kind}\"\nseed = 3\nrays = 10\ndescription = \"d\"\n[sweep]\n");
-        match kind {
-            "lines-in-sphere" => format!("{head}[lines]\ncount = 5\ninner_radius = 0.5\n"),
-            "detp" => format!("{head}[detp]\n{DETP}"),
-            "quasi-static" => format!(
-                "{head}[detp]\n{DETP}\n[dynamic]\nframes = 3\nratio = 0.1\ncrossover = 0.3\n\
-                 check_every = 2\npoints_frame = 1\nreference_photons = 5\npredict = 0.1\n"
-            ),
-            grid => GRID.replace("kind = \"grid\"", &format!("kind = \"{grid}\"")),
-        }
-    }
-
-    #[test]
-    fn declared_spec_defaults_are_the_structs_defaults() {
+    fn spec_keys_are_declared_once_and_shared() {
         let keys = spec_keys();
+        let kinds_of = |key: &str| {
+            keys.iter()
+                .find(|(d, _)| d.key == key)
+                .map(|(_, k)| k.clone())
+                .unwrap_or_default()
+        };
+        assert_eq!(kinds_of("experiment.seed").len(), KINDS.len());
+        assert_eq!(kinds_of("sweep").len(), KINDS.len());
+        assert_eq!(kinds_of("detp.q"), ["detp", "quasi-static"]);
+        assert_eq!(
+            kinds_of("scaling.c"),
+            ["grid", "grid-scaling", "grid-cost-model"]
+        );
+        assert!(kinds_of("scene.class[].radius").contains(&"grid"));
         for k in KINDS {
-            let accepted = accepted_keys(*k);
-            let mine: Vec<&KeyDoc> = keys
-                .iter()
-                .copied()
-                .filter(|d| accepted.iter().any(|a| a == d.key))
-                .collect();
-            check_defaults(&fixture(k.name()), &mine, &|t| {
-                k.normalize(t).map_err(|e| e.message)
-            });
+            let mut seen = BTreeSet::new();
+            for d in k.keys() {
+                assert!(seen.insert(d.key.clone()), "{}: {} twice", k.name(), d.key);
+                assert!(!d.doc.is_empty(), "{}: {} has no doc", k.name(), d.key);
+            }
         }
-    }
-
-    #[test]
-    fn declared_scene_defaults_are_the_structs_defaults() {
-        let fixture = r#"
-            [[surface]]
-            kind = "sphere"
-            name = "s"
-            vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
-            center = [0, 0, 0]
-            radius = 1.0
-            inside = true
-            path = "m.obj"
-            albedo = 0.5
-            emission = 1.0
-            dynamic = "d"
-            [[light]]
-            kind = "spot"
-            position = [0, 1, 0]
-            power = 2.0
-            direction = [0, -1, 0]
-            cone_deg = 30
-            [camera]
-            eye = [0, 0, -1]
-            look_at = [0, 0, 0]
-            up = [0, 1, 0]
-            fov_deg = 60
-            width = 8
-            height = 8
-            [analytic]
-            kind = "closed-sphere"
-            [[dynamic]]
-            name = "d"
-            path = "line"
-            center = [0, 0, 0]
-            radius = 1.0
-            axis = [0, 0, 1]
-            turns = 2.0
-            points = [[0, 0, 0], [1, 0, 0]]
-            spin_deg = 10.0
-            spin_axis = [1, 0, 0]
-        "#;
-        let keys: Vec<&KeyDoc> = crate::lt::format::KEYS.iter().collect();
-        check_defaults(fixture, &keys, &|t| {
-            let raw: crate::lt::format::RawScene =
-                crate::spec::de::from_tree(t).map_err(|e| e.message)?;
-            toml::Value::try_from(&raw).map_err(|e| e.to_string())
-        });
+        assert!(scene_keys().iter().any(|d| d.key == "surface[].emission"));
     }
 }

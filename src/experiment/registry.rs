@@ -1,17 +1,24 @@
-//! The experiment kinds raycost knows: one line each. `experiment.kind` is looked up here; the runner,
-//! `check`, `merge` and `raycost doc` see kinds only through [`DynKind`].
+//! The experiment kinds raycost knows. The list itself is one line per kind module in
+//! `experiment/mod.rs` ([`kinds!`](crate::kinds) declares the module and registers its kinds);
+//! `experiment.kind` is looked up here, and the runner, `check`, `merge` and `raycost doc` see kinds
+//! only through [`DynKind`].
 
-use super::kind::{DynKind, Registered};
+use super::kind::DynKind;
+pub use super::KINDS;
 
-/// Every kind, in the order `raycost doc` lists them.
-pub static KINDS: &[&dyn DynKind] = &[
-    &Registered::<super::grid::Grid<super::grid::Study>>::NEW,
-    &Registered::<super::grid::Grid<super::grid::Scaling>>::NEW,
-    &Registered::<super::grid::Grid<super::grid::CostModel>>::NEW,
-    &Registered::<super::lines_in_sphere::LinesInSphereKind>::NEW,
-    &Registered::<super::detp::DetpKind>::NEW,
-    &Registered::<super::quasi_static::QuasiStaticKind>::NEW,
-];
+/// Declares the kind modules and registers their kinds, one line per module:
+/// `module => [Kind, …]` declares `pub mod module;` and adds each kind to `KINDS`, in the order
+/// `raycost doc` lists them. Invoked once, in `experiment/mod.rs`.
+#[macro_export]
+macro_rules! kinds {
+    ($($(#[$m:meta])* $module:ident => [$($kind:ty),+ $(,)?]),* $(,)?) => {
+        $($(#[$m])* pub mod $module;)*
+        /// Every kind, in the order `raycost doc` lists them.
+        pub static KINDS: &[&dyn $crate::experiment::kind::DynKind] = &[
+            $($(&$crate::experiment::kind::Registered::<$kind>::NEW),+),*
+        ];
+    };
+}
 
 /// The kind named `name`.
 pub fn find(name: &str) -> Option<&'static dyn DynKind> {

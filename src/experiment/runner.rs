@@ -63,6 +63,8 @@ pub struct RunOptions {
     pub shard: Option<Shard>,
     /// `--set` overrides (recorded in the metadata).
     pub sets: Vec<String>,
+    /// Worker threads (`--threads`, or the machine's): passed to every point and recorded.
+    pub threads: usize,
 }
 
 /// The file stem of a run.
@@ -100,62 +102,11 @@ fn start_meta(plan: &Plan, opts: &RunOptions, warnings: Vec<String>) -> Meta {
         .map_or("all".into(), |s| format!("{}/{}", s.k, s.n));
     meta.run.set = opts.sets.clone();
     meta.run.points_total = plan.points.len();
+    meta.run.threads = opts.threads;
     meta.inputs = plan.inputs.clone();
     meta.warnings = warnings;
     meta.spec = plan.normalized.clone();
     meta
-}
-
-/// A point's parameter value as a CSV cell: integers stay integers.
-fn param_value(v: &toml::Value) -> Value {
-    match v {
-        toml::Value::Float(x) => Value::F(*x),
-        toml::Value::Integer(i) if *i >= 0 => Value::U(*i as u64),
-        toml::Value::Integer(i) => Value::F(*i as f64),
-        toml::Value::String(s) => Value::S(s.clone()),
-        other => Value::S(other.to_string()),
-    }
-}
-
-/// Keys of the spec that are not parameters of a point: names, free text and the sweep itself.
-const NOT_PARAMETERS: &[&str] = &[
-    "experiment.name",
-    "experiment.kind",
-    "experiment.description",
-    "sweep",
-];
-
-/// Every parameter of a point, in column order: the swept or `--set` keys first (as `check`
-/// lists them), then every other key the kind accepts, in its declaration order, with the value in
-/// force (defaults filled in); a key without a value (an optional key left out) is missing (NaN).
-/// An array of tables (`scene.class`) is one column with its TOML text.
-pub fn all_params(
-    kind: &dyn DynKind,
-    accepted: &[String],
-    swept: &[(String, toml::Value)],
-    tree: &toml::Table,
-) -> Vec<(String, Value)> {
-    let normalized = kind.normalize(tree).ok();
-    let mut out: Vec<(String, Value)> = swept
-        .iter()
-        .map(|(k, v)| (k.clone(), param_value(v)))
-        .collect();
-    for key in accepted {
-        // `scene.class[].radius` → the column `scene.class`.
-        let key = match key.split_once("[]") {
-            Some((head, _)) => head,
-            None => key.as_str(),
-        };
-        if NOT_PARAMETERS.contains(&key) || out.iter().any(|(k, _)| k == key) {
-            continue;
-        }
-        let value = normalized
-            .as_ref()
-            .and_then(|v| key.split('.').try_fold(v, |v, seg| v.get(seg)))
-            .map_or(Value::F(f64::NAN), param_value);
-        out.push((key.to_string(), value));
-    }
-    out
 }
 
 /// Prepends `point` and the parameter columns to a result row.
@@ -169,28 +120,63 @@ fn with_point_columns(index: usize, params: &[(String, Value)], row: &Row) -> Ro
     r
 }
 
-/// What Ctrl-C says: the points kept so far and the command that resumes (updated after every
-/// point; the handler prints it and exits with 130).
-static ON_INTERRUPT: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
+/// Ctrl-C during a run. The handler asks the runner to stop ([`interrupt::requested`]); the runner
+/// stops after the point in progress (its row kept) and returns [`Error::Interrupted`], whose exit
+/// code is 130, with the command that resumes. A point that does not finish within a second of the
+/// signal is not waited for: the handler then says what was kept (the point in progress is lost,
+/// as a kill would lose it) and exits with 130 itself.
+mod interrupt {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Mutex;
+    use std::time::{Duration, Instant};
 
-/// Installs the Ctrl-C handler once per process.
-fn catch_interrupt() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    ONCE.call_once(|| {
-        let _ = ctrlc::set_handler(|| {
-            let msg = ON_INTERRUPT
-                .lock()
-                .ok()
-                .and_then(|m| m.clone())
-                .unwrap_or_else(|| "interrupted before any point finished".into());
-            eprintln!("\ninterrupted: {msg}");
-            crate::output::folder::release_locks();
-            std::process::exit(130);
+    static REQUESTED: AtomicBool = AtomicBool::new(false);
+    static HEEDED: AtomicBool = AtomicBool::new(false);
+    /// What was kept so far and how to resume (updated after every point).
+    static KEPT: Mutex<Option<String>> = Mutex::new(None);
+    /// How long the handler waits for the runner to heed it.
+    const GRACE: Duration = Duration::from_secs(1);
+
+    /// Installs the handler once per process.
+    pub fn install() {
+        static ONCE: std::sync::Once = std::sync::Once::new();
+        ONCE.call_once(|| {
+            let _ = ctrlc::set_handler(|| {
+                REQUESTED.store(true, Ordering::SeqCst);
+                let t0 = Instant::now();
+                while t0.elapsed() < GRACE {
+                    if HEEDED.load(Ordering::SeqCst) {
+                        return;
+                    }
+                    std::thread::sleep(Duration::from_millis(10));
+                }
+                let kept = KEPT.lock().ok().and_then(|m| m.clone());
+                let kept = kept.unwrap_or_else(|| "before any point finished".into());
+                eprintln!("\nerror: interrupted: {kept} (the point in progress is lost)");
+                crate::output::folder::release_locks();
+                std::process::exit(130);
+            });
         });
-    });
+    }
+
+    /// Records what Ctrl-C should say now.
+    pub fn kept(line: String) {
+        if let Ok(mut m) = KEPT.lock() {
+            *m = Some(line);
+        }
+    }
+
+    /// Whether Ctrl-C was pressed (and, if so, the runner now heeds it).
+    pub fn requested() -> bool {
+        let r = REQUESTED.load(Ordering::SeqCst);
+        if r {
+            HEEDED.store(true, Ordering::SeqCst);
+        }
+        r
+    }
 }
 
-/// The line Ctrl-C prints after `done` of `total` points are in `partial`.
+/// What Ctrl-C says after `done` of `total` points are in `partial`.
 fn interrupt_line(
     plan: &Plan,
     opts: &RunOptions,
@@ -210,8 +196,22 @@ fn interrupt_line(
         cmd.push_str(&format!(" --set '{s}'"));
     }
     format!(
-        "{done} of {total} point(s) kept in {} (the point in progress is lost); continue with: {cmd}",
+        "{done} of {total} point(s) kept in {}; continue with: {cmd}",
         partial.display()
+    )
+}
+
+/// One finished point: its index, its parameters as the summary shows them, what it produced, its
+/// wall seconds.
+type Finished = (usize, String, ErasedOutput, f64);
+
+/// The warnings of this shard's points known before running, each once.
+fn known_warnings(plan: &Plan, mine: &[usize]) -> Vec<String> {
+    crate::output::meta::point_warnings(
+        &mine
+            .iter()
+            .flat_map(|&i| plan.points[i].warnings().into_iter().map(move |w| (i, w)))
+            .collect::<Vec<_>>(),
     )
 }
 
@@ -224,24 +224,13 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
     let mine: Vec<usize> = (0..plan.points.len())
         .filter(|i| opts.shard.is_none_or(|s| i % s.n == s.k))
         .collect();
-    let warnings = crate::output::meta::point_warnings(
-        &mine
-            .iter()
-            .flat_map(|&i| plan.points[i].warnings().into_iter().map(move |w| (i, w)))
-            .collect::<Vec<_>>(),
-    );
-    let mut meta = start_meta(plan, opts, warnings);
-    let sink = Sink::open(
-        &dir,
-        &stem,
-        &meta,
-        SinkOptions {
-            force: opts.force,
-            resume: opts.resume,
-            tables: kind.table_names(),
-        },
-    )?;
-    let Some(mut sink) = sink else {
+    let mut meta = start_meta(plan, opts, known_warnings(plan, &mine));
+    let sink_options = SinkOptions {
+        force: opts.force,
+        resume: opts.resume,
+        tables: kind.table_names(),
+    };
+    let Some(mut sink) = Sink::open(&dir, &stem, &meta, sink_options)? else {
         // --resume on a finished table: nothing to do, and nothing is touched.
         let msg = format!(
             "{}: finished already, nothing to resume\n",
@@ -250,8 +239,6 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
         return Ok((Vec::new(), msg));
     };
     meta.run.started = sink.started().to_string();
-    // The keys the kind accepts, found once per run (the parameter columns of every row).
-    let accepted = crate::experiment::reference::accepted_keys(kind);
     if let Some(then) = sink.previous() {
         meta.columns = then.columns.clone();
     }
@@ -261,139 +248,12 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
         eprintln!("warning: {w}");
     }
     let t0 = Instant::now();
-    let resumed: Vec<usize> = mine
-        .iter()
-        .copied()
-        .filter(|i| sink.done().contains(i))
-        .collect();
-    let todo: Vec<usize> = mine
-        .iter()
-        .copied()
-        .filter(|i| !sink.done().contains(i))
-        .collect();
-    let todo_points: Vec<&dyn super::kind::DynPoint> =
-        todo.iter().map(|&i| plan.points[i].as_ref()).collect();
-    let shared = kind.shared(&todo_points)?;
-    meta.extra = kind.shared_meta(shared.as_ref());
-
-    let total: u64 = todo_points.iter().map(|p| p.work().units).sum();
-    let unit = todo_points.first().map_or("rays", |p| p.work().unit);
-    let bar = progress(total, unit, todo.len(), opts.quiet);
-    let partial = dir.join(format!("{stem}.csv.partial"));
-    if let Ok(mut m) = ON_INTERRUPT.lock() {
-        *m = Some(interrupt_line(
-            plan,
-            opts,
-            &partial,
-            resumed.len(),
-            mine.len(),
-        ));
-    }
-    catch_interrupt();
-    let mut finished: Vec<(usize, String, ErasedOutput, f64)> = Vec::new();
-    for (n, &i) in todo.iter().enumerate() {
-        bar.point(n, todo.len());
-        let p = &plan.spec.points[i];
-        let start = Instant::now();
-        let ctx = Context {
-            index: i as u64,
-            progress: &|k| bar.inc(k),
-        };
-        let out = kind
-            .run(plan.points[i].as_ref(), shared.as_ref(), &ctx)
-            .context_with(|| format!("point {i}"))?;
-        let wall = start.elapsed().as_secs_f64();
-        // An overflow names the point and its parameters, not only the column.
-        let at = || {
-            format!(
-                "point {i} ({})",
-                plan.spec.points[i]
-                    .params
-                    .iter()
-                    .map(|(k, v)| format!("{k} = {}", crate::spec::sweep::show(v)))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )
-        };
-        check_declared(kind, "main", std::slice::from_ref(&out.row))
-            .map_err(|e| Error::internal(format!("{}: {e:#}", at())))?;
-        for (name, rows) in &out.tables {
-            check_declared(kind, name, rows)
-                .map_err(|e| Error::internal(format!("{}: {e:#}", at())))?;
-        }
-        let params = all_params(kind, &accepted, &p.params, &p.tree);
-        let row = with_point_columns(i, &params, &out.row);
-        let side: Vec<(&'static str, Vec<Row>)> = out
-            .tables
-            .iter()
-            .map(|(name, rows)| {
-                let rows = rows.iter().map(|r| with_point_columns(i, &[], r)).collect();
-                (*name, rows)
-            })
-            .collect();
-        record_columns(&mut meta.columns, "main", &row);
-        for (name, rows) in &side {
-            if let Some(r) = rows.first() {
-                record_columns(&mut meta.columns, name, r);
-            }
-        }
-        sink.append(&row, &side, &meta)
-            .map_err(|e| Error::Internal(e.into()))
-            .context_with(|| format!("could not append point {i} to {}", dir.display()))?;
-        for w in &out.warnings {
-            let w = format!("point {i}: {w}");
-            eprintln!("warning: {w}");
-            if !meta.warnings.contains(&w) {
-                meta.warnings.push(w);
-            }
-        }
-        let params = p
-            .params
-            .iter()
-            .map(|(k, v)| format!("{}={v}", short(k)))
-            .collect::<Vec<_>>()
-            .join(" ");
-        meta.run.points.push(i);
-        meta.run.point_wall_s.push(wall);
-        if let Ok(mut m) = ON_INTERRUPT.lock() {
-            *m = Some(interrupt_line(
-                plan,
-                opts,
-                &partial,
-                resumed.len() + n + 1,
-                mine.len(),
-            ));
-        }
-        let mut out = out;
-        // Every built-in check gets a summary line, failed or not.
-        for c in &out.checks {
-            out.summary.push((
-                c.name.to_string(),
-                crate::stats::Estimate {
-                    mean: c.failures as f64,
-                    se: 0.0,
-                    n: c.checked,
-                    clusters: c.checked,
-                },
-                format!("0 of {}", c.checked),
-                if c.failures == 0 {
-                    "ok (exact)"
-                } else {
-                    "FAIL"
-                }
-                .into(),
-            ));
-        }
-        finished.push((i, params, out, wall));
-    }
-    bar.finish();
-    if let Ok(mut m) = ON_INTERRUPT.lock() {
-        *m = Some(
-            "the run was finishing its files; run the same command with --resume to complete it"
-                .into(),
-        );
-    }
-
+    let (resumed, todo): (Vec<usize>, Vec<usize>) =
+        mine.iter().partition(|i| sink.done().contains(i));
+    let finished = run_points(plan, opts, &todo, resumed.len(), &mut meta, &mut sink)?;
+    interrupt::kept(
+        "the run was finishing its files; run the same command with --resume to complete it".into(),
+    );
     meta.end(t0.elapsed().as_secs_f64());
     if meta.busy() {
         if let Some(w) = meta.warnings.last() {
@@ -434,6 +294,131 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
     Ok((written, summary::render(&shown)))
 }
 
+/// Runs the points `todo` (after `resumed` points of an earlier run), appending each to the sink
+/// as it finishes; stops with [`Error::Interrupted`] after the point in progress on Ctrl-C.
+fn run_points(
+    plan: &Plan,
+    opts: &RunOptions,
+    todo: &[usize],
+    resumed: usize,
+    meta: &mut Meta,
+    sink: &mut Sink,
+) -> Result<Vec<Finished>, Error> {
+    let kind = plan.kind;
+    let todo_points: Vec<&dyn super::kind::DynPoint> =
+        todo.iter().map(|&i| plan.points[i].as_ref()).collect();
+    let shared = kind.shared(&todo_points)?;
+    meta.extra = kind.shared_meta(shared.as_ref());
+    let total: u64 = todo_points.iter().map(|p| p.work().units).sum();
+    let unit = todo_points.first().map_or("rays", |p| p.work().unit);
+    let bar = progress(total, unit, todo.len(), opts.quiet);
+    let name = &plan.spec.experiment.name;
+    let partial = opts
+        .out
+        .join(name)
+        .join(format!("{}.csv.partial", stem(name, opts.shard)));
+    let all = resumed + todo.len();
+    interrupt::kept(interrupt_line(plan, opts, &partial, resumed, all));
+    interrupt::install();
+    let mut finished: Vec<Finished> = Vec::new();
+    for (n, &i) in todo.iter().enumerate() {
+        bar.point(n, todo.len());
+        let start = Instant::now();
+        let ctx = Context {
+            index: i as u64,
+            threads: opts.threads,
+            progress: &|k| bar.inc(k),
+        };
+        let out = kind
+            .run(plan.points[i].as_ref(), shared.as_ref(), &ctx)
+            .context_with(|| format!("point {i}"))?;
+        let wall = start.elapsed().as_secs_f64();
+        finished.push(keep_point(plan, i, out, wall, meta, sink)?);
+        let line = interrupt_line(plan, opts, &partial, resumed + n + 1, all);
+        if interrupt::requested() {
+            bar.finish();
+            return Err(Error::Interrupted(line));
+        }
+        interrupt::kept(line);
+    }
+    bar.finish();
+    Ok(finished)
+}
+
+/// Appends point `i`'s rows (with `point` and its parameters) to the sink, records its columns,
+/// warnings and wall time in the metadata, and adds its checks' summary lines.
+fn keep_point(
+    plan: &Plan,
+    i: usize,
+    mut out: ErasedOutput,
+    wall: f64,
+    meta: &mut Meta,
+    sink: &mut Sink,
+) -> Result<Finished, Error> {
+    let kind = plan.kind;
+    // An overflow names the point and its parameters, not only the column.
+    let at = |e: Error| {
+        let params: Vec<String> = plan.spec.points[i]
+            .params
+            .iter()
+            .map(|(k, v)| format!("{k} = {}", crate::spec::sweep::show(v)))
+            .collect();
+        Error::internal(format!("point {i} ({}): {e:#}", params.join(", ")))
+    };
+    check_declared(kind, "main", std::slice::from_ref(&out.row)).map_err(at)?;
+    for (name, rows) in &out.tables {
+        check_declared(kind, name, rows).map_err(at)?;
+    }
+    let row = with_point_columns(i, &plan.params[i], &out.row);
+    let side: Vec<(&'static str, Vec<Row>)> = out
+        .tables
+        .iter()
+        .map(|(name, rows)| {
+            let rows = rows.iter().map(|r| with_point_columns(i, &[], r)).collect();
+            (*name, rows)
+        })
+        .collect();
+    record_columns(&mut meta.columns, "main", &row);
+    for (name, rows) in &side {
+        if let Some(r) = rows.first() {
+            record_columns(&mut meta.columns, name, r);
+        }
+    }
+    sink.append(&row, &side, meta)
+        .map_err(|e| Error::Internal(e.into()))
+        .context_with(|| format!("could not append point {i}"))?;
+    for w in &out.warnings {
+        let w = format!("point {i}: {w}");
+        eprintln!("warning: {w}");
+        if !meta.warnings.contains(&w) {
+            meta.warnings.push(w);
+        }
+    }
+    meta.run.points.push(i);
+    meta.run.point_wall_s.push(wall);
+    // Every built-in check gets a summary line, failed or not.
+    for c in &out.checks {
+        out.summary.push(summary::SummaryLine {
+            metric: c.name.to_string(),
+            measured: crate::stats::Estimate {
+                mean: c.failures as f64,
+                se: 0.0,
+                n: c.checked,
+                clusters: c.checked,
+            },
+            theory: format!("0 of {}", c.checked),
+            verdict: crate::stats::Verdict::of_check(c.failures),
+        });
+    }
+    let params = plan.spec.points[i]
+        .params
+        .iter()
+        .map(|(k, v)| format!("{}={v}", short(k)))
+        .collect::<Vec<_>>()
+        .join(" ");
+    Ok((i, params, out, wall))
+}
+
 /// Every cell of a kind's rows of `table` must come from the kind's declaration of that table, with
 /// the class declared there (a bug in the kind otherwise), and no result is ever written as ±∞
 /// unless its column is declared open-ended (a histogram's last edge): an overflow fails the run
@@ -445,7 +430,7 @@ fn check_declared(kind: &dyn DynKind, table: &str, rows: &[Row]) -> Result<(), E
     let declared = columns
         .iter()
         .find(|(t, _)| *t == table)
-        .map_or(&[][..], |(_, c)| *c);
+        .map_or(&[][..], |(_, c)| c.as_slice());
     // Column name → may it be infinite.
     let mut checked: std::collections::HashMap<&str, bool> = std::collections::HashMap::new();
     for row in rows {
@@ -455,7 +440,7 @@ fn check_declared(kind: &dyn DynKind, table: &str, rows: &[Row]) -> Result<(), E
                 None => {
                     let ok = match declaration(declared, &cell.name) {
                         // A measured cell may be written as a timing where seconds decided it
-                        // (Row::decided_by_timing); never the other way.
+                        // (a column declared `decided_by_timing`); never the other way.
                         Some((column, class))
                             if class == cell.class
                                 || (class == Class::Measured && cell.class == Class::Timing) =>
@@ -524,32 +509,62 @@ mod tests {
     use super::*;
     use crate::experiment::inputs::Inputs;
     use crate::experiment::kind::{
-        Check, ConfigError, Context, Kind, NoTables, PointOutput, Rate, Registered, Work,
+        col, Cell, Check, ConfigError, Context, Kind, NoTables, Output, Rate, Registered, Table,
+        Work,
     };
-    use crate::experiment::lines_in_sphere::LinesSpec;
     use crate::output::column::{Class, Column};
+
+    crate::spec_file! {
+        /// The planted kind's spec.
+        pub struct PlantedSpec {
+            /// `[planted]`.
+            planted: PlantedTable = {table};
+        }
+    }
+
+    crate::spec_table! {
+        /// `[planted]`.
+        pub struct PlantedTable {
+            /// What the point does (see [`Planted`]).
+            value: f64 = {required}, "number", "", "any";
+        }
+    }
 
     const VALUE: Column = Column::value("value", "1", Class::Measured, "the point's value");
     const BAD: Column = Column::value("bad", "1", Class::Check, "failures");
-    const UNDECLARED: Column = Column::value("stray", "1", Class::Measured, "not in the table");
 
-    /// A test kind whose point misbehaves as its parameter `lines.inner_radius` says: 0.2 fails its
-    /// built-in check, 0.3 overflows to ∞, 0.4 writes a column the table does not declare; any
-    /// other value is a good point.
+    /// A test kind whose point misbehaves as its parameter `planted.value` says: 0.2 fails its
+    /// built-in check, 0.3 overflows to ∞, 0.4 gives a cell that does not fit its column's shape;
+    /// any other value is a good point.
     struct Planted;
 
     impl Kind for Planted {
         const NAME: &'static str = "planted";
         const ABOUT: &'static str = "a test kind";
-        type Raw = LinesSpec;
+        type Raw = PlantedSpec;
         type Point = f64;
+        type Measured = u64;
         type Tables = NoTables;
         type Shared = ();
-        fn columns() -> Vec<(&'static str, &'static [Column])> {
-            vec![("main", &[VALUE, BAD])]
-        }
-        fn configure(raw: LinesSpec, _: &mut Inputs) -> Result<f64, ConfigError> {
-            Ok(raw.lines.inner_radius)
+        const MAIN: Table<f64, u64> = Table::of(&[
+            col(&VALUE, |p, _| {
+                if *p == 0.3 {
+                    f64::INFINITY.into()
+                } else if *p == 0.4 {
+                    Cell::Estimate(crate::stats::Estimate {
+                        mean: 1.0,
+                        se: 0.0,
+                        n: 1,
+                        clusters: 1,
+                    })
+                } else {
+                    (*p).into()
+                }
+            }),
+            col(&BAD, |_, failures| (*failures).into()),
+        ]);
+        fn configure(raw: &PlantedSpec, _: &mut Inputs) -> Result<f64, ConfigError> {
+            Ok(raw.planted.value)
         }
         fn describe(p: &f64) -> String {
             p.to_string()
@@ -564,18 +579,11 @@ mod tests {
         fn shared(_: &[&f64]) -> Result<(), Error> {
             Ok(())
         }
-        fn run(p: &f64, _: &(), _: &Context) -> Result<PointOutput<NoTables>, Error> {
+        fn run(p: &f64, _: &(), _: &Context) -> Result<Output<u64, NoTables>, Error> {
             let failures = u64::from(*p == 0.2);
-            let mut row = Row::default();
-            row.put(&VALUE, if *p == 0.3 { f64::INFINITY } else { *p })
-                .put(&BAD, failures);
-            if *p == 0.4 {
-                row.put(&UNDECLARED, 1u64);
-            }
-            Ok(PointOutput {
-                row,
+            Ok(Output {
+                measured: failures,
                 tables: NoTables,
-                summary: Vec::new(),
                 checks: vec![Check {
                     name: "bad",
                     what: "a planted failure",
@@ -593,15 +601,15 @@ mod tests {
 
     static PLANTED: Registered<Planted> = Registered::NEW;
 
-    /// Runs kind `planted` over `lines.inner_radius` = `sweep`; returns its error and the lines of
-    /// the main table (finished or partial).
+    /// Runs kind `planted` over `planted.value` = `sweep`; returns its error and the lines of the
+    /// main table (finished or partial).
     fn run_planted(sweep: &str) -> (Error, Vec<String>) {
         let dir = tempfile::tempdir().unwrap();
-        let text = format!("[experiment]\nname = \"p\"\nkind = \"planted\"\n[lines]\ncount = 1\ninner_radius = 0.5\n[sweep]\n\"lines.inner_radius\" = {sweep}\n");
+        let text = format!("[experiment]\nname = \"p\"\nkind = \"planted\"\n[planted]\nvalue = 0.5\n[sweep]\n\"planted.value\" = {sweep}\n");
         let path = dir.path().join("p.toml");
         std::fs::write(&path, text).unwrap();
         let spec = crate::spec::Spec::read(&path, &[]).unwrap();
-        let plan = Plan::with_kind(spec, &PLANTED).unwrap();
+        let plan = Plan::with_kind(spec, &PLANTED, 1).unwrap();
         let opts = RunOptions {
             out: dir.path().join("out"),
             force: false,
@@ -609,6 +617,7 @@ mod tests {
             quiet: true,
             shard: None,
             sets: Vec::new(),
+            threads: 1,
         };
         let e = run(&plan, &opts).expect_err("a planted fault");
         let table = ["out/p/p.csv", "out/p/p.csv.partial"]
@@ -633,16 +642,19 @@ mod tests {
         assert!(table[2].ends_with(",1"), "{table:?}");
     }
 
-    /// An overflow is never written (the run stops before the point's row), and neither is a column
-    /// the kind did not declare.
+    /// An overflow is never written (the run stops before the point's row), and neither is a cell
+    /// that does not fit its declared column.
     #[test]
-    fn overflows_and_undeclared_columns_never_reach_a_table() {
+    fn overflows_and_misdeclared_cells_never_reach_a_table() {
         for (sweep, want) in [
             ("[0.1, 0.3]", "main.value overflowed to inf"),
-            ("[0.1, 0.4]", "column main.stray is not declared"),
+            (
+                "[0.1, 0.4]",
+                "column value is declared Value but its accessor gave Estimate",
+            ),
         ] {
             let (e, table) = run_planted(sweep);
-            let msg = e.to_string();
+            let msg = format!("{e:#}");
             assert!(msg.contains(want), "{msg}");
             assert_eq!(table.len(), 2, "only point 0 is written: {table:?}");
             assert!(!table.iter().any(|l| l.contains("inf")));

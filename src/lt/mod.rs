@@ -9,8 +9,11 @@
 
 pub mod aff;
 pub mod bvh;
+pub mod cast;
+pub mod direct;
 pub mod format;
 pub mod motion;
+pub mod pathtrace;
 pub mod precision;
 pub mod reference;
 pub mod shapes;
@@ -21,12 +24,12 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
-use self::bvh::{Bvh, TwoNearest};
-use self::format::{AnalyticKind, LightKind, PathKind, RawScene, SurfaceKind};
-use self::motion::{Motion, Mover, MoverPart};
+use self::bvh::Bvh;
+use self::format::{AnalyticKind, RawScene};
+use self::motion::Mover;
 use self::shapes::{Ball, Triangle};
 use crate::geom::Aabb;
-use crate::toml_text::{find_key, line_col};
+use crate::toml_text::de::from_text;
 
 pub use crate::error::InputError;
 
@@ -161,6 +164,20 @@ pub struct Scene {
     bounds: Aabb,
 }
 
+impl Scene {
+    /// Traverses its hierarchies with `path` from now on (tests and `raycost bench` force each
+    /// instruction set; answers do not depend on it).
+    pub fn set_bvh_path(&mut self, path: bvh::Path) {
+        self.bvh = std::mem::take(&mut self.bvh).with_path(path);
+        self.dyn_bvh = std::mem::take(&mut self.dyn_bvh).with_path(path);
+    }
+
+    /// The instruction-set path its hierarchies are traversed with.
+    pub fn bvh_path(&self) -> bvh::Path {
+        self.bvh.path()
+    }
+}
+
 /// What a scene is made of, before its hierarchy and bounds are built (from a TOML scene file or an
 /// AFF file).
 #[derive(Debug, Default)]
@@ -216,387 +233,14 @@ impl Scene {
 
     /// A TOML scene from its text; `path` names it in errors and anchors relative OBJ paths.
     pub fn parse(text: &str, path: &Path) -> Result<Scene, InputError> {
-        let name = path.display().to_string();
-        let de = toml::Deserializer::new(text);
-        let raw: RawScene = serde_path_to_error::deserialize(de).map_err(|e| {
-            let key = e.path().to_string();
-            let inner = e.into_inner();
-            InputError {
-                file: name.clone(),
-                at: inner.span().map(|s| line_col(text, s.start)),
-                key: (!key.is_empty() && key != ".").then_some(key),
-                message: inner.message().trim().to_string(),
-            }
+        // The spec's own reader: located by line, column and dotted key.
+        let raw: RawScene = from_text(text).map_err(|e| InputError {
+            file: path.display().to_string(),
+            at: e.at,
+            key: e.key,
+            message: e.message,
         })?;
-        Self::from_raw(raw, path, text)
-    }
-
-    fn from_raw(raw: RawScene, path: &Path, text: &str) -> Result<Scene, InputError> {
-        let name = path.display().to_string();
-        let err = |key: String, message: String| InputError {
-            file: name.clone(),
-            at: find_key(text, &key).filter(|_| !key.is_empty()),
-            key: Some(key),
-            message,
-        };
-        let dir = path.parent().unwrap_or(Path::new(""));
-        let (mut triangles, mut balls, mut surfaces) = (Vec::new(), Vec::new(), Vec::new());
-        let mut warnings = Vec::new();
-        let mut lights = Vec::new();
-        let mut sources = Vec::new();
-        // Geometry of each [[dynamic]] object, gathered from the surfaces naming it.
-        let mut moving: Vec<(Vec<Triangle>, Vec<Ball>)> =
-            vec![Default::default(); raw.dynamic.len()];
-        for (si, s) in raw.surface.iter().enumerate() {
-            let key = |k: &str| format!("surface[{si}].{k}");
-            let id = si as u32;
-            let first = triangles.len();
-            let label = s.name.clone().unwrap_or_else(|| format!("surface {si}"));
-            let v: Vec<DVec3> = s.vertices.iter().map(|&p| DVec3::from_array(p)).collect();
-            let need = |n: usize| {
-                if v.len() == n {
-                    Ok(())
-                } else {
-                    Err(err(
-                        key("vertices"),
-                        format!("a {:?} needs {n} vertices, got {}", s.kind, v.len())
-                            .to_lowercase(),
-                    ))
-                }
-            };
-            match s.kind {
-                SurfaceKind::Triangle => {
-                    need(3)?;
-                    triangles.push(Triangle {
-                        v: [v[0], v[1], v[2]],
-                        surface: id,
-                    });
-                }
-                SurfaceKind::Quad => {
-                    need(4)?;
-                    // A quad is split along v0–v2: it must be planar and its vertices in order
-                    // around it, or the two halves are not the quad the user meant.
-                    let n1 = (v[1] - v[0]).cross(v[2] - v[0]);
-                    let n2 = (v[2] - v[0]).cross(v[3] - v[0]);
-                    let size = (v[2] - v[0]).length().max((v[3] - v[1]).length());
-                    if n1.length() > 0.0 && n2.length() > 0.0 {
-                        // Measured data is not exactly planar (the Cornell box's walls are off by
-                        // 0.4 % of their size, as published): up to 1 % of the quad's size is
-                        // accepted as measurement error, beyond it the quad is refused.
-                        let off = (v[3] - v[0]).dot(n1.normalize()).abs();
-                        if off > 0.01 * size {
-                            return Err(err(
-                                key("vertices"),
-                                format!("the quad is not planar: its 4th vertex is {off:.3e} off the plane of the first three, over 1 % of its size {size:.3e} (split it into two triangles)"),
-                            ));
-                        }
-                        if n1.dot(n2) < 0.0 {
-                            return Err(err(
-                                key("vertices"),
-                                "the quad's vertices are not in order around it (a bow-tie): list them along its edge".into(),
-                            ));
-                        }
-                    }
-                    triangles.push(Triangle {
-                        v: [v[0], v[1], v[2]],
-                        surface: id,
-                    });
-                    triangles.push(Triangle {
-                        v: [v[0], v[2], v[3]],
-                        surface: id,
-                    });
-                }
-                SurfaceKind::Sphere => {
-                    let (Some(c), Some(r)) = (s.center, s.radius) else {
-                        return Err(err(
-                            key("radius"),
-                            "a sphere needs center and radius".into(),
-                        ));
-                    };
-                    balls.push(Ball {
-                        center: DVec3::from_array(c),
-                        radius: r,
-                        inside: s.inside,
-                        surface: id,
-                    });
-                }
-                SurfaceKind::Obj => {
-                    let Some(p) = &s.path else {
-                        return Err(err(key("path"), "an obj surface needs a path".into()));
-                    };
-                    let file: PathBuf = dir.join(p);
-                    if let Err(why) = crate::error::regular_input(&file) {
-                        return Err(err(key("path"), format!("{}: {why}", file.display())));
-                    }
-                    sources.push((file.clone(), "obj"));
-                    let (models, _) = tobj::load_obj(
-                        &file,
-                        &tobj::LoadOptions {
-                            triangulate: true,
-                            single_index: true,
-                            ..Default::default()
-                        },
-                    )
-                    .map_err(|e| InputError {
-                        file: file.display().to_string(),
-                        at: None,
-                        key: None,
-                        message: format!(
-                            "cannot read this OBJ (named by {name}, {}): {e}",
-                            key("path")
-                        ),
-                    })?;
-                    if models.iter().all(|m| m.mesh.indices.len() < 3) {
-                        return Err(InputError {
-                            file: file.display().to_string(),
-                            at: None,
-                            key: None,
-                            message: format!(
-                                "the OBJ (named by {name}, {}) has no faces",
-                                key("path")
-                            ),
-                        });
-                    }
-                    for m in models {
-                        let p = &m.mesh.positions;
-                        let vert = |i: u32| {
-                            let i = i as usize * 3;
-                            DVec3::new(f64::from(p[i]), f64::from(p[i + 1]), f64::from(p[i + 2]))
-                        };
-                        for f in m.mesh.indices.chunks_exact(3) {
-                            triangles.push(Triangle {
-                                v: [vert(f[0]), vert(f[1]), vert(f[2])],
-                                surface: id,
-                            });
-                        }
-                    }
-                }
-            }
-            // Degenerate triangles are skipped and counted, never traced.
-            let before = triangles.len();
-            let kept: Vec<Triangle> = triangles
-                .drain(first..)
-                .filter(|t| !t.degenerate())
-                .collect();
-            if kept.len() < before - first {
-                warnings.push(format!(
-                    "{name}: {label}: skipped {} degenerate triangle(s) (zero area or not finite)",
-                    before - first - kept.len()
-                ));
-            }
-            let (kept, duplicates) = shapes::without_duplicates(kept);
-            if duplicates > 0 {
-                warnings.push(format!(
-                    "{name}: {label}: skipped {duplicates} duplicate triangle(s) (the same three \
-                     vertices, wound the same way, as another triangle of this surface)"
-                ));
-            }
-            triangles.extend(kept);
-            if let Some(dname) = &s.dynamic {
-                let Some(k) = raw.dynamic.iter().position(|d| &d.name == dname) else {
-                    return Err(err(
-                        key("dynamic"),
-                        format!("no [[dynamic]] object is named \"{dname}\""),
-                    ));
-                };
-                if s.emission.is_some() {
-                    return Err(err(
-                        key("emission"),
-                        "a dynamic surface cannot emit (lights are static)".into(),
-                    ));
-                }
-                moving[k].0.extend(triangles.drain(first..));
-                if s.kind == SurfaceKind::Sphere {
-                    moving[k].1.extend(balls.pop());
-                }
-            }
-            if let Some(le) = s.emission {
-                let tris: Vec<u32> = (first as u32..triangles.len() as u32).collect();
-                let ball = (s.kind == SurfaceKind::Sphere).then(|| balls.len() as u32 - 1);
-                let area: f64 = tris
-                    .iter()
-                    .map(|&t| triangles[t as usize].area())
-                    .sum::<f64>()
-                    + ball.map_or(0.0, |b| balls[b as usize].area());
-                if area <= 0.0 {
-                    return Err(err(
-                        key("emission"),
-                        "an emitting surface has no area".into(),
-                    ));
-                }
-                lights.push(Light::Area {
-                    surface: id,
-                    triangles: tris,
-                    ball,
-                    power: PI * le * area,
-                });
-            }
-            surfaces.push(Surface {
-                name: label,
-                albedo: s.albedo,
-                emission: s.emission.unwrap_or(0.0),
-            });
-        }
-        for (li, l) in raw.light.iter().enumerate() {
-            let position = DVec3::from_array(l.position);
-            lights.push(match l.kind {
-                LightKind::Point => Light::Point {
-                    position,
-                    power: l.power,
-                },
-                LightKind::Spot => {
-                    let (Some(dir), Some(cone)) = (l.direction, l.cone_deg) else {
-                        return Err(err(
-                            format!("light[{li}].direction"),
-                            "a spot light needs direction and cone_deg".into(),
-                        ));
-                    };
-                    let axis = DVec3::from_array(dir);
-                    if axis.length() == 0.0 || cone > 180.0 {
-                        return Err(err(
-                            format!("light[{li}].cone_deg"),
-                            "a spot needs a non-zero direction and cone_deg in (0, 180]".into(),
-                        ));
-                    }
-                    Light::Spot {
-                        position,
-                        axis: axis.normalize(),
-                        cos_cone: cone.to_radians().cos(),
-                        power: l.power,
-                    }
-                }
-            });
-        }
-        if lights.is_empty() {
-            return Err(err(
-                "light".into(),
-                "the scene has no light: add a [[light]] or a surface with emission > 0".into(),
-            ));
-        }
-        if triangles.is_empty() && balls.is_empty() {
-            return Err(err("surface".into(), "the scene has no surface".into()));
-        }
-        let analytic = raw.analytic.map(|a| a.kind);
-        match analytic {
-            Some(AnalyticKind::PointOverPlane)
-                if !lights.iter().any(|l| matches!(l, Light::Point { .. })) =>
-            {
-                return Err(err(
-                    "analytic.kind".into(),
-                    "point-over-plane needs a point light".into(),
-                ));
-            }
-            Some(AnalyticKind::ClosedSphere)
-                if !balls
-                    .iter()
-                    .any(|b| b.inside && surfaces[b.surface as usize].emission > 0.0) =>
-            {
-                return Err(err(
-                    "analytic.kind".into(),
-                    "closed-sphere needs an emitting sphere seen from inside".into(),
-                ));
-            }
-            Some(AnalyticKind::DirectLight)
-                if surfaces.iter().any(|s| s.albedo != 0.0)
-                    || lights.iter().any(|l| matches!(l, Light::Area { .. })) =>
-            {
-                return Err(err(
-                    "analytic.kind".into(),
-                    "direct-light needs every albedo 0 and point or spot lights only (no emitting surface): then the irradiance is the lights' direct light".into(),
-                ));
-            }
-            _ => {}
-        }
-        let camera = raw.camera.map(|c| Camera {
-            eye: DVec3::from_array(c.eye),
-            look_at: DVec3::from_array(c.look_at),
-            up: DVec3::from_array(c.up),
-            fov_deg: c.fov_deg,
-            width: c.width,
-            height: c.height,
-        });
-        let mut movers = Vec::new();
-        for (k, d) in raw.dynamic.iter().enumerate() {
-            if let Some(first) = raw.dynamic[..k].iter().position(|e| e.name == d.name) {
-                return Err(err(
-                    format!("dynamic[{k}].name"),
-                    format!(
-                        "\"{}\" names two [[dynamic]] tables (the {} and the {}); each object needs its own name",
-                        d.name,
-                        ordinal(first),
-                        ordinal(k)
-                    ),
-                ));
-            }
-        }
-        for (k, (d, (tris, bls))) in raw.dynamic.iter().zip(moving).enumerate() {
-            let key = |f: &str| format!("dynamic[{k}].{f}");
-            if tris.is_empty() && bls.is_empty() {
-                return Err(err(
-                    key("name"),
-                    format!("no surface names dynamic = \"{}\"", d.name),
-                ));
-            }
-            let unit = |v: Option<[f64; 3]>, f: &str| -> Result<DVec3, InputError> {
-                let a = DVec3::from_array(v.unwrap_or([0.0, 1.0, 0.0]));
-                if a.length() > 0.0 {
-                    Ok(a.normalize())
-                } else {
-                    Err(err(key(f), "an axis must be non-zero".into()))
-                }
-            };
-            let spin_axis = unit(d.spin_axis, "spin_axis")?;
-            let motion = match d.path {
-                PathKind::Circle => {
-                    let (Some(c), Some(r)) = (d.center, d.radius) else {
-                        return Err(err(
-                            key("path"),
-                            "a circle path needs center and radius".into(),
-                        ));
-                    };
-                    Motion::Circle {
-                        center: DVec3::from_array(c),
-                        radius: r,
-                        axis: unit(d.axis, "axis")?,
-                        turns: d.turns,
-                        spin_deg: d.spin_deg,
-                        spin_axis,
-                    }
-                }
-                PathKind::Line => {
-                    if d.points.len() < 2 {
-                        return Err(err(
-                            key("points"),
-                            "a line path needs at least two points".into(),
-                        ));
-                    }
-                    Motion::Path {
-                        points: d.points.iter().map(|&p| DVec3::from_array(p)).collect(),
-                        spin_deg: d.spin_deg,
-                        spin_axis,
-                    }
-                }
-            };
-            movers.push(Mover::new(
-                d.name.clone(),
-                vec![MoverPart {
-                    triangles: tris,
-                    balls: bls,
-                    motion,
-                }],
-            ));
-        }
-        Ok(Self::assemble(SceneParts {
-            triangles,
-            balls,
-            surfaces,
-            lights,
-            camera,
-            analytic,
-            warnings,
-            movers,
-            sources,
-        }))
+        Ok(Self::assemble(raw.into_parts(path, text)?))
     }
 
     /// Files read besides the scene file itself (OBJ meshes, AFF includes), with their role
@@ -670,7 +314,8 @@ impl Scene {
             self.triangles.extend(p.triangles);
             self.balls.extend(p.balls);
         }
-        self.dyn_bvh = Bvh::build(&self.triangles[self.n_static_tris..]);
+        let path = self.bvh.path();
+        self.dyn_bvh = Bvh::build(&self.triangles[self.n_static_tris..]).with_path(path);
         self.tau = tau;
     }
 
@@ -721,17 +366,13 @@ impl Scene {
             Some(Prim::Triangle(i)) => i,
             _ => u32::MAX,
         };
-        let mut best = TwoNearest::default();
         let n = self.n_static_tris;
-        self.bvh
-            .two_nearest(&self.triangles[..n], o, d, t_min, skip_tri, &mut best);
+        let mut best = self.bvh.two_nearest(o, d, t_min, skip_tri);
         if !self.dyn_bvh.is_empty() {
             // Dynamic triangles after the static ones, in a fixed order: a photon's path depends only
             // on the geometry, never on which frames came before.
-            let mut dynamic = TwoNearest::default();
             let skip_dyn = skip_tri.wrapping_sub(n as u32);
-            self.dyn_bvh
-                .two_nearest(&self.triangles[n..], o, d, t_min, skip_dyn, &mut dynamic);
+            let dynamic = self.dyn_bvh.two_nearest(o, d, t_min, skip_dyn);
             for (t, id) in [dynamic.first, dynamic.second] {
                 if t.is_finite() {
                     best.offer(t, id + n as u32);
@@ -769,22 +410,29 @@ impl Scene {
     /// [`Scene::first_two_hits`] for the same ray, found without the second (cheaper: a path tracer
     /// needs only this).
     pub fn first_hit(&self, o: DVec3, d: DVec3, t_min: f64, skip: Option<Prim>) -> Option<Hit> {
+        self.first_hit_before(o, d, t_min, f64::INFINITY, skip)
+    }
+
+    /// [`Scene::first_hit`] among the crossings with t < `limit` (None if the nearest is at or
+    /// beyond it): boxes beyond `limit` are never opened.
+    pub fn first_hit_before(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        t_min: f64,
+        limit: f64,
+        skip: Option<Prim>,
+    ) -> Option<Hit> {
         let skip_tri = match skip {
             Some(Prim::Triangle(i)) => i,
             _ => u32::MAX,
         };
         let n = self.n_static_tris;
-        let (mut t, mut id) = self
-            .bvh
-            .nearest(&self.triangles[..n], o, d, t_min, skip_tri);
+        let (mut t, mut id) = self.bvh.nearest_before(o, d, t_min, limit, skip_tri);
         if !self.dyn_bvh.is_empty() {
-            let (td, idd) = self.dyn_bvh.nearest(
-                &self.triangles[n..],
-                o,
-                d,
-                t_min,
-                skip_tri.wrapping_sub(n as u32),
-            );
+            let (td, idd) =
+                self.dyn_bvh
+                    .nearest_before(o, d, t_min, limit, skip_tri.wrapping_sub(n as u32));
             if td < t {
                 (t, id) = (td, idd + n as u32);
             }
@@ -793,7 +441,7 @@ impl Scene {
         for (i, b) in self.balls.iter().enumerate() {
             if let Some((t0, t1)) = b.roots(o, d) {
                 for r in [t0, t1] {
-                    if r > t_min && r < t {
+                    if r > t_min && r < t && r < limit {
                         t = r;
                         prim = Prim::Ball(i as u32);
                     }
@@ -808,6 +456,25 @@ impl Scene {
             Prim::Ball(i) => self.balls[i as usize].surface,
         };
         Some(Hit { t, prim, surface })
+    }
+
+    /// Is there any crossing with t_min < t < `limit` (skipping triangle `skip`)? Exactly
+    /// `first_hit_before(o, d, t_min, limit, skip).is_some()`, stopping at the first crossing found
+    /// (a shadow ray).
+    pub fn occluded(&self, o: DVec3, d: DVec3, t_min: f64, limit: f64, skip: Option<Prim>) -> bool {
+        let skip_tri = match skip {
+            Some(Prim::Triangle(i)) => i,
+            _ => u32::MAX,
+        };
+        let n = self.n_static_tris as u32;
+        self.balls.iter().any(|b| {
+            b.roots(o, d)
+                .is_some_and(|(t0, t1)| [t0, t1].iter().any(|&r| r > t_min && r < limit))
+        }) || self.bvh.any_before(o, d, t_min, limit, skip_tri)
+            || (!self.dyn_bvh.is_empty()
+                && self
+                    .dyn_bvh
+                    .any_before(o, d, t_min, limit, skip_tri.wrapping_sub(n)))
     }
 
     /// Calls `f` with every triangle (static or dynamic, by its index in `triangles`) that may
@@ -888,17 +555,4 @@ impl Scene {
         }
         e
     }
-}
-
-/// "1st", "2nd", … for the k-th (0-based) table.
-fn ordinal(k: usize) -> String {
-    let n = k + 1;
-    let suffix = match (n % 10, n % 100) {
-        (1, 11) | (2, 12) | (3, 13) => "th",
-        (1, _) => "st",
-        (2, _) => "nd",
-        (3, _) => "rd",
-        _ => "th",
-    };
-    format!("{n}{suffix}")
 }

@@ -76,6 +76,10 @@ pub struct Column {
     /// Whether ±∞ is a legitimate value (an open histogram edge); elsewhere an infinite value is an
     /// overflow and is never written.
     pub infinite_ok: bool,
+    /// Whether its measured values follow a decision a kind may take on seconds (the quasi-static
+    /// predictor's engine pick): in a row where a clock decided, its measured cells are written as
+    /// timings (`output::table`).
+    pub decided_by_timing: bool,
 }
 
 /// One expanded CSV column: what metadata records and `raycost doc columns` prints.
@@ -104,6 +108,7 @@ impl Column {
             shape: Shape::Value,
             doc,
             infinite_ok: false,
+            decided_by_timing: false,
         }
     }
 
@@ -116,6 +121,7 @@ impl Column {
             shape: Shape::Estimate,
             doc,
             infinite_ok: false,
+            decided_by_timing: false,
         }
     }
 
@@ -128,6 +134,7 @@ impl Column {
             shape: Shape::Estimate,
             doc,
             infinite_ok: false,
+            decided_by_timing: false,
         }
     }
 
@@ -140,6 +147,7 @@ impl Column {
             shape: Shape::EstimateVsPrediction,
             doc,
             infinite_ok: false,
+            decided_by_timing: false,
         }
     }
 
@@ -152,6 +160,7 @@ impl Column {
             shape: Shape::EstimateVsBand,
             doc,
             infinite_ok: false,
+            decided_by_timing: false,
         }
     }
 
@@ -159,6 +168,15 @@ impl Column {
     pub const fn open_ended(self) -> Self {
         Self {
             infinite_ok: true,
+            ..self
+        }
+    }
+
+    /// The same column, its measured values following a decision taken on seconds where a kind
+    /// takes one (see [`Column::decided_by_timing`](Self::decided_by_timing)).
+    pub const fn decided_by_timing(self) -> Self {
+        Self {
+            decided_by_timing: true,
             ..self
         }
     }

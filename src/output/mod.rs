@@ -17,6 +17,7 @@ pub mod readback;
 pub mod row;
 pub mod sink;
 pub mod summary;
+pub mod table;
 pub mod time;
 pub mod work;
 

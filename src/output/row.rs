@@ -1,6 +1,8 @@
 //! Rows: ordered cells, each with its column's name, class and value — the unit every sink writes.
 //! Cells come from [`Column`] declarations (see [`super::column`]), so a row knows which of its
-//! columns are measured and which are timings.
+//! columns are measured and which are timings. A kind's rows are built by [`super::table`] from its
+//! declared tables; [`Row::put`] is for the few cells written by hand (the runner's `point`
+//! column, `raycost bench`'s tables).
 
 use super::column::{Class, Column, ColumnInfo, Shape};
 use crate::stats::Estimate;
@@ -101,6 +103,17 @@ pub struct Cell {
 pub struct Row(pub Vec<Cell>);
 
 impl Row {
+    /// Appends one cell (the declared-table builder of `output::table`).
+    pub(crate) fn push_cell(
+        &mut self,
+        name: String,
+        class: Class,
+        unit: &'static str,
+        value: Value,
+    ) -> &mut Self {
+        self.push(name, class, unit, value)
+    }
+
     fn push(&mut self, name: String, class: Class, unit: &'static str, value: Value) -> &mut Self {
         debug_assert!(
             self.0.iter().all(|c| c.name != name),
@@ -115,44 +128,13 @@ impl Row {
         self
     }
 
-    /// Reclasses the measured cells whose names `pick` accepts as timings: their values followed
-    /// from a decision taken on seconds (the §4.1 predictor's engine pick), so they may differ
-    /// between runs of the same spec and seed, and the reproducibility checks must not compare them.
-    pub fn decided_by_timing(&mut self, pick: impl Fn(&str) -> bool) {
-        for c in &mut self.0 {
-            if c.class == Class::Measured && pick(&c.name) {
-                c.class = Class::Timing;
-            }
-        }
-    }
-
     /// Appends the single-valued column `c`.
     pub fn put(&mut self, c: &Column, v: impl Into<Value>) -> &mut Self {
         debug_assert!(c.shape == Shape::Value && !c.is_family(), "{}", c.name);
         self.push(c.name.to_string(), c.class, c.unit, v.into())
     }
 
-    /// Appends member `part` of the single-valued family `c` (`tests_{}` → `tests_PART`).
-    pub fn put_member(&mut self, c: &Column, part: &str, v: impl Into<Value>) -> &mut Self {
-        debug_assert!(c.shape == Shape::Value && c.is_family(), "{}", c.name);
-        self.push(c.member(part), c.class, c.unit, v.into())
-    }
-
-    /// Appends `M_mean, M_se, M_n, M_clusters` of the estimate column `c`.
-    pub fn put_estimate(&mut self, c: &Column, e: &Estimate) -> &mut Self {
-        debug_assert!(c.shape == Shape::Estimate && !c.is_family(), "{}", c.name);
-        self.estimate_cells(c, c.name, e)
-    }
-
-    /// Appends `M_mean, M_se, M_n, M_clusters` of member `part` of the estimate family `c`
-    /// (`tests_{}_per_replica` → `tests_PART_per_replica_mean`, …).
-    pub fn put_member_estimate(&mut self, c: &Column, part: &str, e: &Estimate) -> &mut Self {
-        debug_assert!(c.shape == Shape::Estimate && c.is_family(), "{}", c.name);
-        let stem = c.member(part);
-        self.estimate_cells(c, &stem, e)
-    }
-
-    /// Appends the estimate cells of `c` under `stem` (a metric writes its theory columns after).
+    /// Appends the estimate cells of `c` under `stem` (`M_mean, M_se, M_n, M_clusters`).
     pub(crate) fn estimate_cells(&mut self, c: &Column, stem: &str, e: &Estimate) -> &mut Self {
         self.push(format!("{stem}_mean"), c.class, c.unit, Value::F(e.mean))
             .push(format!("{stem}_se"), c.class, c.unit, Value::F(e.se))
@@ -218,8 +200,9 @@ mod tests {
     #[test]
     fn cells_carry_the_class_of_their_declaration() {
         let mut r = Row::default();
-        r.put(&COUNT, 3u64).put_estimate(
+        r.put(&COUNT, 3u64).estimate_cells(
             &SECS,
+            "frame_s",
             &Estimate {
                 mean: 1.0,
                 se: 0.1,
@@ -241,15 +224,5 @@ mod tests {
         assert_eq!(r.get("count"), Some(&Value::U(3)));
         assert_eq!(r.get("frame_s_n"), Some(&Value::U(12)));
         assert_eq!(r.get("frame_s_clusters"), Some(&Value::U(4)));
-    }
-
-    #[test]
-    fn decided_by_timing_demotes_only_measured_cells() {
-        const THEORY: Column = Column::value("count_theory", "1", Class::Theory, "a law");
-        let mut r = Row::default();
-        r.put(&COUNT, 3u64).put(&THEORY, 2.5);
-        r.decided_by_timing(|name| name.starts_with("count"));
-        let classes: Vec<Class> = r.0.iter().map(|c| c.class).collect();
-        assert_eq!(classes, [Class::Timing, Class::Theory]);
     }
 }

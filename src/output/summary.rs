@@ -2,7 +2,7 @@
 
 use std::fmt::Write;
 
-use crate::stats::Estimate;
+use crate::stats::{Estimate, Verdict};
 
 /// A rate for the summary: `per_s` `unit` per second (e.g. rays/s while tracing).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -13,8 +13,18 @@ pub struct Rate {
     pub unit: &'static str,
 }
 
-/// One line of the summary: (metric, measured, theory text, verdict).
-pub type SummaryLine = (String, Estimate, String, String);
+/// One line of the summary: a metric measured ± CI, its theory, and the verdict.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SummaryLine {
+    /// The metric (a column stem, or a name such as `rays L3`).
+    pub metric: String,
+    /// What was measured.
+    pub measured: Estimate,
+    /// The theory as printed (`prediction`, `prediction [lower, upper]`, a law, a ratio's name).
+    pub theory: String,
+    /// The verdict.
+    pub verdict: Verdict,
+}
 
 /// One finished point as the summary shows it.
 #[derive(Clone, Copy, Debug)]
@@ -48,7 +58,8 @@ pub fn render(points: &[SummaryPoint]) -> String {
     );
     for p in points {
         let (index, params, wall) = (p.index, p.params, p.wall);
-        for (i, (metric, e, theory, verdict)) in p.lines.iter().enumerate() {
+        for (i, l) in p.lines.iter().enumerate() {
+            let (metric, e, theory, verdict) = (&l.metric, &l.measured, &l.theory, &l.verdict);
             let (p, pr, rs, w) = if i == 0 {
                 (
                     index.to_string(),

@@ -35,12 +35,9 @@ use crate::detp::edge::{clamped_radii, clip_to_first_hit, EdgeMode};
 use crate::detp::quasi_static::QuasiStatic;
 use crate::detp::store::SegmentStore;
 use crate::error::Error;
-use crate::experiment::detp::spec::{DynamicEngine, Points};
-use crate::experiment::detp::DetpKind;
+use crate::experiment::detp::{DetpKind, DynamicEngine, Points};
 use crate::experiment::plan::Plan;
-use crate::experiment::quasi_static as eq;
-use crate::experiment::quasi_static::spec::QuasiStaticConfig;
-use crate::experiment::quasi_static::QuasiStaticKind;
+use crate::experiment::quasi_static::{self as eq, QuasiStaticConfig, QuasiStaticKind};
 use crate::lt::Camera;
 use crate::output::OutputError;
 use crate::spec::{InputError, KeyError};
@@ -196,6 +193,107 @@ fn default_out(plan: &Plan, frames: &[u32]) -> PathBuf {
 pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
     let t_all = Instant::now();
     let (cfg, seed) = config(plan, o.point)?;
+    let out = check_options(plan, o, &cfg)?;
+    // The scene and its camera, before any tracing.
+    let Some(cam) = cfg.scene.camera.clone() else {
+        let path = cfg
+            .detp
+            .scene()
+            .map_or(String::new(), |f| f.path.display().to_string());
+        return Err(spec_error(
+            plan,
+            "detp.scene",
+            &format!(
+                "the scene {path} has no camera: add a [camera] table (TOML scene) or a `v` view (AFF) to render it"
+            ),
+        )
+        .into());
+    };
+    let cam = aim(cam, o)?;
+    let (w, h) = size(&cam, o.width)?;
+    let mut log = String::new();
+
+    // Frame 0: the full trace.
+    let t = Instant::now();
+    let (mut qs, _) = start(&cfg, seed)?;
+    let mut times = Times {
+        trace_s: t.elapsed().as_secs_f64(),
+        ..Times::default()
+    };
+    writeln!(
+        log,
+        "render: {} point {}: frame 0 traced ({} photons, {} segments) in {:.3} s",
+        plan.spec.path,
+        o.point,
+        cfg.detp.photons,
+        qs.live_segments(),
+        times.trace_s
+    )?;
+    let mut shown: Vec<Frame> = Vec::new();
+    let mut black_frames: Vec<String> = Vec::new();
+    for &f in &o.frames {
+        if f != qs.frame {
+            let t = Instant::now();
+            let st = qs.step(f);
+            times.step_s += t.elapsed().as_secs_f64();
+            writeln!(
+                log,
+                "render: stepped to frame {f}: {} photons re-traced in {:.3} s",
+                st.photons_retraced, st.frame_s
+            )?;
+        }
+        let view = camera::view(&qs.scene, &cam, w, h, cfg.detp.disc_radius);
+        match o.compare_edge.map(|m| with_spec_params(m, cfg.detp.edge)) {
+            Some(mode) => {
+                shown.extend(compare_frame(&qs, &view, mode, f, &mut times, &mut log)?);
+            }
+            None => shown.push(frame(&qs, &view, &cfg, o, f, &mut times, &mut log)?),
+        }
+        if let Some(why) = shown.last().and_then(|fr| black(&view, &fr.b)) {
+            black_frames.push(why);
+        }
+    }
+    // An all-black picture is almost always a scene or spec mistake: say why, once.
+    if black_frames.len() == o.frames.len() {
+        if let Some(why) = black_frames.first() {
+            eprintln!("warning: every pixel of the picture is black: {why}");
+        }
+    }
+    let t = Instant::now();
+    encode_frames(&shown, o, &out, (w, h), &mut log)?;
+    let encode_s = t.elapsed().as_secs_f64();
+    writeln!(
+        log,
+        "render: times: frame 0 trace {:.3} s, stepping {:.3} s, gathering {:.3} s{}, encoding {encode_s:.3} s, total {:.3} s",
+        times.trace_s,
+        times.step_s,
+        times.gather_s,
+        if o.diff.is_some() {
+            format!(", full recalculation + gather {:.3} s", times.full_s)
+        } else {
+            String::new()
+        },
+        t_all.elapsed().as_secs_f64()
+    )?;
+    Ok(log)
+}
+
+/// Seconds spent in each phase of a rendering.
+#[derive(Default)]
+struct Times {
+    trace_s: f64,
+    step_s: f64,
+    gather_s: f64,
+    full_s: f64,
+}
+
+/// The options against the spec: frames the spec has, `--compare-edge` with one frame, output
+/// files named once and not replaced without `--force`. Returns the PNG's path.
+fn check_options(
+    plan: &Plan,
+    o: &RenderOptions,
+    cfg: &QuasiStaticConfig,
+) -> anyhow::Result<PathBuf> {
     if o.frames.is_empty() {
         return Err(Error::Usage("--frames: give at least one frame".into()).into());
     }
@@ -232,134 +330,110 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
             .into());
         }
     }
-    // The scene and its camera, before any tracing.
-    let Some(cam) = cfg.scene.camera.clone() else {
-        let path = cfg
-            .detp
-            .scene()
-            .map_or(String::new(), |f| f.path.display().to_string());
-        return Err(spec_error(
-            plan,
-            "detp.scene",
-            &format!(
-                "the scene {path} has no camera: add a [camera] table (TOML scene) or a `v` view (AFF) to render it"
-            ),
-        )
-        .into());
-    };
-    let cam = aim(cam, o)?;
-    let (w, h) = size(&cam, o.width)?;
-    let mut log = String::new();
+    Ok(out)
+}
 
-    // Frame 0: the full trace.
+/// Frame `f` as the spec's `detp.edge` gathers it, with its difference from a full recalculation
+/// when `--diff` asks.
+fn frame(
+    qs: &QuasiStatic,
+    view: &View,
+    cfg: &QuasiStaticConfig,
+    o: &RenderOptions,
+    f: u32,
+    times: &mut Times,
+    log: &mut String,
+) -> anyhow::Result<Frame> {
     let t = Instant::now();
-    let (mut qs, _) = start(&cfg, seed)?;
-    let trace_s = t.elapsed().as_secs_f64();
+    let live = qs.live_store();
+    let (discs, cut) = edge(&qs.scene, &view.discs, &live, cfg.detp.edge);
+    let live_e = cut.as_ref().unwrap_or(&live);
+    let acc = gather::gather(&discs, live_e);
+    let b = radiosity(view, &discs, &acc, live.scale.watts_per_unit);
+    times.gather_s += t.elapsed().as_secs_f64();
+    if o.diff.is_none() {
+        return Ok(Frame { b, diff: None });
+    }
+    let t = Instant::now();
+    let (_, full, _) = qs.full_recalculation();
+    let (_, cut_full) = edge(&qs.scene, &view.discs, &full, cfg.detp.edge);
+    let acc_full = gather::gather(&discs, cut_full.as_ref().unwrap_or(&full));
+    let e_inc = radiosity(view, &discs, &acc, live.scale.watts_per_unit);
+    let e_full = radiosity(view, &discs, &acc_full, full.scale.watts_per_unit);
+    let mut dif = vec![0.0; view.pixels.len()];
+    let mut count = 0;
+    for (k, p) in view.pixels.iter().enumerate() {
+        if let Pixel::Disc { disc, albedo } = *p {
+            let i = disc as usize;
+            if acc[i] != acc_full[i] || live.scale != full.scale {
+                count += 1;
+                // Back from radiosity to irradiance.
+                dif[k] = ((e_inc[k] - e_full[k]) * std::f64::consts::PI / albedo.max(1e-300))
+                    .abs()
+                    .max(f64::MIN_POSITIVE);
+            }
+        }
+    }
+    times.full_s += t.elapsed().as_secs_f64();
+    let max = dif.iter().copied().fold(0.0, f64::max);
+    let (w, h) = (view.width, view.height);
     writeln!(
         log,
-        "render: {} point {}: frame 0 traced ({} photons, {} segments) in {:.3} s",
-        plan.spec.path,
-        o.point,
-        cfg.detp.photons,
-        qs.live_segments(),
-        trace_s
+        "render: frame {f}, {w}×{h} pixels, {count} pixel(s) differ (max |ΔE| = {max})"
     )?;
-    let (mut step_s, mut gather_s, mut full_s) = (0.0, 0.0, 0.0);
-    let mut shown: Vec<Frame> = Vec::new();
-    let mut black_frames: Vec<(u32, String)> = Vec::new();
-    for &f in &o.frames {
-        if f != qs.frame {
-            let t = Instant::now();
-            let st = qs.step(f);
-            step_s += t.elapsed().as_secs_f64();
-            writeln!(
-                log,
-                "render: stepped to frame {f}: {} photons re-traced in {:.3} s",
-                st.photons_retraced, st.frame_s
-            )?;
-        }
-        let t = Instant::now();
-        let view = camera::view(&qs.scene, &cam, w, h, cfg.detp.disc_radius);
-        let live = qs.live_store();
-        let (discs, cut) = edge(&qs.scene, &view.discs, &live, cfg.detp.edge);
-        let live_e = cut.as_ref().unwrap_or(&live);
-        let acc = gather::gather(&discs, live_e);
-        let b = radiosity(&view, &discs, &acc, live.scale.watts_per_unit);
-        gather_s += t.elapsed().as_secs_f64();
-        if let Some(why) = black(&view, &b) {
-            black_frames.push((f, why));
-        }
-        let diff = if o.diff.is_some() {
-            let t = Instant::now();
-            let (_, full, _) = qs.full_recalculation();
-            let (_, cut_full) = edge(&qs.scene, &view.discs, &full, cfg.detp.edge);
-            let acc_full = gather::gather(&discs, cut_full.as_ref().unwrap_or(&full));
-            let e_inc = radiosity(&view, &discs, &acc, live.scale.watts_per_unit);
-            let e_full = radiosity(&view, &discs, &acc_full, full.scale.watts_per_unit);
-            let mut dif = vec![0.0; view.pixels.len()];
-            let mut count = 0;
-            for (k, p) in view.pixels.iter().enumerate() {
-                if let Pixel::Disc { disc, albedo } = *p {
-                    let i = disc as usize;
-                    if acc[i] != acc_full[i] || live.scale != full.scale {
-                        count += 1;
-                        // Back from radiosity to irradiance.
-                        dif[k] = ((e_inc[k] - e_full[k]) * std::f64::consts::PI
-                            / albedo.max(1e-300))
-                        .abs()
-                        .max(f64::MIN_POSITIVE);
-                    }
-                }
-            }
-            full_s += t.elapsed().as_secs_f64();
-            let max = dif.iter().copied().fold(0.0, f64::max);
-            writeln!(
-                log,
-                "render: frame {f}, {w}×{h} pixels, {count} pixel(s) differ (max |ΔE| = {max})"
-            )?;
-            Some((dif, count))
-        } else {
-            None
-        };
-        if let Some(mode) = o.compare_edge.map(|m| with_spec_params(m, cfg.detp.edge)) {
-            let t = Instant::now();
-            let (pd, pc) = edge(&qs.scene, &view.discs, &live, EdgeMode::Paper);
-            let a = gather::gather(&pd, pc.as_ref().unwrap_or(&live));
-            let paper = radiosity(&view, &pd, &a, live.scale.watts_per_unit);
-            let (rd, rc) = edge(&qs.scene, &view.discs, &live, mode);
-            let a = gather::gather(&rd, rc.as_ref().unwrap_or(&live));
-            let remedy = radiosity(&view, &rd, &a, live.scale.watts_per_unit);
-            let (dif, count, max) = difference(&view, &paper, &remedy);
-            gather_s += t.elapsed().as_secs_f64();
-            writeln!(
-                log,
-                "render: frame {f}, paper vs {}: {count} of {} pixel(s) differ (max |ΔE| = {max:.6e} W/m²)",
-                edge_name(mode),
-                view.discs.len()
-            )?;
-            shown.push(Frame {
-                b: paper,
-                diff: None,
-            });
-            shown.push(Frame {
-                b: remedy,
-                diff: None,
-            });
-            shown.push(Frame { b: dif, diff: None });
-            continue;
-        }
-        shown.push(Frame { b, diff });
-    }
+    Ok(Frame {
+        b,
+        diff: Some((dif, count)),
+    })
+}
 
-    // An all-black picture is almost always a scene or spec mistake: say why, once.
-    if black_frames.len() == o.frames.len() {
-        if let Some((_, why)) = black_frames.first() {
-            eprintln!("warning: every pixel of the picture is black: {why}");
-        }
-    }
-
-    // Tone map and encode.
+/// Frame `f` three times: the paper's method, the remedy `mode`, and their difference.
+fn compare_frame(
+    qs: &QuasiStatic,
+    view: &View,
+    mode: EdgeMode,
+    f: u32,
+    times: &mut Times,
+    log: &mut String,
+) -> anyhow::Result<[Frame; 3]> {
     let t = Instant::now();
+    let live = qs.live_store();
+    let (pd, pc) = edge(&qs.scene, &view.discs, &live, EdgeMode::Paper);
+    let a = gather::gather(&pd, pc.as_ref().unwrap_or(&live));
+    let paper = radiosity(view, &pd, &a, live.scale.watts_per_unit);
+    let (rd, rc) = edge(&qs.scene, &view.discs, &live, mode);
+    let a = gather::gather(&rd, rc.as_ref().unwrap_or(&live));
+    let remedy = radiosity(view, &rd, &a, live.scale.watts_per_unit);
+    let (dif, count, max) = difference(view, &paper, &remedy);
+    times.gather_s += t.elapsed().as_secs_f64();
+    writeln!(
+        log,
+        "render: frame {f}, paper vs {}: {count} of {} pixel(s) differ (max |ΔE| = {max:.6e} W/m²)",
+        edge_name(mode),
+        view.discs.len()
+    )?;
+    Ok([
+        Frame {
+            b: paper,
+            diff: None,
+        },
+        Frame {
+            b: remedy,
+            diff: None,
+        },
+        Frame { b: dif, diff: None },
+    ])
+}
+
+/// Tone-maps the frames side by side into the PNG `out` (and the GIF and the difference image
+/// when asked).
+fn encode_frames(
+    shown: &[Frame],
+    o: &RenderOptions,
+    out: &Path,
+    (w, h): (u32, u32),
+    log: &mut String,
+) -> anyhow::Result<()> {
     let palette = if o.colormap {
         Palette::Colour
     } else {
@@ -390,7 +464,7 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
     let pal = o.colormap.then_some(rgb.as_slice());
     let data = tone::strip(&images, wu, hu);
     encode::write_png(
-        &out,
+        out,
         &Indexed {
             width: w * k,
             height: h,
@@ -412,56 +486,58 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
         writeln!(log, "wrote {} ({w}×{h}, {k} frame(s))", g.display())?;
     }
     if let Some(dpath) = &o.diff {
-        let red: Vec<u8> = (0..=255u8).flat_map(|i| [i, 0, 0]).collect();
-        let diffs: Vec<Vec<u8>> = shown
-            .iter()
-            .map(|f| {
-                let (dif, _) = f.diff.as_ref().expect("diffs computed");
-                let max = dif.iter().copied().fold(0.0, f64::max);
-                dif.iter()
-                    .map(|&x| {
-                        if x > 0.0 {
-                            128 + (127.0 * x / max).round() as u8
-                        } else {
-                            0
-                        }
-                    })
-                    .collect()
-            })
-            .collect();
-        let total: usize = shown
-            .iter()
-            .map(|f| f.diff.as_ref().map_or(0, |d| d.1))
-            .sum();
-        let data = tone::strip(&diffs, wu, hu);
-        encode::write_png(
-            dpath,
-            &Indexed {
-                width: w * k,
-                height: h,
-                data: &data,
-                palette: Some(&red),
-            },
-            o.force,
-        )?;
-        writeln!(
-            log,
-            "wrote {} (|E_incremental − E_full|: {total} pixel(s) differ over {k} frame(s))",
-            dpath.display()
-        )?;
+        encode_diff(shown, dpath, (w, h), o.force, log)?;
     }
-    let encode_s = t.elapsed().as_secs_f64();
+    Ok(())
+}
+
+/// The difference images |E_incremental − E_full| of the frames, side by side, in red.
+fn encode_diff(
+    shown: &[Frame],
+    dpath: &Path,
+    (w, h): (u32, u32),
+    force: bool,
+    log: &mut String,
+) -> anyhow::Result<()> {
+    let red: Vec<u8> = (0..=255u8).flat_map(|i| [i, 0, 0]).collect();
+    let diffs: Vec<Vec<u8>> = shown
+        .iter()
+        .map(|f| {
+            let (dif, _) = f.diff.as_ref().expect("diffs computed");
+            let max = dif.iter().copied().fold(0.0, f64::max);
+            dif.iter()
+                .map(|&x| {
+                    if x > 0.0 {
+                        128 + (127.0 * x / max).round() as u8
+                    } else {
+                        0
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let total: usize = shown
+        .iter()
+        .map(|f| f.diff.as_ref().map_or(0, |d| d.1))
+        .sum();
+    let k = shown.len() as u32;
+    let data = tone::strip(&diffs, w as usize, h as usize);
+    encode::write_png(
+        dpath,
+        &Indexed {
+            width: w * k,
+            height: h,
+            data: &data,
+            palette: Some(&red),
+        },
+        force,
+    )?;
     writeln!(
         log,
-        "render: times: frame 0 trace {trace_s:.3} s, stepping {step_s:.3} s, gathering {gather_s:.3} s{}, encoding {encode_s:.3} s, total {:.3} s",
-        if o.diff.is_some() {
-            format!(", full recalculation + gather {full_s:.3} s")
-        } else {
-            String::new()
-        },
-        t_all.elapsed().as_secs_f64()
+        "wrote {} (|E_incremental − E_full|: {total} pixel(s) differ over {k} frame(s))",
+        dpath.display()
     )?;
-    Ok(log)
+    Ok(())
 }
 
 /// The view's discs and, if the mode cuts segments, a cut copy of `store`: `detp.edge` applied as
@@ -490,7 +566,7 @@ fn edge(
 /// `--compare-edge MODE`: a remedy of `detp.edge`, with the default parameters (the spec's replace
 /// them in [`run`] when it gives them).
 pub fn edge_mode(name: &str) -> Result<EdgeMode, Error> {
-    use crate::experiment::detp::spec::{EDGE_GAP, EDGE_MIN_RADIUS};
+    use crate::experiment::detp::{EDGE_GAP, EDGE_MIN_RADIUS};
     let (min, gap) = (EDGE_MIN_RADIUS, EDGE_GAP);
     match name {
         "clamp-radius" => Ok(EdgeMode::ClampRadius { min }),

@@ -13,25 +13,31 @@
 //! # or a text that states its own uncertainty: measured = "40 of 40 points inside"
 //! unit = "steps"                       # optional
 //! verdict = "ok (99% CI)"              # optional with `column` and a numeric `paper`
+//! outcome = "holds"                    # optional: holds, holds-in-part, differs, refuted, inconclusive
+//! rule = "theorem-2/2"                 # optional: the pre-registered rule that decided it
+//! accounting = "paper"                 # optional: the cost model it was judged in
+//! earlier = "…"                        # optional: what earlier rules gave
 //! note = "…"                           # optional
 //! ```
 //!
 //! With `column`, the measured value and its CI come from the table itself (they cannot drift from
 //! it), and without a `verdict` the claim is judged against the paper's number by the summary's own
-//! rule ([`z_verdict`]). Every problem is an [`InputError`] naming the file, line and key.
+//! rule ([`z_verdict`]). A claim is coloured by its `outcome`, or without one by its verdict read as
+//! an outcome or a verdict ([`claim_tone`]). Every problem is an [`InputError`] naming the file,
+//! line and key.
 
 use std::path::Path;
 
 use serde::Deserialize;
 
 use crate::error::InputError;
-use crate::experiment::metric::z_verdict;
 use crate::output::summary::measured;
-use crate::spec::de::from_text;
+use crate::stats::verdict::z_verdict;
 use crate::stats::Estimate;
+use crate::toml_text::de::from_text;
 
 use super::table::{display, Table};
-use super::verdicts::Tone;
+use super::verdicts::{claim_tone, Outcome, Tone};
 
 /// The file name looked for in RESULTS.
 pub const FILE: &str = "claims.toml";
@@ -74,8 +80,26 @@ struct Entry {
     #[serde(default)]
     verdict: Option<String>,
     #[serde(default)]
+    outcome: Option<String>,
+    #[serde(default)]
+    rule: Option<String>,
+    #[serde(default)]
+    accounting: Option<String>,
+    #[serde(default)]
+    earlier: Option<String>,
+    #[serde(default)]
     note: Option<String>,
 }
+
+/// The outcomes a claim can have (`outcome` in the file; scripts/claims_rules.py writes them):
+/// the spellings of [`Outcome`].
+pub const OUTCOMES: [&str; 5] = [
+    Outcome::ALL[0].0,
+    Outcome::ALL[1].0,
+    Outcome::ALL[2].0,
+    Outcome::ALL[3].0,
+    Outcome::ALL[4].0,
+];
 
 /// One claim, resolved, as the page shows it.
 #[derive(Clone, Debug, PartialEq)]
@@ -92,6 +116,14 @@ pub struct PaperClaim {
     pub verdict: String,
     /// Its tone.
     pub tone: Tone,
+    /// The typed outcome (one of [`OUTCOMES`]) when the file gives one; the page colours by it.
+    pub outcome: Option<String>,
+    /// The pre-registered rule that decided it (empty if not given).
+    pub rule: String,
+    /// The accounting it was judged in (empty if not given).
+    pub accounting: String,
+    /// What earlier rules gave (empty if not given).
+    pub earlier: String,
     /// The source CSV, relative to RESULTS, as written.
     pub source: String,
     /// The source CSV for the page's link: absolute when loaded, made relative to DIR by
@@ -211,7 +243,7 @@ fn resolve(e: Entry, results: &Path) -> Result<PaperClaim, (&'static str, String
     };
     let verdict = match (e.verdict, est, paper_number) {
         (Some(v), _, _) => v,
-        (None, Some(est), Some(p)) => z_verdict(&est, p),
+        (None, Some(est), Some(p)) => z_verdict(&est, p).to_string(),
         (None, _, _) => {
             return Err((
                 "verdict",
@@ -219,13 +251,22 @@ fn resolve(e: Entry, results: &Path) -> Result<PaperClaim, (&'static str, String
             ))
         }
     };
+    // The typed outcome, read by the enum the page's colours come from.
+    let outcome: Option<Outcome> = match &e.outcome {
+        Some(o) => Some(o.parse().map_err(|m| ("outcome", m))?),
+        None => None,
+    };
     Ok(PaperClaim {
         claim: e.claim,
         reference: e.reference.unwrap_or_default(),
         paper,
         measured: measured_text,
-        tone: Tone::of(&verdict),
+        tone: claim_tone(outcome, &verdict),
         verdict,
+        outcome: e.outcome,
+        rule: e.rule.unwrap_or_default(),
+        accounting: e.accounting.unwrap_or_default(),
+        earlier: e.earlier.unwrap_or_default(),
         source: e.source,
         link: path.canonicalize().unwrap_or(path),
         note: e.note.unwrap_or_default(),
@@ -350,6 +391,24 @@ verdict = "agrees"
         assert_eq!(e.1.as_deref(), Some("claim[0].column"));
         let e = err(&format!("{base}source = \"a/a.csv\"\nmeasured = 1.0\n"));
         assert_eq!(e.1.as_deref(), Some("claim[0].verdict"));
+        let e = err(&format!(
+            "{base}source = \"a/a.csv\"\nmeasured = 1.0\nverdict = \"x\"\noutcome = \"fine\"\n"
+        ));
+        assert_eq!(e.1.as_deref(), Some("claim[0].outcome"));
+        assert!(e.0.contains("holds-in-part"), "{}", e.0);
+        let c = parse(
+            &format!("{base}source = \"a/a.csv\"\nmeasured = 1.0\nverdict = \"holds: 1 of 1\"\noutcome = \"holds\"\nrule = \"r/2\"\naccounting = \"paper\"\n"),
+            d.path(),
+        )
+        .expect("outcome");
+        assert_eq!(
+            (
+                c[0].outcome.as_deref(),
+                c[0].rule.as_str(),
+                c[0].accounting.as_str()
+            ),
+            (Some("holds"), "r/2", "paper")
+        );
         let e = err(&format!(
             "{base}source = \"a/a.csv\"\nmeasured = 1.0\ncolour = 1\n"
         ));

@@ -27,6 +27,16 @@ th { background: #f3f3f3; text-align: left; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
 .scroll { overflow-x: auto; }
 .agrees { background: #e3f4e1; } .disagrees { background: #fbe3e0; } .neutral { color: #555; }
+table.claims { width: 100%; table-layout: fixed; }
+table.claims td { overflow-wrap: anywhere; }
+table.claims td.measured div + div { margin-top: .35em; }
+col.c-claim { width: 17%; } col.c-paper { width: 12%; } col.c-measured { width: 43%; }
+col.c-verdict { width: 16%; } col.c-rule { width: 12%; }
+.outcome-holds { background: #dcf1d8; } .outcome-holds-in-part { background: #f6efc8; }
+.outcome-differs, .outcome-refuted { background: #f9dcd7; }
+.outcome-inconclusive { background: #ececec; }
+td.verdict strong { display: block; }
+.legend span { padding: 0 .5em; margin-right: .4em; }
 figure { margin: 1em 0; } figure img { max-width: 100%; height: auto; border: 1px solid #eee; }
 figcaption, .note { color: #555; font-size: 13px; }
 .files a { margin-right: 1em; white-space: nowrap; }
@@ -116,26 +126,87 @@ fn claims(s: &mut String, claims: Option<&[PaperClaim]>) {
         return;
     };
     s.push_str(
-        "<div class=\"scroll\"><table>\n<tr><th>claim</th><th>reference</th><th>paper</th>\
-         <th>measured ± 95% CI</th><th>verdict</th><th>source</th><th>note</th></tr>\n",
+        "<p class=\"note legend\">Verdicts by their meaning: <span class=\"outcome-holds\">holds</span>\
+         <span class=\"outcome-holds-in-part\">holds in part</span><span class=\"outcome-differs\">\
+         differs or refuted</span><span class=\"outcome-inconclusive\">inconclusive</span> \
+         (the rules: claims/preregistered.toml).</p>\n<table class=\"claims\">\n<colgroup>\
+         <col class=\"c-claim\"><col class=\"c-paper\"><col class=\"c-measured\"><col class=\"c-verdict\">\
+         <col class=\"c-rule\"></colgroup>\n<tr><th>claim</th><th>paper</th><th>measured (95% CI)</th>\
+         <th>verdict</th><th>rule · accounting · source</th></tr>\n",
     );
     for c in claims {
         let _ = writeln!(
             s,
-            "<tr><td>{}</td><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td>\
-             <td class=\"{}\">{}</td><td><a href=\"{}\">{}</a></td><td>{}</td></tr>",
+            "<tr><td>{}<div class=\"note\">{}</div></td><td>{}</td><td class=\"measured\">{}{}</td>\
+             {}<td>{}<a href=\"{}\">{}</a></td></tr>",
             text(&c.claim),
             text(&c.reference),
             text(&c.paper),
-            text(&c.measured),
-            tone(c.tone),
-            text(&c.verdict),
+            parts(&c.measured),
+            note_div(&c.note),
+            verdict_cell(c),
+            rule_text(c),
             href(&c.link),
             text(&c.source),
-            text(&c.note)
         );
     }
-    s.push_str("</table></div>\n</section>\n");
+    s.push_str("</table>\n</section>\n");
+}
+
+/// A long measured text, one block per part (the parts are joined by " · ").
+fn parts(measured: &str) -> String {
+    measured
+        .split(" · ")
+        .map(|p| format!("<div>{}</div>", text(p)))
+        .collect()
+}
+
+/// The claim's note as a block under its measurement (nothing when empty).
+fn note_div(note: &str) -> String {
+    if note.is_empty() {
+        String::new()
+    } else {
+        format!("<div class=\"note\">{}</div>", text(note))
+    }
+}
+
+/// The verdict cell: coloured by the typed outcome when the file gives one (`data-outcome` says
+/// which, for the browser test), else by the tone of the verdict text.
+fn verdict_cell(c: &PaperClaim) -> String {
+    match &c.outcome {
+        Some(o) => {
+            let reason = c
+                .verdict
+                .strip_prefix(o.as_str())
+                .map(|r| r.trim_start_matches(':').trim())
+                .unwrap_or(&c.verdict);
+            let earlier = if c.earlier.is_empty() {
+                String::new()
+            } else {
+                format!("<div class=\"note\">earlier: {}</div>", text(&c.earlier))
+            };
+            // `o` is one of claims::OUTCOMES (checked when loaded); escaped all the same.
+            let o = text(o);
+            format!(
+                "<td class=\"verdict outcome-{o}\" data-outcome=\"{o}\"><strong>{o}</strong>{}{earlier}</td>",
+                text(reason)
+            )
+        }
+        None => format!(
+            "<td class=\"verdict {}\">{}</td>",
+            tone(c.tone),
+            text(&c.verdict)
+        ),
+    }
+}
+
+/// The rule and accounting of a claim, each followed by a separator (empty when not given).
+fn rule_text(c: &PaperClaim) -> String {
+    [&c.rule, &c.accounting]
+        .iter()
+        .filter(|x| !x.is_empty())
+        .map(|x| format!("{} · ", text(x)))
+        .collect()
 }
 
 /// The bench section.
@@ -285,7 +356,7 @@ fn points(s: &mut String, points: &[PointClaims]) {
             }
             let _ = writeln!(
                 s,
-                "<td class=\"mono\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td>\
+                "<td class=\"mono\">{}</td><td class=\"num measured\">{}</td><td class=\"num\">{}</td>\
                  <td class=\"{}\">{}</td></tr>",
                 text(&c.metric),
                 text(&c.measured),
@@ -338,6 +409,62 @@ fn tone(t: Tone) -> &'static str {
     match t {
         Tone::Agrees => "agrees",
         Tone::Disagrees => "disagrees",
-        Tone::Neutral => "neutral",
+        Tone::Inconclusive | Tone::NotJudged => "neutral",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn claim(outcome: Option<&str>, verdict: &str) -> PaperClaim {
+        PaperClaim {
+            claim: "Theorem 2".into(),
+            reference: "DETP".into(),
+            paper: "0.35".into(),
+            measured: "0.29 [0.28, 0.44] · beside: seconds <3>".into(),
+            verdict: verdict.into(),
+            tone: super::super::verdicts::claim_tone(outcome.and_then(|o| o.parse().ok()), verdict),
+            outcome: outcome.map(str::to_string),
+            rule: "theorem-2/2".into(),
+            accounting: "paper".into(),
+            earlier: "theorem-2/1: holds in seconds".into(),
+            source: "a/a.csv".into(),
+            link: "../a/a.csv".into(),
+            note: String::new(),
+        }
+    }
+
+    #[test]
+    fn verdict_cells_are_coloured_by_their_outcome() {
+        let mut s = String::new();
+        claims(
+            &mut s,
+            Some(&[
+                claim(Some("holds"), "holds: 2 of 2 units hold"),
+                claim(
+                    Some("inconclusive"),
+                    "inconclusive: needs detp.index = grid",
+                ),
+                claim(None, "ok (99% CI)"),
+            ]),
+        );
+        assert!(s.contains(
+            "<td class=\"verdict outcome-holds\" data-outcome=\"holds\"><strong>holds</strong>2 of 2 units hold"
+        ));
+        assert!(s.contains("outcome-inconclusive\" data-outcome=\"inconclusive\""));
+        assert!(s.contains(
+            "<strong>inconclusive</strong>needs detp.index = grid<div class=\"note\">earlier:"
+        ));
+        // Without an outcome, the verdict text's tone, as before.
+        assert!(s.contains("<td class=\"verdict agrees\">ok (99% CI)</td>"));
+        // The measurement in parts, escaped; the rule and accounting beside the source.
+        assert!(s.contains("<div>0.29 [0.28, 0.44]</div><div>beside: seconds &lt;3&gt;</div>"));
+        assert!(s.contains("theorem-2/2 · paper · <a href="));
+        assert!(s.contains("earlier: theorem-2/1: holds in seconds"));
+        // Every outcome has a colour in the style sheet.
+        for o in super::super::claims::OUTCOMES {
+            assert!(CSS.contains(&format!(".outcome-{o}")), "{o}");
+        }
     }
 }

@@ -1,9 +1,15 @@
 //! The claims of one result table, point by point: every metric the run held against theory, read
 //! back from `NAME.csv` and judged by the code the terminal summary uses ([`Theory::verdict`],
 //! [`crate::output::summary::measured`]), so the page and the terminal cannot disagree on a rule.
+//! Verdicts are typed ([`Verdict`]): a verdict cell of a table (`M_band`) is read back with
+//! `Verdict::from_str`, which accepts exactly what a run writes, and every verdict is coloured by
+//! its [`Tone`], never by the first letters of its text. A claim of `claims.toml` is coloured by
+//! its typed `outcome` ([`Outcome`]), or, in a file written before that key existed, by its
+//! verdict text read as an outcome or a verdict ([`claim_tone`]).
 //!
 //! A metric is a `M_mean` column with a `M_theory` beside it (a prediction), or also `M_lower` and
-//! `M_upper` (a band) — the columns [`crate::experiment::metric::Metric`] writes. The Student-t
+//! `M_upper` (a band) — the columns a judged cell of a declared table writes
+//! ([`crate::output::table::Cell::Judged`]). The Student-t
 //! interval takes its degrees of freedom from `M_clusters` (the independent clusters behind `M_se`),
 //! as the run did. Tables written before that column existed have only `M_n`, which is used instead:
 //! exact for per-replica estimates, narrower than the run's where a metric had few clusters and many
@@ -13,34 +19,100 @@
 //! A single measured value with a `_theory` column and no `_mean` (an exact count against a cost
 //! model) has no standard error; it is listed with the ratio and no verdict.
 
-use crate::experiment::metric::Theory;
+use std::fmt;
+use std::str::FromStr;
+
 use crate::output::summary::measured;
+pub use crate::stats::verdict::Tone;
+use crate::stats::verdict::{Theory, Verdict};
 use crate::stats::Estimate;
 
 use super::table::{display, Table};
 
-/// How a verdict reads, for colour only (the text is the verdict).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Tone {
-    /// Agrees: `ok …`, `inside`.
-    Agrees,
-    /// Disagrees: `±k SE`, `above`, `below`, `differs …`.
-    Disagrees,
-    /// No verdict possible: `n/a`, or a single value against a model.
-    Neutral,
+/// What became of a paper's claim (`outcome` in `claims.toml`, written by `scripts/claims.py`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Outcome {
+    /// `holds`: the measurement agrees with the claim.
+    Holds,
+    /// `holds-in-part`: it agrees with part of it, or under some readings only.
+    HoldsInPart,
+    /// `differs`: the measurement differs from the paper's number.
+    Differs,
+    /// `refuted`: the claim is wrong.
+    Refuted,
+    /// `inconclusive`: the measurement cannot decide.
+    Inconclusive,
 }
 
-impl Tone {
-    /// The tone of a verdict text.
-    pub fn of(verdict: &str) -> Tone {
-        if verdict.starts_with("ok") || verdict.starts_with("inside") {
-            Tone::Agrees
-        } else if verdict.starts_with("n/a") || verdict.starts_with("no verdict") {
-            Tone::Neutral
-        } else {
-            Tone::Disagrees
+impl Outcome {
+    /// Every outcome with its spelling.
+    pub const ALL: [(&'static str, Outcome); 5] = [
+        ("holds", Outcome::Holds),
+        ("holds-in-part", Outcome::HoldsInPart),
+        ("differs", Outcome::Differs),
+        ("refuted", Outcome::Refuted),
+        ("inconclusive", Outcome::Inconclusive),
+    ];
+
+    /// What it means for the page's colours.
+    pub fn tone(self) -> Tone {
+        match self {
+            Outcome::Holds => Tone::Agrees,
+            Outcome::Differs | Outcome::Refuted => Tone::Disagrees,
+            Outcome::HoldsInPart | Outcome::Inconclusive => Tone::Inconclusive,
         }
     }
+
+    /// An outcome written as the words of an older claims file's `verdict` (`holds in part`).
+    fn from_words(text: &str) -> Option<Outcome> {
+        text.replace(' ', "-").parse().ok()
+    }
+}
+
+impl fmt::Display for Outcome {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let name = Outcome::ALL
+            .iter()
+            .find(|(_, o)| o == self)
+            .map_or("", |(n, _)| *n);
+        f.pad(name)
+    }
+}
+
+impl FromStr for Outcome {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Outcome, String> {
+        Outcome::ALL
+            .iter()
+            .find(|(n, _)| *n == s)
+            .map(|(_, o)| *o)
+            .ok_or_else(|| {
+                let allowed: Vec<String> = Outcome::ALL
+                    .iter()
+                    .map(|(n, _)| format!("\"{n}\""))
+                    .collect();
+                format!("got \"{s}\", expected one of {}", allowed.join(", "))
+            })
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for Outcome {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        String::deserialize(d)?
+            .parse()
+            .map_err(serde::de::Error::custom)
+    }
+}
+
+/// The tone of a claim: its typed `outcome` where the file has one; else its verdict text read as
+/// an outcome (`holds`, `holds in part`, …) or as a verdict a run writes (`ok (99% CI)`, `+3.1 SE`);
+/// a text that is neither is inconclusive (shown, not coloured as either).
+pub fn claim_tone(outcome: Option<Outcome>, verdict: &str) -> Tone {
+    outcome
+        .or_else(|| Outcome::from_words(verdict))
+        .map(Outcome::tone)
+        .or_else(|| verdict.parse::<Verdict>().ok().map(|v| v.tone()))
+        .unwrap_or(Tone::Inconclusive)
 }
 
 /// One metric of one point.
@@ -144,33 +216,35 @@ fn claim(t: &Table, r: usize, s: &Stem) -> Claim {
             } else {
                 Theory::Prediction(num("_theory"))
             };
-            let mut verdict = theory.verdict(&est);
-            if let Some(run) = t.cell(r, &format!("{m}_band")) {
-                if !run.is_empty() && run != verdict {
-                    verdict = format!("{verdict} (the run: {run})");
+            let verdict = theory.verdict(&est);
+            let mut text = verdict.to_string();
+            // The run's own band verdict, read as a verdict (a text that is none is shown too).
+            if let Some(run) = t.cell(r, &format!("{m}_band")).filter(|c| !c.is_empty()) {
+                if run.parse::<Verdict>().ok().as_ref() != Some(&verdict) {
+                    text = format!("{text} (the run: {run})");
                 }
             }
             Claim {
                 metric: m.clone(),
                 measured: measured(&est),
                 theory: theory.describe(),
-                tone: Tone::of(&verdict),
-                verdict,
+                tone: verdict.tone(),
+                verdict: text,
             }
         }
         Stem::Value(m) => {
             let (v, th) = (t.number(r, m), t.number(r, &format!("{m}_theory")));
             let verdict = if v.is_finite() && th.is_finite() && th != 0.0 {
-                format!("no verdict (one value; measured/theory = {:.3})", v / th)
+                Verdict::OneValue(v / th)
             } else {
-                "n/a".to_string()
+                Verdict::NotAvailable
             };
             Claim {
                 metric: m.clone(),
                 measured: t.cell(r, m).map(display).unwrap_or_default(),
                 theory: display(&th.to_string()),
-                tone: Tone::of(&verdict),
-                verdict,
+                tone: verdict.tone(),
+                verdict: verdict.to_string(),
             }
         }
     }
@@ -209,6 +283,33 @@ n_s_mean,n_s_se,n_s_n,n_s_theory,trace_s,tests,tests_theory\n\
             "no verdict (one value; measured/theory = 1.250)"
         );
         assert_eq!(p[1].claims[2].verdict, "n/a", "theory 0: no ratio");
+        assert_eq!(p[1].claims[2].tone, Tone::Inconclusive);
+        assert_eq!(p[0].claims[2].tone, Tone::NotJudged);
+    }
+
+    /// Issue 28: every claim of the committed report was coloured as a disagreement, because
+    /// "holds" does not start with "ok". A claim is coloured by its typed outcome, else by its
+    /// verdict read whole, never by a prefix.
+    #[test]
+    fn claims_are_coloured_by_their_outcome_then_by_their_whole_verdict() {
+        assert_eq!(claim_tone(Some(Outcome::Holds), "anything"), Tone::Agrees);
+        assert_eq!(claim_tone(Some(Outcome::Refuted), "holds"), Tone::Disagrees);
+        assert_eq!(claim_tone(None, "holds"), Tone::Agrees);
+        assert_eq!(claim_tone(None, "holds in part"), Tone::Inconclusive);
+        assert_eq!(claim_tone(None, "differs"), Tone::Disagrees);
+        assert_eq!(claim_tone(None, "ok (99% CI)"), Tone::Agrees);
+        assert_eq!(claim_tone(None, "-2.9 SE"), Tone::Disagrees);
+        // Free text decides nothing (it used to read as a disagreement, or as agreement for "ok…").
+        assert_eq!(
+            claim_tone(None, "holds in seconds, not in counted tests"),
+            Tone::Inconclusive
+        );
+        assert_eq!(claim_tone(None, "okay-ish"), Tone::Inconclusive);
+        for (name, o) in Outcome::ALL {
+            assert_eq!(name.parse::<Outcome>(), Ok(o));
+            assert_eq!(o.to_string(), name);
+        }
+        assert!("holds in part".parse::<Outcome>().is_err());
     }
 
     #[test]

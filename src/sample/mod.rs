@@ -1,8 +1,11 @@
-//! Reproducible randomness: streams keyed by logical work items, and the samplers built on them.
+//! Reproducible randomness: streams keyed by logical work items, and the samplers built on them
+//! (directions, lines, Poisson counts, and the radius laws of [`radius`], which `theory` integrates
+//! and `scene` draws from).
 
 pub mod counter;
 pub mod directions;
 pub mod lines;
+pub mod radius;
 pub mod rng;
 
 pub use rng::Stream;

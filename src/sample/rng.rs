@@ -63,6 +63,13 @@ pub mod domain {
     pub const CHECK: u64 = 0x6368_6563;
     /// The reference path tracer's samples at one sample point: `[REFERENCE, seed, point, sample]`.
     pub const REFERENCE: u64 = 0x7265_6665;
+    /// Per-point path tracing as a competitor (issue 27), independent of the reference it is
+    /// judged against: `[PATH_TRACE, seed, replica, point]`.
+    pub const PATH_TRACE: u64 = 0x7061_7468;
+    /// Direct light by next-event estimation alone: `[DIRECT, seed, replica, point]`.
+    pub const DIRECT: u64 = 0x6469_7265;
+    /// Bootstrap resamples of an analysis: `[BOOTSTRAP, seed]`.
+    pub const BOOTSTRAP: u64 = 0x626f_6f74;
 }
 
 #[cfg(test)]
@@ -86,6 +93,26 @@ mod tests {
             .collect();
         assert_eq!(a, b);
         assert_ne!(a, c);
+    }
+
+    #[test]
+    fn domains_are_distinct() {
+        let all = [
+            domain::RAYS,
+            domain::SCENE,
+            domain::BLOCK,
+            domain::LINES,
+            domain::POINTS,
+            domain::PHOTON,
+            domain::CHECK,
+            domain::REFERENCE,
+            domain::PATH_TRACE,
+            domain::DIRECT,
+            domain::BOOTSTRAP,
+        ];
+        for (i, a) in all.iter().enumerate() {
+            assert!(all[i + 1..].iter().all(|b| b != a), "{a:#x} appears twice");
+        }
     }
 
     #[test]

@@ -5,10 +5,11 @@
 pub mod finite;
 pub mod infinite;
 pub mod lazy;
-pub mod radius;
 pub mod tube;
 
-pub use radius::{RadiusClass, RadiusDist, RadiusDraw};
+/// The radius laws live with the samplers (`sample::radius`), below `theory`, which integrates them.
+pub use crate::sample::radius;
+pub use crate::sample::radius::{RadiusClass, RadiusDist, RadiusDraw};
 
 /// The class mark of a generated sphere: class i with probability α_i, from one uniform (none
 /// when there is a single class). Shared by the infinite scene's engines, which must consume

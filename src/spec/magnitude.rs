@@ -9,7 +9,7 @@
 //! after the points before it had run; now `raycost check` refuses it, naming the key and the point.
 //! No shipped experiment comes within 10^±20 of the bounds (units from nm to km span 10^±12).
 
-use super::de::KeyError;
+use crate::toml_text::de::KeyError;
 
 /// The largest magnitude a point's number may have.
 pub const LARGEST: f64 = 1e100;

@@ -14,81 +14,33 @@
 
 use std::path::{Path, PathBuf};
 
-use serde::{Deserialize, Serialize};
+use serde::Deserialize;
 
-use super::de::{from_text, from_tree, KeyError, TextError};
-use super::keys::{key, IfAbsent::*, KeyDoc};
 use crate::error::InputError;
-use crate::toml_text::{find_key, line_col};
+use crate::toml_text::de::{from_tree, opt_count, seed, KeyError};
+use crate::toml_text::document::Document;
+use crate::toml_text::find_key;
 
 /// Largest number of points one spec may expand into.
 pub const MAX_POINTS: usize = 10_000;
 
-/// `[experiment]`: what every spec names, whatever its kind.
-#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct RawExperiment {
-    /// Result folder and file stem: letters, digits, `-` and `_`.
-    #[serde(deserialize_with = "name")]
-    pub name: String,
-    /// The experiment kind (`raycost doc spec` lists them).
-    pub kind: String,
-    /// Master seed of every random stream, 0 … 2⁶³ − 1 (TOML's largest integer).
-    #[serde(default = "default_seed", deserialize_with = "super::de::seed")]
-    pub seed: u64,
-    /// Rays per sweep point (grid kinds; DETP counts its rays in `detp.photons`).
-    #[serde(
-        default,
-        deserialize_with = "super::de::opt_count",
-        skip_serializing_if = "Option::is_none"
-    )]
-    pub rays: Option<u64>,
-    /// Free text copied into the metadata.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub description: Option<String>,
-}
-
-/// The keys every spec has: `[experiment]` and `[sweep]` (`raycost doc spec`).
-pub const KEYS: &[KeyDoc] = &[
-    key("experiment.name", "string", "", Required, "1–100 letters, digits, `-`, `_`",
-        "Names the results: `DIR/NAME/NAME.csv`, `NAME.meta.toml`, `NAME.TABLE.csv`."),
-    key("experiment.kind", "string", "", Required, "a kind of `raycost doc kinds`",
-        "What the experiment measures; decides which tables below the spec may have."),
-    key("experiment.seed", "integer", "", Value("1"), "0 … 2⁶³ − 1 (TOML's largest integer)",
-        "Master seed of every random stream: the same spec and seed give the same measured columns on any machine, thread count or shard split."),
-    key("experiment.rays", "integer", "rays", Absent("required by the grid kinds, unused by others"), "≥ 1 (grid: ≤ 10¹⁰)",
-        "Rays traced per sweep point (DETP kinds count their rays in `detp.photons`, lines in `lines.count`)."),
-    key("experiment.description", "string", "", Absent("none"), "any text",
-        "Free text copied into `NAME.meta.toml`."),
-    key("sweep", "table", "", Absent("one point"), "dotted spec key = array of values",
-        "The sweep: every combination of the arrays is one point (the first key varies slowest, the last fastest; at most 10 000 points). Each swept key becomes a column; `--set` on a swept key stops it being swept."),
-];
-
-/// The dotted key assigned on the line holding byte `at` of a TOML text (its `[table]` header
-/// prefixed), and the value text from `at` to the end of that token.
-fn key_and_value_at(text: &str, at: usize) -> (Option<String>, String) {
-    let line_start = text[..at].rfind('\n').map_or(0, |i| i + 1);
-    let line = &text[line_start..];
-    let line = &line[..line.find('\n').unwrap_or(line.len())];
-    let number: String = text[at..]
-        .chars()
-        .take_while(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '+' | '-' | '.'))
-        .collect();
-    let Some((key, _)) = line.split_once('=') else {
-        return (None, number);
-    };
-    let table = text[..line_start]
-        .lines()
-        .rev()
-        .map(str::trim)
-        .find(|l| l.starts_with('[') && !l.starts_with("[["))
-        .map(|l| l.trim_matches(|c| c == '[' || c == ']').trim().to_string());
-    let key = key.trim().trim_matches('"');
-    let key = match table {
-        Some(t) if !t.is_empty() => format!("{t}.{key}"),
-        _ => key.to_string(),
-    };
-    (Some(key), number)
+crate::spec_table! {
+    /// `[experiment]`: what every spec names, whatever its kind.
+    pub struct RawExperiment {
+        /// Names the results: `DIR/NAME/NAME.csv`, `NAME.meta.toml`, `NAME.TABLE.csv`.
+        name: String = {required} read name, "string", "", "1–100 letters, digits, `-`, `_`";
+        /// What the experiment measures; decides which tables below the spec may have.
+        kind: String = {required}, "string", "", "a kind of `raycost doc kinds`";
+        /// Master seed of every random stream: the same spec and seed give the same measured
+        /// columns on any machine, thread count or shard split.
+        seed: u64 = {default 1} read seed, "integer", "", "0 … 2⁶³ − 1 (TOML's largest integer)";
+        /// Rays traced per sweep point (DETP kinds count their rays in `detp.photons`, lines in
+        /// `lines.count`).
+        rays: Option<u64> = {absent "required by the grid kinds, unused by others"}
+            read opt_count, "integer", "rays", "≥ 1 (grid: ≤ 10¹⁰)";
+        /// Free text copied into `NAME.meta.toml`.
+        description: Option<String> = {absent "none"}, "string", "", "any text";
+    }
 }
 
 /// A value as a message shows it: floats in their shortest form, in scientific notation when very
@@ -101,8 +53,29 @@ pub fn show(v: &toml::Value) -> String {
     }
 }
 
-fn default_seed() -> u64 {
-    1
+/// Declares the spec file of a kind: `[experiment]` ([`RawExperiment`]), the kind's own tables as
+/// given, and `[sweep]` (declared here, once for every kind), with [`crate::spec_table!`]'s
+/// field syntax.
+#[macro_export]
+macro_rules! spec_file {
+    (
+        $(#[$m:meta])*
+        pub struct $name:ident { $($fields:tt)* }
+    ) => {
+        $crate::spec_table! {
+            $(#[$m])*
+            pub struct $name {
+                /// `[experiment]`.
+                experiment: $crate::spec::RawExperiment = {table};
+                $($fields)*
+                /// The sweep: every combination of the arrays is one point (the first key varies
+                /// slowest, the last fastest; at most 10 000 points). Each swept key becomes a
+                /// column; `--set` on a swept key stops it being swept.
+                sweep: Option<toml::Table> = {absent "one point"}, "table", "",
+                    "dotted spec key = array of values";
+            }
+        }
+    };
 }
 
 fn name<'de, D: serde::Deserializer<'de>>(d: D) -> Result<String, D::Error> {
@@ -156,6 +129,8 @@ pub struct Spec {
     pub dir: PathBuf,
     /// Its text.
     pub text: String,
+    /// Where each key and value of the text sits (its one parse).
+    pub doc: Document,
     /// `[experiment]`, after `--set`.
     pub experiment: RawExperiment,
     /// The file's tree with `--set` applied and `[sweep]` removed.
@@ -193,27 +168,17 @@ impl Spec {
                 key,
                 message,
             };
-        let mut tree: toml::Table = text.parse().map_err(|e: toml::de::Error| {
-            let at = e.span().map(|s| line_col(text, s.start));
-            let message = e.message().trim().to_string();
-            match e.span().filter(|_| message.starts_with("number too large")) {
-                // Name the key and TOML's range rather than serde's "target type".
-                Some(span) => {
-                    let (key, number) = key_and_value_at(text, span.start);
-                    file_err(
-                        at,
-                        key,
-                        format!(
-                            "{number} is larger than TOML's largest integer, 2⁶³ − 1 = {}",
-                            i64::MAX
-                        ),
-                    )
-                }
-                None => file_err(at, None, message),
-            }
+        // The one parse of the text: its tree, and where every key and value sits.
+        let doc = Document::parse(text).map_err(|e| file_err(e.at, e.key, e.message))?;
+        let mut tree = doc.tree.clone();
+        // The header as written, before any --set.
+        from_tree::<Header>(&tree).map_err(|e| {
+            file_err(
+                doc.place(text, &e.key, &e.message),
+                (!e.key.is_empty()).then(|| e.key.clone()),
+                e.message,
+            )
         })?;
-        // The header as written (located by serde), before any --set.
-        from_text::<Header>(text).map_err(|e: TextError| file_err(e.at, e.key, e.message))?;
 
         // The sweep axes, flattened to dotted keys.
         let mut flat = Vec::new();
@@ -236,51 +201,7 @@ impl Spec {
         }
 
         // --set overrides: an axis under `sweep`, or a value (which is then no longer swept).
-        let mut flags: Vec<SetFlag> = Vec::new();
-        for s in sets {
-            let flag = format!("--set {s}");
-            let flag_err = |key: Option<String>, m: String| InputError {
-                file: flag.clone(),
-                at: None,
-                key,
-                message: m,
-            };
-            let (path, value) = parse_set(s).map_err(|m| flag_err(None, m))?;
-            let key = path.join(".");
-            if path.first().map(String::as_str) == Some("sweep") {
-                let axis = path[1..].join(".");
-                if axis.is_empty() {
-                    return Err(flag_err(
-                        Some(key),
-                        "name the swept key: sweep.\"grid.cell_width\"=[…]".into(),
-                    ));
-                }
-                check_axis(&axis, &value).map_err(|m| flag_err(Some(key.clone()), m))?;
-                let values = value.as_array().cloned().unwrap_or_default();
-                match sweep.iter_mut().find(|(k, _)| *k == axis) {
-                    Some(existing) => existing.1 = values,
-                    None => sweep.push((axis.clone(), values)),
-                }
-            } else {
-                set_path(&mut tree, &path, value).map_err(|m| flag_err(Some(key.clone()), m))?;
-                sweep.retain(|(k, _)| *k != key);
-            }
-            flags.push(SetFlag { flag, key });
-        }
-        for f in &flags {
-            if let Some(axis) = f.key.strip_prefix("sweep.") {
-                if let Some(other) = flags.iter().find(|g| g.key == axis) {
-                    return Err(InputError::new(
-                        &f.flag,
-                        format!(
-                            "{} sets the same key to one value; give one or the other",
-                            other.flag
-                        ),
-                    )
-                    .key(&f.key));
-                }
-            }
-        }
+        let flags = apply_sets(sets, &mut tree, &mut sweep)?;
 
         // The header again, after --set (experiment.seed or .kind may have been set).
         let header: Header = from_tree(&tree).map_err(|e| locate_key(name, text, &flags, e))?;
@@ -304,6 +225,7 @@ impl Spec {
                 .map(Path::to_path_buf)
                 .unwrap_or_default(),
             text: text.to_string(),
+            doc,
             experiment: header.experiment,
             tree,
             sweep,
@@ -349,6 +271,17 @@ impl Spec {
     /// `None`): at the `--set` flag that set it, at the `[sweep]` entry that produced it (naming the
     /// point), or at the key in the file.
     pub fn locate(&self, point: Option<usize>, e: KeyError) -> InputError {
+        self.locate_as(point, e, false)
+    }
+
+    /// As [`Spec::locate`], for an error found reading the tree with a kind's serde struct: in the
+    /// file it is placed as serde reading the text would place it (a bad value at the value, an
+    /// unknown key at the key, a missing key at its table), not at the key's line.
+    pub fn locate_read(&self, point: Option<usize>, e: KeyError) -> InputError {
+        self.locate_as(point, e, true)
+    }
+
+    fn locate_as(&self, point: Option<usize>, e: KeyError, read: bool) -> InputError {
         let KeyError { key, message } = e;
         let related = |s: &str| {
             key == s || key.starts_with(&format!("{s}.")) || s.starts_with(&format!("{key}."))
@@ -385,7 +318,11 @@ impl Spec {
             },
             None => InputError {
                 file: self.path.clone(),
-                at: find_key(&self.text, &key).filter(|_| !key.is_empty()),
+                at: if read {
+                    self.doc.place(&self.text, &key, &message)
+                } else {
+                    find_key(&self.text, &key).filter(|_| !key.is_empty())
+                },
                 key: (!key.is_empty()).then_some(key),
                 message: format!("{message}{suffix}"),
             },
@@ -406,20 +343,65 @@ impl Spec {
         }
     }
 
-    /// Locates a serde error of the file's text (line and column from the parser).
-    pub fn locate_text(&self, e: TextError) -> InputError {
-        InputError {
-            file: self.path.clone(),
-            at: e.at,
-            key: e.key,
-            message: e.message,
-        }
-    }
-
     /// A path named in the spec, resolved against the spec's folder.
     pub fn resolve(&self, relative: &str) -> PathBuf {
         self.dir.join(relative)
     }
+}
+
+/// Applies the `--set` flags to the tree and the sweep axes: a key under `sweep` replaces (or adds)
+/// that axis, any other key sets the value and stops it being swept; a key set both ways is refused.
+fn apply_sets(
+    sets: &[String],
+    tree: &mut toml::Table,
+    sweep: &mut Vec<(String, Vec<toml::Value>)>,
+) -> Result<Vec<SetFlag>, InputError> {
+    let mut flags: Vec<SetFlag> = Vec::new();
+    for s in sets {
+        let flag = format!("--set {s}");
+        let flag_err = |key: Option<String>, m: String| InputError {
+            file: flag.clone(),
+            at: None,
+            key,
+            message: m,
+        };
+        let (path, value) = parse_set(s).map_err(|m| flag_err(None, m))?;
+        let key = path.join(".");
+        if path.first().map(String::as_str) == Some("sweep") {
+            let axis = path[1..].join(".");
+            if axis.is_empty() {
+                return Err(flag_err(
+                    Some(key),
+                    "name the swept key: sweep.\"grid.cell_width\"=[…]".into(),
+                ));
+            }
+            check_axis(&axis, &value).map_err(|m| flag_err(Some(key.clone()), m))?;
+            let values = value.as_array().cloned().unwrap_or_default();
+            match sweep.iter_mut().find(|(k, _)| *k == axis) {
+                Some(existing) => existing.1 = values,
+                None => sweep.push((axis.clone(), values)),
+            }
+        } else {
+            set_path(tree, &path, value).map_err(|m| flag_err(Some(key.clone()), m))?;
+            sweep.retain(|(k, _)| *k != key);
+        }
+        flags.push(SetFlag { flag, key });
+    }
+    for f in &flags {
+        if let Some(axis) = f.key.strip_prefix("sweep.") {
+            if let Some(other) = flags.iter().find(|g| g.key == axis) {
+                return Err(InputError::new(
+                    &f.flag,
+                    format!(
+                        "{} sets the same key to one value; give one or the other",
+                        other.flag
+                    ),
+                )
+                .key(&f.key));
+            }
+        }
+    }
+    Ok(flags)
 }
 
 /// A `[sweep]` axis must be a non-empty array and may not sweep `[experiment]` (the name and kind

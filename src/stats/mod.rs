@@ -1,13 +1,20 @@
 //! Estimators that every engine's counters flow into: mergeable means with honest standard errors,
-//! histograms, and goodness-of-fit statistics. All of them merge partial results in a fixed order,
-//! so a run's numbers do not depend on how the work was split across threads.
+//! histograms, goodness-of-fit statistics, and the verdict of a measurement against theory
+//! ([`verdict`]). All of them merge partial results in a fixed order, so a run's numbers do not
+//! depend on how the work was split across threads. [`fit`] and [`crossover`] turn such summaries
+//! into the speed-against-error answers of issue 27 (time to a target error, the crossover in points
+//! or frames, bootstrap CIs over replicas).
 
+pub mod crossover;
+pub mod fit;
 pub mod gof;
 pub mod histogram;
 pub mod mean;
+pub mod verdict;
 
 pub use histogram::Histogram;
 pub use mean::{ClusteredMean, Estimate};
+pub use verdict::{Theory, Tone, Verdict};
 
 /// Two-sided Student-t quantile with `dof` degrees of freedom (normal beyond 10⁴; NaN for 0).
 pub fn t_for_level(level: f64, dof: u64) -> f64 {

@@ -40,9 +40,9 @@
 //! per-scene tensor products use fewer per class (16, 8, 3 for 1, 2, ≥3 classes) to keep the
 //! product below about 10⁵ nodes.
 //!
-//! [`RadiusDist::quadrature`]: crate::scene::radius::RadiusDist::quadrature
+//! [`RadiusDist::quadrature`]: crate::sample::radius::RadiusDist::quadrature
 
-use crate::scene::radius::{gauss_legendre_panels, RadiusClass, RadiusDraw};
+use crate::sample::radius::{gauss_legendre_panels, RadiusClass, RadiusDraw};
 use std::f64::consts::PI;
 use std::sync::OnceLock;
 
@@ -94,7 +94,7 @@ pub struct QueryCost {
 
 /// Gauss–Legendre nodes per panel for per-sphere expectations (as [`RadiusDist::expect`]).
 ///
-/// [`RadiusDist::expect`]: crate::scene::radius::RadiusDist::expect
+/// [`RadiusDist::expect`]: crate::sample::radius::RadiusDist::expect
 const SPHERE_NODES: usize = 16;
 
 /// Nodes per panel per class for per-scene tensor products, by number of classes.
@@ -606,8 +606,8 @@ mod tests {
         max: 0.4,
     };
     use crate::sample::directions::uniform_direction;
+    use crate::sample::radius::RadiusDist;
     use crate::sample::rng::stream;
-    use crate::scene::radius::RadiusDist;
     use rand::Rng;
 
     /// Mean and standard error of the mean.

@@ -6,8 +6,9 @@
 //!   Results 3.1 and 3.2, plus the cell-step counts and sharper test-count predictors that the paper
 //!   does not state (derived in that module's doc comments).
 //!
-//! Note on layering: the theory reads the radius laws of [`crate::scene::radius`] (a plain data type
-//! with its own quadrature), so that theory and scene integrate exactly the same truncated law.
+//! Note on layering: the theory reads the radius laws of [`crate::sample::radius`] (a plain data type
+//! with its own quadrature and sampler, below both), so that theory and scene integrate exactly the
+//! same truncated law; the theory imports no engine.
 
 pub mod detp;
 pub mod grid;

@@ -86,6 +86,15 @@ impl IndexStats {
     }
 }
 
+/// Which disc index a spec chose.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum IndexKind {
+    /// A regular grid of this cell width.
+    Grid(f64),
+    /// An octree with leaves of at most this many discs (and sides ≥ 2d).
+    Octree(usize),
+}
+
 /// A spatial index over discs that segments traverse.
 pub trait DiscIndex: Sync {
     /// The indexed discs, in the index's own order.

@@ -126,14 +126,7 @@ pub struct Params {
     pub feed: Feed,
 }
 
-/// Which disc index.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum IndexKind {
-    /// A regular grid of this cell width.
-    Grid(f64),
-    /// An octree with leaves of at most this many discs (and sides ≥ 2d).
-    Octree(usize),
-}
+pub use super::disc_index::IndexKind;
 
 impl IndexKind {
     fn build(self, discs: &Discs, d: f64) -> Box<dyn DiscIndex> {

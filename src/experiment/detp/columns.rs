@@ -1,7 +1,19 @@
-//! Every column kind `detp` writes, declared once. Engine columns are families, one member per
-//! engine in `detp.engines` (`tests_{}` → `tests_sphere_cache`).
+//! Every column kind `detp` writes, declared once, and the tables that read them from a point's
+//! typed measurement: [`MAIN`] (the point's own columns around one group per engine, in the
+//! point's engine order, each engine's group from its own table: [`SPHERE_CACHE`],
+//! [`DISC_INDEX`], [`BRUTE_FORCE`], [`PHOTON_MAP`], [`REFERENCE`]), [`LEVELS`] and [`POINTS_TABLE`].
+//! Engine columns are families, one member per engine (`tests_{}` → `tests_sphere_cache`).
 
+use super::config::DetpConfig;
+use super::engines::{
+    BruteMeasured, CacheMeasured, EngineMeasured, IndexMeasured, LevelRow, MapMeasured, Sizes,
+};
+use super::measure::{DetpMeasured, PointRow};
+use super::spec::EngineChoice;
 use crate::output::column::{Class, Column};
+use crate::output::table::{cells, col, Against, Cell, Cells, Entry, Line, Table};
+use crate::stats::Theory;
+use crate::theory::detp as th;
 
 /// Segments in the store.
 pub const SEGMENTS: Column = Column::value(
@@ -261,48 +273,161 @@ pub const RAYS_PER_S: Column = Column::value(
     "segments handled per second of engine time",
 );
 
-/// The main table.
-pub const MAIN: &[Column] = &[
-    SEGMENTS,
-    POINTS,
-    TRACE_S,
-    EDGE_S,
-    EDGE_RADIUS,
-    TESTS,
-    TESTS_THEORY,
-    RAY_SPHERE_TESTS,
-    RAY_SPHERE_TESTS_THEORY,
-    RAY_DISC_TESTS,
-    RAY_DISC_TESTS_THEORY,
-    RAYS_COPIED,
-    SPHERES_BUILT,
-    POP_REPAIRS,
-    COUNTED_COST,
-    COST_S,
-    ORDER_S,
-    NODES,
-    BOX_TESTS,
-    DDA_STEPS,
-    BUILD_S,
-    BYTES,
-    PHOTON_MAP_RMSE,
-    PHOTON_MAP_BIAS,
-    MISMATCHES,
-    BF_CHECKED,
-    IRRADIANCE,
-    IRRADIANCE_RMSE,
-    IRRADIANCE_BIAS,
-    TESTS_PER_REPLICA,
-    COST_PER_REPLICA_S,
-    REFERENCE_IRRADIANCE,
-    REFERENCE_MEAN_SE,
-    IRRADIANCE_REF_BIAS,
-    IRRADIANCE_REF_RMSE,
-    PHOTON_MAP_REF_BIAS,
-    PHOTON_MAP_REF_RMSE,
-    POINTS_COVERED,
-    RAYS_PER_S,
-];
+/// Theorem 1's (T_R, T_I) for the sphere cache at these sizes (t = u = 1).
+fn cache_cost(p: &DetpConfig, z: &Sizes) -> (f64, f64) {
+    th::sphere_cache_cost(1.0, 1.0, z.n_r, z.n_p, p.q())
+}
+
+/// The sphere cache's columns.
+pub const SPHERE_CACHE: Table<DetpConfig, CacheMeasured> = Table::of(&[
+    col(&TESTS, |_, e| (e.sphere_tests + e.disc_tests).into()),
+    col(&TESTS_THEORY, |p, e| {
+        let (t_r, t_i) = cache_cost(p, &e.sizes);
+        (e.sizes.reps * (t_r + t_i)).into()
+    }),
+    col(&RAY_SPHERE_TESTS, |_, e| e.sphere_tests.into()),
+    col(&RAY_SPHERE_TESTS_THEORY, |p, e| {
+        (e.sizes.reps * cache_cost(p, &e.sizes).0).into()
+    }),
+    col(&RAY_DISC_TESTS, |_, e| e.disc_tests.into()),
+    col(&RAY_DISC_TESTS_THEORY, |p, e| {
+        (e.sizes.reps * cache_cost(p, &e.sizes).1).into()
+    }),
+    col(&RAYS_COPIED, |_, e| e.rays_copied.into()),
+    col(&SPHERES_BUILT, |_, e| e.spheres_built.into()),
+    col(&POP_REPAIRS, |_, e| e.pop_repairs.into()),
+    col(&COUNTED_COST, |_, e| (e.sphere_tests + e.disc_tests).into()),
+    col(&COST_S, |_, e| e.seconds.into()),
+    col(&ORDER_S, |_, e| e.order_s.into()),
+    col(&TESTS_PER_REPLICA, |_, e| e.tests_per_replica.into()),
+    col(&COST_PER_REPLICA_S, |_, e| e.seconds_per_replica.into()),
+]);
+
+/// The disc index's columns.
+pub const DISC_INDEX: Table<DetpConfig, IndexMeasured> = Table::of(&[
+    col(&BOX_TESTS, |_, e| e.stats.box_tests.into()),
+    col(&DDA_STEPS, |_, e| e.stats.dda_steps.into()),
+    col(&COUNTED_COST, |_, e| e.stats.counted_cost().into()),
+    col(&TESTS, |_, e| e.stats.ray_disc_tests.into()),
+    col(&TESTS_THEORY, |_, e| {
+        (e.sizes.reps * th::disc_index_cost(1.0, e.sizes.n_r, e.sizes.n_p)).into()
+    }),
+    col(&NODES, |_, e| e.stats.nodes_visited.into()),
+    col(&COST_S, |_, e| e.seconds.into()),
+    col(&BUILD_S, |_, e| e.build_s.into()),
+    col(&BYTES, |_, e| e.bytes.into()),
+    col(&TESTS_PER_REPLICA, |_, e| e.tests_per_replica.into()),
+    col(&COST_PER_REPLICA_S, |_, e| e.seconds_per_replica.into()),
+]);
+
+/// Brute force's columns.
+pub const BRUTE_FORCE: Table<DetpConfig, BruteMeasured> = Table::of(&[
+    col(&TESTS, |_, e| e.tests.into()),
+    col(&COUNTED_COST, |_, e| e.tests.into()),
+    col(&TESTS_THEORY, |_, e| {
+        (e.sizes.reps * e.sizes.n_r * e.sizes.n_p).into()
+    }),
+    col(&COST_S, |_, e| e.seconds.into()),
+    col(&TESTS_PER_REPLICA, |_, e| e.tests_per_replica.into()),
+    col(&COST_PER_REPLICA_S, |_, e| e.seconds_per_replica.into()),
+]);
+
+/// The photon map's columns.
+pub const PHOTON_MAP: Table<DetpConfig, MapMeasured> = Table::of(&[
+    col(&PHOTON_MAP_RMSE, |_, e| e.rmse.into()),
+    col(&PHOTON_MAP_BIAS, |_, e| e.bias.into()),
+    col(&COST_S, |_, e| e.seconds.into()),
+]);
+
+/// The reference's column: its seconds.
+pub const REFERENCE: Table<DetpConfig, f64> = Table::of(&[col(&COST_S, |_, s| (*s).into())]);
+
+/// One group of cells per engine, in the point's engine order.
+fn engine_cells(p: &DetpConfig, m: &DetpMeasured) -> Vec<(&'static str, Cells)> {
+    m.engines
+        .iter()
+        .map(|e| match e {
+            EngineMeasured::SphereCache(x) => (
+                EngineChoice::SphereCache.column(),
+                cells(SPHERE_CACHE.entries, p, x),
+            ),
+            EngineMeasured::DiscIndex(x) => (
+                EngineChoice::DiscIndex.column(),
+                cells(DISC_INDEX.entries, p, x),
+            ),
+            EngineMeasured::BruteForce(x) => (
+                EngineChoice::BruteForce.column(),
+                cells(BRUTE_FORCE.entries, p, x),
+            ),
+            EngineMeasured::PhotonMap(x) => (
+                EngineChoice::PhotonMap.column(),
+                cells(PHOTON_MAP.entries, p, x),
+            ),
+            EngineMeasured::Reference(x) => (
+                EngineChoice::Reference.column(),
+                cells(REFERENCE.entries, p, x),
+            ),
+        })
+        .collect()
+}
+
+/// Every engine's columns.
+fn engine_columns() -> Vec<&'static Column> {
+    [
+        SPHERE_CACHE.columns(),
+        DISC_INDEX.columns(),
+        BRUTE_FORCE.columns(),
+        PHOTON_MAP.columns(),
+        REFERENCE.columns(),
+    ]
+    .concat()
+}
+
+/// The main table: the point's counts, one group per engine, the checks, the accuracy against the
+/// reference and against the exact irradiance, the speed.
+pub const MAIN: Table<DetpConfig, DetpMeasured> = Table::of(&[
+    col(&SEGMENTS, |_, m| m.segments.into()),
+    col(&POINTS, |_, m| m.points.into()),
+    col(&TRACE_S, |_, m| m.trace_s.into()),
+    col(&EDGE_S, |_, m| m.edge_s.into()),
+    col(&EDGE_RADIUS, |_, m| m.edge_radius.into()),
+    Entry::Parts(engine_cells, engine_columns),
+    col(&MISMATCHES, |_, m| m.mismatches.into()),
+    col(&BF_CHECKED, |_, m| m.bf_checked.into()),
+    col(&POINTS_COVERED, |_, m| m.points_covered.into()),
+    col(&REFERENCE_IRRADIANCE, |_, m| {
+        m.reference.as_ref().map(|r| r.irradiance).into()
+    }),
+    col(&REFERENCE_MEAN_SE, |_, m| {
+        m.reference.as_ref().map(|r| r.mean_se).into()
+    }),
+    col(&IRRADIANCE_REF_BIAS, |_, m| {
+        m.reference.as_ref().map(|r| r.detp.0).into()
+    }),
+    col(&IRRADIANCE_REF_RMSE, |_, m| {
+        m.reference.as_ref().map(|r| r.detp.1).into()
+    }),
+    col(&PHOTON_MAP_REF_BIAS, |_, m| {
+        m.reference
+            .as_ref()
+            .and_then(|r| r.photon_map)
+            .map(|x| x.0)
+            .into()
+    }),
+    col(&PHOTON_MAP_REF_RMSE, |_, m| {
+        m.reference
+            .as_ref()
+            .and_then(|r| r.photon_map)
+            .map(|x| x.1)
+            .into()
+    }),
+    col(&IRRADIANCE, |_, m| {
+        Cell::Judged(m.irradiance, Theory::Prediction(m.exact_mean))
+    }),
+    col(&IRRADIANCE_RMSE, |_, m| m.irradiance_rmse.into()),
+    col(&IRRADIANCE_BIAS, |_, m| m.irradiance_bias.into()),
+    col(&RAYS_PER_S, |_, m| m.rays_per_s.into()),
+]);
 
 /// Level number.
 pub const LEVEL: Column = Column::value(
@@ -387,22 +512,51 @@ pub const RAY_SPHERE_TESTS_LEVEL: Column = Column::value(
     "ray–sphere tests building this level's lists",
 );
 
-/// `NAME.levels.csv`.
-pub const LEVELS: &[Column] = &[
-    LEVEL,
-    RADIUS,
-    BUILDS_LEVEL,
-    RAYS_LEVEL,
-    RAYS_LEVEL_THEORY,
-    RAYS_LEVEL_THEORY_CLIPPED,
-    RAYS_LEVEL_INSIDE,
-    RAYS_LEVEL_LEAF,
-    MISSES_LEVEL,
-    MISSES_LEVEL_PER_REPLICA,
-    MISSES_LEVEL_THEORY,
-    RAYS_COPIED_LEVEL,
-    RAY_SPHERE_TESTS_LEVEL,
-];
+/// A level's summary line: rays held against the uniform-line law (photons of a scene are shown
+/// against it, not judged: the README's real scenes hold 1.2–2.3× the law); none for a level no
+/// replica built.
+fn level_line(_: &DetpConfig, r: &LevelRow) -> Vec<Line> {
+    if r.rays.n == 0 {
+        return Vec::new();
+    }
+    vec![Line {
+        metric: format!("rays L{}", r.level),
+        estimate: r.rays,
+        against: Against::Law {
+            value: r.law,
+            name: "n_R·(r_i/r_law)²",
+            not_judged: (!r.lines).then_some("photons"),
+        },
+    }]
+}
+
+/// `NAME.levels.csv`: one row per sphere-cache level (the leaf mean is not summarised: one line
+/// per level would drown the rays' lines).
+pub const LEVELS: Table<DetpConfig, LevelRow> = Table {
+    entries: &[
+        col(&LEVEL, |_, r| r.level.into()),
+        col(&RADIUS, |_, r| r.radius.into()),
+        col(&BUILDS_LEVEL, |_, r| r.builds.into()),
+        col(&RAYS_LEVEL, |_, r| r.rays.into()),
+        col(&RAYS_LEVEL_THEORY, |_, r| r.law.into()),
+        col(&RAYS_LEVEL_THEORY_CLIPPED, |_, r| r.clipped.into()),
+        col(&RAYS_LEVEL_INSIDE, |_, r| r.inside.into()),
+        col(&MISSES_LEVEL, |_, r| r.misses.into()),
+        col(&MISSES_LEVEL_PER_REPLICA, |_, r| {
+            r.misses_per_replica.into()
+        }),
+        col(&MISSES_LEVEL_THEORY, |p, r| {
+            (p.replicas as f64 * p.q().powi(-3 * r.level as i32)).into()
+        }),
+        col(&RAYS_COPIED_LEVEL, |_, r| r.copied.into()),
+        col(&RAY_SPHERE_TESTS_LEVEL, |_, r| r.sphere_tests.into()),
+        col(&RAYS_LEVEL_LEAF, |p, r| {
+            let law = th::poisson_mean_below(r.law, p.cache.threshold as u64);
+            Cell::Judged(r.leaf, Theory::Prediction(law))
+        }),
+    ],
+    lines: level_line,
+};
 
 /// Sample index.
 pub const SAMPLE: Column =
@@ -470,20 +624,40 @@ pub const POINT_BASELINE_SE: Column = Column::value(
     "its standard error: the reference's from its samples' variance; the photon map's across replicas, or with one replica E/√k",
 );
 
-/// `NAME.points.csv`.
-pub const POINTS_TABLE: &[Column] = &[
-    SAMPLE,
-    X,
-    Y,
-    Z,
-    NX,
-    NY,
-    NZ,
-    POINT_DISC_RADIUS,
-    POINT_IRRADIANCE_MEAN,
-    POINT_IRRADIANCE_SE,
-    POINT_IRRADIANCE_REPLICA,
-    POINT_IRRADIANCE_EXACT,
-    POINT_BASELINE_E,
-    POINT_BASELINE_SE,
-];
+/// A baseline's estimate and standard error at a point.
+pub const BASELINE: Table<DetpConfig, (f64, f64)> = Table::of(&[
+    col(&POINT_BASELINE_E, |_, b| b.0.into()),
+    col(&POINT_BASELINE_SE, |_, b| b.1.into()),
+]);
+
+/// The baselines' columns at one point, one group per baseline in the point's engine order.
+fn baseline_cells(p: &DetpConfig, r: &PointRow) -> Vec<(&'static str, Cells)> {
+    r.baselines
+        .iter()
+        .map(|&(engine, e, se)| (engine, cells(BASELINE.entries, p, &(e, se))))
+        .collect()
+}
+
+/// `NAME.points.csv`: one row per sample point.
+pub const POINTS_TABLE: Table<DetpConfig, PointRow> = Table::of(&[
+    col(&SAMPLE, |_, r| r.sample.into()),
+    col(&X, |_, r| r.center.x.into()),
+    col(&Y, |_, r| r.center.y.into()),
+    col(&Z, |_, r| r.center.z.into()),
+    col(&NX, |_, r| r.normal.x.into()),
+    col(&NY, |_, r| r.normal.y.into()),
+    col(&NZ, |_, r| r.normal.z.into()),
+    col(&POINT_DISC_RADIUS, |_, r| r.disc_radius.into()),
+    col(&POINT_IRRADIANCE_MEAN, |_, r| r.mean.into()),
+    col(&POINT_IRRADIANCE_SE, |_, r| r.se.into()),
+    col(&POINT_IRRADIANCE_REPLICA, |_, r| {
+        Cell::members(
+            r.replicas
+                .iter()
+                .enumerate()
+                .map(|(k, &e)| (k.to_string(), e)),
+        )
+    }),
+    col(&POINT_IRRADIANCE_EXACT, |_, r| r.exact.into()),
+    Entry::Parts(baseline_cells, || BASELINE.columns()),
+]);

@@ -1,6 +1,7 @@
 //! The engines of kind `detp`, one [`Engine`] each: what it runs on a replica's rays and points, and
-//! the columns it writes from all replicas. A new engine is one struct here and one line in
-//! [`engine`]; the point runner (`mod.rs`) treats them all alike.
+//! what it measured over all replicas, typed ([`EngineMeasured`]; `columns.rs` declares each
+//! engine's columns). A new engine is one struct here, one line in [`engine`] and its table in
+//! `columns.rs`; the point runner (`mod.rs`) treats them all alike.
 //!
 //! DETP engines return their integer sum per disc, which the runner compares across engines and
 //! against brute force; baselines (the photon map) return per-disc estimates instead.
@@ -9,17 +10,14 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-use super::columns as col;
-use super::spec::{DetpConfig, EngineChoice, FilterChoice};
+use super::config::DetpConfig;
+use super::spec::{EngineChoice, FilterChoice};
 use super::{PointSet, RaySet};
-use crate::detp::disc_index::DiscIndex;
+use crate::detp::disc_index::{DiscIndex, IndexKind, IndexStats};
 use crate::detp::fixed::Acc;
 use crate::detp::photon_map::{self, Filter};
-use crate::detp::quasi_static::IndexKind;
 use crate::detp::{brute, disc_index, order, sphere_cache};
-use crate::experiment::metric::{not_judged, z_verdict, Metric, SummaryLine, Theory};
 use crate::lt::reference::{self, Irradiance};
-use crate::output::row::Row;
 use crate::sample::rng::{domain, hash_key, mix64};
 use crate::stats::{ClusteredMean, Estimate};
 use crate::theory::detp as th;
@@ -32,41 +30,25 @@ pub(super) enum Output {
     Baseline,
 }
 
-/// What the point knows when its engines write their columns.
+/// What the point knows when its engines pool their replicas.
 pub(super) struct Pooled<'a> {
     /// The point's config.
     pub cfg: &'a DetpConfig,
+    /// The sizes Theorem 1 takes.
+    pub sizes: Sizes,
+    /// The exact irradiance per disc (NaN where unknown).
+    pub exact: &'a [f64],
+}
+
+/// The sizes of a point that Theorem 1's counts take.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sizes {
     /// Replicas.
     pub reps: f64,
     /// n_R: mean rays per replica meeting the law's ball.
     pub n_r: f64,
     /// n_P.
     pub n_p: f64,
-    /// The exact irradiance per disc (NaN where unknown).
-    pub exact: &'a [f64],
-}
-
-/// One engine (see the module doc).
-pub(super) trait Engine: Send {
-    /// Runs on one replica.
-    fn run(&mut self, cfg: &DetpConfig, rays: &RaySet, pts: &PointSet) -> Output;
-    /// Engine seconds over all replicas so far (for `rays_per_s`).
-    fn seconds(&self) -> f64;
-    /// Writes its columns of the main row.
-    fn write(&self, p: &Pooled, row: &mut Row);
-    /// A baseline's estimate and standard error per disc, pooled over replicas (None for a DETP
-    /// engine, whose per-disc values the runner pools itself).
-    fn per_point(&self, _p: &Pooled) -> Option<Vec<(f64, f64)>> {
-        None
-    }
-    /// A baseline's estimate per disc in each replica (empty where it keeps none).
-    fn replica_points(&self) -> Vec<Vec<f64>> {
-        Vec::new()
-    }
-    /// The levels table and its summary lines (the sphere cache only).
-    fn levels(&self, _p: &Pooled, _law: &Law) -> (Vec<Row>, Vec<SummaryLine>) {
-        (Vec::new(), Vec::new())
-    }
 }
 
 /// What the rays-per-level law needs from the point's rays.
@@ -79,6 +61,144 @@ pub(super) struct Law {
     pub lines: bool,
 }
 
+/// One engine (see the module doc).
+pub(super) trait Engine: Send {
+    /// Runs on one replica.
+    fn run(&mut self, cfg: &DetpConfig, rays: &RaySet, pts: &PointSet) -> Output;
+    /// Engine seconds over all replicas so far (for `rays_per_s`).
+    fn seconds(&self) -> f64;
+    /// What it measured over all replicas.
+    fn measured(&self, p: &Pooled) -> EngineMeasured;
+    /// A baseline's estimate and standard error per disc, pooled over replicas (None for a DETP
+    /// engine, whose per-disc values the runner pools itself).
+    fn per_point(&self, _p: &Pooled) -> Option<Vec<(f64, f64)>> {
+        None
+    }
+    /// A baseline's estimate per disc in each replica (empty where it keeps none).
+    fn replica_points(&self) -> Vec<Vec<f64>> {
+        Vec::new()
+    }
+    /// The levels table (the sphere cache only).
+    fn levels(&self, _p: &Pooled, _law: &Law) -> Vec<LevelRow> {
+        Vec::new()
+    }
+}
+
+/// What an engine measured over a point's replicas.
+#[derive(Clone, Debug)]
+pub enum EngineMeasured {
+    /// The sphere cache.
+    SphereCache(CacheMeasured),
+    /// The disc index.
+    DiscIndex(IndexMeasured),
+    /// Brute force.
+    BruteForce(BruteMeasured),
+    /// The photon map (a baseline).
+    PhotonMap(MapMeasured),
+    /// The path-traced reference (a baseline): its seconds.
+    Reference(f64),
+}
+
+/// The sphere cache's counts, summed over replicas.
+#[derive(Clone, Debug)]
+pub struct CacheMeasured {
+    /// The point's sizes (Theorem 1's input).
+    pub sizes: Sizes,
+    /// Ray–sphere tests.
+    pub sphere_tests: u64,
+    /// Ray–disc tests.
+    pub disc_tests: u64,
+    /// Segments copied into lists.
+    pub rays_copied: u64,
+    /// Spheres built.
+    pub spheres_built: u64,
+    /// Pop repairs (`detp.pop_rule = "paper"`).
+    pub pop_repairs: u64,
+    /// Engine seconds.
+    pub seconds: f64,
+    /// Seconds sorting the points.
+    pub order_s: f64,
+    /// Tests per replica, with their spread.
+    pub tests_per_replica: Estimate,
+    /// Seconds per replica, with their spread.
+    pub seconds_per_replica: Estimate,
+}
+
+/// The disc index's counts, summed over replicas.
+#[derive(Clone, Debug)]
+pub struct IndexMeasured {
+    /// The point's sizes.
+    pub sizes: Sizes,
+    /// Traversal and tests.
+    pub stats: IndexStats,
+    /// Engine seconds.
+    pub seconds: f64,
+    /// Build seconds.
+    pub build_s: f64,
+    /// Bytes of the largest replica's index.
+    pub bytes: usize,
+    /// Tests per replica, with their spread.
+    pub tests_per_replica: Estimate,
+    /// Seconds per replica, with their spread.
+    pub seconds_per_replica: Estimate,
+}
+
+/// Brute force's tests, summed over replicas.
+#[derive(Clone, Debug)]
+pub struct BruteMeasured {
+    /// The point's sizes.
+    pub sizes: Sizes,
+    /// Ray–disc tests.
+    pub tests: u64,
+    /// Engine seconds.
+    pub seconds: f64,
+    /// Tests per replica, with their spread.
+    pub tests_per_replica: Estimate,
+    /// Seconds per replica, with their spread.
+    pub seconds_per_replica: Estimate,
+}
+
+/// The photon map against the exact irradiance, one sample per replica.
+#[derive(Clone, Debug)]
+pub struct MapMeasured {
+    /// Root-mean-square error.
+    pub rmse: Estimate,
+    /// Mean error.
+    pub bias: Estimate,
+    /// Its seconds.
+    pub seconds: f64,
+}
+
+/// One row of `NAME.levels.csv`: one sphere-cache level over the point's replicas.
+#[derive(Clone, Debug)]
+pub struct LevelRow {
+    /// Level i.
+    pub level: u64,
+    /// Its radius (as built, else r_0·Q^i).
+    pub radius: f64,
+    /// Spheres built.
+    pub builds: u64,
+    /// Rays held per sphere built.
+    pub rays: Estimate,
+    /// The uniform-line law n_R·(r_i/r_law)².
+    pub law: f64,
+    /// Lines: the law for centres uniform in the ball, clipped (NaN for photons).
+    pub clipped: f64,
+    /// Rays held by spheres inside the law's ball.
+    pub inside: Estimate,
+    /// Rays held by the spheres never subdivided.
+    pub leaf: Estimate,
+    /// Cache misses.
+    pub misses: u64,
+    /// Misses per replica, with their spread.
+    pub misses_per_replica: Estimate,
+    /// Segments copied into this level's lists.
+    pub copied: u64,
+    /// Ray–sphere tests building them.
+    pub sphere_tests: u64,
+    /// Whether the rays are μ-random lines (the law applies) or photons (shown, not judged).
+    pub lines: bool,
+}
 /// The engine for a choice of `detp.engines` (the reference reads and fills the run's `cache`).
 pub(super) fn engine(e: EngineChoice, cache: &ReferenceCache) -> Box<dyn Engine> {
     match e {
@@ -106,13 +226,6 @@ pub(super) fn per_replica(values: &[f64]) -> Estimate {
         m.push_cluster(1, v, v * v);
     }
     m.estimate()
-}
-
-/// An engine's tests and seconds per replica, with their spread across replicas (the sums above
-/// carry no standard error).
-fn replica_spread(row: &mut Row, engine: &str, tests: &[f64], secs: &[f64]) {
-    row.put_member_estimate(&col::TESTS_PER_REPLICA, engine, &per_replica(tests))
-        .put_member_estimate(&col::COST_PER_REPLICA_S, engine, &per_replica(secs));
 }
 
 /// Root-mean-square error and mean error of `est` against `exact` over the discs that have an exact
@@ -158,134 +271,93 @@ impl Engine for SphereCache {
     fn seconds(&self) -> f64 {
         self.runs.iter().map(|r| r.1).sum()
     }
-    fn write(&self, p: &Pooled, row: &mut Row) {
-        let (t_r, t_i) = th::sphere_cache_cost(1.0, 1.0, p.n_r, p.n_p, p.cfg.q());
-        let sphere: u64 = self.runs.iter().map(|r| r.0.ray_sphere_tests).sum();
-        let disc: u64 = self.runs.iter().map(|r| r.0.ray_disc_tests).sum();
-        let c = EngineChoice::SphereCache.column();
-        row.put_member(&col::TESTS, c, sphere + disc)
-            .put_member(&col::TESTS_THEORY, c, p.reps * (t_r + t_i))
-            .put(&col::RAY_SPHERE_TESTS, sphere)
-            .put(&col::RAY_SPHERE_TESTS_THEORY, p.reps * t_r)
-            .put(&col::RAY_DISC_TESTS, disc)
-            .put(&col::RAY_DISC_TESTS_THEORY, p.reps * t_i)
-            .put(
-                &col::RAYS_COPIED,
-                self.runs.iter().map(|r| r.0.rays_copied()).sum::<u64>(),
-            )
-            .put(
-                &col::SPHERES_BUILT,
-                self.runs.iter().map(|r| r.0.builds()).sum::<u64>(),
-            )
-            .put(
-                &col::POP_REPAIRS,
-                self.runs.iter().map(|r| r.0.pop_repairs).sum::<u64>(),
-            )
-            .put_member(&col::COUNTED_COST, c, sphere + disc)
-            .put_member(&col::COST_S, c, self.seconds())
-            .put(&col::ORDER_S, self.runs.iter().map(|r| r.2).sum::<f64>());
+    fn measured(&self, p: &Pooled) -> EngineMeasured {
         let tests: Vec<f64> = self
             .runs
             .iter()
             .map(|r| (r.0.ray_sphere_tests + r.0.ray_disc_tests) as f64)
             .collect();
         let secs: Vec<f64> = self.runs.iter().map(|r| r.1).collect();
-        replica_spread(row, c, &tests, &secs);
+        EngineMeasured::SphereCache(CacheMeasured {
+            sizes: p.sizes,
+            sphere_tests: self.runs.iter().map(|r| r.0.ray_sphere_tests).sum(),
+            disc_tests: self.runs.iter().map(|r| r.0.ray_disc_tests).sum(),
+            rays_copied: self.runs.iter().map(|r| r.0.rays_copied()).sum(),
+            spheres_built: self.runs.iter().map(|r| r.0.builds()).sum(),
+            pop_repairs: self.runs.iter().map(|r| r.0.pop_repairs).sum(),
+            seconds: self.seconds(),
+            order_s: self.runs.iter().map(|r| r.2).sum(),
+            tests_per_replica: per_replica(&tests),
+            seconds_per_replica: per_replica(&secs),
+        })
     }
-    fn levels(&self, p: &Pooled, law: &Law) -> (Vec<Row>, Vec<SummaryLine>) {
-        let mut rows = Vec::new();
-        let mut lines = Vec::new();
+    fn levels(&self, p: &Pooled, law: &Law) -> Vec<LevelRow> {
         let depth = self
             .runs
             .iter()
             .map(|r| r.0.levels.len())
             .max()
             .unwrap_or(0);
-        for i in 0..depth {
-            let mut m = ClusteredMean::default();
-            let mut inside = ClusteredMean::default();
-            let mut leaf = ClusteredMean::default();
-            let (mut builds, mut misses, mut tests, mut copied) = (0u64, 0u64, 0u64, 0u64);
-            let mut misses_per_replica = Vec::with_capacity(self.runs.len());
-            let mut radius = f64::NAN;
-            for (stats, ..) in &self.runs {
-                let l = stats.levels.get(i).cloned().unwrap_or_default();
-                m.push_cluster(l.builds, l.rays_held as f64, l.rays_held_sq as f64);
-                inside.push_cluster(
-                    l.inside_builds,
-                    l.inside_rays_held as f64,
-                    l.inside_rays_held_sq as f64,
-                );
-                leaf.push_cluster(
-                    l.leaf_builds,
-                    l.leaf_rays_held as f64,
-                    l.leaf_rays_held_sq as f64,
-                );
-                builds += l.builds;
-                misses += l.misses;
-                misses_per_replica.push(l.misses as f64);
-                tests += l.ray_sphere_tests;
-                copied += l.rays_held;
-                if l.builds > 0 {
-                    radius = l.radius;
-                }
-            }
-            let e = m.estimate();
-            let ri = law.root_radius * p.cfg.q().powi(i as i32);
-            let theory = p.n_r * (ri / law.law_radius).min(1.0).powi(2);
-            let clipped = match (law.lines, i) {
-                // The root is concentric with the ball and holds it: every line.
-                (true, 0) => p.n_r,
-                (true, _) => th::rays_per_level_uniform_centres(
-                    p.n_r,
-                    law.law_radius,
-                    ri.min(law.law_radius),
-                ),
-                (false, _) => f64::NAN,
-            };
-            let mut r = Row::default();
-            r.put(&col::LEVEL, i as u64)
-                .put(&col::RADIUS, if radius.is_finite() { radius } else { ri })
-                .put(&col::BUILDS_LEVEL, builds)
-                .put_estimate(&col::RAYS_LEVEL, &e)
-                .put(&col::RAYS_LEVEL_THEORY, theory)
-                .put(&col::RAYS_LEVEL_THEORY_CLIPPED, clipped)
-                .put_estimate(&col::RAYS_LEVEL_INSIDE, &inside.estimate())
-                .put(&col::MISSES_LEVEL, misses)
-                .put_estimate(
-                    &col::MISSES_LEVEL_PER_REPLICA,
-                    &per_replica(&misses_per_replica),
-                )
-                .put(
-                    &col::MISSES_LEVEL_THEORY,
-                    p.reps * p.cfg.q().powi(-3 * i as i32),
-                )
-                .put(&col::RAYS_COPIED_LEVEL, copied)
-                .put(&col::RAY_SPHERE_TESTS_LEVEL, tests);
-            // The leaf mean's line is not summarised (one per level would drown the rays' lines).
-            Metric::new(
-                &col::RAYS_LEVEL_LEAF,
-                leaf.estimate(),
-                Theory::Prediction(th::poisson_mean_below(theory, p.cfg.cache.threshold as u64)),
-            )
-            .write(&mut r, &mut Vec::new());
-            rows.push(r);
-            if e.n > 0 {
-                lines.push((
-                    format!("rays L{i}"),
-                    e,
-                    format!("{theory:.4} (n_R·(r_i/r_law)²)"),
-                    // The law is for μ-random lines; photons of a scene are not (README: real
-                    // scenes hold 1.2–2.3× the law), so they are shown against it, not judged.
-                    if law.lines {
-                        z_verdict(&e, theory)
-                    } else {
-                        not_judged(&e, theory, "photons")
-                    },
-                ));
+        (0..depth).map(|i| self.level(p, law, i)).collect()
+    }
+}
+
+impl SphereCache {
+    /// Level `i` over the replicas.
+    fn level(&self, p: &Pooled, law: &Law, i: usize) -> LevelRow {
+        let mut m = ClusteredMean::default();
+        let mut inside = ClusteredMean::default();
+        let mut leaf = ClusteredMean::default();
+        let (mut builds, mut misses, mut tests, mut copied) = (0u64, 0u64, 0u64, 0u64);
+        let mut misses_per_replica = Vec::with_capacity(self.runs.len());
+        let mut radius = f64::NAN;
+        for (stats, ..) in &self.runs {
+            let l = stats.levels.get(i).cloned().unwrap_or_default();
+            m.push_cluster(l.builds, l.rays_held as f64, l.rays_held_sq as f64);
+            inside.push_cluster(
+                l.inside_builds,
+                l.inside_rays_held as f64,
+                l.inside_rays_held_sq as f64,
+            );
+            leaf.push_cluster(
+                l.leaf_builds,
+                l.leaf_rays_held as f64,
+                l.leaf_rays_held_sq as f64,
+            );
+            builds += l.builds;
+            misses += l.misses;
+            misses_per_replica.push(l.misses as f64);
+            tests += l.ray_sphere_tests;
+            copied += l.rays_held;
+            if l.builds > 0 {
+                radius = l.radius;
             }
         }
-        (rows, lines)
+        let n_r = p.sizes.n_r;
+        let ri = law.root_radius * p.cfg.q().powi(i as i32);
+        let clipped = match (law.lines, i) {
+            // The root is concentric with the ball and holds it: every line.
+            (true, 0) => n_r,
+            (true, _) => {
+                th::rays_per_level_uniform_centres(n_r, law.law_radius, ri.min(law.law_radius))
+            }
+            (false, _) => f64::NAN,
+        };
+        LevelRow {
+            level: i as u64,
+            radius: if radius.is_finite() { radius } else { ri },
+            builds,
+            rays: m.estimate(),
+            law: n_r * (ri / law.law_radius).min(1.0).powi(2),
+            clipped,
+            inside: inside.estimate(),
+            leaf: leaf.estimate(),
+            misses,
+            misses_per_replica: per_replica(&misses_per_replica),
+            copied,
+            sphere_tests: tests,
+            lines: law.lines,
+        }
     }
 }
 
@@ -316,44 +388,25 @@ impl Engine for Index {
     fn seconds(&self) -> f64 {
         self.runs.iter().map(|r| r.2).sum()
     }
-    fn write(&self, p: &Pooled, row: &mut Row) {
-        let c = EngineChoice::DiscIndex.column();
-        let total = self
-            .runs
-            .iter()
-            .fold(disc_index::IndexStats::default(), |a, r| a.merge(r.0));
-        row.put_member(&col::BOX_TESTS, c, total.box_tests)
-            .put_member(&col::DDA_STEPS, c, total.dda_steps)
-            .put_member(&col::COUNTED_COST, c, total.counted_cost());
-        row.put_member(
-            &col::TESTS,
-            c,
-            self.runs.iter().map(|r| r.0.ray_disc_tests).sum::<u64>(),
-        )
-        .put_member(
-            &col::TESTS_THEORY,
-            c,
-            p.reps * th::disc_index_cost(1.0, p.n_r, p.n_p),
-        )
-        .put_member(
-            &col::NODES,
-            c,
-            self.runs.iter().map(|r| r.0.nodes_visited).sum::<u64>(),
-        )
-        .put_member(&col::COST_S, c, self.seconds())
-        .put_member(&col::BUILD_S, c, self.runs.iter().map(|r| r.1).sum::<f64>())
-        .put_member(
-            &col::BYTES,
-            c,
-            self.runs.iter().map(|r| r.3).max().unwrap_or(0),
-        );
+    fn measured(&self, p: &Pooled) -> EngineMeasured {
         let tests: Vec<f64> = self
             .runs
             .iter()
             .map(|r| r.0.ray_disc_tests as f64)
             .collect();
         let secs: Vec<f64> = self.runs.iter().map(|r| r.2).collect();
-        replica_spread(row, c, &tests, &secs);
+        EngineMeasured::DiscIndex(IndexMeasured {
+            sizes: p.sizes,
+            stats: self
+                .runs
+                .iter()
+                .fold(IndexStats::default(), |a, r| a.merge(r.0)),
+            seconds: self.seconds(),
+            build_s: self.runs.iter().map(|r| r.1).sum(),
+            bytes: self.runs.iter().map(|r| r.3).max().unwrap_or(0),
+            tests_per_replica: per_replica(&tests),
+            seconds_per_replica: per_replica(&secs),
+        })
     }
 }
 
@@ -373,16 +426,16 @@ impl Engine for BruteForce {
     fn seconds(&self) -> f64 {
         self.runs.iter().map(|r| r.1).sum()
     }
-    fn write(&self, p: &Pooled, row: &mut Row) {
-        let c = EngineChoice::BruteForce.column();
-        let tests = self.runs.iter().map(|r| r.0).sum::<u64>();
-        row.put_member(&col::TESTS, c, tests)
-            .put_member(&col::COUNTED_COST, c, tests)
-            .put_member(&col::TESTS_THEORY, c, p.reps * p.n_r * p.n_p)
-            .put_member(&col::COST_S, c, self.seconds());
+    fn measured(&self, p: &Pooled) -> EngineMeasured {
         let tests: Vec<f64> = self.runs.iter().map(|r| r.0 as f64).collect();
         let secs: Vec<f64> = self.runs.iter().map(|r| r.1).collect();
-        replica_spread(row, c, &tests, &secs);
+        EngineMeasured::BruteForce(BruteMeasured {
+            sizes: p.sizes,
+            tests: self.runs.iter().map(|r| r.0).sum(),
+            seconds: self.seconds(),
+            tests_per_replica: per_replica(&tests),
+            seconds_per_replica: per_replica(&secs),
+        })
     }
 }
 
@@ -436,21 +489,13 @@ impl Engine for PhotonMap {
                 .collect(),
         )
     }
-    fn write(&self, p: &Pooled, row: &mut Row) {
+    fn measured(&self, p: &Pooled) -> EngineMeasured {
         let errs: Vec<(f64, f64)> = self.runs.iter().map(|r| errors(&r.0, p.exact)).collect();
-        row.put_estimate(
-            &col::PHOTON_MAP_RMSE,
-            &per_replica(&errs.iter().map(|e| e.0).collect::<Vec<_>>()),
-        )
-        .put_estimate(
-            &col::PHOTON_MAP_BIAS,
-            &per_replica(&errs.iter().map(|e| e.1).collect::<Vec<_>>()),
-        )
-        .put_member(
-            &col::COST_S,
-            EngineChoice::PhotonMap.column(),
-            self.runs.iter().map(|r| r.1).sum::<f64>(),
-        );
+        EngineMeasured::PhotonMap(MapMeasured {
+            rmse: per_replica(&errs.iter().map(|e| e.0).collect::<Vec<_>>()),
+            bias: per_replica(&errs.iter().map(|e| e.1).collect::<Vec<_>>()),
+            seconds: self.runs.iter().map(|r| r.1).sum(),
+        })
     }
 }
 
@@ -525,12 +570,8 @@ impl Engine for Reference {
             .as_ref()
             .map(|r| r.0.iter().map(|e| (e.mean, e.se)).collect())
     }
-    fn write(&self, _p: &Pooled, row: &mut Row) {
-        row.put_member(
-            &col::COST_S,
-            EngineChoice::Reference.column(),
-            self.result.as_ref().map_or(0.0, |r| r.1),
-        );
+    fn measured(&self, _p: &Pooled) -> EngineMeasured {
+        EngineMeasured::Reference(self.result.as_ref().map_or(0.0, |r| r.1))
     }
 }
 

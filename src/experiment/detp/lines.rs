@@ -6,7 +6,7 @@ use std::time::Instant;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::spec::DetpConfig;
+use super::config::DetpConfig;
 use super::{RaySet, BATCH};
 use crate::detp::fixed::PowerScale;
 use crate::detp::store::{Segment, SegmentStore};

@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use super::spec::{DetpConfig, Points};
+use super::config::{DetpConfig, Points};
 use super::{PointSet, RaySet};
 use crate::detp::disc::Discs;
 use crate::detp::edge::{clamped_radii, clip_to_first_hit};

@@ -1,7 +1,14 @@
-//! Every column the grid kinds write, declared once (name, unit, class, meaning). The row builder in
-//! `run.rs` writes only these; `raycost doc columns` prints them.
+//! Every column the grid kinds write, declared once (name, unit, class, meaning), and the two tables
+//! that read them from a point's measurement ([`MAIN`], [`HIST`]); `raycost doc columns` prints
+//! them. A column a point does not have (a finite scene's grid size in an infinite scene, the
+//! scaling columns of another kind) is absent from its row.
 
+use super::config::GridConfig;
+use super::measure::{FiniteFacts, GridMeasured, HistBin, SceneFacts};
 use crate::output::column::{Class, Column};
+use crate::output::table::{col, Cell, Table};
+use crate::stats::Theory;
+use crate::theory::grid::query_time;
 
 /// N_I without mailboxing.
 pub const N_I: Column = Column::vs_band(
@@ -241,47 +248,106 @@ pub const TIME_COUNTS_MODEL_S: Column = Column::value(
     "grid-cost-model: N_I·T_I + N_S·T_S with the measured counts",
 );
 
+/// N_I against the band, with `prediction`.
+fn in_band(m: &GridMeasured, e: crate::stats::Estimate, prediction: f64) -> Cell {
+    let band = m.theory.band;
+    Cell::Judged(
+        e,
+        Theory::Band {
+            prediction,
+            lower: band.lower,
+            upper: band.upper,
+        },
+    )
+}
+
+/// A finite scene's fact (absent in an infinite scene).
+fn finite(m: &GridMeasured, f: fn(&FiniteFacts) -> Cell) -> Cell {
+    match &m.scene {
+        SceneFacts::Finite(facts) => f(facts),
+        SceneFacts::Infinite { .. } => Cell::Absent,
+    }
+}
+
+/// The tests the cost model counts: with or without mailboxing, as the point traced.
+fn tested(p: &GridConfig, m: &GridMeasured) -> (f64, f64) {
+    if p.mailbox {
+        (m.n_i_mb.mean, m.theory.n_i_mb)
+    } else {
+        (m.n_i.mean, m.theory.n_i)
+    }
+}
+
 /// The main table, in column order.
-pub const MAIN: &[Column] = &[
-    N_I,
-    N_I_MB,
-    N_I_PLAIN_THEORY,
-    PREDICTOR_REGIME,
-    N_S,
-    T_HIT,
-    HIT,
-    T_HIT_KS,
-    T_HIT_KS_P,
-    T_HIT_CHI2,
-    T_HIT_CHI2_DOF,
-    T_HIT_CHI2_P,
-    N_I_GEOMETRIC_P,
-    N_I_CYLINDER_RADIUS,
-    N_I_MB_CHI2,
-    N_I_MB_CHI2_DOF,
-    N_I_MB_CHI2_P,
-    TRUNCATED,
-    GENERATED,
-    SPHERES,
-    GRID_CELLS,
-    GRID_LISTINGS,
-    GRID_BYTES,
-    H_LOG,
-    P_LOG,
-    H_SQRT,
-    P_SQRT,
-    BF_RAYS,
-    BF_MISMATCHES,
-    BF_RAYS_PER_S,
-    TRACE_S,
-    RAYS_PER_S,
-    TIME_PER_RAY_S,
-    BUILD_S,
-    T_I_S,
-    T_S_S,
-    TIME_MODEL_S,
-    TIME_COUNTS_MODEL_S,
-];
+pub const MAIN: Table<GridConfig, GridMeasured> = Table::of(&[
+    col(&N_I, |_, m| in_band(m, m.n_i, m.theory.n_i)),
+    col(&N_I_MB, |_, m| in_band(m, m.n_i_mb, m.theory.n_i_mb)),
+    col(&N_I_PLAIN_THEORY, |_, m| m.theory.n_i_plain.into()),
+    col(&PREDICTOR_REGIME, |_, m| m.theory.regime.into()),
+    col(&N_S, |_, m| {
+        Cell::Judged(m.n_s, Theory::Prediction(m.theory.n_s))
+    }),
+    col(&T_HIT, |_, m| {
+        Cell::Judged(m.t_hit, Theory::Prediction(m.theory.t_hit))
+    }),
+    col(&HIT, |_, m| {
+        Cell::Judged(m.hit, Theory::Prediction(m.theory.hit))
+    }),
+    col(&T_HIT_KS, |_, m| m.laws.ks.into()),
+    col(&T_HIT_KS_P, |_, m| m.laws.ks_p.into()),
+    col(&T_HIT_CHI2, |_, m| m.laws.chi_t.statistic.into()),
+    col(&T_HIT_CHI2_DOF, |_, m| m.laws.chi_t.dof.into()),
+    col(&T_HIT_CHI2_P, |_, m| m.laws.chi_t.p_value.into()),
+    col(&N_I_GEOMETRIC_P, |_, m| m.laws.geometric_p.into()),
+    col(&N_I_CYLINDER_RADIUS, |_, m| m.laws.cylinder_radius.into()),
+    col(&N_I_MB_CHI2, |_, m| m.laws.chi_g.statistic.into()),
+    col(&N_I_MB_CHI2_DOF, |_, m| m.laws.chi_g.dof.into()),
+    col(&N_I_MB_CHI2_P, |_, m| m.laws.chi_g.p_value.into()),
+    col(&TRUNCATED, |_, m| m.truncated.into()),
+    col(&GENERATED, |_, m| match m.scene {
+        SceneFacts::Infinite {
+            generated_per_batch,
+        } => generated_per_batch.into(),
+        SceneFacts::Finite { .. } => Cell::Absent,
+    }),
+    col(&SPHERES, |_, m| finite(m, |f| f.spheres.into())),
+    col(&GRID_CELLS, |_, m| finite(m, |f| f.cells.into())),
+    col(&GRID_LISTINGS, |_, m| finite(m, |f| f.listings.into())),
+    col(&GRID_BYTES, |_, m| finite(m, |f| f.bytes.into())),
+    col(&H_LOG, |p, m| {
+        m.scaling.map(|s| p.concentration_c * s.n.ln()).into()
+    }),
+    col(&P_LOG, |_, m| m.scaling.map(|s| s.p_log).into()),
+    col(&H_SQRT, |p, m| {
+        m.scaling.map(|s| p.concentration_c * s.n.sqrt()).into()
+    }),
+    col(&P_SQRT, |_, m| m.scaling.map(|s| s.p_sqrt).into()),
+    col(&BF_RAYS, |_, m| m.scaling.map(|s| s.bf_rays).into()),
+    col(&BF_MISMATCHES, |_, m| {
+        m.scaling.map(|s| s.bf_mismatches).into()
+    }),
+    col(&BF_RAYS_PER_S, |_, m| {
+        m.scaling.map(|s| s.bf_rays_per_s).into()
+    }),
+    col(&TRACE_S, |_, m| m.trace_s.into()),
+    col(&RAYS_PER_S, |_, m| m.rays_per_s.into()),
+    col(&TIME_PER_RAY_S, |_, m| m.time_per_ray_s.into()),
+    col(&BUILD_S, |_, m| finite(m, |f| f.build_s.into())),
+    col(&T_I_S, |_, m| m.machine.map(|c| c.t_i).into()),
+    col(&T_S_S, |_, m| m.machine.map(|c| c.t_s).into()),
+    col(&TIME_MODEL_S, |p, m| {
+        let th = tested(p, m).1;
+        m.machine
+            .map(|c| query_time(th, m.theory.n_s, c.t_i, c.t_s))
+            .into()
+    }),
+    col(&TIME_COUNTS_MODEL_S, |p, m| {
+        let counted = tested(p, m).0;
+        m.machine
+            .map(|c| query_time(counted, m.n_s.mean, c.t_i, c.t_s))
+            .into()
+    }),
+]);
 
 /// Histogram table: which metric.
 pub const HIST_METRIC: Column = Column::value(
@@ -312,10 +378,10 @@ pub const HIST_EXPECTED: Column = Column::value(
 );
 
 /// `NAME.hist.csv`.
-pub const HIST: &[Column] = &[
-    HIST_METRIC,
-    HIST_BIN_LO,
-    HIST_BIN_HI,
-    HIST_COUNT,
-    HIST_EXPECTED,
-];
+pub const HIST: Table<GridConfig, HistBin> = Table::of(&[
+    col(&HIST_METRIC, |_, b| b.metric.into()),
+    col(&HIST_BIN_LO, |_, b| b.lo.into()),
+    col(&HIST_BIN_HI, |_, b| b.hi.into()),
+    col(&HIST_COUNT, |_, b| b.count.into()),
+    col(&HIST_EXPECTED, |_, b| b.expected.into()),
+]);

@@ -2,28 +2,31 @@
 //! against Results 3.1/3.2 and the exponential first-hit law), `grid-scaling` (finite scenes of
 //! growing n: O(1) expected cost, brute force, Proposition 4.1's concentration) and `grid-cost-model`
 //! (the machine's T_I and T_S and the model t = N_I·T_I + N_S·T_S). They share the spec file
-//! (`spec.rs`), the validated point (`config.rs`), the tracer (`run.rs`) and the columns
-//! (`columns.rs`); each kind adds what it measures beyond the common counts.
+//! (`spec.rs`), the validated point (`config.rs`), the tracer (`run.rs`), the measurement
+//! (`measure.rs`: typed means, fits and histograms), the closed forms (`theory.rs`) and the columns
+//! with their accessors (`columns.rs`); each kind adds what it measures beyond the common counts.
 
 pub mod columns;
 pub mod config;
+pub mod measure;
 pub mod run;
 pub mod spec;
+pub mod theory;
 
 pub use config::{GridConfig, SceneModel, Variant};
 pub use run::BATCH;
 pub use spec::{GridSpec, DEFAULT_RAYS_PER_SCENE};
 
 use super::inputs::Inputs;
-use super::kind::{ConfigError, Context, Kind, Memory, Need, PointOutput, Work};
+use super::kind::{Check, ConfigError, Context, Kind, Memory, Need, Output, Rate, Table, Work};
 use super::machine::{self, MachineCosts};
 use crate::error::Error;
-use crate::output::column::Column;
+use measure::{GridMeasured, HistBin};
 
 crate::side_tables!(
     /// `NAME.hist.csv`: the t* histogram against the exponential law, and the N_I,mb histogram
     /// against the fitted geometric law.
-    GridTables { hist }
+    GridTables for GridConfig { hist: HistBin = columns::HIST }
 );
 
 fn describe(g: &GridConfig) -> String {
@@ -41,9 +44,9 @@ fn describe(g: &GridConfig) -> String {
 /// A finite scene's spheres and cell lists; an infinite scene's per-ray working set: the spheres
 /// drawn for the first cell's reach box, ρ·(a + 2r_max)³ of them (each thread walks one ray at a
 /// time; with shared realisations a batch's block of cells).
-fn memory(g: &GridConfig) -> Memory {
+fn memory(g: &GridConfig, threads: usize) -> Memory {
     let r_max = g.classes.iter().map(|c| c.radius.max()).fold(0.0, f64::max);
-    let threads = rayon::current_num_threads() as f64;
+    let threads = threads as f64;
     let needs = match &g.scene {
         SceneModel::Infinite => {
             let per_box = g.intensity * (g.cell_width + 2.0 * r_max).powi(3);
@@ -104,14 +107,13 @@ impl<V: GridVariant> Kind for Grid<V> {
     const ABOUT: &'static str = V::ABOUT;
     type Raw = GridSpec;
     type Point = GridConfig;
+    type Measured = GridMeasured;
     type Tables = GridTables;
     type Shared = V::Shared;
+    const MAIN: Table<GridConfig, GridMeasured> = columns::MAIN;
 
-    fn columns() -> Vec<(&'static str, &'static [Column])> {
-        vec![("main", columns::MAIN), ("hist", columns::HIST)]
-    }
-    fn configure(raw: GridSpec, _: &mut Inputs) -> Result<GridConfig, ConfigError> {
-        Ok(GridConfig::from_spec(&raw, V::VARIANT)?)
+    fn configure(raw: &GridSpec, _: &mut Inputs) -> Result<GridConfig, ConfigError> {
+        Ok(GridConfig::from_spec(raw, V::VARIANT)?)
     }
     fn describe(p: &GridConfig) -> String {
         describe(p)
@@ -123,8 +125,8 @@ impl<V: GridVariant> Kind for Grid<V> {
             points: 1,
         }
     }
-    fn memory(p: &GridConfig) -> Memory {
-        memory(p)
+    fn memory(p: &GridConfig, threads: usize) -> Memory {
+        memory(p, threads)
     }
     fn shared(_: &[&GridConfig]) -> Result<V::Shared, Error> {
         Ok(V::shared())
@@ -139,8 +141,34 @@ impl<V: GridVariant> Kind for Grid<V> {
         }
         outer
     }
-    fn run(p: &GridConfig, s: &V::Shared, ctx: &Context) -> Result<PointOutput<GridTables>, Error> {
-        Ok(run::run_point(p, ctx.index, V::machine(s), ctx.progress))
+    fn run(
+        p: &GridConfig,
+        s: &V::Shared,
+        ctx: &Context,
+    ) -> Result<Output<GridMeasured, GridTables>, Error> {
+        let traced = run::run_point(p, ctx.index, ctx.threads, ctx.progress);
+        let (measured, hist) = measure::measure(p, &traced, V::machine(s));
+        let checks = measured
+            .scaling
+            .map(|s| Check {
+                name: columns::BF_MISMATCHES.name,
+                what: "the grid's first hit ≠ brute force's",
+                failures: s.bf_mismatches,
+                checked: s.bf_rays,
+            })
+            .into_iter()
+            .collect();
+        let rate = Rate {
+            per_s: measured.rays_per_s,
+            unit: "rays",
+        };
+        Ok(Output {
+            measured,
+            tables: GridTables { hist },
+            checks,
+            rate,
+            warnings: Vec::new(),
+        })
     }
 }
 

@@ -1,10 +1,22 @@
-//! Every column kind `quasi-static` writes, declared once, and the per-frame metrics as one list
-//! ([`PER_FRAME`]: the column and how to read it from a frame's stats), so the accumulators, the
-//! row and the summary cannot fall out of step.
+//! Every column kind `quasi-static` writes, declared once, the per-frame metrics as one list
+//! ([`PER_FRAME_VALUES`]: the column and how to read it from a frame's stats, so the accumulators
+//! and the row cannot fall out of step), and the tables that read the columns from a point's
+//! measurement ([`MAIN`], [`FRAMES_TABLE`], [`POINTS_TABLE`]).
+//!
+//! The columns whose values follow the engine picked for the dynamic points (`engine_used` and the
+//! `dynamic_*` counts and seconds) are declared [`Column::decided_by_timing`]: with `detp.engine =
+//! "predicted"` the §4.1 predictor picks on seconds, so those may differ between runs of one spec
+//! and seed and are written as timings.
 
+use super::measure::{FrameRow, QsMeasured, QsPointRow};
+use super::spec::QuasiStaticConfig;
 use crate::detp::quasi_static::FrameStats;
 use crate::experiment::detp::columns as detp;
-use crate::output::column::{Class, Column};
+use crate::output::column::{Class, Column, Shape};
+use crate::output::row::Value;
+use crate::output::table::{col, Against, Cell, Cells, Entry, Line, Table};
+use crate::stats::{Estimate, Theory};
+use crate::theory::detp as th;
 
 const fn measured(name: &'static str, unit: &'static str, doc: &'static str) -> Column {
     Column::value(name, unit, Class::Measured, doc)
@@ -62,14 +74,9 @@ pub const ENGINE_USED: Column = measured(
     "engine_used",
     "",
     "the engine each object's points used at frame 0, joined by + (with engine \"predicted\" the pick is taken on seconds: this and the dynamic_* counts are then classed timing)",
-);
+)
+.decided_by_timing();
 
-/// The measured columns whose values follow the engine picked for the dynamic points: with
-/// `detp.engine = "predicted"` the §4.1 predictor picks on seconds, so these may differ between
-/// runs of one spec and seed and are written as timings (`Row::decided_by_timing`).
-pub fn decided_by_the_pick(name: &str) -> bool {
-    name == ENGINE_USED.name || name.starts_with("dynamic_")
-}
 /// Warnings.
 pub const WARNINGS: Column = measured(
     "warnings",
@@ -124,13 +131,15 @@ pub const DYNAMIC_TESTS: Column = Column::estimate(
     "dynamic_tests",
     "tests",
     "ray–disc tests of the dynamic points, per frame",
-);
+)
+.decided_by_timing();
 /// Dynamic points' sphere tests.
 pub const DYNAMIC_SPHERE_TESTS: Column = Column::estimate(
     "dynamic_sphere_tests",
     "tests",
     "ray–sphere tests of the dynamic points' sphere cache, per frame",
-);
+)
+.decided_by_timing();
 /// disc-index traversal updating the static points, per frame.
 pub const STATIC_TRAVERSAL: Column = Column::estimate(
     "static_traversal",
@@ -154,31 +163,36 @@ pub const DYNAMIC_TRAVERSAL: Column = Column::estimate(
     "dynamic_traversal",
     "steps",
     "disc-index traversal of the dynamic points: segment–box slab tests + DDA steps (0 with the sphere cache), per frame",
-);
+)
+.decided_by_timing();
 /// segments copied into the dynamic points' sphere-cache lists, root list included (0 with the disc index), per frame.
 pub const DYNAMIC_RAYS_COPIED: Column = Column::estimate(
     "dynamic_rays_copied",
     "segments",
     "segments copied into the dynamic points' sphere-cache lists, root list included (0 with the disc index), per frame",
-);
+)
+.decided_by_timing();
 /// spheres the dynamic points' sphere cache built, root included (0 with the disc index), per frame.
 pub const DYNAMIC_SPHERES_BUILT: Column = Column::estimate(
     "dynamic_spheres_built",
     "spheres",
     "spheres the dynamic points' sphere cache built, root included (0 with the disc index), per frame",
-);
+)
+.decided_by_timing();
 /// segment-index cells read + segments tested to feed the dynamic points' engine (dynamic.feed; 0 when it gets every segment); not in dynamic_counted_cost, per frame.
 pub const DYNAMIC_FEED: Column = Column::estimate(
     "dynamic_feed",
     "steps",
     "segment-index cells read + segments tested to feed the dynamic points' engine (dynamic.feed; 0 when it gets every segment); not in dynamic_counted_cost, per frame",
-);
+)
+.decided_by_timing();
 /// the dynamic points' counted cost with the engine used, per frame.
 pub const DYNAMIC_COUNTED_COST: Column = Column::estimate(
     "dynamic_counted_cost",
     "tests",
     "the dynamic points' counted cost with the engine used: ray–disc + ray–sphere tests + box tests + DDA steps, weight 1 each (copies and the feed apart), per frame",
-);
+)
+.decided_by_timing();
 /// Search seconds.
 pub const SEARCH_S: Column = Column::timed_estimate(
     "search_s",
@@ -199,7 +213,8 @@ pub const DYNAMIC_S: Column = Column::timed_estimate(
     "dynamic_s",
     "s",
     "seconds gathering the dynamic points, per frame",
-);
+)
+.decided_by_timing();
 /// Frame seconds.
 pub const FRAME_S: Column =
     Column::timed_estimate("frame_s", "s", "seconds of an incremental frame");
@@ -209,7 +224,7 @@ pub type FrameValue = fn(&FrameStats) -> f64;
 
 /// The per-frame metrics, estimated over frames 1…F−1 (batches of consecutive frames as clusters),
 /// in column order: the column and its value in one frame's stats.
-pub const PER_FRAME: &[(Column, FrameValue)] = &[
+pub const PER_FRAME_VALUES: &[(Column, FrameValue)] = &[
     (RETRACED_RAYS, |s| s.affected_segments as f64),
     (RAYS_MEETING_OBJECT, |s| s.meeting_new as f64),
     (PHOTONS_RETRACED, |s| s.photons_retraced as f64),
@@ -341,7 +356,8 @@ pub const DYNAMIC_TESTS_THEORY: Column = theory(
     "dynamic_tests_theory_{}",
     "tests",
     "Theorem 2: the dynamic points' gather cost per frame with the engine",
-);
+)
+.decided_by_timing();
 /// Crossover of Theorem 2.
 pub const CROSSOVER_THEORY: Column = theory(
     "crossover_theory",
@@ -349,63 +365,134 @@ pub const CROSSOVER_THEORY: Column = theory(
     "Theorem 2's crossover r_D/r_0 for this n_D (≈ 0.35 as n_D → ∞)",
 );
 
+/// The per-frame estimates, in [`PER_FRAME_VALUES`] order; both retrace counts (the columns held
+/// against a prediction) are held against f_R.
+fn per_frame_cells(_: &QuasiStaticConfig, m: &QsMeasured) -> Vec<(&'static str, Cells)> {
+    let f_r = m.f_r();
+    let cells = PER_FRAME_VALUES
+        .iter()
+        .zip(&m.per_frame)
+        .map(|((c, _), &e)| {
+            let cell = if c.shape == Shape::EstimateVsPrediction {
+                Cell::Judged(e, Theory::Prediction(f_r))
+            } else {
+                Cell::Estimate(e)
+            };
+            (c, cell)
+        })
+        .collect();
+    vec![("", cells)]
+}
+
+/// The predictor's per-engine seconds, `sphere_cache` and `disc_index`.
+fn per_engine(m: &QsMeasured, f: fn(&super::measure::Predictor, usize) -> f64) -> Cell {
+    match &m.predictor {
+        Some(p) => Cell::members(
+            ["sphere_cache", "disc_index"]
+                .iter()
+                .enumerate()
+                .map(|(i, e)| (e.to_string(), f(p, i))),
+        ),
+        None => Cell::Absent,
+    }
+}
+
+/// Theorem 2's costs for this run's n (in ray tests, t = u): `sphere_cache` and `disc_index`.
+fn engines(costs: (f64, f64)) -> Cell {
+    Cell::members([
+        ("sphere_cache".to_string(), costs.0),
+        ("disc_index".to_string(), costs.1),
+    ])
+}
+
 /// The main table, in column order.
-pub const MAIN: &[Column] = &[
-    FRAMES,
-    PHOTONS,
-    SEGMENTS,
-    POINTS_STATIC,
-    POINTS_DYNAMIC,
-    OBJECTS,
-    R0,
-    RATIO,
-    CROSSOVER,
-    ENGINE_USED,
-    WARNINGS,
-    RETRACED_RAYS,
-    RAYS_MEETING_OBJECT,
-    PHOTONS_RETRACED,
-    SEGMENTS_RETRACED,
-    SEGMENTS_CHANGED,
-    SEARCH_TESTS,
-    SEARCH_CELLS,
-    STATIC_TESTS,
-    DYNAMIC_TESTS,
-    DYNAMIC_SPHERE_TESTS,
-    STATIC_TRAVERSAL,
-    STATIC_RAYS_COPIED,
-    STATIC_COUNTED_COST,
-    DYNAMIC_TRAVERSAL,
-    DYNAMIC_RAYS_COPIED,
-    DYNAMIC_SPHERES_BUILT,
-    DYNAMIC_FEED,
-    DYNAMIC_COUNTED_COST,
-    SEARCH_S,
-    RETRACE_S,
-    STATIC_S,
-    DYNAMIC_S,
-    FRAME_S,
-    FULL_FRAME_S,
-    FRAME0_S,
-    STATIC_INDEX_BUILD_S,
-    SPEEDUP,
-    FULL_MISMATCH,
-    FULL_CHECKED,
-    PREDICT_FRACTION,
-    PREDICTED_S,
-    MEASURED_S,
-    PREDICTION_ERROR,
-    TIMED_PICK,
-    TIMED_BEST_ENGINE,
-    TIMED_PICK_RIGHT,
-    TIMED_RULE_PICK_RIGHT,
-    IRRADIANCE_RMSE,
-    REFERENCE_PHOTONS,
-    REFERENCE_S,
-    STATIC_TESTS_THEORY,
-    DYNAMIC_TESTS_THEORY,
-    CROSSOVER_THEORY,
-];
+pub const MAIN: Table<QuasiStaticConfig, QsMeasured> = Table {
+    entries: &[
+        col(&FRAMES, |p, _| u64::from(p.frames).into()),
+        col(&PHOTONS, |p, _| p.detp.photons.into()),
+        col(&SEGMENTS, |_, m| m.segments.into()),
+        col(&POINTS_STATIC, |_, m| m.points_static.into()),
+        col(&POINTS_DYNAMIC, |_, m| m.points_dynamic.into()),
+        col(&OBJECTS, |_, m| m.ratios.len().into()),
+        col(&R0, |_, m| m.r0.into()),
+        col(&RATIO, |_, m| {
+            m.ratios.iter().copied().fold(0.0, f64::max).into()
+        }),
+        col(&CROSSOVER, |_, m| m.crossover.into()),
+        col(&ENGINE_USED, |_, m| m.engine_used.as_str().into()),
+        col(&WARNINGS, |p, _| p.warnings.len().into()),
+        Entry::Parts(per_frame_cells, || {
+            PER_FRAME_VALUES.iter().map(|(c, _)| c).collect()
+        }),
+        col(&FULL_FRAME_S, |_, m| m.full_frame_s.into()),
+        col(&FRAME0_S, |_, m| m.frame0_s.into()),
+        col(&STATIC_INDEX_BUILD_S, |_, m| m.static_index_build_s.into()),
+        col(&SPEEDUP, |_, m| m.speedup().into()),
+        col(&FULL_MISMATCH, |_, m| m.full_mismatch.into()),
+        col(&FULL_CHECKED, |_, m| m.full_checked.into()),
+        col(&PREDICT_FRACTION, |_, m| {
+            m.predictor.map(|p| p.fraction).into()
+        }),
+        col(&PREDICTED_S, |_, m| {
+            per_engine(m, |p, i| p.first.predicted[i])
+        }),
+        col(&MEASURED_S, |_, m| {
+            per_engine(m, |p, i| p.first.measured[i])
+        }),
+        col(&PREDICTION_ERROR, |_, m| {
+            per_engine(m, |p, i| p.first.predicted[i] / p.first.measured[i] - 1.0)
+        }),
+        col(&TIMED_PICK, |_, m| {
+            m.predictor.map(|p| p.first.pick.as_str()).into()
+        }),
+        col(&TIMED_BEST_ENGINE, |_, m| {
+            m.predictor.map(|p| p.first.best.as_str()).into()
+        }),
+        col(&TIMED_PICK_RIGHT, |_, m| {
+            m.predictor.map(|p| p.pick_right).into()
+        }),
+        col(&TIMED_RULE_PICK_RIGHT, |_, m| {
+            m.predictor.map(|p| p.rule_pick_right).into()
+        }),
+        col(&IRRADIANCE_RMSE, |_, m| m.reference.map(|r| r.0).into()),
+        col(&REFERENCE_PHOTONS, |_, m| m.reference.map(|r| r.2).into()),
+        col(&REFERENCE_S, |_, m| m.reference.map(|r| r.1).into()),
+        col(&STATIC_TESTS_THEORY, |p, m| {
+            engines(th::static_points_cost(
+                m.f_r(),
+                m.points_static as f64,
+                p.detp.q(),
+            ))
+        }),
+        col(&DYNAMIC_TESTS_THEORY, |p, m| {
+            let ratio = m.ratios.first().copied().unwrap_or(0.0);
+            engines(th::dynamic_points_cost(
+                m.n_r,
+                ratio,
+                m.points_dynamic as f64,
+                p.detp.q(),
+            ))
+        }),
+        col(&CROSSOVER_THEORY, |p, m| {
+            th::crossover_ratio(p.detp.q(), m.points_dynamic.max(1) as f64).into()
+        }),
+    ],
+    lines: speedup_line,
+};
+
+/// The speed-up of an incremental frame over a full recalculation, shown, not judged.
+fn speedup_line(_: &QuasiStaticConfig, m: &QsMeasured) -> Vec<Line> {
+    vec![Line {
+        metric: "speedup".into(),
+        estimate: Estimate {
+            mean: m.speedup(),
+            se: f64::NAN,
+            n: m.full_checked,
+            clusters: 1,
+        },
+        against: Against::Speedup("full_frame_s / frame_s"),
+    }]
+}
 
 /// Frame number.
 pub const FRAME: Column = measured("frame", "1", "the frame");
@@ -442,7 +529,8 @@ pub const DYNAMIC_DISC_TESTS: Column = measured(
     "dynamic_disc_tests",
     "tests",
     "ray–disc tests of the dynamic points",
-);
+)
+.decided_by_timing();
 /// One frame's counts and seconds (per-frame values, no estimate).
 pub mod frame {
     use super::*;
@@ -481,7 +569,8 @@ pub mod frame {
         "dynamic_sphere_tests",
         "tests",
         "ray–sphere tests of the dynamic points",
-    );
+    )
+    .decided_by_timing();
     /// disc-index traversal updating the static points.
     pub const STATIC_TRAVERSAL: Column = measured(
         "static_traversal",
@@ -505,31 +594,36 @@ pub mod frame {
         "dynamic_traversal",
         "steps",
         "disc-index traversal of the dynamic points: segment–box slab tests + DDA steps (0 with the sphere cache)",
-    );
+    )
+.decided_by_timing();
     /// segments copied into the dynamic points' sphere-cache lists, root list included (0 with the disc index).
     pub const DYNAMIC_RAYS_COPIED: Column = measured(
         "dynamic_rays_copied",
         "segments",
         "segments copied into the dynamic points' sphere-cache lists, root list included (0 with the disc index)",
-    );
+    )
+.decided_by_timing();
     /// spheres the dynamic points' sphere cache built, root included (0 with the disc index).
     pub const DYNAMIC_SPHERES_BUILT: Column = measured(
         "dynamic_spheres_built",
         "spheres",
         "spheres the dynamic points' sphere cache built, root included (0 with the disc index)",
-    );
+    )
+    .decided_by_timing();
     /// segment-index cells read + segments tested to feed the dynamic points' engine (dynamic.feed; 0 when it gets every segment); not in dynamic_counted_cost.
     pub const DYNAMIC_FEED: Column = measured(
         "dynamic_feed",
         "steps",
         "segment-index cells read + segments tested to feed the dynamic points' engine (dynamic.feed; 0 when it gets every segment); not in dynamic_counted_cost",
-    );
+    )
+.decided_by_timing();
     /// the dynamic points' counted cost with the engine used.
     pub const DYNAMIC_COUNTED_COST: Column = measured(
         "dynamic_counted_cost",
         "tests",
         "the dynamic points' counted cost with the engine used: ray–disc + ray–sphere tests + box tests + DDA steps, weight 1 each (copies and the feed apart)",
-    );
+    )
+.decided_by_timing();
     /// Search seconds.
     pub const SEARCH_S: Column = timing("search_s", "s", "seconds finding the affected segments");
     /// Re-trace seconds.
@@ -537,7 +631,8 @@ pub mod frame {
     /// Static seconds.
     pub const STATIC_S: Column = timing("static_s", "s", "seconds updating the static points");
     /// Dynamic seconds.
-    pub const DYNAMIC_S: Column = timing("dynamic_s", "s", "seconds gathering the dynamic points");
+    pub const DYNAMIC_S: Column =
+        timing("dynamic_s", "s", "seconds gathering the dynamic points").decided_by_timing();
     /// Frame seconds.
     pub const FRAME_S: Column = timing("frame_s", "s", "seconds of the frame");
     /// Full recalculation seconds.
@@ -555,40 +650,75 @@ pub mod frame {
     );
 }
 
-/// `NAME.frames.csv`.
-pub const FRAMES_TABLE: &[Column] = &[
-    REPLICA,
-    FRAME,
-    frame::RETRACED_RAYS,
-    frame::RAYS_MEETING_OBJECT,
-    frame::PHOTONS_RETRACED,
-    SEGMENTS_REMOVED,
-    SEGMENTS_ADDED,
-    frame::SEGMENTS_RETRACED,
-    frame::SEARCH_CELLS,
-    SEARCH_LISTINGS,
-    frame::SEARCH_TESTS,
-    STATIC_DISC_TESTS,
-    STATIC_SPHERE_TESTS,
-    DYNAMIC_DISC_TESTS,
-    frame::DYNAMIC_SPHERE_TESTS,
-    frame::STATIC_TRAVERSAL,
-    frame::STATIC_RAYS_COPIED,
-    frame::STATIC_COUNTED_COST,
-    frame::DYNAMIC_TRAVERSAL,
-    frame::DYNAMIC_RAYS_COPIED,
-    frame::DYNAMIC_SPHERES_BUILT,
-    frame::DYNAMIC_FEED,
-    frame::DYNAMIC_COUNTED_COST,
-    ENGINE_USED,
-    frame::SEARCH_S,
-    frame::RETRACE_S,
-    frame::STATIC_S,
-    frame::DYNAMIC_S,
-    frame::FRAME_S,
-    frame::FULL_FRAME_S,
-    frame::FULL_MISMATCH,
-];
+/// `NAME.frames.csv`: one row per frame of every replica.
+pub const FRAMES_TABLE: Table<QuasiStaticConfig, FrameRow> = Table::of(&[
+    col(&REPLICA, |_, r| r.replica.into()),
+    col(&FRAME, |_, r| r.stats.frame.into()),
+    col(&frame::RETRACED_RAYS, |_, r| {
+        r.stats.affected_segments.into()
+    }),
+    col(&frame::RAYS_MEETING_OBJECT, |_, r| {
+        r.stats.meeting_new.into()
+    }),
+    col(&frame::PHOTONS_RETRACED, |_, r| {
+        r.stats.photons_retraced.into()
+    }),
+    col(&SEGMENTS_REMOVED, |_, r| r.stats.segments_removed.into()),
+    col(&SEGMENTS_ADDED, |_, r| r.stats.segments_added.into()),
+    col(&frame::SEGMENTS_RETRACED, |_, r| {
+        r.stats.segments_retraced.into()
+    }),
+    col(&frame::SEARCH_CELLS, |_, r| r.stats.search.cells.into()),
+    col(&SEARCH_LISTINGS, |_, r| r.stats.search.listings.into()),
+    col(&frame::SEARCH_TESTS, |_, r| r.stats.search.tested.into()),
+    col(&STATIC_DISC_TESTS, |_, r| r.stats.static_disc_tests.into()),
+    col(&STATIC_SPHERE_TESTS, |_, r| {
+        r.stats.static_sphere_tests.into()
+    }),
+    col(&DYNAMIC_DISC_TESTS, |_, r| {
+        r.stats.dynamic_disc_tests.into()
+    }),
+    col(&frame::DYNAMIC_SPHERE_TESTS, |_, r| {
+        r.stats.dynamic_sphere_tests.into()
+    }),
+    col(&frame::STATIC_TRAVERSAL, |_, r| {
+        r.stats.static_traversal.into()
+    }),
+    col(&frame::STATIC_RAYS_COPIED, |_, r| {
+        r.stats.static_rays_copied.into()
+    }),
+    col(&frame::STATIC_COUNTED_COST, |_, r| {
+        r.stats.static_counted_cost().into()
+    }),
+    col(&frame::DYNAMIC_TRAVERSAL, |_, r| {
+        r.stats.dynamic_traversal.into()
+    }),
+    col(&frame::DYNAMIC_RAYS_COPIED, |_, r| {
+        r.stats.dynamic_rays_copied.into()
+    }),
+    col(&frame::DYNAMIC_SPHERES_BUILT, |_, r| {
+        r.stats.dynamic_spheres_built.into()
+    }),
+    col(&frame::DYNAMIC_FEED, |_, r| r.stats.dynamic_feed.into()),
+    col(&frame::DYNAMIC_COUNTED_COST, |_, r| {
+        r.stats.dynamic_counted_cost().into()
+    }),
+    col(&ENGINE_USED, |_, r| {
+        let used: Vec<&str> = r.stats.used.iter().map(|u| u.as_str()).collect();
+        used.join("+").into()
+    }),
+    col(&frame::SEARCH_S, |_, r| r.stats.search_s.into()),
+    col(&frame::RETRACE_S, |_, r| r.stats.retrace_s.into()),
+    col(&frame::STATIC_S, |_, r| r.stats.static_s.into()),
+    col(&frame::DYNAMIC_S, |_, r| r.stats.dynamic_s.into()),
+    col(&frame::FRAME_S, |_, r| r.stats.frame_s.into()),
+    col(&frame::FULL_FRAME_S, |_, r| {
+        r.full.map_or(f64::NAN, |f| f.0).into()
+    }),
+    col(&frame::FULL_MISMATCH, |_, r| {
+        r.full.map_or(Value::missing(), |f| Value::U(f.1)).into()
+    }),
+]);
 
 /// Whether a point is on a dynamic object.
 pub const DYNAMIC: Column = measured("dynamic", "1", "1 if the point is on a dynamic object");
@@ -605,17 +735,17 @@ pub const POINT_IRRADIANCE_SE: Column = measured(
     "its Poisson standard error √(E·w̄/πd²)",
 );
 
-/// `NAME.points.csv`.
-pub const POINTS_TABLE: &[Column] = &[
-    detp::SAMPLE,
-    FRAME,
-    DYNAMIC,
-    detp::X,
-    detp::Y,
-    detp::Z,
-    detp::NX,
-    detp::NY,
-    detp::NZ,
-    POINT_IRRADIANCE,
-    POINT_IRRADIANCE_SE,
-];
+/// `NAME.points.csv`: the irradiance at one frame.
+pub const POINTS_TABLE: Table<QuasiStaticConfig, QsPointRow> = Table::of(&[
+    col(&detp::SAMPLE, |_, r| r.sample.into()),
+    col(&FRAME, |_, r| r.frame.into()),
+    col(&DYNAMIC, |_, r| r.dynamic.into()),
+    col(&detp::X, |_, r| r.center.x.into()),
+    col(&detp::Y, |_, r| r.center.y.into()),
+    col(&detp::Z, |_, r| r.center.z.into()),
+    col(&detp::NX, |_, r| r.normal.x.into()),
+    col(&detp::NY, |_, r| r.normal.y.into()),
+    col(&detp::NZ, |_, r| r.normal.z.into()),
+    col(&POINT_IRRADIANCE, |_, r| r.irradiance.into()),
+    col(&POINT_IRRADIANCE_SE, |_, r| r.se.into()),
+]);

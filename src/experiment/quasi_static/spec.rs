@@ -6,109 +6,56 @@
 //! anything is written: the scene must have a dynamic object; once scaled, no object may be as large
 //! as the scene, leave the scene's box at any frame, or overlap another object.
 
-use serde::{Deserialize, Serialize};
-
 use crate::detp::quasi_static::Feed;
-use crate::experiment::detp::spec::{DetpConfig, DynamicEngine, Points, RawDetp, Rays};
+use crate::experiment::detp::{DetpConfig, DynamicEngine, EngineChoice, Points, RawDetp, Rays};
 use crate::experiment::inputs::{Inputs, SceneFile};
 use crate::experiment::kind::{refuse, ConfigError};
 use crate::lt::Scene;
-use crate::spec::de::{count, count_or_zero, number, opt_count, opt_count_or_zero};
-use crate::spec::keys::{key, IfAbsent::*, KeyDoc};
-use crate::spec::RawExperiment;
+use crate::toml_text::de::{count, count_or_zero, number, opt_count, opt_count_or_zero};
 
-/// The keys of `[dynamic]` (`raycost doc spec`, checked against [`RawDynamicSpec`] by a test).
-pub const KEYS: &[KeyDoc] = &[
-    key("dynamic.frames", "integer", "frames", Required, "≥ 1",
-        "F: frames; frame 0 is the full trace, the objects sit at τ = f/(F − 1) of their motion."),
-    key("dynamic.ratio", "number", "", Absent("the objects' size in the scene"), "(0, 1)",
-        "r_D/r_0 of every dynamic object, each scaled about its centre (r_0: radius of the sphere around the static scene)."),
-    key("dynamic.crossover", "number", "", Absent("Theorem 2 at the run's Q and n_D"), "(0, 1)",
-        "The hybrid engine's crossover r_D/r_0: smaller objects use the sphere cache."),
-    key("dynamic.check_every", "integer", "frames", Value("1"), "≥ 0",
-        "Check every k-th frame (and the last) against a full recalculation (`full_mismatch`, `full_frame_s`); 0: never. A mismatch fails the run (exit 1)."),
-    key("dynamic.points_frame", "integer", "", Absent("the last frame"), "0 … frames − 1",
-        "The frame whose irradiance goes to `NAME.points.csv` (with `detp.write_points`)."),
-    key("dynamic.reference_photons", "integer", "photons", Absent("no reference"), "≥ 1",
-        "Photons of a reference full recalculation of the last frame (another seed); the run's error against it is `irradiance_rmse`."),
-    key("dynamic.predict", "number", "", Absent("0.05 with `detp.engine = \"predicted\"`, else none"), "(0, 1]",
-        "The §4.1 predictor: the fraction of the photons whose segments predict each engine's cost at frame 0."),
-    key("dynamic.feed", "string", "", Value("\"paper\""), "`\"paper\"`, `\"segment-index\"`, `\"all\"`",
-        "Which segments the dynamic points' engines get: Theorem 2's model (the sphere cache the segment index's answer, the disc index every segment), both the segment index's answer, or both every segment."),
-];
-
-/// The spec file of kind `quasi-static`: `[experiment]`, `[detp]`, `[dynamic]` and `[sweep]`.
-#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct QuasiStaticSpec {
-    /// `[experiment]`.
-    pub experiment: RawExperiment,
-    /// `[detp]`.
-    pub detp: RawDetp,
-    /// `[dynamic]` (required; missing is reported at `dynamic`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub dynamic: Option<RawDynamicSpec>,
-    /// `[sweep]`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub sweep: Option<toml::Table>,
+crate::spec_file! {
+    /// The spec file of kind `quasi-static`: `[experiment]`, `[detp]`, `[dynamic]` and `[sweep]`.
+    pub struct QuasiStaticSpec {
+        /// `[detp]`.
+        detp: RawDetp = {table};
+        /// `[dynamic]` (required; missing is reported at `dynamic`).
+        dynamic: Option<RawDynamicSpec> = {optional_table};
+    }
 }
 
-/// `[dynamic]`: frames, the objects' r_D/r_0, the hybrid crossover, the full-recalculation check
-/// period, the points table's frame, a reference run and the engine predictor.
-#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct RawDynamicSpec {
-    /// F: frames (frame 0 is the full trace; τ = f/(F − 1)).
-    #[serde(deserialize_with = "count")]
-    pub frames: u64,
-    /// r_D/r_0 of every dynamic object (each scaled about its centre); absent: as in the scene.
-    #[serde(
-        default,
-        deserialize_with = "opt_ratio",
-        skip_serializing_if = "Option::is_none"
-    )]
-    pub ratio: Option<f64>,
-    /// The hybrid engine's crossover r_D/r_0 (default: Theorem 2 at the run's Q and n_D).
-    #[serde(
-        default,
-        deserialize_with = "opt_ratio",
-        skip_serializing_if = "Option::is_none"
-    )]
-    pub crossover: Option<f64>,
-    /// Check every k-th frame against a full recalculation (`full_mismatch`, `full_frame_s`);
-    /// 0: never. The last frame is always checked when k > 0.
-    #[serde(default = "one", deserialize_with = "count_or_zero")]
-    pub check_every: u64,
-    /// The frame whose irradiance is written to `NAME.points.csv` (with `detp.write_points`);
-    /// default the last.
-    #[serde(
-        default,
-        deserialize_with = "opt_count_or_zero",
-        skip_serializing_if = "Option::is_none"
-    )]
-    pub points_frame: Option<u64>,
-    /// Photons of a reference full recalculation of the last frame (another seed): the run's
-    /// irradiance error against it goes to `irradiance_rmse` (relative). Absent: no reference.
-    #[serde(
-        default,
-        deserialize_with = "opt_count",
-        skip_serializing_if = "Option::is_none"
-    )]
-    pub reference_photons: Option<u64>,
-    /// The §4.1 predictor: the fraction of the photons whose segments predict each engine's cost
-    /// at frame 0 (with `detp.engine = "predicted"` the prediction picks the engine; default 0.05).
-    #[serde(
-        default,
-        deserialize_with = "opt_fraction",
-        skip_serializing_if = "Option::is_none"
-    )]
-    pub predict: Option<f64>,
-    /// Which segments the dynamic points' engines get: `"paper"` (default; Theorem 2's model: the
-    /// sphere cache gets the segment index's answer for the object's sphere padded by d, the disc
-    /// index every segment), `"segment-index"` (both get that answer) or `"all"` (both get every
-    /// segment).
-    #[serde(default)]
-    pub feed: FeedChoice,
+crate::spec_table! {
+    /// `[dynamic]`: frames, the objects' r_D/r_0, the hybrid crossover, the full-recalculation
+    /// check period, the points table's frame, a reference run and the engine predictor.
+    pub struct RawDynamicSpec {
+        /// F: frames; frame 0 is the full trace, the objects sit at τ = f/(F − 1) of their motion.
+        frames: u64 = {required} read count, "integer", "frames", "≥ 1";
+        /// r_D/r_0 of every dynamic object, each scaled about its centre (r_0: radius of the
+        /// sphere around the static scene).
+        ratio: Option<f64> = {absent "the objects' size in the scene"} read opt_ratio,
+            "number", "", "(0, 1)";
+        /// The hybrid engine's crossover r_D/r_0: smaller objects use the sphere cache.
+        crossover: Option<f64> = {absent "Theorem 2 at the run's Q and n_D"} read opt_ratio,
+            "number", "", "(0, 1)";
+        /// Check every k-th frame (and the last) against a full recalculation (`full_mismatch`,
+        /// `full_frame_s`); 0: never. A mismatch fails the run (exit 1).
+        check_every: u64 = {default 1} read count_or_zero, "integer", "frames", "≥ 0";
+        /// The frame whose irradiance goes to `NAME.points.csv` (with `detp.write_points`).
+        points_frame: Option<u64> = {absent "the last frame"} read opt_count_or_zero,
+            "integer", "", "0 … frames − 1";
+        /// Photons of a reference full recalculation of the last frame (another seed); the run's
+        /// error against it is `irradiance_rmse`.
+        reference_photons: Option<u64> = {absent "no reference"} read opt_count,
+            "integer", "photons", "≥ 1";
+        /// The §4.1 predictor: the fraction of the photons whose segments predict each engine's
+        /// cost at frame 0.
+        predict: Option<f64> = {absent "0.05 with `detp.engine = \"predicted\"`, else none"}
+            read opt_fraction, "number", "", "(0, 1]";
+        /// Which segments the dynamic points' engines get: Theorem 2's model (the sphere cache
+        /// the segment index's answer, the disc index every segment), both the segment index's
+        /// answer, or both every segment.
+        feed: FeedChoice = {default FeedChoice::Paper}, "string", "",
+            "`\"paper\"`, `\"segment-index\"`, `\"all\"`";
+    }
 }
 
 crate::choice!(
@@ -126,10 +73,6 @@ fn opt_fraction<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f64>, D
             "got {x}, expected a fraction of the photons in (0, 1]"
         )))
     }
-}
-
-fn one() -> u64 {
-    1
 }
 
 fn opt_ratio<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
@@ -207,28 +150,13 @@ impl QuasiStaticConfig {
                 "kind quasi-static runs the paper's method only (its incremental updates keep the stored segments and d); the remedies are measured by kind \"detp\"",
             );
         }
-        if detp.engines != [crate::experiment::detp::spec::EngineChoice::SphereCache] {
+        if detp.engines != [EngineChoice::SphereCache] {
             return refuse(
                 "detp.engines",
                 "kind quasi-static chooses its engine per object with detp.engine (hybrid, sphere-cache, disc-index, predicted)",
             );
         }
-        if let Some(n) = dy.reference_photons {
-            if n > 1 << 31 {
-                return refuse("dynamic.reference_photons", format!("got {n}, at most 2³¹"));
-            }
-        }
-        if dy.frames > 1 << 20 {
-            return refuse("dynamic.frames", format!("got {}, at most 2²⁰", dy.frames));
-        }
-        if let Some(f) = dy.points_frame {
-            if f >= dy.frames {
-                return refuse(
-                    "dynamic.points_frame",
-                    format!("got {f}, the frames are 0…{}", dy.frames - 1),
-                );
-            }
-        }
+        dy.check()?;
         let scene = scaled(file, dy.ratio)?;
         // A size or motion problem is the scene's, or the ratio's when the spec rescales.
         let blame = if dy.ratio.is_some() {
@@ -260,6 +188,33 @@ impl QuasiStaticConfig {
                 .or((d.engine == Some(DynamicEngine::Predicted)).then_some(0.05)),
             warnings,
         })
+    }
+}
+
+impl RawDynamicSpec {
+    /// The rules within `[dynamic]`: at most 2²⁰ frames, a points frame among them, at most 2³¹
+    /// reference photons.
+    fn check(&self) -> Result<(), ConfigError> {
+        if let Some(n) = self.reference_photons {
+            if n > 1 << 31 {
+                return refuse("dynamic.reference_photons", format!("got {n}, at most 2³¹"));
+            }
+        }
+        if self.frames > 1 << 20 {
+            return refuse(
+                "dynamic.frames",
+                format!("got {}, at most 2²⁰", self.frames),
+            );
+        }
+        if let Some(f) = self.points_frame {
+            if f >= self.frames {
+                return refuse(
+                    "dynamic.points_frame",
+                    format!("got {f}, the frames are 0…{}", self.frames - 1),
+                );
+            }
+        }
+        Ok(())
     }
 }
 

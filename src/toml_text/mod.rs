@@ -1,5 +1,13 @@
-//! Where a key or a byte offset sits in a TOML text, for error messages that name the line and
-//! column (`FILE:LINE:COL: KEY: …`). Shared by specs and scene files; knows nothing of either.
+//! TOML text as every input file reads it, below every layer that reads one (specs, scene files,
+//! the claims file): where a key or a byte offset sits in the text, for error messages that name the
+//! line and column (`FILE:LINE:COL: KEY: …`); serde readers that locate a bad value and check its
+//! range where it is read ([`de`]); a text read once into its tree and the places of its keys and
+//! values ([`document`]); and the declarations of the keys a user writes, from which the key lists
+//! and the reference docs come ([`keys`]). Knows nothing of specs or scenes.
+
+pub mod de;
+pub mod document;
+pub mod keys;
 
 /// 1-based (line, column) of byte offset `at` in `text`.
 pub fn line_col(text: &str, at: usize) -> (usize, usize) {

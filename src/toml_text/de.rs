@@ -10,7 +10,7 @@
 use serde::de::DeserializeOwned;
 use serde::{de::Error as _, Deserialize, Deserializer};
 
-use crate::toml_text::line_col;
+use super::line_col;
 
 /// A problem with one dotted key, before it is located in a file (the spec layer adds file, line
 /// and column, or the `--set` flag it came from).
@@ -65,6 +65,24 @@ pub fn from_tree<T: DeserializeOwned>(tree: &toml::Table) -> Result<T, KeyError>
         let p = e.path().to_string();
         KeyError::new(p, e.into_inner().message().trim().to_string())
     })
+}
+
+/// A reader of one key's value: a range-checked function of this module, or a type's own
+/// `Deserialize` (what [`crate::spec_table!`] reads each field with).
+pub trait Reader {
+    /// What it reads.
+    type Value;
+    /// Reads the value, refusing it with "got …, expected …".
+    fn read<'de, D: Deserializer<'de>>(d: D) -> Result<Self::Value, D::Error>;
+}
+
+/// A value read by the reader `R` (a field of a [`crate::spec_table!`] struct's shadow).
+pub struct Checked<R: Reader>(pub R::Value);
+
+impl<'de, R: Reader> Deserialize<'de> for Checked<R> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        R::read(d).map(Checked)
+    }
 }
 
 /// `Ok(x)` when x is finite and > 0, else "got x, expected a finite number > 0".
@@ -225,6 +243,7 @@ macro_rules! choice {
             fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> { s.serialize_str(self.as_str()) }
         }
         impl Default for $name { fn default() -> Self { $name::$d } }
+        impl $crate::toml_text::keys::Omit for $name {}
     };
 }
 

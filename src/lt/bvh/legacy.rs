@@ -1,45 +1,11 @@
-//! A bounding-volume hierarchy over triangles that answers what DETP needs: the nearest
-//! intersection after t_min *and* the next one beyond it along the same line (the paper counts
-//! crossings up to the second intersection).
-//!
-//! Binary, split at the median centroid of the longest centroid axis, leaves of at most 4
-//! triangles (a scene of at most 64 is one leaf); traversal keeps the two smallest t found so far and skips every box that starts
-//! beyond the second. Boxes are padded by 10⁻⁹ of the scene's magnitude, and a NaN slab (a ray in a
-//! box's face plane) counts as a hit, so traversal never drops a triangle the exact test accepts.
+//! The BVH of f3d7ed0 (binary, median split, f64 boxes padded by 10⁻⁹ of the scene's size,
+//! unordered traversal), kept for the tests only: the new core must answer as it did.
+#![allow(dead_code)]
 
 use glam::DVec3;
 
-use super::shapes::Triangle;
-
-/// The two nearest (t, triangle) along a ray; t = +∞ where there is none.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TwoNearest {
-    /// Nearest.
-    pub first: (f64, u32),
-    /// Next beyond it.
-    pub second: (f64, u32),
-}
-
-impl TwoNearest {
-    const EMPTY: Self = Self {
-        first: (f64::INFINITY, u32::MAX),
-        second: (f64::INFINITY, u32::MAX),
-    };
-
-    /// Offers a candidate. Equal t from a different triangle (a ray through a shared edge) is the
-    /// same crossing, not a second one.
-    #[inline]
-    pub fn offer(&mut self, t: f64, id: u32) {
-        if t < self.first.0 {
-            if self.first.0 - t > 1e-12 * t.abs().max(1.0) {
-                self.second = self.first;
-            }
-            self.first = (t, id);
-        } else if t < self.second.0 && t - self.first.0 > 1e-12 * t.abs().max(1.0) {
-            self.second = (t, id);
-        }
-    }
-}
+use super::TwoNearest;
+use crate::lt::shapes::Triangle;
 
 #[derive(Clone, Copy, Debug)]
 struct Node {
@@ -237,111 +203,5 @@ impl Bvh {
             }
         }
         best
-    }
-}
-
-impl Bvh {
-    /// Calls `f` with every triangle whose node box comes within `r` of `p` (a superset of the
-    /// triangles within `r`: the caller measures each).
-    pub fn near(&self, p: DVec3, r: f64, f: &mut dyn FnMut(u32)) {
-        if self.nodes.is_empty() {
-            return;
-        }
-        let mut stack = vec![0u32];
-        while let Some(k) = stack.pop() {
-            let n = self.nodes[k as usize];
-            let q = p.clamp(n.lo, n.hi);
-            if (q - p).length_squared() > r * r {
-                continue;
-            }
-            if n.count > 0 {
-                for &i in &self.order[n.start as usize..(n.start + n.count) as usize] {
-                    f(i);
-                }
-            } else {
-                stack.push(n.start);
-                stack.push(n.start + 1);
-            }
-        }
-    }
-}
-
-/// The same answer by testing every triangle (the oracle).
-pub fn two_nearest_brute(
-    tris: &[Triangle],
-    o: DVec3,
-    d: DVec3,
-    t_min: f64,
-    skip: u32,
-) -> TwoNearest {
-    let mut best = TwoNearest::EMPTY;
-    for (i, t) in tris.iter().enumerate() {
-        if i as u32 != skip {
-            if let Some(t) = t.intersect(o, d, t_min) {
-                best.offer(t, i as u32);
-            }
-        }
-    }
-    best
-}
-
-impl Default for TwoNearest {
-    fn default() -> Self {
-        Self::EMPTY
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::sample::{directions::uniform_direction, rng::stream};
-    use rand::Rng;
-
-    #[test]
-    fn bvh_equals_brute_force_on_random_triangles_and_rays() {
-        let mut rng = stream(&[77]);
-        let tris: Vec<Triangle> = (0..3000)
-            .map(|k| {
-                let c = DVec3::new(rng.gen(), rng.gen(), rng.gen()) * 10.0;
-                Triangle {
-                    v: [
-                        c,
-                        c + uniform_direction(&mut rng) * 0.5,
-                        c + uniform_direction(&mut rng) * 0.5,
-                    ],
-                    surface: k,
-                }
-            })
-            .collect();
-        let bvh = Bvh::build(&tris);
-        for k in 0..5000 {
-            let o = DVec3::new(rng.gen(), rng.gen(), rng.gen()) * 10.0;
-            let mut d = uniform_direction(&mut rng);
-            if k % 7 == 0 {
-                d = DVec3::X; // axis-parallel: slab NaNs and infinities
-            }
-            let mut got = TwoNearest::default();
-            bvh.two_nearest(&tris, o, d, 1e-9, u32::MAX, &mut got);
-            assert_eq!(
-                got,
-                two_nearest_brute(&tris, o, d, 1e-9, u32::MAX),
-                "ray {k}"
-            );
-            assert_eq!(
-                bvh.nearest(&tris, o, d, 1e-9, u32::MAX).0,
-                got.first.0,
-                "nearest, ray {k}"
-            );
-        }
-    }
-
-    #[test]
-    fn equal_t_on_a_shared_edge_is_one_crossing() {
-        let mut b = TwoNearest::default();
-        b.offer(2.0, 0);
-        b.offer(2.0, 1);
-        b.offer(5.0, 2);
-        assert_eq!(b.first, (2.0, 0));
-        assert_eq!(b.second, (5.0, 2));
     }
 }

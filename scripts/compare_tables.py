@@ -1,0 +1,139 @@
+#!/usr/bin/env python3
+"""Compare the result tables of two result folders, column class by column class.
+
+    python3 scripts/compare_tables.py OLD_DIR NEW_DIR
+
+Both folders hold experiment folders (`NAME/NAME.csv`, `NAME/NAME.TABLE.csv`, `NAME/NAME.meta.toml`),
+as `raycost run --out DIR` writes them. For every table of every experiment in OLD_DIR, the same
+table must exist in NEW_DIR with the same header (names and order) and the same classes in its
+metadata; every column that is not of class `timing` (read from `[[columns.TABLE]]` of each table's
+`NAME.meta.toml`) must be equal byte for byte in every row. Timing columns (seconds, rates and what
+a clock decided) are the only ones allowed to differ between two runs of one spec and seed.
+
+Prints one line per table: "N measured columns of M compared, 0 differ", or the first differences;
+exits 1 on any difference (or a missing table), 0 otherwise.
+"""
+
+import argparse
+import csv
+import sys
+import tomllib
+from pathlib import Path
+
+# Differences printed per table before the rest are only counted.
+SHOWN = 5
+
+
+def classes(meta_path: Path) -> dict:
+    """{table: [(column, class), ...]} from a NAME.meta.toml."""
+    meta = tomllib.loads(meta_path.read_text())
+    return {
+        table: [(c["name"], c["class"]) for c in cols]
+        for table, cols in meta.get("columns", {}).items()
+    }
+
+
+def read_csv(path: Path):
+    with path.open(newline="") as f:
+        rows = list(csv.reader(f))
+    return rows[0], rows[1:]
+
+
+def table_files(exp_dir: Path, name: str):
+    """(table name, path) of every CSV of one experiment: `main` and its side tables."""
+    out = []
+    for p in sorted(exp_dir.glob(f"{name}*.csv")):
+        rest = p.name[len(name):]
+        if rest == ".csv":
+            out.append(("main", p))
+        elif rest.startswith(".") and rest.count(".") == 2:
+            out.append((rest[1:-4], p))
+    return out
+
+
+def compare_table(label, old_path, new_path, old_cls, new_cls):
+    """Returns (ok, line)."""
+    problems = []
+    if not new_path.exists():
+        return False, f"{label}: missing in the new folder"
+    old_header, old_rows = read_csv(old_path)
+    new_header, new_rows = read_csv(new_path)
+    if old_header != new_header:
+        gone = [c for c in old_header if c not in new_header]
+        added = [c for c in new_header if c not in old_header]
+        return False, (
+            f"{label}: headers differ (only old: {gone[:8]}, only new: {added[:8]}"
+            + ("" if gone or added else ", same names in another order")
+            + ")"
+        )
+    if old_cls != new_cls:
+        diff = [(a, b) for a, b in zip(old_cls, new_cls) if a != b]
+        problems.append(f"classes differ in the metadata: {diff[:5]}")
+    declared = dict(old_cls)
+    undeclared = [c for c in old_header if c not in declared]
+    if undeclared:
+        problems.append(f"columns without a class in the metadata: {undeclared[:5]}")
+    compared = [i for i, c in enumerate(old_header) if declared.get(c, "measured") != "timing"]
+    if len(old_rows) != len(new_rows):
+        problems.append(f"{len(old_rows)} rows in the old table, {len(new_rows)} in the new")
+    differ = 0
+    shown = []
+    for r, (a, b) in enumerate(zip(old_rows, new_rows)):
+        for i in compared:
+            if a[i] != b[i]:
+                differ += 1
+                if len(shown) < SHOWN:
+                    shown.append(f"row {r} {old_header[i]}: {a[i]!r} → {b[i]!r}")
+    if differ:
+        problems.append(f"{differ} cell(s) differ: " + "; ".join(shown))
+    line = (
+        f"{label}: {len(compared)} measured columns of {len(old_header)} compared, "
+        f"{len(old_rows)} rows, {differ} differ"
+    )
+    if problems:
+        return False, line + " — " + " | ".join(problems)
+    return True, line
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("old", type=Path, help="folder of the reference results")
+    ap.add_argument("new", type=Path, help="folder of the results to check")
+    args = ap.parse_args()
+    ok_all = True
+    n_tables = 0
+    experiments = sorted(p for p in args.old.iterdir() if (p / f"{p.name}.meta.toml").is_file())
+    if not experiments:
+        print(f"no experiment folders (NAME/NAME.meta.toml) in {args.old}", file=sys.stderr)
+        return 1
+    for exp in experiments:
+        name = exp.name
+        new_exp = args.new / name
+        if not (new_exp / f"{name}.meta.toml").is_file():
+            print(f"{name}: no {name}.meta.toml in {args.new}")
+            ok_all = False
+            continue
+        old_meta, new_meta = classes(exp / f"{name}.meta.toml"), classes(new_exp / f"{name}.meta.toml")
+        old_tables = table_files(exp, name)
+        new_tables = {t for t, _ in table_files(new_exp, name)}
+        for extra in sorted(new_tables - {t for t, _ in old_tables}):
+            print(f"{name}.{extra}: only in the new folder")
+            ok_all = False
+        for table, path in old_tables:
+            n_tables += 1
+            label = name if table == "main" else f"{name}.{table}"
+            ok, line = compare_table(
+                label,
+                path,
+                new_exp / path.name,
+                old_meta.get(table, []),
+                new_meta.get(table, []),
+            )
+            ok_all &= ok
+            print(("" if ok else "DIFFERS ") + line)
+    print(f"{n_tables} tables of {len(experiments)} experiments: " + ("all equal in their measured columns" if ok_all else "DIFFERENCES"))
+    return 0 if ok_all else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,375 @@
+//! One DETP point, from its replicas to its typed measurement: every replica's rays through every
+//! engine ([`replicate`]), then the point's pooled values ([`measure`]): the counts, each engine's
+//! measurement, the engines' agreement, DETP's irradiance per disc and its accuracy against the exact
+//! value and the path-traced reference, the levels table and (if asked) the points table.
+//! `columns.rs` declares how each value becomes a column.
+
+use glam::DVec3;
+
+use super::config::DetpConfig;
+use super::engines::{self, EngineMeasured, Law, LevelRow, Output, Pooled, ReferenceCache, Sizes};
+use super::spec::EngineChoice;
+use super::{agree, points, rays, PointSet};
+use crate::error::Error;
+use crate::stats::Estimate;
+
+/// What one DETP point measured.
+#[derive(Clone, Debug)]
+pub struct DetpMeasured {
+    /// Segments in the stores, summed over replicas.
+    pub segments: u64,
+    /// Sample points.
+    pub points: usize,
+    /// Seconds making the rays, summed over replicas.
+    pub trace_s: f64,
+    /// Seconds on `detp.edge`'s remedy.
+    pub edge_s: f64,
+    /// Mean disc radius over d.
+    pub edge_radius: f64,
+    /// Each engine's measurement, in the point's engine order.
+    pub engines: Vec<EngineMeasured>,
+    /// Discs where the DETP engines or brute force disagree.
+    pub mismatches: u64,
+    /// Discs re-computed by brute force.
+    pub bf_checked: u64,
+    /// Surface points skipped as covered.
+    pub points_covered: Option<u64>,
+    /// Accuracy against engine `reference`, where it ran.
+    pub reference: Option<AgainstReference>,
+    /// DETP's mean irradiance over the judged discs.
+    pub irradiance: Estimate,
+    /// The exact mean over them (NaN without a closed form).
+    pub exact_mean: f64,
+    /// DETP's RMSE against the exact irradiance.
+    pub irradiance_rmse: Estimate,
+    /// DETP's mean error against it.
+    pub irradiance_bias: Estimate,
+    /// Segments per second of engine time.
+    pub rays_per_s: f64,
+}
+
+/// The engines against the path-traced reference.
+#[derive(Clone, Copy, Debug)]
+pub struct AgainstReference {
+    /// The reference's irradiance averaged over the points.
+    pub irradiance: Estimate,
+    /// Its mean standard error.
+    pub mean_se: f64,
+    /// DETP's bias and RMSE against it.
+    pub detp: (Estimate, Estimate),
+    /// The photon map's, where it ran.
+    pub photon_map: Option<(Estimate, Estimate)>,
+}
+
+/// One row of `NAME.points.csv`.
+#[derive(Clone, Debug)]
+pub struct PointRow {
+    /// The sample's index.
+    pub sample: usize,
+    /// Its position.
+    pub center: DVec3,
+    /// Its normal.
+    pub normal: DVec3,
+    /// Its disc radius.
+    pub disc_radius: f64,
+    /// DETP's irradiance (mean over replicas).
+    pub mean: f64,
+    /// Its standard error.
+    pub se: f64,
+    /// Its value in each replica (with ≥ 2 replicas).
+    pub replicas: Vec<f64>,
+    /// The exact value (NaN without one).
+    pub exact: f64,
+    /// Each baseline's (column stem, estimate, SE).
+    pub baselines: Vec<(&'static str, f64, f64)>,
+}
+
+/// What the replicas of one point leave.
+pub(super) struct Replicated {
+    pts: PointSet,
+    engines: Vec<Box<dyn engines::Engine>>,
+    /// DETP's irradiance per disc, per replica.
+    irr: Vec<Vec<f64>>,
+    law_radius: f64,
+    root_radius: f64,
+    mean_segment_watts: f64,
+    segments: u64,
+    rays_in_root: u64,
+    trace_s: f64,
+    edge_s: f64,
+    mismatches: u64,
+    bf_checked: u64,
+}
+
+/// Every replica through every engine.
+pub(super) fn replicate(
+    cfg: &DetpConfig,
+    point: u64,
+    progress: &(dyn Fn(u64) + Sync),
+    refs: &ReferenceCache,
+) -> Result<Replicated, Error> {
+    let pts = points(cfg, point)?;
+    let mut r = Replicated {
+        engines: cfg
+            .engines
+            .iter()
+            .map(|&e| engines::engine(e, refs))
+            .collect(),
+        irr: Vec::with_capacity(cfg.replicas as usize),
+        law_radius: 1.0,
+        root_radius: 1.0,
+        mean_segment_watts: 0.0,
+        segments: 0,
+        rays_in_root: 0,
+        trace_s: 0.0,
+        edge_s: pts.edge_s,
+        mismatches: 0,
+        bf_checked: 0,
+        pts,
+    };
+    for replica in 0..cfg.replicas {
+        let rays = rays(cfg, point, replica, &r.pts);
+        let scale = rays.store.scale;
+        r.law_radius = rays.law_radius;
+        r.root_radius = rays.root.1;
+        r.segments += rays.store.len() as u64;
+        r.rays_in_root += rays.rays_in_root;
+        r.trace_s += rays.trace_s;
+        r.edge_s += rays.edge_s;
+        if !rays.store.is_empty() {
+            r.mean_segment_watts = rays
+                .store
+                .segments
+                .iter()
+                .map(|s| scale.watts(i64::from(s.power)))
+                .sum::<f64>()
+                / rays.store.len() as f64;
+        }
+        let sums: Vec<Vec<_>> = r
+            .engines
+            .iter_mut()
+            .filter_map(|e| match e.run(cfg, &rays, &r.pts) {
+                Output::Sums(s) => Some(s),
+                Output::Baseline => None,
+            })
+            .collect();
+        let a = agree(cfg, point, replica, &rays, &r.pts, &sums);
+        r.mismatches += a.mismatches;
+        r.bf_checked += a.bf_checked;
+        let discs = &r.pts.discs;
+        r.irr.push(
+            a.sums
+                .iter()
+                .enumerate()
+                .map(|(i, &s)| discs.irradiance(i, scale.watts(s)))
+                .collect(),
+        );
+        progress(cfg.photons);
+    }
+    Ok(r)
+}
+
+/// The mean of `values` over the indices `judged`.
+fn mean_over(values: &[f64], judged: &[usize]) -> f64 {
+    judged.iter().map(|&i| values[i]).sum::<f64>() / judged.len().max(1) as f64
+}
+
+/// What the point measured, its levels and points rows, and its warnings.
+pub(super) fn measure(
+    cfg: &DetpConfig,
+    r: &Replicated,
+) -> (DetpMeasured, Vec<LevelRow>, Vec<PointRow>, Vec<String>) {
+    let discs = &r.pts.discs;
+    let reps = cfg.replicas as f64;
+    let pooled = Pooled {
+        cfg,
+        sizes: Sizes {
+            reps,
+            n_r: r.rays_in_root as f64 / reps,
+            n_p: discs.len() as f64,
+        },
+        exact: &r.pts.exact,
+    };
+    let detp_points = per_disc(r);
+    // Baselines' estimates per disc, and every engine against the reference where it runs.
+    let baselines: Vec<(EngineChoice, Vec<(f64, f64)>)> = cfg
+        .engines
+        .iter()
+        .zip(&r.engines)
+        .filter_map(|(&c, e)| e.per_point(&pooled).map(|v| (c, v)))
+        .collect();
+    let reference = against_reference(cfg, r, &detp_points, &baselines);
+    let (irradiance, exact_mean) = mean_irradiance(r);
+    let errs: Vec<(f64, f64)> = r
+        .irr
+        .iter()
+        .map(|e| engines::errors(e, &r.pts.exact))
+        .collect();
+    let engine_s: f64 = r.engines.iter().map(|e| e.seconds()).sum();
+    let law = Law {
+        root_radius: r.root_radius,
+        law_radius: r.law_radius,
+        lines: cfg.scene().is_none(),
+    };
+    let levels = r
+        .engines
+        .iter()
+        .flat_map(|e| e.levels(&pooled, &law))
+        .collect();
+    let rows = if cfg.write_points {
+        point_rows(r, &detp_points, &baselines)
+    } else {
+        Vec::new()
+    };
+    let mut warnings = Vec::new();
+    if !discs.is_empty() && r.irr.iter().all(|e| e.iter().all(|&x| x == 0.0)) {
+        warnings.push(format!(
+            "no photon crossed any of the {} discs: the irradiance is 0 everywhere (do the lights face the points? is d too small for {} photons?)",
+            discs.len(),
+            cfg.photons
+        ));
+    }
+    let measured = DetpMeasured {
+        segments: r.segments,
+        points: discs.len(),
+        trace_s: r.trace_s,
+        edge_s: r.edge_s,
+        edge_radius: (0..discs.len())
+            .map(|i| discs.radius_of(i) / discs.radius)
+            .sum::<f64>()
+            / discs.len().max(1) as f64,
+        engines: r.engines.iter().map(|e| e.measured(&pooled)).collect(),
+        mismatches: r.mismatches,
+        bf_checked: r.bf_checked,
+        points_covered: r.pts.covered,
+        reference,
+        irradiance,
+        exact_mean,
+        irradiance_rmse: engines::per_replica(&errs.iter().map(|e| e.0).collect::<Vec<_>>()),
+        irradiance_bias: engines::per_replica(&errs.iter().map(|e| e.1).collect::<Vec<_>>()),
+        rays_per_s: r.segments as f64 / engine_s.max(1e-12),
+    };
+    (measured, levels, rows, warnings)
+}
+
+/// DETP's estimate per disc: mean over replicas, SE across them (or, with one replica, the Poisson
+/// SE of a sum of segments of the mean segment power: √(E·w̄/πd²)).
+fn per_disc(r: &Replicated) -> Vec<(f64, f64)> {
+    let discs = &r.pts.discs;
+    (0..discs.len())
+        .map(|i| {
+            let v: Vec<f64> = r.irr.iter().map(|e| e[i]).collect();
+            let mut est = engines::per_replica(&v);
+            if r.irr.len() == 1 {
+                est.se = (est.mean.max(0.0) * r.mean_segment_watts / discs.area(i)).sqrt();
+            }
+            (est.mean, est.se)
+        })
+        .collect()
+}
+
+/// DETP and the photon map against engine `reference`, where it ran.
+fn against_reference(
+    cfg: &DetpConfig,
+    r: &Replicated,
+    detp_points: &[(f64, f64)],
+    baselines: &[(EngineChoice, Vec<(f64, f64)>)],
+) -> Option<AgainstReference> {
+    let (_, refr) = baselines
+        .iter()
+        .find(|(c, _)| *c == EngineChoice::Reference)?;
+    let n = refr.len().max(1) as f64;
+    let se2: f64 = refr.iter().map(|r| r.1 * r.1).sum();
+    let photon_map = baselines
+        .iter()
+        .find(|(c, _)| *c == EngineChoice::PhotonMap)
+        .map(|(_, pm)| {
+            let pm_replicas = cfg
+                .engines
+                .iter()
+                .zip(&r.engines)
+                .find(|(&c, _)| c == EngineChoice::PhotonMap)
+                .map_or_else(Vec::new, |(_, e)| e.replica_points());
+            engines::against_reference(pm, &pm_replicas, refr)
+        });
+    Some(AgainstReference {
+        irradiance: Estimate {
+            mean: refr.iter().map(|r| r.0).sum::<f64>() / n,
+            se: se2.sqrt() / n,
+            n: refr.len() as u64,
+            clusters: refr.len() as u64,
+        },
+        mean_se: refr.iter().map(|r| r.1).sum::<f64>() / n,
+        detp: engines::against_reference(detp_points, &r.irr, refr),
+        photon_map,
+    })
+}
+
+/// DETP's mean irradiance and the exact mean, over the discs with an exact value (all of them where
+/// none has one, so the mean irradiance is still reported).
+fn mean_irradiance(r: &Replicated) -> (Estimate, f64) {
+    let (discs, exact) = (&r.pts.discs, &r.pts.exact);
+    let with_exact: Vec<usize> = (0..discs.len()).filter(|&i| exact[i].is_finite()).collect();
+    let judged: Vec<usize> = if with_exact.is_empty() {
+        (0..discs.len()).collect()
+    } else {
+        with_exact
+    };
+    let exact_mean = if exact.iter().any(|x| x.is_finite()) {
+        mean_over(exact, &judged)
+    } else {
+        f64::NAN
+    };
+    let mut mean_irr = engines::per_replica(
+        &r.irr
+            .iter()
+            .map(|e| mean_over(e, &judged))
+            .collect::<Vec<_>>(),
+    );
+    if r.irr.len() == 1 && !judged.is_empty() {
+        // One replica: the Poisson SE of the mean over the n judged points, each point's sum
+        // counted as independent (as the points table does per point): √(Σ Ē·w̄/(π·d_i²))/n, which
+        // is √(Ē·w̄/(πd²·n)) when every disc has radius d. With it the mean is judged against an
+        // exact value instead of "n/a".
+        let n = judged.len() as f64;
+        let var: f64 = judged
+            .iter()
+            .map(|&i| mean_irr.mean.max(0.0) * r.mean_segment_watts / discs.area(i))
+            .sum();
+        mean_irr.se = var.sqrt() / n;
+        mean_irr.clusters = judged.len() as u64;
+    }
+    (mean_irr, exact_mean)
+}
+
+/// The points table: DETP's estimate and SE per disc, its value in each replica, then each
+/// baseline's.
+fn point_rows(
+    r: &Replicated,
+    detp_points: &[(f64, f64)],
+    baselines: &[(EngineChoice, Vec<(f64, f64)>)],
+) -> Vec<PointRow> {
+    let discs = &r.pts.discs;
+    detp_points
+        .iter()
+        .enumerate()
+        .map(|(i, &(mean, se))| PointRow {
+            sample: i,
+            center: discs.centers[i],
+            normal: discs.normals[i],
+            disc_radius: discs.radius_of(i),
+            mean,
+            se,
+            replicas: if r.irr.len() >= 2 {
+                r.irr.iter().map(|e| e[i]).collect()
+            } else {
+                Vec::new()
+            },
+            exact: r.pts.exact[i],
+            baselines: baselines
+                .iter()
+                .map(|(c, v)| (c.column(), v[i].0, v[i].1))
+                .collect(),
+        })
+        .collect()
+}

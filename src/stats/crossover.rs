@@ -1,0 +1,476 @@
+//! Which method when (issue 27): the seconds each method needs to reach a target relative RMSE,
+//! and the number of points N* beyond which DETP beats per-point path tracing, with a bootstrap CI
+//! over replicas — or "never" with the reason. Pure functions of measured summaries.
+//!
+//! Errors are relative RMSEs over a point set: √(mean_i (Ê_i − E_i)²) / mean_i E_i, as the `detp`
+//! kind reports them against the reference (its own variance subtracted).
+//!
+//! - **Path tracing** is unbiased and its points are independent: with n paths per point its
+//!   relative RMSE is cv/√n, where cv = √(mean_i σ_i²)/mean_i E_i and σ_i² is the per-path variance
+//!   at point i. A target ε needs n = ⌈(cv/ε)²⌉ paths per point, and n_P points cost n_P·n·t_path:
+//!   linear in n_P, nothing paid once.
+//! - **DETP** (and the photon map) has relative MSE B + c/N in its photon count N
+//!   ([`ErrorFit`]), independent of n_P (a point's error depends on the photons and d, not on how many
+//!   other points there are). A target ε needs N_ε = c/(ε² − B) photons, and none if √B ≥ ε (a
+//!   bias floor). Its seconds are [`CostModel::seconds`](N_ε, n_P).
+//! - **The crossover** N* solves T_DETP(n_P) = T_PT(n_P). With D(x) = T_DETP(x) − T_PT(x) =
+//!   A + b·N_ε·x^γ + (c − p)·x (A = fixed + a·N_ε > 0, p = n·t_path the path tracer's seconds per
+//!   point, γ ∈ [0, 1]), D is concave with D(0) = A > 0, so it has at most one positive root: DETP
+//!   wins beyond it. It exists iff DETP's seconds per added point eventually fall below the path
+//!   tracer's: b·N_ε + c < p for γ = 1, c < p for γ < 1. Otherwise "never": DETP's cost per point
+//!   (its tests per disc, i.e. its variance per disc) is not below the path tracer's.
+//! - **Frames**: F frames of a quasi-static scene cost DETP T₁ + (F − 1)·t_f (the first frame in
+//!   full, then incremental frames) against F·T_PT; DETP wins from F* = (T₁ − t_f)/(T_PT − t_f)
+//!   frames on, if t_f < T_PT ([`frames_crossover`]).
+//!
+//! CIs come from a percentile bootstrap over replicas ([`bootstrap`]): replicas are the independent
+//! units (a replica's points share its photons), so whole replicas are resampled, the summaries
+//! recomputed and the statistic re-derived; "never" counts as +∞ (an upper bound of +∞ says the
+//! data cannot exclude that DETP never wins). Seconds are taken as given (their spread across
+//! replicas is small next to the errors'; the load at measurement time is reported beside them).
+
+use super::fit::{CostModel, ErrorFit};
+use crate::sample::rng::{domain, stream};
+
+/// Per-point path tracing's cost and noise.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathTracingCost {
+    /// cv: √(mean_i σ_i²) / mean_i E_i, the relative RMSE of one path per point.
+    pub cv: f64,
+    /// Seconds per path (wall clock on the threads used).
+    pub seconds_per_path: f64,
+}
+
+impl PathTracingCost {
+    /// cv from the per-path variances σ_i² at the points and their true irradiances E_i.
+    pub fn cv_from(variances: &[f64], truth: &[f64]) -> f64 {
+        let n = variances.len().min(truth.len()) as f64;
+        let var = variances.iter().sum::<f64>() / n;
+        let mean = truth.iter().sum::<f64>() / n;
+        var.sqrt() / mean
+    }
+
+    /// cv² from the path tracer's own errors against the truth: `rel_mse[k]` is its relative MSE
+    /// (the truth's variance subtracted) after `paths[k]` paths per point, e.g. at the prefix
+    /// checkpoints of one run. Unbiased, mse(n) = cv²/n; least squares with relative weights
+    /// 1/mse(n)² ∝ n² gives cv² = mean_k(n_k·mse_k). Where rare bright paths make the per-path
+    /// sample variance unstable (heavy tails: a secondary vertex close to a point light), this reads
+    /// the error as it is, not as the variance formula says it should be.
+    pub fn cv2_from_prefix_errors(paths: &[f64], rel_mse: &[f64]) -> f64 {
+        let n = paths.len().min(rel_mse.len()) as f64;
+        paths.iter().zip(rel_mse).map(|(p, m)| p * m).sum::<f64>() / n
+    }
+
+    /// Paths per point for a relative RMSE of `target`: ⌈(cv/target)²⌉, at least 1.
+    pub fn paths_for(&self, target: f64) -> u64 {
+        // A hair below the integer it should be is that integer (rounding of cv and target).
+        let n = (self.cv / target).powi(2) * (1.0 - 1e-12);
+        (n.ceil() as u64).max(1)
+    }
+
+    /// Seconds per point at `target`.
+    pub fn seconds_per_point(&self, target: f64) -> f64 {
+        self.paths_for(target) as f64 * self.seconds_per_path
+    }
+
+    /// Seconds for `points` points at `target`.
+    pub fn seconds(&self, points: f64, target: f64) -> f64 {
+        points * self.seconds_per_point(target)
+    }
+}
+
+/// Why DETP never beats path tracing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Never {
+    /// DETP's error floor (√B, relative) is at or above the target: no photon count reaches it.
+    BiasFloor {
+        /// √B.
+        floor: f64,
+        /// The target relative RMSE.
+        target: f64,
+    },
+    /// DETP's seconds per added point are not below the path tracer's at the target.
+    PerPointCost {
+        /// DETP's seconds per added point, for many points (b·N_ε + c for γ = 1, c for γ < 1).
+        detp: f64,
+        /// The path tracer's seconds per point.
+        path_tracing: f64,
+    },
+    /// DETP's seconds per further (incremental) frame are not below the path tracer's per frame.
+    PerFrameCost {
+        /// DETP's seconds per incremental frame.
+        detp: f64,
+        /// The path tracer's seconds per frame.
+        path_tracing: f64,
+    },
+}
+
+/// Where DETP starts to win.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Crossover {
+    /// DETP is faster beyond this many points (or frames): a real number, round it up for a count.
+    At(f64),
+    /// It never is.
+    Never(Never),
+}
+
+impl Crossover {
+    /// The crossover as a number, +∞ for never.
+    pub fn value(&self) -> f64 {
+        match self {
+            Crossover::At(x) => *x,
+            Crossover::Never(_) => f64::INFINITY,
+        }
+    }
+}
+
+/// DETP's seconds for `points` points at relative RMSE `target`, or why it cannot reach it.
+pub fn detp_seconds(
+    error: &ErrorFit,
+    cost: &CostModel,
+    points: f64,
+    target: f64,
+) -> Result<f64, Never> {
+    match error.photons_for(target) {
+        Some(n) => Ok(cost.seconds(n, points)),
+        None => Err(Never::BiasFloor {
+            floor: error.floor(),
+            target,
+        }),
+    }
+}
+
+/// N*: the number of points beyond which DETP (error `error`, cost `cost`) reaches `target` faster
+/// than path tracing (`pt`). See the module doc.
+pub fn points_crossover(
+    pt: &PathTracingCost,
+    error: &ErrorFit,
+    cost: &CostModel,
+    target: f64,
+) -> Crossover {
+    let Some(n) = error.photons_for(target) else {
+        return Crossover::Never(Never::BiasFloor {
+            floor: error.floor(),
+            target,
+        });
+    };
+    let p = pt.seconds_per_point(target);
+    let d = |x: f64| cost.seconds(n, x) - p * x;
+    let once = cost.seconds(n, 0.0);
+    let per_point = if cost.gamma >= 1.0 {
+        cost.per_photon_point * n + cost.per_point
+    } else {
+        cost.per_point
+    };
+    if per_point >= p {
+        return Crossover::Never(Never::PerPointCost {
+            detp: per_point,
+            path_tracing: p,
+        });
+    }
+    if once <= 0.0 {
+        return Crossover::At(0.0);
+    }
+    if cost.gamma >= 1.0 || cost.per_photon_point == 0.0 {
+        return Crossover::At(once / (p - per_point));
+    }
+    // γ < 1: D is concave, D(0) > 0 and D → −∞; bracket the one root, then bisect.
+    let mut hi = once / (p - per_point);
+    while d(hi) > 0.0 && hi < f64::MAX / 4.0 {
+        hi *= 2.0;
+    }
+    let mut lo = 0.0;
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if d(mid) > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Crossover::At(hi)
+}
+
+/// F*: the frames beyond which DETP — `first_s` for the first frame, `frame_s` for each further
+/// (incremental) frame — costs less in all than path tracing at `pt_frame_s` per frame.
+pub fn frames_crossover(first_s: f64, frame_s: f64, pt_frame_s: f64) -> Crossover {
+    if frame_s >= pt_frame_s {
+        return Crossover::Never(Never::PerFrameCost {
+            detp: frame_s,
+            path_tracing: pt_frame_s,
+        });
+    }
+    Crossover::At(((first_s - frame_s) / (pt_frame_s - frame_s)).max(1.0))
+}
+
+/// A statistic with its percentile bootstrap interval.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Interval {
+    /// The statistic on all replicas.
+    pub estimate: f64,
+    /// Lower bound (+∞ values sort last).
+    pub lo: f64,
+    /// Upper bound (+∞: not bounded).
+    pub hi: f64,
+    /// Fraction of resamples whose statistic was +∞ ("never").
+    pub never_fraction: f64,
+}
+
+/// Percentile bootstrap over `replicas` independent replicas: `stat` receives the replica indices
+/// of one resample (with repetition; all of them, in order, for the estimate) and returns the
+/// statistic (+∞ for "never"). `draws` resamples from the stream `[BOOTSTRAP, seed]`, at two-sided
+/// `level` (e.g. 0.95).
+///
+/// # Panics
+/// With no replica, no draw, or a level outside (0, 1).
+pub fn bootstrap(
+    replicas: usize,
+    draws: usize,
+    level: f64,
+    seed: u64,
+    stat: impl Fn(&[usize]) -> f64,
+) -> Interval {
+    assert!(replicas >= 1 && draws >= 1 && level > 0.0 && level < 1.0);
+    let all: Vec<usize> = (0..replicas).collect();
+    let estimate = stat(&all);
+    let mut rng = stream(&[domain::BOOTSTRAP, seed]);
+    let mut values: Vec<f64> = (0..draws)
+        .map(|_| {
+            let pick: Vec<usize> = (0..replicas)
+                .map(|_| rand::Rng::gen_range(&mut rng, 0..replicas))
+                .collect();
+            stat(&pick)
+        })
+        .collect();
+    values.sort_by(f64::total_cmp);
+    let at = |q: f64| values[((q * draws as f64).floor() as usize).min(draws - 1)];
+    Interval {
+        estimate,
+        lo: at(0.5 - 0.5 * level),
+        hi: at(0.5 + 0.5 * level),
+        never_fraction: values.iter().filter(|v| v.is_infinite()).count() as f64 / draws as f64,
+    }
+}
+
+/// What one replica measured, for the crossover's bootstrap.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReplicaErrors {
+    /// DETP's relative MSE at each photon count of the analysis (this replica alone, the truth's
+    /// variance subtracted).
+    pub detp_mse: Vec<f64>,
+    /// The path tracer's cv² in this replica: mean_i σ_i² / (mean_i E_i)².
+    pub pt_cv2: f64,
+}
+
+/// N* with its bootstrap interval: each resample averages the replicas' MSE curves and cv², refits
+/// B + c/N and re-derives N* (costs fixed). The estimate is from all replicas.
+#[allow(clippy::too_many_arguments)] // the measured summaries, the target and the bootstrap's knobs
+pub fn points_crossover_interval(
+    photons: &[f64],
+    replicas: &[ReplicaErrors],
+    seconds_per_path: f64,
+    cost: &CostModel,
+    target: f64,
+    draws: usize,
+    level: f64,
+    seed: u64,
+) -> (Crossover, Interval) {
+    let at = |pick: &[usize]| {
+        let k = pick.len() as f64;
+        let mse: Vec<f64> = (0..photons.len())
+            .map(|j| pick.iter().map(|&r| replicas[r].detp_mse[j]).sum::<f64>() / k)
+            .collect();
+        let cv2 = pick.iter().map(|&r| replicas[r].pt_cv2).sum::<f64>() / k;
+        let pt = PathTracingCost {
+            cv: cv2.sqrt(),
+            seconds_per_path,
+        };
+        points_crossover(&pt, &ErrorFit::fit_relative(photons, &mse), cost, target)
+    };
+    let all: Vec<usize> = (0..replicas.len()).collect();
+    let estimate = at(&all);
+    let interval = bootstrap(replicas.len(), draws, level, seed, |p| at(p).value());
+    (estimate, interval)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cost(per_photon_point: f64, per_point: f64, gamma: f64) -> CostModel {
+        CostModel {
+            fixed: 0.01,
+            per_photon: 1e-6,
+            per_photon_point,
+            per_point,
+            gamma,
+        }
+    }
+
+    #[test]
+    fn paths_per_point_follow_cv_over_target_squared() {
+        let pt = PathTracingCost {
+            cv: 1.0,
+            seconds_per_path: 2e-6,
+        };
+        assert_eq!(pt.paths_for(0.1), 100);
+        assert_eq!(pt.paths_for(0.05), 400);
+        assert_eq!(pt.paths_for(0.03), 1112);
+        assert_eq!(pt.paths_for(2.0), 1, "one path at least");
+        assert!((pt.seconds(1000.0, 0.1) - 1000.0 * 100.0 * 2e-6).abs() < 1e-15);
+        // cv: pooled variance over the mean truth.
+        let cv = PathTracingCost::cv_from(&[4.0, 16.0], &[1.0, 3.0]);
+        assert!((cv - 10f64.sqrt() / 2.0).abs() < 1e-15);
+        // From prefix errors: mse = cv²/n exactly gives cv² back.
+        let paths = [1.0, 2.0, 4.0, 8.0, 1024.0];
+        let mse: Vec<f64> = paths.iter().map(|n| 2.25 / n).collect();
+        assert!((PathTracingCost::cv2_from_prefix_errors(&paths, &mse) - 2.25).abs() < 1e-12);
+    }
+
+    /// γ = 1: the closed form A/(p − bN − c), at which both methods take the same seconds.
+    #[test]
+    fn the_points_crossover_equalises_the_seconds() {
+        let pt = PathTracingCost {
+            cv: 1.2,
+            seconds_per_path: 2e-6,
+        };
+        let err = ErrorFit {
+            floor2: 0.01f64.powi(2),
+            c: 50.0,
+        };
+        let model = cost(1e-12, 2e-6, 1.0);
+        for target in [0.1, 0.05, 0.02] {
+            let Crossover::At(x) = points_crossover(&pt, &err, &model, target) else {
+                panic!("a crossover at {target}");
+            };
+            let d = detp_seconds(&err, &model, x, target).expect("reachable");
+            let p = pt.seconds(x, target);
+            assert!((d / p - 1.0).abs() < 1e-9, "{target}: {d} vs {p} at {x}");
+            // Beyond it DETP is faster, before it slower.
+            assert!(
+                detp_seconds(&err, &model, 2.0 * x, target).unwrap() < pt.seconds(2.0 * x, target)
+            );
+            assert!(
+                detp_seconds(&err, &model, 0.5 * x, target).unwrap() > pt.seconds(0.5 * x, target)
+            );
+        }
+    }
+
+    /// γ < 1: the bisection finds the one root of the concave difference.
+    #[test]
+    fn a_sublinear_point_cost_crosses_once() {
+        let pt = PathTracingCost {
+            cv: 1.0,
+            seconds_per_path: 1e-6,
+        };
+        let err = ErrorFit {
+            floor2: 0.0,
+            c: 10.0,
+        };
+        let model = cost(1e-9, 1e-6, 0.5);
+        let Crossover::At(x) = points_crossover(&pt, &err, &model, 0.05) else {
+            panic!("a crossover");
+        };
+        let d = detp_seconds(&err, &model, x, 0.05).unwrap();
+        assert!((d / pt.seconds(x, 0.05) - 1.0).abs() < 1e-9, "{x}");
+    }
+
+    #[test]
+    fn never_says_why() {
+        let pt = PathTracingCost {
+            cv: 1.0,
+            seconds_per_path: 1e-6,
+        };
+        let biased = ErrorFit {
+            floor2: 0.08f64.powi(2),
+            c: 10.0,
+        };
+        assert_eq!(
+            points_crossover(&pt, &biased, &cost(0.0, 1e-6, 1.0), 0.05),
+            Crossover::Never(Never::BiasFloor {
+                floor: 0.08,
+                target: 0.05
+            })
+        );
+        // Reachable (N_ε = 10/0.05² = 4000 photons), but each added point costs DETP
+        // b·N_ε = 1 s against the path tracer's 400 paths × 1 µs.
+        let unbiased = ErrorFit {
+            floor2: 0.0,
+            c: 10.0,
+        };
+        match points_crossover(&pt, &unbiased, &cost(2.5e-4, 0.0, 1.0), 0.05) {
+            Crossover::Never(Never::PerPointCost { detp, path_tracing }) => {
+                assert!((detp - 1.0).abs() < 1e-12 && (path_tracing - 4e-4).abs() < 1e-15);
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn frames_crossover_balances_the_totals() {
+        let Crossover::At(f) = frames_crossover(10.0, 0.5, 2.5) else {
+            panic!("a crossover");
+        };
+        assert!((10.0 + (f - 1.0) * 0.5 - f * 2.5).abs() < 1e-12);
+        assert_eq!(
+            frames_crossover(10.0, 3.0, 2.5),
+            Crossover::Never(Never::PerFrameCost {
+                detp: 3.0,
+                path_tracing: 2.5
+            })
+        );
+        // A first frame already cheaper than path tracing's: DETP wins from the first frame.
+        assert_eq!(frames_crossover(1.0, 0.5, 2.5), Crossover::At(1.0));
+    }
+
+    /// The bootstrap's interval covers the spread of the replicas and is reproducible.
+    #[test]
+    fn the_bootstrap_interval_brackets_the_mean_of_replicas() {
+        let values = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0];
+        let mean = |p: &[usize]| p.iter().map(|&i| values[i]).sum::<f64>() / p.len() as f64;
+        let a = bootstrap(values.len(), 2000, 0.95, 7, mean);
+        assert_eq!(a, bootstrap(values.len(), 2000, 0.95, 7, mean));
+        assert!((a.estimate - 4.5).abs() < 1e-12);
+        // SE of the mean: 2.29/√8 = 0.81; a 95 % interval about ±1.6.
+        assert!(
+            a.lo < 4.5 && a.hi > 4.5 && a.hi - a.lo > 2.0 && a.hi - a.lo < 4.5,
+            "{a:?}"
+        );
+        assert_eq!(a.never_fraction, 0.0);
+        // "Never" in some resamples: an unbounded upper end.
+        let b = bootstrap(values.len(), 2000, 0.95, 7, |p| {
+            if p.iter().filter(|&&i| i == 0).count() >= 2 {
+                f64::INFINITY
+            } else {
+                1.0
+            }
+        });
+        assert!(b.never_fraction > 0.05 && b.hi.is_infinite(), "{b:?}");
+    }
+
+    /// Replicas whose DETP error curve has a floor near the target: the interval of N* is wide, and
+    /// "never" shows up in the resamples where the floor exceeds the target.
+    #[test]
+    fn the_crossover_interval_sees_a_floor_near_the_target() {
+        let photons = [5e4, 2e5, 8e5];
+        let make = |floor: f64, cv2: f64| ReplicaErrors {
+            detp_mse: photons.iter().map(|&n| floor * floor + 100.0 / n).collect(),
+            pt_cv2: cv2,
+        };
+        let clear: Vec<ReplicaErrors> =
+            (0..6).map(|k| make(0.01 + 0.001 * k as f64, 1.0)).collect();
+        let model = cost(1e-12, 1e-6, 1.0);
+        let (est, ci) =
+            points_crossover_interval(&photons, &clear, 2e-6, &model, 0.05, 500, 0.95, 1);
+        let Crossover::At(x) = est else {
+            panic!("{est:?}")
+        };
+        assert!(ci.lo <= x && x <= ci.hi && ci.hi.is_finite(), "{x} {ci:?}");
+        let near: Vec<ReplicaErrors> = [0.03, 0.04, 0.05, 0.06, 0.07]
+            .iter()
+            .map(|&f| make(f, 1.0))
+            .collect();
+        let (_, ci) = points_crossover_interval(&photons, &near, 2e-6, &model, 0.05, 500, 0.95, 1);
+        assert!(ci.never_fraction > 0.1 && ci.hi.is_infinite(), "{ci:?}");
+    }
+}
