@@ -467,7 +467,11 @@ impl RawSurface {
                     return Err(cx.err(key("path"), "an obj surface needs a path"));
                 };
                 let file: PathBuf = cx.dir.join(p);
-                if let Err(why) = crate::error::regular_input(&file) {
+                // A FIFO or device is refused by what it is; a missing file by the OBJ reader.
+                if let Err(why) = file
+                    .metadata()
+                    .map_or(Ok(()), |_| crate::error::regular_input(&file))
+                {
                     return Err(cx.err(key("path"), format!("{}: {why}", file.display())));
                 }
                 parts.sources.push((file.clone(), "obj"));
