@@ -79,7 +79,8 @@ Examples:
   raycost merge results/detp-big            # its NAME.photon-shard-*-of-N.json: sums added
   raycost merge a/x.shard-0-of-2.csv b/x.shard-1-of-2.csv --out x.csv")]
     Merge(MergeArgs),
-    /// Render the DETP irradiance of a quasi-static spec's frame(s), seen from the scene's camera.
+    /// Render the DETP radiosity (B = albedo·E/π) of a quasi-static spec's frame(s), seen from the
+    /// scene's camera.
     #[command(after_help = "\
 Examples:
   raycost render experiments/render-cornell.toml --frame 3 --out cornell.png

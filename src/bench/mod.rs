@@ -286,7 +286,7 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         .chain(qs_rows.iter().map(|_| Vec::new()))
         .chain(lt_rows.iter().map(|_| Vec::new()));
     for (row, side) in table::union_columns(&rows).iter().zip(sides) {
-        sink.append(row, &side)
+        sink.append(row, &side, &meta)
             .context("could not append to the bench table")?;
     }
     let mut bench = toml::Table::new();
@@ -436,7 +436,11 @@ impl<T: Clone> Answers<T> {
 
 /// How many rays got a different answer (`key`) on one thread than on all.
 fn differing<T, K: PartialEq>(a: &Answers<T>, key: impl Fn(&T) -> K) -> u64 {
-    a.one.iter().zip(&a.all).filter(|(x, y)| key(x) != key(y)).count() as u64
+    a.one
+        .iter()
+        .zip(&a.all)
+        .filter(|(x, y)| key(x) != key(y))
+        .count() as u64
 }
 
 /// Embree's first hit per ray: (sphere, t).

@@ -35,13 +35,17 @@ pub use crate::output::table::{col, Cell, Cells, Entry, Line, Table};
 use crate::toml_text::de::{from_tree, KeyError};
 use crate::toml_text::keys::{keys_of, KeyDoc, SpecTable};
 
-/// What a point does, for progress and ETA: `units` of `unit` (rays, photons, photon-frames).
+/// What a point does, for progress and ETA: `units` of `unit` (rays, photons, photon-frames); and
+/// for `raycost check`'s total, the sample points each unit meets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Work {
     /// How many.
     pub units: u64,
     /// Of what (plural noun).
     pub unit: &'static str,
+    /// Sample points each unit is held against (DETP's discs); 1 where units meet no points (rays
+    /// of the grid kinds, lines). `check` sums `units × points` and warns above its threshold.
+    pub points: u64,
 }
 
 /// Memory a point needs before it allocates: one entry per large structure.

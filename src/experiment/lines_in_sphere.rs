@@ -106,6 +106,7 @@ impl Kind for LinesInSphereKind {
         Work {
             units: p.count,
             unit: "lines",
+            points: 1,
         }
     }
     fn shared(_: &[&LinesPoint]) -> Result<(), Error> {

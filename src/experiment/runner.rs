@@ -156,6 +156,7 @@ mod interrupt {
                 let kept = KEPT.lock().ok().and_then(|m| m.clone());
                 let kept = kept.unwrap_or_else(|| "before any point finished".into());
                 eprintln!("\nerror: interrupted: {kept} (the point in progress is lost)");
+                crate::output::folder::release_locks();
                 std::process::exit(130);
             });
         });
@@ -209,16 +210,12 @@ type Finished = (usize, String, ErasedOutput, f64);
 
 /// The warnings of this shard's points known before running, each once.
 fn known_warnings(plan: &Plan, mine: &[usize]) -> Vec<String> {
-    let mut warnings: Vec<String> = Vec::new();
-    for &i in mine {
-        for w in plan.points[i].warnings() {
-            let w = format!("point {i}: {w}");
-            if !warnings.contains(&w) {
-                warnings.push(w);
-            }
-        }
-    }
-    warnings
+    crate::output::meta::point_warnings(
+        &mine
+            .iter()
+            .flat_map(|&i| plan.points[i].warnings().into_iter().map(move |w| (i, w)))
+            .collect::<Vec<_>>(),
+    )
 }
 
 /// Runs `plan`; returns the written paths and the summary text.
@@ -248,6 +245,7 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
     if let Some(then) = sink.previous() {
         meta.columns = then.columns.clone();
     }
+    meta.warnings.extend(sink.notes().iter().cloned());
     // Warnings are printed even with --quiet (which silences progress and the summary only).
     for w in &meta.warnings {
         eprintln!("warning: {w}");
@@ -366,9 +364,18 @@ fn keep_point(
     sink: &mut Sink,
 ) -> Result<Finished, Error> {
     let kind = plan.kind;
-    check_declared(kind, "main", std::slice::from_ref(&out.row))?;
+    // An overflow names the point and its parameters, not only the column.
+    let at = |e: Error| {
+        let params: Vec<String> = plan.spec.points[i]
+            .params
+            .iter()
+            .map(|(k, v)| format!("{k} = {}", crate::spec::sweep::show(v)))
+            .collect();
+        Error::internal(format!("point {i} ({}): {e:#}", params.join(", ")))
+    };
+    check_declared(kind, "main", std::slice::from_ref(&out.row)).map_err(at)?;
     for (name, rows) in &out.tables {
-        check_declared(kind, name, rows)?;
+        check_declared(kind, name, rows).map_err(at)?;
     }
     let row = with_point_columns(i, &plan.params[i], &out.row);
     let side: Vec<(&'static str, Vec<Row>)> = out
@@ -385,7 +392,7 @@ fn keep_point(
             record_columns(&mut meta.columns, name, r);
         }
     }
-    sink.append(&row, &side)
+    sink.append(&row, &side, meta)
         .map_err(|e| Error::Internal(e.into()))
         .context_with(|| format!("could not append point {i}"))?;
     for w in &out.warnings {
@@ -574,6 +581,7 @@ mod tests {
             Work {
                 units: 1,
                 unit: "points",
+                points: 1,
             }
         }
         fn shared(_: &[&f64]) -> Result<(), Error> {

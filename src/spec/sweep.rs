@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::error::InputError;
-use crate::toml_text::de::{from_tree, opt_count, KeyError};
+use crate::toml_text::de::{from_tree, opt_count, seed, KeyError};
 use crate::toml_text::document::Document;
 use crate::toml_text::find_key;
 
@@ -33,13 +33,23 @@ crate::spec_table! {
         kind: String = {required}, "string", "", "a kind of `raycost doc kinds`";
         /// Master seed of every random stream: the same spec and seed give the same measured
         /// columns on any machine, thread count or shard split.
-        seed: u64 = {default 1}, "integer", "", "0 … 2⁶⁴ − 1";
+        seed: u64 = {default 1} read seed, "integer", "", "0 … 2⁶³ − 1 (TOML's largest integer)";
         /// Rays traced per sweep point (DETP kinds count their rays in `detp.photons`, lines in
         /// `lines.count`).
         rays: Option<u64> = {absent "required by the grid kinds, unused by others"}
             read opt_count, "integer", "rays", "≥ 1 (grid: ≤ 10¹⁰)";
         /// Free text copied into `NAME.meta.toml`.
         description: Option<String> = {absent "none"}, "string", "", "any text";
+    }
+}
+
+/// A value as a message shows it: floats in their shortest form, in scientific notation when very
+/// large or small (`1e-200`, not 200 zeros), everything else as TOML writes it.
+pub fn show(v: &toml::Value) -> String {
+    match v {
+        toml::Value::Float(x) => format!("{x:?}"),
+        toml::Value::Array(a) => format!("[{}]", a.iter().map(show).collect::<Vec<_>>().join(", ")),
+        other => other.to_string(),
     }
 }
 
@@ -292,7 +302,7 @@ impl Spec {
                 p.index,
                 p.params
                     .iter()
-                    .map(|(k, v)| format!("{k} = {v}"))
+                    .map(|(k, v)| format!("{k} = {}", show(v)))
                     .collect::<Vec<_>>()
                     .join(", ")
             ),

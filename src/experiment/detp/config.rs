@@ -474,6 +474,13 @@ fn disc_radius(d: &RawDetp, points: &Points, rays: &Rays) -> Result<f64, ConfigE
             format!("d = {disc_radius:e} is larger than {}: a tangent disc must be small against the scene", reach.1),
         );
     }
+    // Enough of f64 left for d and the scene at the scene's coordinates (issue 26).
+    if let Rays::Scene(s) = rays {
+        s.scene
+            .precision()
+            .check(disc_radius)
+            .or_else(|m| refuse("detp.scene", m))?;
+    }
     Ok(disc_radius)
 }
 

@@ -398,6 +398,7 @@ impl Kind for DetpKind {
             } else {
                 "lines"
             },
+            points: p.point_count(),
         }
     }
     fn memory(p: &DetpConfig, threads: usize) -> Memory {

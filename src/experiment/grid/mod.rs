@@ -122,6 +122,7 @@ impl<V: GridVariant> Kind for Grid<V> {
         Work {
             units: p.rays,
             unit: "rays",
+            points: 1,
         }
     }
     fn memory(p: &GridConfig, threads: usize) -> Memory {

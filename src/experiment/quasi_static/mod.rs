@@ -315,6 +315,7 @@ impl Kind for QuasiStaticKind {
         Work {
             units: p.detp.photons * u64::from(p.frames) * p.detp.replicas.max(1),
             unit: "photon-frames",
+            points: p.detp.point_count(),
         }
     }
     /// DETP's needs, and the segment index of the incremental frames: about segments/64 cubic cells
