@@ -76,9 +76,30 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>, force: bool) -> Result<Merg
         .into_iter()
         .map(Shard::load)
         .collect::<Result<_, _>>()?;
-    let first = &shards[0];
+    check_same_run(&shards)?;
+    let total = shards[0].points_total;
+    // Main table: one header, every point exactly once, in its own shard.
+    let with_rows: Vec<&Shard> = shards.iter().filter(|s| s.main.header.is_some()).collect();
+    let header = with_rows.first().and_then(|s| s.main.header.clone());
+    for s in &with_rows[..] {
+        check_header(&s.main, &with_rows[0].main)?;
+    }
+    check_main_rows(&shards, n, total)?;
+    let table_names = check_side_tables(&shards)?;
+    let outputs = Outputs::new(out, &shards[0], &name, &table_names)?;
+    let _out_lock = outputs.claim(&shards, force)?;
+    let contents = outputs.assemble(&shards, header, total, n);
+    outputs.publish(&contents)?;
+    Ok(Merged {
+        shards: n,
+        points: total,
+        written: outputs.all,
+    })
+}
 
-    // One spec, one version, one sweep size.
+/// One spec, one version, one set of inputs, one sweep size.
+fn check_same_run(shards: &[Shard]) -> Result<(), OutputError> {
+    let first = &shards[0];
     for s in &shards[1..] {
         if s.spec_hash != first.spec_hash {
             return Err(err(
@@ -118,16 +139,14 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>, force: bool) -> Result<Merg
             ));
         }
     }
-    let total = first.points_total;
+    Ok(())
+}
 
-    // Main table: one header, every point exactly once, in its own shard.
-    let with_rows: Vec<&Shard> = shards.iter().filter(|s| s.main.header.is_some()).collect();
-    let header = with_rows.first().and_then(|s| s.main.header.clone());
-    for s in &with_rows[..] {
-        check_header(&s.main, &with_rows[0].main)?;
-    }
+/// Every point exactly once, in its own shard, and each shard's rows the points its metadata
+/// lists.
+fn check_main_rows(shards: &[Shard], n: usize, total: usize) -> Result<(), OutputError> {
     let mut seen: BTreeMap<usize, (&Path, u64)> = BTreeMap::new();
-    for s in &shards {
+    for s in shards {
         for r in &s.main.rows {
             if r.point >= total {
                 return Err(err(
@@ -166,7 +185,7 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>, force: bool) -> Result<Merg
             seen.insert(r.point, (&s.main.path, r.line));
         }
     }
-    for s in &shards {
+    for s in shards {
         let missing: Vec<usize> = (s.k..total)
             .step_by(n)
             .filter(|p| !seen.contains_key(p))
@@ -206,15 +225,19 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>, force: bool) -> Result<Merg
         }
     }
 
-    // Side tables (e.g. `hist`): every shard with points has the same ones, with one header, and
-    // their rows belong to points of the shard's main table.
+    Ok(())
+}
+
+/// Side tables (e.g. `hist`): every shard with points has the same ones, with one header, and
+/// their rows belong to points of the shard's main table. Returns their names.
+fn check_side_tables(shards: &[Shard]) -> Result<BTreeSet<String>, OutputError> {
     let mut table_names: BTreeSet<String> = BTreeSet::new();
-    for s in &shards {
+    for s in shards {
         table_names.extend(s.tables.keys().cloned());
     }
     for t in &table_names {
         let mut reference: Option<&Table> = None;
-        for s in &shards {
+        for s in shards {
             let Some(tab) = s.tables.get(t) else {
                 if s.main.rows.is_empty() {
                     continue;
@@ -246,112 +269,165 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>, force: bool) -> Result<Merg
         }
     }
 
-    // Output paths; refuse to replace anything without --force.
-    let main_out = match out {
-        Some(p) => {
-            if p.extension().and_then(|e| e.to_str()) != Some("csv") {
-                return Err(err(p, "--out must name the merged .csv file (its .hist.csv and .meta.toml go beside it)"));
+    Ok(table_names)
+}
+
+/// Where a merge writes: the main table, each side table beside it, the metadata.
+struct Outputs {
+    main: PathBuf,
+    /// The main table's path without `.csv`.
+    base: String,
+    meta: PathBuf,
+    /// Every output, the main table first and the metadata last.
+    all: Vec<PathBuf>,
+}
+
+impl Outputs {
+    /// The paths for `--out` (or `NAME.csv` beside the first shard).
+    fn new(
+        out: Option<&Path>,
+        first: &Shard,
+        name: &str,
+        table_names: &BTreeSet<String>,
+    ) -> Result<Self, OutputError> {
+        let main = match out {
+            Some(p) => {
+                if p.extension().and_then(|e| e.to_str()) != Some("csv") {
+                    return Err(err(p, "--out must name the merged .csv file (its .hist.csv and .meta.toml go beside it)"));
+                }
+                p.to_path_buf()
             }
-            p.to_path_buf()
-        }
-        None => first.csv.with_file_name(format!("{name}.csv")),
-    };
-    let base = main_out
-        .to_string_lossy()
-        .strip_suffix(".csv")
-        .map(str::to_string)
-        .unwrap_or_default();
-    let table_out = |t: &str| PathBuf::from(format!("{base}.{t}.csv"));
-    let meta_out = PathBuf::from(format!("{base}.meta.toml"));
-    let mut outputs: Vec<PathBuf> = vec![main_out.clone()];
-    outputs.extend(table_names.iter().map(|t| table_out(t)));
-    outputs.push(meta_out.clone());
-    let read: Vec<&Path> = shards.iter().flat_map(Shard::files).collect();
-    for p in &outputs {
-        if let Some(input) = read.iter().find(|r| same_file(p, r)) {
-            return Err(err(
-                p,
-                format!(
-                    "would overwrite {}, which this merge reads; choose another --out",
-                    input.display()
-                ),
-            ));
-        }
-    }
-    let out_dir = parent_dir(&main_out);
-    fs::create_dir_all(out_dir)
-        .map_err(|e| err(out_dir, format!("cannot create the folder: {e}")))?;
-    let out_stem = Path::new(&base)
-        .file_name()
-        .map_or_else(String::new, |f| f.to_string_lossy().into_owned());
-    let _out_lock = Lock::acquire(out_dir, &out_stem)?;
-    folder::remove_stale_temporaries(&outputs).map_err(|e| {
-        err(
-            out_dir,
-            format!("cannot remove a killed merge's temporary files: {e}"),
-        )
-    })?;
-    for p in &outputs {
-        if p.exists() && !force {
-            return Err(err(
-                p,
-                "exists already; pass --force to replace it (nothing was written)",
-            ));
-        }
+            None => first.csv.with_file_name(format!("{name}.csv")),
+        };
+        let base = main
+            .to_string_lossy()
+            .strip_suffix(".csv")
+            .map(str::to_string)
+            .unwrap_or_default();
+        let meta = PathBuf::from(format!("{base}.meta.toml"));
+        let mut o = Outputs {
+            main: main.clone(),
+            base,
+            meta: meta.clone(),
+            all: vec![main],
+        };
+        let tables: Vec<PathBuf> = table_names.iter().map(|t| o.table(t)).collect();
+        o.all.extend(tables);
+        o.all.push(meta);
+        Ok(o)
     }
 
-    // Assemble, in point order (stable: side-table rows keep their order within a point).
-    let mut contents: Vec<(PathBuf, Vec<u8>)> = Vec::new();
-    let mut main_bytes = header.unwrap_or_default();
-    let mut rows: Vec<&Line> = shards.iter().flat_map(|s| s.main.rows.iter()).collect();
-    rows.sort_by_key(|r| r.point);
-    for r in rows {
-        main_bytes.extend_from_slice(&r.bytes);
+    fn table(&self, t: &str) -> PathBuf {
+        PathBuf::from(format!("{}.{t}.csv", self.base))
     }
-    for t in &table_names {
-        let tabs: Vec<&Table> = shards.iter().filter_map(|s| s.tables.get(t)).collect();
-        let mut bytes = tabs
+
+    /// Refuses an output that is one of the inputs, or that exists without `--force`; takes the
+    /// output's lock and removes a killed merge's temporaries. The lock is held while it lives.
+    fn claim(&self, shards: &[Shard], force: bool) -> Result<Lock, OutputError> {
+        let outputs = &self.all;
+        let main_out = &self.main;
+        let base = &self.base;
+        let read: Vec<&Path> = shards.iter().flat_map(Shard::files).collect();
+        for p in outputs {
+            if let Some(input) = read.iter().find(|r| same_file(p, r)) {
+                return Err(err(
+                    p,
+                    format!(
+                        "would overwrite {}, which this merge reads; choose another --out",
+                        input.display()
+                    ),
+                ));
+            }
+        }
+        let out_dir = parent_dir(main_out);
+        fs::create_dir_all(out_dir)
+            .map_err(|e| err(out_dir, format!("cannot create the folder: {e}")))?;
+        let out_stem = Path::new(base)
+            .file_name()
+            .map_or_else(String::new, |f| f.to_string_lossy().into_owned());
+        let lock = Lock::acquire(out_dir, &out_stem)?;
+        folder::remove_stale_temporaries(outputs).map_err(|e| {
+            err(
+                out_dir,
+                format!("cannot remove a killed merge's temporary files: {e}"),
+            )
+        })?;
+        for p in outputs {
+            if p.exists() && !force {
+                return Err(err(
+                    p,
+                    "exists already; pass --force to replace it (nothing was written)",
+                ));
+            }
+        }
+        Ok(lock)
+    }
+
+    /// The merged files' bytes, in point order (stable: side-table rows keep their order within
+    /// a point), the main table last (published last).
+    fn assemble(
+        &self,
+        shards: &[Shard],
+        header: Option<Vec<u8>>,
+        total: usize,
+        n: usize,
+    ) -> Vec<(PathBuf, Vec<u8>)> {
+        let table_names: Vec<String> = shards
             .iter()
-            .find_map(|t| t.header.clone())
-            .unwrap_or_default();
-        let mut rows: Vec<&Line> = tabs.iter().flat_map(|t| t.rows.iter()).collect();
+            .flat_map(|s| s.tables.keys().cloned())
+            .collect::<BTreeSet<_>>()
+            .into_iter()
+            .collect();
+        let mut contents: Vec<(PathBuf, Vec<u8>)> = Vec::new();
+        let mut main_bytes = header.unwrap_or_default();
+        let mut rows: Vec<&Line> = shards.iter().flat_map(|s| s.main.rows.iter()).collect();
         rows.sort_by_key(|r| r.point);
         for r in rows {
-            bytes.extend_from_slice(&r.bytes);
+            main_bytes.extend_from_slice(&r.bytes);
         }
-        contents.push((table_out(t), bytes));
+        for t in &table_names {
+            let tabs: Vec<&Table> = shards.iter().filter_map(|s| s.tables.get(t)).collect();
+            let mut bytes = tabs
+                .iter()
+                .find_map(|t| t.header.clone())
+                .unwrap_or_default();
+            let mut rows: Vec<&Line> = tabs.iter().flat_map(|t| t.rows.iter()).collect();
+            rows.sort_by_key(|r| r.point);
+            for r in rows {
+                bytes.extend_from_slice(&r.bytes);
+            }
+            contents.push((self.table(t), bytes));
+        }
+        contents.push((
+            self.meta.clone(),
+            merged_meta(shards, total, n).render().into_bytes(),
+        ));
+        contents.push((self.main.clone(), main_bytes));
+        contents
     }
-    contents.push((
-        meta_out.clone(),
-        merged_meta(&shards, total, n).render().into_bytes(),
-    ));
-    contents.push((main_out.clone(), main_bytes));
-    let staged = contents
-        .iter()
-        .map(|(p, bytes)| {
-            folder::stage(p, bytes).map_err(|e| {
-                err(
-                    p,
-                    format!("cannot write the merged file: {e} (nothing was replaced)"),
-                )
-            })
-        })
-        .collect::<Result<Vec<_>, _>>()?;
-    folder::publish_staged(staged).map_err(|e| {
-        err(
-            &main_out,
-            format!("cannot move the merged files into place: {e}"),
-        )
-    })?;
 
-    let mut written = vec![main_out];
-    written.extend(table_names.iter().map(|t| table_out(t)));
-    written.push(meta_out);
-    Ok(Merged {
-        shards: n,
-        points: total,
-        written,
-    })
+    /// Stages every file, then publishes them all (the main table last).
+    fn publish(&self, contents: &[(PathBuf, Vec<u8>)]) -> Result<(), OutputError> {
+        let main_out = &self.main;
+        let staged = contents
+            .iter()
+            .map(|(p, bytes)| {
+                folder::stage(p, bytes).map_err(|e| {
+                    err(
+                        p,
+                        format!("cannot write the merged file: {e} (nothing was replaced)"),
+                    )
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        folder::publish_staged(staged).map_err(|e| {
+            err(
+                main_out,
+                format!("cannot move the merged files into place: {e}"),
+            )
+        })?;
+        Ok(())
+    }
 }
 
 /// One shard's file names.
