@@ -113,41 +113,7 @@ pub fn check_table(
         text,
     };
     let text = &t.text;
-    // A torn tail: zeros a crash left, or bytes after the last newline.
-    let mut end = text.len();
-    let mut why: Option<(u64, String)> = None;
-    if let Some(z) = text.iter().position(|&b| b == 0) {
-        let start = text[..z]
-            .iter()
-            .rposition(|&b| b == b'\n')
-            .map_or(0, |i| i + 1);
-        if text[z..].iter().any(|&b| b != 0) {
-            return Err(err(
-                path,
-                format!(
-                    "line {} holds NUL bytes followed by more data: the file is corrupted",
-                    line_of(text, z)
-                ),
-            ));
-        }
-        end = start;
-        why = Some((
-            line_of(text, z),
-            "ends in NUL bytes (a crash zero-filled its last block)".into(),
-        ));
-    }
-    if end > 0 && text[end - 1] != b'\n' {
-        let start = text[..end]
-            .iter()
-            .rposition(|&b| b == b'\n')
-            .map_or(0, |i| i + 1);
-        why = why.or(Some((
-            line_of(text, start),
-            "is truncated (the file does not end with a newline: the last write was cut short)"
-                .into(),
-        )));
-        end = start;
-    }
+    let (mut end, mut why) = torn_tail(path, text)?;
     let mut reader = ::csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
@@ -178,22 +144,7 @@ pub fn check_table(
             break;
         }
         if t.header.is_none() {
-            let columns: Vec<String> = record
-                .iter()
-                .map(|f| String::from_utf8_lossy(f).into_owned())
-                .collect();
-            if columns.first().map(String::as_str) != Some("point") {
-                return Err(err(
-                    path,
-                    format!(
-                        "line {line}: the first column is '{}', expected 'point' (not a raycost table)",
-                        columns.first().map_or("", String::as_str)
-                    ),
-                ));
-            }
-            if let Some(d) = declared.filter(|d| !d.is_empty()) {
-                check_declared(path, &columns, d)?;
-            }
+            let columns = header_columns(path, line, &record, declared)?;
             width = record.len();
             t.header = Some(record_bytes(record.iter()));
             t.header_raw = start..stop;
@@ -244,6 +195,73 @@ pub fn check_table(
         t.valid_len = end;
     }
     Ok(t)
+}
+
+/// Where a table's intact text ends: before zeros a crash left, or bytes after the last
+/// newline; with the line and reason of what is cut. NUL bytes followed by data are refused.
+fn torn_tail(path: &Path, text: &[u8]) -> Result<(usize, Option<(u64, String)>), OutputError> {
+    let mut end = text.len();
+    let mut why: Option<(u64, String)> = None;
+    if let Some(z) = text.iter().position(|&b| b == 0) {
+        let start = text[..z]
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .map_or(0, |i| i + 1);
+        if text[z..].iter().any(|&b| b != 0) {
+            return Err(err(
+                path,
+                format!(
+                    "line {} holds NUL bytes followed by more data: the file is corrupted",
+                    line_of(text, z)
+                ),
+            ));
+        }
+        end = start;
+        why = Some((
+            line_of(text, z),
+            "ends in NUL bytes (a crash zero-filled its last block)".into(),
+        ));
+    }
+    if end > 0 && text[end - 1] != b'\n' {
+        let start = text[..end]
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .map_or(0, |i| i + 1);
+        why = why.or(Some((
+            line_of(text, start),
+            "is truncated (the file does not end with a newline: the last write was cut short)"
+                .into(),
+        )));
+        end = start;
+    }
+    Ok((end, why))
+}
+
+/// The header's column names: `point` first, and the declared columns where the metadata
+/// records them.
+fn header_columns(
+    path: &Path,
+    line: u64,
+    record: &::csv::ByteRecord,
+    declared: Option<&[String]>,
+) -> Result<Vec<String>, OutputError> {
+    let columns: Vec<String> = record
+        .iter()
+        .map(|f| String::from_utf8_lossy(f).into_owned())
+        .collect();
+    if columns.first().map(String::as_str) != Some("point") {
+        return Err(err(
+            path,
+            format!(
+                "line {line}: the first column is '{}', expected 'point' (not a raycost table)",
+                columns.first().map_or("", String::as_str)
+            ),
+        ));
+    }
+    if let Some(d) = declared.filter(|d| !d.is_empty()) {
+        check_declared(path, &columns, d)?;
+    }
+    Ok(columns)
 }
 
 /// The header must be the columns the metadata records for this table.
