@@ -242,6 +242,14 @@ pub struct RunArgs {
     /// Continue a partial run, skipping the points it finished.
     #[arg(long)]
     pub resume: bool,
+    /// Separate run R of the spec: sets experiment.run = R (mixed into the seed) and writes
+    /// OUT/NAME/runs/R/NAME.csv.
+    #[arg(long, value_name = "R")]
+    pub run: Option<u64>,
+    /// Runs the spec K times, as K separate processes (runs 0 … K−1, each as --run R would run it
+    /// alone).
+    #[arg(long, value_name = "K", conflicts_with = "run", value_parser = clap::value_parser!(u64).range(1..=1000))]
+    pub repeat: Option<u64>,
 }
 
 /// `raycost merge`.

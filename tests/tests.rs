@@ -19,5 +19,6 @@ mod render;
 mod report;
 mod reproducible;
 mod resume;
+mod runs;
 mod sanity;
 mod slurm;

@@ -358,7 +358,7 @@ impl Kind for DetpKind {
                 "belongs to kind quasi-static (it chooses the engine of moving frames); kind \"detp\" runs the engines listed in detp.engines",
             );
         }
-        DetpConfig::from_raw(raw.experiment.seed, &raw.detp, inputs)
+        DetpConfig::from_raw(raw.experiment.stream_seed(), &raw.detp, inputs)
     }
     fn describe(p: &DetpConfig) -> String {
         describe(p)
@@ -387,7 +387,7 @@ impl Kind for DetpKind {
         refs: &ReferenceCache,
         ctx: &Context,
     ) -> Result<Output<DetpMeasured, DetpTables>, Error> {
-        let replicated = measure::replicate(p, ctx.index, ctx.progress, refs)?;
+        let replicated = measure::replicate(p, ctx.stream_point, ctx.progress, refs)?;
         let (measured, levels, points, warnings) = measure::measure(p, &replicated);
         let checks = vec![Check {
             name: col::MISMATCHES.name,

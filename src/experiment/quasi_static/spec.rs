@@ -131,7 +131,7 @@ impl QuasiStaticConfig {
             );
         };
         let d = &raw.detp;
-        let detp = DetpConfig::from_raw(raw.experiment.seed, d, inputs)?;
+        let detp = DetpConfig::from_raw(raw.experiment.stream_seed(), d, inputs)?;
         let Rays::Scene(file) = &detp.rays else {
             return refuse(
                 "detp.source",
