@@ -635,6 +635,12 @@ pub mod frame {
         timing("dynamic_s", "s", "seconds gathering the dynamic points").decided_by_timing();
     /// Frame seconds.
     pub const FRAME_S: Column = timing("frame_s", "s", "seconds of the frame");
+    /// The static index's build in one replica.
+    pub const STATIC_INDEX_BUILD_S: Column = timing(
+        "static_index_build_s",
+        "s",
+        "seconds this replica spent building the static points' index (frame 0's row; NaN on the others)",
+    );
     /// Full recalculation seconds.
     pub const FULL_FRAME_S: Column = timing(
         "full_frame_s",
@@ -712,6 +718,9 @@ pub const FRAMES_TABLE: Table<QuasiStaticConfig, FrameRow> = Table::of(&[
     col(&frame::STATIC_S, |_, r| r.stats.static_s.into()),
     col(&frame::DYNAMIC_S, |_, r| r.stats.dynamic_s.into()),
     col(&frame::FRAME_S, |_, r| r.stats.frame_s.into()),
+    col(&frame::STATIC_INDEX_BUILD_S, |_, r| {
+        r.static_index_build_s.unwrap_or(f64::NAN).into()
+    }),
     col(&frame::FULL_FRAME_S, |_, r| {
         r.full.map_or(f64::NAN, |f| f.0).into()
     }),

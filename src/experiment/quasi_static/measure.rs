@@ -108,6 +108,9 @@ pub struct FrameRow {
     pub replica: u64,
     /// The frame's counts and seconds.
     pub stats: FrameStats,
+    /// Frame 0's row: the seconds this replica spent building the static points' index (an
+    /// amortisation needs each replica's build, not only their mean).
+    pub static_index_build_s: Option<f64>,
     /// A checked frame: (seconds of the full recalculation, points differing).
     pub full: Option<(f64, u64)>,
 }

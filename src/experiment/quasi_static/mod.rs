@@ -143,6 +143,7 @@ fn run_replica(
     frames.push(FrameRow {
         replica,
         stats: f0.clone(),
+        static_index_build_s: Some(qs.static_index_build_s),
         full: None,
     });
     let points_frame = cfg.points_frame.unwrap_or(cfg.frames - 1);
@@ -171,6 +172,7 @@ fn run_replica(
         frames.push(FrameRow {
             replica,
             stats: st,
+            static_index_build_s: None,
             full: checked,
         });
         if f == points_frame && write_points {
