@@ -625,6 +625,7 @@ mod tests {
             shard: None,
             sets: Vec::new(),
             threads: 1,
+            run: None,
         };
         let e = run(&plan, &opts).expect_err("a planted fault");
         let table = ["out/p/p.csv", "out/p/p.csv.partial"]
