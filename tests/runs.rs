@@ -196,3 +196,109 @@ fn a_run_is_chosen_by_flag_never_by_set() {
         .code(2);
     assert!(!out.exists(), "nothing written");
 }
+
+/// The §4.1 predictor on the Cornell box's centre sphere, each replica timing both engines warm.
+fn predictor_spec(warm_repeats: u64, predict: bool) -> String {
+    let scene = crate::common::root().join("experiments/scenes/cornell-centre.toml");
+    let engine = if predict { "predicted" } else { "sphere-cache" };
+    format!(
+        r#"
+[experiment]
+name = "warm"
+kind = "quasi-static"
+seed = 2
+
+[detp]
+source = "scene"
+scene = "{}"
+photons = 3000
+point_spacing = 40.0
+disc_radius = 20.0
+engine = "{engine}"
+replicas = 3
+
+[dynamic]
+frames = 2
+ratio = 0.2
+warm_repeats = {warm_repeats}
+"#,
+        scene.display()
+    )
+}
+
+#[test]
+fn the_predictor_writes_every_replicas_pick_and_warm_timings_of_both_engines() {
+    let tmp = tempfile::tempdir().expect("temp");
+    let csv = run(tmp.path(), "warm", &predictor_spec(4, true));
+    for r in 0..3 {
+        let pick = column(&csv, &format!("pick_replica_{r}"));
+        assert!(
+            pick[0] == "sphere-cache" || pick[0] == "disc-index",
+            "{pick:?}"
+        );
+    }
+    for e in ["sphere_cache", "disc_index"] {
+        assert_eq!(column(&csv, &format!("warm_{e}_s_n")), ["12"]);
+        assert_eq!(column(&csv, &format!("warm_{e}_s_clusters")), ["3"]);
+        let s: f64 = column(&csv, &format!("warm_{e}_s_mean"))[0]
+            .parse()
+            .unwrap();
+        assert!(s > 0.0 && s.is_finite(), "{e}: {s}");
+    }
+    // Each replica's static index build, on its frame 0 row only.
+    let frames = csv.with_file_name("warm.frames.csv");
+    let frame = column(&frames, "frame");
+    let build = column(&frames, "static_index_build_s");
+    assert_eq!(frame.iter().filter(|f| *f == "0").count(), 3);
+    for (f, b) in frame.iter().zip(&build) {
+        let b: f64 = b.parse().unwrap();
+        assert_eq!(f == "0", b.is_finite() && b >= 0.0, "frame {f}: {b}");
+    }
+}
+
+#[test]
+fn the_points_table_gives_each_points_distance_to_an_edge() {
+    let tmp = tempfile::tempdir().expect("temp");
+    let scene = crate::common::root().join("experiments/scenes/cornell.toml");
+    let d = 15.0;
+    let text = format!(
+        r#"
+[experiment]
+name = "edges"
+kind = "detp"
+seed = 2
+
+[detp]
+source = "scene"
+scene = "{}"
+photons = 2000
+point_spacing = 40.0
+disc_radius = {d}
+write_points = true
+"#,
+        scene.display()
+    );
+    let csv = run(tmp.path(), "edges", &text);
+    let s: Vec<f64> = column(&csv.with_file_name("edges.points.csv"), "edge_distance")
+        .iter()
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert!(s.iter().all(|&x| (0.0..=2.0 * d).contains(&x)), "{s:?}");
+    // The box's corners and edges are near some points, its wall centres far from any.
+    assert!(
+        s.iter().any(|&x| x < d) && s.iter().any(|&x| x == 2.0 * d),
+        "{s:?}"
+    );
+}
+
+#[test]
+fn warm_timings_need_the_predictor() {
+    let tmp = tempfile::tempdir().expect("temp");
+    let spec = write_spec(tmp.path(), "warm", &predictor_spec(4, false));
+    let out = tmp.path().join("out");
+    run_quiet(&spec, &out)
+        .assert()
+        .code(2)
+        .stderr(predicates::str::contains("dynamic.warm_repeats"));
+    assert!(!out.exists(), "nothing written");
+}

@@ -331,6 +331,18 @@ pub const TIMED_RULE_PICK_RIGHT: Column = timing(
     "objects",
     "objects whose Theorem 2 rule pick was the faster engine",
 );
+/// The predictor's pick in each replica.
+pub const PICK_REPLICA: Column = timing(
+    "pick_replica_{}",
+    "",
+    "the engine the predictor picked for the first object in replica {} (\"sphere-cache\" or \"disc-index\")",
+);
+/// Warm seconds of each engine.
+pub const WARM_S: Column = Column::timed_estimate(
+    "warm_{}_s",
+    "s",
+    "the engine's seconds on every segment for the first object's points, timed warm dynamic.warm_repeats times per replica, the engines interleaved (one cluster per replica)",
+);
 /// Error against a reference.
 pub const IRRADIANCE_RMSE: Column = measured(
     "irradiance_rmse",
@@ -453,6 +465,21 @@ pub const MAIN: Table<QuasiStaticConfig, QsMeasured> = Table {
         }),
         col(&TIMED_RULE_PICK_RIGHT, |_, m| {
             m.predictor.map(|p| p.rule_pick_right).into()
+        }),
+        col(&PICK_REPLICA, |_, m| {
+            Cell::members(
+                m.picks
+                    .iter()
+                    .enumerate()
+                    .map(|(k, u)| (k.to_string(), u.as_str())),
+            )
+        }),
+        col(&WARM_S, |_, m| match m.warm {
+            Some([sc, di]) => Cell::members([
+                ("sphere_cache".to_string(), sc),
+                ("disc_index".to_string(), di),
+            ]),
+            None => Cell::Absent,
         }),
         col(&IRRADIANCE_RMSE, |_, m| m.reference.map(|r| r.0).into()),
         col(&REFERENCE_PHOTONS, |_, m| m.reference.map(|r| r.2).into()),
