@@ -11,7 +11,8 @@ metadata; every column that is not of class `timing` (read from `[[columns.TABLE
 a clock decided) are the only ones allowed to differ between two runs of one spec and seed.
 
 `--added COLUMN` (repeatable) names a column the new binary adds (a new parameter): it may appear in
-the new tables only, and is left out before the headers are compared.
+the new tables only, and is left out before the headers are compared; `--added TABLE:COLUMN` only in
+that side table (`frames:static_index_build_s`), `main:COLUMN` only in the main table.
 
 Prints one line per table: "N measured columns of M compared, 0 differ", or the first differences;
 exits 1 on any difference (or a missing table), 0 otherwise.
@@ -131,13 +132,15 @@ def main():
         for table, path in old_tables:
             n_tables += 1
             label = name if table == "main" else f"{name}.{table}"
+            added = [a.split(":", 1)[-1] for a in args.added
+                     if ":" not in a or a.split(":", 1)[0] == table]
             ok, line = compare_table(
                 label,
                 path,
                 new_exp / path.name,
                 old_meta.get(table, []),
                 new_meta.get(table, []),
-                args.added,
+                added,
             )
             ok_all &= ok
             print(("" if ok else "DIFFERS ") + line)
