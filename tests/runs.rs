@@ -302,3 +302,58 @@ fn warm_timings_need_the_predictor() {
         .stderr(predicates::str::contains("dynamic.warm_repeats"));
     assert!(!out.exists(), "nothing written");
 }
+
+/// The number after `label` in `text` (a float as Rust prints it: exact).
+fn number_after(text: &str, label: &str) -> String {
+    let rest = &text[text
+        .find(label)
+        .unwrap_or_else(|| panic!("{label} in {text}"))
+        + label.len()..];
+    rest.chars()
+        .take_while(|c| c.is_ascii_digit() || matches!(c, '.' | 'e' | '-'))
+        .collect()
+}
+
+#[test]
+fn lengths_in_units_of_the_scenes_radius_are_the_scaled_lengths() {
+    let tmp = tempfile::tempdir().expect("temp");
+    let scene = crate::common::root().join("experiments/scenes/cornell.toml");
+    let spec = |unit: &str, spacing: &str, d: &str| {
+        format!(
+            r#"
+[experiment]
+name = "units"
+kind = "detp"
+seed = 2
+
+[detp]
+source = "scene"
+scene = "{}"
+photons = 2000
+length_unit = "{unit}"
+point_spacing = {spacing}
+disc_radius = {d}
+"#,
+            scene.display()
+        )
+    };
+    let relative = write_spec(tmp.path(), "relative", &spec("root", "0.1", "0.03"));
+    let out = raycost()
+        .arg("check")
+        .arg(&relative)
+        .output()
+        .expect("check");
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    let (s, d) = (
+        number_after(&text, "at spacing "),
+        number_after(&text, "d = "),
+    );
+    let (sv, dv): (f64, f64) = (s.parse().unwrap(), d.parse().unwrap());
+    // The Cornell box is hundreds of units across: r_s scales both lengths alike.
+    assert!(sv > 10.0 && (sv / dv - 0.1 / 0.03).abs() < 1e-9, "{s} {d}");
+    let a = run(tmp.path(), "root", &spec("root", "0.1", "0.03"));
+    let b = run(tmp.path(), "scene", &spec("scene", &s, &d));
+    for c in ["points", "irradiance_mean", "tests_sphere_cache"] {
+        assert_eq!(column(&a, c), column(&b, c), "{c}");
+    }
+}
