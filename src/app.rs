@@ -63,12 +63,26 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             thread_pool(b.threads)?;
             Ok(crate::bench::run(b.quick, &b.out, b.force)?)
         }
-        Command::Merge(m) => Ok(crate::output::merge::run(
-            &m.inputs,
-            m.out.as_deref(),
-            m.force,
-            m.quiet,
-        )?),
+        Command::Merge(m) => {
+            let photon = crate::experiment::photon_shards::files(&m.inputs);
+            if photon.is_empty() {
+                return Ok(crate::output::merge::run(
+                    &m.inputs,
+                    m.out.as_deref(),
+                    m.force,
+                    m.quiet,
+                )?);
+            }
+            if m.out.is_some() {
+                return Err(crate::error::Error::usage(
+                    "--out: photon shards merge into NAME.csv beside them (as the unsplit run writes it)",
+                ));
+            }
+            let threads = thread_pool(None)?;
+            let (written, summary) =
+                crate::experiment::photon_shards::merge(&photon, m.force, m.quiet, threads)?;
+            print_run(m.quiet, &summary, &written)
+        }
         Command::Render(r) => render(r),
     }
 }
@@ -96,9 +110,25 @@ fn run_spec(a: crate::cli::RunArgs) -> crate::error::Result<()> {
         sets: a.set,
         threads,
         run: a.run,
+        merged: None,
     };
-    let (written, summary) = runner::run(&plan, &opts)?;
-    if !a.quiet {
+    let (written, summary) = match a.photon_shard {
+        None => runner::run(&plan, &opts)?,
+        Some(s) => {
+            let (path, line) = crate::experiment::photon_shards::run_shard(&plan, &opts, s)?;
+            (vec![path], line)
+        }
+    };
+    print_run(a.quiet, &summary, &written)
+}
+
+/// A run's summary and the files it wrote (nothing with `--quiet`).
+fn print_run(
+    quiet: bool,
+    summary: &str,
+    written: &[std::path::PathBuf],
+) -> crate::error::Result<()> {
+    if !quiet {
         let mut out = std::io::stdout().lock();
         write!(out, "{summary}")?;
         for p in written {

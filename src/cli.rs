@@ -50,6 +50,7 @@ Examples:
   raycost run experiments/quickstart.toml
   raycost run experiments/grid-cell-width.toml --set experiment.rays=100000 --out /tmp/r
   raycost run spec.toml --shard 2/8          # points 2, 10, 18, …; then raycost merge
+  raycost run detp.toml --photon-shard 2/8   # photons [2P/8, 3P/8) of every point; then merge
   raycost run spec.toml --resume             # continue after Ctrl-C")]
     Run(RunArgs),
     /// Validate a spec and print its expanded points; runs nothing.
@@ -70,10 +71,12 @@ Examples:
   raycost bench --quick --out /tmp/r
   raycost bench --threads 4 --force")]
     Bench(BenchArgs),
-    /// Join the shards of a sweep (NAME.shard-K-of-N.csv) into NAME.csv, checking that they fit.
+    /// Join the shards of a sweep (NAME.shard-K-of-N.csv), or a run's photon shards
+    /// (NAME.photon-shard-K-of-N.json), into NAME.csv, checking that they fit.
     #[command(after_help = "\
 Examples:
   raycost merge results/grid-scaling
+  raycost merge results/detp-big            # its NAME.photon-shard-*-of-N.json: sums added
   raycost merge a/x.shard-0-of-2.csv b/x.shard-1-of-2.csv --out x.csv")]
     Merge(MergeArgs),
     /// Render the DETP irradiance of a quasi-static spec's frame(s), seen from the scene's camera.
@@ -250,12 +253,17 @@ pub struct RunArgs {
     /// alone).
     #[arg(long, value_name = "K", conflicts_with = "run", value_parser = clap::value_parser!(u64).range(1..=1000))]
     pub repeat: Option<u64>,
+    /// Trace only photons [K·P/N, (K+1)·P/N) of every point and replica (kind detp); writes
+    /// NAME.photon-shard-K-of-N.json for raycost merge.
+    #[arg(long, value_name = "K/N", conflicts_with_all = ["shard", "resume", "run", "repeat"])]
+    pub photon_shard: Option<Shard>,
 }
 
 /// `raycost merge`.
 #[derive(Debug, Args)]
 pub struct MergeArgs {
-    /// A results folder DIR/NAME holding NAME.shard-K-of-N.csv (+ .meta.toml, .hist.csv), or those CSV files.
+    /// A results folder DIR/NAME holding NAME.shard-K-of-N.csv (+ .meta.toml, .hist.csv) or
+    /// NAME.photon-shard-K-of-N.json, or those files.
     #[arg(required = true, value_name = "DIR|FILES")]
     pub inputs: Vec<PathBuf>,
     /// The merged table (default: NAME.csv beside the shards; .hist.csv and .meta.toml go beside it).

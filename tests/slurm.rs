@@ -25,6 +25,22 @@ fn bash(script: &Path) -> Command {
     c
 }
 
+/// `merge.sbatch` for `OUT/NAME`, as the dependent job runs it; it must succeed.
+fn merge_job(out: &Path, name: &str) -> std::process::Output {
+    let o = bash(&script("merge.sbatch"))
+        .env("OUT", out)
+        .env("NAME", name)
+        .env("RAYCOST", assert_cmd::cargo::cargo_bin("raycost"))
+        .output()
+        .expect("bash merge.sbatch");
+    assert!(
+        o.status.success(),
+        "merge: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
 #[test]
 fn scripts_parse() {
     for s in [
@@ -78,17 +94,7 @@ fn array_tasks_then_merge_job_give_the_local_table() {
             "task {k} log: {err}"
         );
     }
-    let o = bash(&script("merge.sbatch"))
-        .env("OUT", &out)
-        .env("NAME", "slurm-sweep")
-        .env("RAYCOST", &bin)
-        .output()
-        .expect("bash merge.sbatch");
-    assert!(
-        o.status.success(),
-        "merge: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let o = merge_job(&out, "slurm-sweep");
     assert!(String::from_utf8_lossy(&o.stdout).contains("merged 4 shards, 8 points"));
 
     let local = tmp.path().join("local");
@@ -142,6 +148,49 @@ fn array_tasks_then_merge_job_give_the_local_table() {
         before,
         std::fs::read(m.join("slurm-sweep.shard-1-of-4.csv")).expect("shard")
     );
+}
+
+#[test]
+fn photon_shard_array_tasks_then_merge_job_give_the_unsplit_table() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let out = tmp.path().join("cluster");
+    let spec = root().join("tests/specs/slurm-photons.toml");
+    let bin = assert_cmd::cargo::cargo_bin("raycost");
+    for k in [2, 0, 1] {
+        let o = bash(&script("sweep.sbatch"))
+            .env("SPEC", &spec)
+            .env("OUT", &out)
+            .env("SHARDS", "3")
+            .env("SPLIT", "photons")
+            .env("RAYCOST", &bin)
+            .env("SLURM_ARRAY_TASK_ID", k.to_string())
+            .env("SLURM_CPUS_PER_TASK", "1")
+            .output()
+            .expect("bash sweep.sbatch");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "task {k}: {err}");
+        assert!(err.contains("split=photons"), "task {k} log: {err}");
+    }
+    merge_job(&out, "slurm-photons");
+    let local = tmp.path().join("local");
+    run_ok(&spec, &local, &[]);
+    let (m, l) = (out.join("slurm-photons"), local.join("slurm-photons"));
+    assert_eq!(
+        assert_same_measured(&m.join("slurm-photons.csv"), &l.join("slurm-photons.csv")),
+        2
+    );
+    let points = |d: &Path| crate::common::measured_columns(&d.join("slurm-photons.points.csv"));
+    assert_eq!(points(&m), points(&l));
+    // SPLIT must be one of the two.
+    let o = bash(&script("sweep.sbatch"))
+        .env("SPEC", &spec)
+        .env("OUT", &out)
+        .env("SHARDS", "3")
+        .env("SPLIT", "rays")
+        .env("SLURM_ARRAY_TASK_ID", "0")
+        .output()
+        .expect("bash sweep.sbatch");
+    assert_eq!(o.status.code(), Some(2));
 }
 
 #[test]

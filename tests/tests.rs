@@ -13,6 +13,7 @@ mod lt;
 mod merge;
 mod never_panics;
 mod oracle;
+mod photon_shards;
 mod quasi_static;
 mod reference;
 mod render;

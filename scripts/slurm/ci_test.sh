@@ -10,8 +10,14 @@
 # merged table with the local one: every non-timing column byte for byte, and the histogram table
 # whole. The cluster is always brought down again (trap), by the pids cluster.sh recorded.
 #
+# Then the same with one run's photons split (issue 29 item 5): tests/specs/slurm-photons.toml as
+# an array of PHOTON_SHARDS tasks (`submit.sh --photons`: task K runs `--photon-shard
+# K/PHOTON_SHARDS`) and the dependent merge, compared with a local unsplit run: every non-timing
+# column of the main and points tables byte for byte.
+#
 # Builds nothing. Environment: RAYCOST (default target/release/raycost in the repository), SPEC
-# (default tests/specs/slurm-sweep.toml), SHARDS (default 4), RAYCOST_SLURM_* (see cluster.sh).
+# (default tests/specs/slurm-sweep.toml), SHARDS (default 4), PHOTON_SPEC (default
+# tests/specs/slurm-photons.toml), PHOTON_SHARDS (default 3), RAYCOST_SLURM_* (see cluster.sh).
 # Exit codes: 0 passed, or skipped because Slurm cannot be made available here (a line
 # "SKIP slurm: <reason>"); 1 failed.
 set -euo pipefail
@@ -21,6 +27,8 @@ ROOT=$(cd "$HERE/../.." && pwd)
 RAYCOST=${RAYCOST:-$ROOT/target/release/raycost}
 SPEC=${SPEC:-$ROOT/tests/specs/slurm-sweep.toml}
 SHARDS=${SHARDS:-4}
+PHOTON_SPEC=${PHOTON_SPEC:-$ROOT/tests/specs/slurm-photons.toml}
+PHOTON_SHARDS=${PHOTON_SHARDS:-3}
 
 say() { printf 'slurm: %s\n' "$*"; }
 fail() { printf 'slurm: FAIL: %s\n' "$*" >&2; exit 1; }
@@ -29,6 +37,7 @@ fail() { printf 'slurm: FAIL: %s\n' "$*" >&2; exit 1; }
 [[ -x $RAYCOST ]] || fail "RAYCOST=$RAYCOST is not an executable (build it first: cargo build --release)"
 RAYCOST=$(realpath "$RAYCOST")
 [[ -f $SPEC ]] || fail "spec $SPEC: no such file"
+[[ -f $PHOTON_SPEC ]] || fail "spec $PHOTON_SPEC: no such file"
 command -v python3 >/dev/null 2>&1 || fail "python3 is needed for the table comparison"
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/raycost-slurm-ci.XXXXXX")
@@ -67,12 +76,15 @@ eval "$(bash "$HERE/cluster.sh" env)"
 say "cluster up: $(sinfo -h -o '%P %D nodes %c CPUs %T' | head -n 1) (SLURM_CONF=$SLURM_CONF)"
 
 # --- the sweep as a job array, merged by the dependent job -----------------------------------
-name=$(awk '
+spec_name() { # experiment.name of a spec file
+    awk '
     /^[[:space:]]*\[/ { section = $0; gsub(/[[:space:]]/, "", section); next }
     section == "[experiment]" && /^[[:space:]]*name[[:space:]]*=/ {
         sub(/^[^=]*=[[:space:]]*/, ""); sub(/[[:space:]]*(#.*)?$/, "")
         gsub(/^["\047]|["\047]$/, ""); print; exit
-    }' "$SPEC")
+    }' "$1"
+}
+name=$(spec_name "$SPEC")
 points=$("$RAYCOST" check "$SPEC" | sed -n 's/.*, \([0-9][0-9]*\) point(s),.*/\1/p')
 [[ -n $name && -n $points ]] || fail "could not read experiment.name and the point count of $SPEC"
 [[ $points -ge 8 ]] || fail "$SPEC has $points points; the test needs at least 8"
@@ -133,4 +145,46 @@ if got != [f"{k}/{shards}" for k in range(shards)]:
 print(f"slurm: {len(keep)} measured columns of {len(hm)} compared byte for byte; hist table identical; "
       f"merged meta lists {shards} shards on {sorted({s['machine']['host'] for s in meta['shards']})}")
 print(f"slurm: merged table identical to local run ({points} points)")
+EOF
+
+# --- one run's photons as a job array, merged by the dependent job ------------------------------
+pname=$(spec_name "$PHOTON_SPEC")
+[[ -n $pname ]] || fail "could not read experiment.name of $PHOTON_SPEC"
+say "submitting $PHOTON_SPEC ($pname) as $PHOTON_SHARDS photon shards + merge"
+t0=$SECONDS
+RAYCOST=$RAYCOST bash "$HERE/submit.sh" --wait --timeout 900 --photons "$PHOTON_SPEC" "$PHOTON_SHARDS" "$work/photons" ||
+    fail "submit.sh --wait --photons failed"
+say "photon array and merge done in $((SECONDS - t0)) s"
+pmerged=$work/photons/$pname
+for k in $(seq 0 $((PHOTON_SHARDS - 1))); do
+    [[ -s $pmerged/$pname.photon-shard-$k-of-$PHOTON_SHARDS.json ]] || fail "photon task $k wrote no shard file"
+done
+"$RAYCOST" run "$PHOTON_SPEC" --out "$work/plocal" --quiet
+python3 - "$pmerged" "$work/plocal/$pname" "$pname" <<'EOF'
+import csv, sys, tomllib
+
+merged, local, name = sys.argv[1:]
+with open(f"{merged}/{name}.meta.toml", "rb") as f:
+    meta = tomllib.load(f)
+
+def table(path):
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    return rows[0], rows[1:]
+
+compared = 0
+for table_name, suffix in [("main", "csv"), ("points", "points.csv")]:
+    classes = {c["name"]: c["class"] for c in meta["columns"][table_name]}
+    hm, rm = table(f"{merged}/{name}.{suffix}")
+    hl, rl = table(f"{local}/{name}.{suffix}")
+    if hm != hl or len(rm) != len(rl) or not rm:
+        sys.exit(f"slurm: FAIL: {name}.{suffix}: headers or row counts differ ({len(rm)} vs {len(rl)} rows)")
+    keep = [i for i, c in enumerate(hm) if classes[c] != "timing"]
+    bad = [(n, hm[i], a[i], b[i]) for n, (a, b) in enumerate(zip(rm, rl)) for i in keep if a[i] != b[i]]
+    if bad:
+        for n, c, a, b in bad[:10]:
+            print(f"slurm: {suffix} row {n} column {c}: merged {a!r}, local {b!r}", file=sys.stderr)
+        sys.exit(f"slurm: FAIL: {len(bad)} measured cells of {name}.{suffix} differ")
+    compared += len(keep) * len(rm)
+print(f"slurm: photon-sharded run identical to the unsplit run ({compared} measured cells, main and points tables)")
 EOF

@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # submit.sh — run a raycost sweep as a Slurm job array plus a dependent merge job (issue 4).
 #
-#   scripts/slurm/submit.sh [--wait] [--timeout SECONDS] SPEC SHARDS OUT
+#   scripts/slurm/submit.sh [--wait] [--timeout SECONDS] [--photons] SPEC SHARDS OUT
 #
 # Submits scripts/slurm/sweep.sbatch as array 0-(SHARDS-1) (task K runs `raycost run SPEC
-# --shard K/SHARDS --out OUT`), then scripts/slurm/merge.sbatch with --dependency=afterok:ARRAY
+# --shard K/SHARDS --out OUT`, or with --photons `--photon-shard K/SHARDS`: one run's photons
+# split instead of its sweep points), then scripts/slurm/merge.sbatch with --dependency=afterok:ARRAY
 # (`raycost merge OUT/NAME`). Prints `ARRAY_JOB=<id>` and `MERGE_JOB=<id>` on stdout.
 # With --wait it polls squeue until both jobs have left the queue (printing the queue whenever it
 # changes), then prints one line per array task and for the merge, and exits 1 unless every task
@@ -18,15 +19,17 @@
 set -euo pipefail
 
 HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
-usage() { echo "usage: $0 [--wait] [--timeout SECONDS] SPEC SHARDS OUT" >&2; exit 2; }
+usage() { echo "usage: $0 [--wait] [--timeout SECONDS] [--photons] SPEC SHARDS OUT" >&2; exit 2; }
 log() { printf 'submit.sh: %s\n' "$*" >&2; }
 die() { log "error: $*"; exit 1; }
 
 wait=0
 timeout=3600
+split=points
 while [[ $# -gt 0 ]]; do
     case $1 in
     --wait) wait=1; shift ;;
+    --photons) split=photons; shift ;;
     --timeout) [[ $# -ge 2 && $2 =~ ^[0-9]+$ ]] || usage; timeout=$2; shift 2 ;;
     --) shift; break ;;
     -*) usage ;;
@@ -61,7 +64,7 @@ name=${NAME:-$(awk '
 
 logs="$out/slurm-logs"
 mkdir -p "$logs"
-export SPEC=$spec SHARDS=$shards OUT=$out RAYCOST=$raycost NAME=$name
+export SPEC=$spec SHARDS=$shards OUT=$out RAYCOST=$raycost NAME=$name SPLIT=$split
 export RAYCOST_ARGS=${RAYCOST_ARGS:-}
 
 array_job=$(sbatch --parsable --export=ALL --chdir="$out" --array="0-$((shards - 1))" \

@@ -90,6 +90,7 @@ impl Plan {
 }
 
 /// One engine at one n and thread count: everything its row reports.
+#[derive(Clone)]
 struct Measured {
     engine: &'static str,
     n: u64,
@@ -335,45 +336,149 @@ fn bench_size(
     rays: &[Ray],
     all: usize,
 ) -> anyhow::Result<Vec<Measured>> {
-    let per = plan.rays_per_round;
     let rss_before_scene = memory::rss_bytes();
     let (spheres, bounds) = bench_scene(classes, n, KEY ^ n);
     // What a process holding just the scene uses; each engine's peak adds its own increment.
     let scene_bytes = memory::rss_bytes().saturating_sub(rss_before_scene);
-    let mut grid_all = vec![FastTrace::default(); rays.len()];
-    let mut grid_one = vec![FastTrace::default(); rays.len()];
     let ((grid, grid_build), grid_peak) = memory::peak_increment(|| {
-        let start = Instant::now();
-        let g = FastGrid::build(frame_around(bounds, a, DVec3::ZERO), &spheres);
-        (g, start.elapsed().as_secs_f64())
+        timed(|| FastGrid::build(frame_around(bounds, a, DVec3::ZERO), &spheres))
     });
     #[cfg(feature = "embree")]
-    let ((embree, embree_build), embree_peak) = memory::peak_increment(|| {
-        let start = Instant::now();
-        let e = crate::embree::EmbreeScene::build(&spheres);
-        (e, start.elapsed().as_secs_f64())
-    });
+    let ((embree, embree_build), embree_peak) =
+        memory::peak_increment(|| timed(|| crate::embree::EmbreeScene::build(&spheres)));
     #[cfg(feature = "embree")]
     let embree = embree?;
+    let engines = Engines {
+        grid: &grid,
+        #[cfg(feature = "embree")]
+        embree: &embree,
+    };
+    let race = race(&engines, rays, plan, all)?;
+    let grid_row = Measured {
+        engine: "grid",
+        n,
+        threads: 1,
+        cell_width: a,
+        secs: Vec::new(),
+        rays_per_round: plan.rays_per_round,
+        build_s: grid_build,
+        peak_mem_bytes: scene_bytes + grid_peak,
+        structure_bytes: grid.bytes(),
+        agreement: Agreement::default(),
+        n_i: f64::NAN,
+        n_s: f64::NAN,
+    };
+    drop(grid);
+    #[allow(unused_mut)]
+    let mut out = grid_measured(&spheres, rays, &race, plan, all, grid_row, scene_bytes)?;
     #[cfg(feature = "embree")]
-    let mut embree_all: Vec<Option<(usize, f64)>> = vec![None; rays.len()];
-    #[cfg(feature = "embree")]
-    let mut embree_one: Vec<Option<(usize, f64)>> = vec![None; rays.len()];
+    {
+        // Embree against the grid on every ray, on both thread counts.
+        let hits: Vec<Option<Hit>> = race.grid.all.iter().map(|q| q.hit).collect();
+        let mut check = agreement::embree_vs_grid(&spheres, rays, &race.embree.all, &hits);
+        check.mismatches += differing(&race.embree, |h| h.map(|h| h.0));
+        for (threads, secs) in [1, all].into_iter().zip(&race.embree_secs) {
+            out.push(Measured {
+                engine: "embree",
+                n,
+                threads,
+                cell_width: f64::NAN,
+                secs: secs.clone(),
+                rays_per_round: plan.rays_per_round,
+                build_s: embree_build,
+                peak_mem_bytes: scene_bytes + embree_peak,
+                structure_bytes: 0,
+                agreement: check,
+                n_i: f64::NAN,
+                n_s: f64::NAN,
+            });
+        }
+    }
+    Ok(out)
+}
 
+/// `f()` and its seconds.
+fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
+    let start = Instant::now();
+    let value = f();
+    (value, start.elapsed().as_secs_f64())
+}
+
+/// The structures racing at one size.
+struct Engines<'a> {
+    grid: &'a FastGrid,
+    #[cfg(feature = "embree")]
+    embree: &'a crate::embree::EmbreeScene,
+}
+
+/// What one engine answered on every ray, on one thread and on all.
+struct Answers<T> {
+    one: Vec<T>,
+    all: Vec<T>,
+}
+
+impl<T: Clone> Answers<T> {
+    fn new(len: usize, empty: T) -> Self {
+        Answers {
+            one: vec![empty.clone(); len],
+            all: vec![empty; len],
+        }
+    }
+
+    fn on(&mut self, all_threads: bool) -> &mut [T] {
+        if all_threads {
+            &mut self.all
+        } else {
+            &mut self.one
+        }
+    }
+}
+
+/// How many rays got a different answer (`key`) on one thread than on all.
+fn differing<T, K: PartialEq>(a: &Answers<T>, key: impl Fn(&T) -> K) -> u64 {
+    a.one
+        .iter()
+        .zip(&a.all)
+        .filter(|(x, y)| key(x) != key(y))
+        .count() as u64
+}
+
+/// Embree's first hit per ray: (sphere, t).
+#[cfg(feature = "embree")]
+type EmbreeHit = Option<(usize, f64)>;
+
+/// Casts `rays` with Embree into `out` on the current pool.
+#[cfg(feature = "embree")]
+fn embree_into(e: &crate::embree::EmbreeScene, rays: &[Ray], out: &mut [EmbreeHit]) {
+    out.par_chunks_mut(1024)
+        .zip(rays.par_chunks(1024))
+        .for_each(|(h, r)| e.first_hits(r, h));
+}
+
+/// The answers and the seconds of every round: `*_secs[0]` on one thread, `[1]` on all.
+struct Race {
+    grid: Answers<FastTrace>,
+    grid_secs: [Vec<f64>; 2],
+    #[cfg(feature = "embree")]
+    embree: Answers<EmbreeHit>,
+    #[cfg(feature = "embree")]
+    embree_secs: [Vec<f64>; 2],
+}
+
+/// Every contestant in alternating rounds — grid on 1 thread, Embree on 1, grid on all, Embree on
+/// all — after an untimed warm-up, so that the first timed contestant does not pay for faulting
+/// in the freshly built structures.
+fn race(engines: &Engines, rays: &[Ray], plan: &Plan, all: usize) -> anyhow::Result<Race> {
+    let per = plan.rays_per_round;
+    let mut grid = Answers::new(rays.len(), FastTrace::default());
+    #[cfg(feature = "embree")]
+    let mut embree: Answers<EmbreeHit> = Answers::new(rays.len(), None);
     let (one, many) = (pool(1)?, pool(all)?);
-    // Untimed warm-up, so that the first timed contestant does not pay for faulting in the freshly
-    // built structures.
     let warm = &rays[..per.min(rays.len())];
-    many.install(|| trace_into(&grid, warm, &mut grid_all[..warm.len()]));
+    many.install(|| trace_into(engines.grid, warm, &mut grid.all[..warm.len()]));
     #[cfg(feature = "embree")]
-    many.install(|| {
-        embree_all[..warm.len()]
-            .par_chunks_mut(1024)
-            .zip(warm.par_chunks(1024))
-            .for_each(|(h, r)| embree.first_hits(r, h))
-    });
+    many.install(|| embree_into(engines.embree, warm, &mut embree.all[..warm.len()]));
 
-    // Contestants, in round order: grid on 1 thread, Embree on 1, grid on all, Embree on all.
     let embree_on = cfg!(feature = "embree");
     let contestants = if embree_on { 4 } else { 2 };
     // Contestant c: (is it the grid, does it use all threads)?
@@ -384,81 +489,78 @@ fn bench_size(
             (true, c == 1)
         }
     };
-    let times: RoundTimes = alternate(contestants, plan.rounds, |c, r| {
+    let times = alternate(contestants, plan.rounds, |c, r| {
         let span = r * per..(r + 1) * per;
         let slice = &rays[span.clone()];
         let (is_grid, all_threads) = who(c);
         let p = if all_threads { &many } else { &one };
         if is_grid {
-            let out = if all_threads {
-                &mut grid_all[span]
-            } else {
-                &mut grid_one[span]
-            };
-            p.install(|| trace_into(&grid, slice, out));
+            let out = &mut grid.on(all_threads)[span];
+            p.install(|| trace_into(engines.grid, slice, out));
         } else {
             #[cfg(feature = "embree")]
             {
-                let out = if all_threads {
-                    &mut embree_all[span]
-                } else {
-                    &mut embree_one[span]
-                };
-                p.install(|| {
-                    out.par_chunks_mut(1024)
-                        .zip(slice.par_chunks(1024))
-                        .for_each(|(h, r)| embree.first_hits(r, h))
-                });
+                let out = &mut embree.on(all_threads)[span];
+                p.install(|| embree_into(engines.embree, slice, out));
             }
         }
     });
-    let secs_of = |is_grid: bool, all_threads: bool| -> Vec<f64> {
+    let secs = |is_grid: bool, all_threads: bool| -> Vec<f64> {
         let c = (0..contestants)
             .find(|&c| who(c) == (is_grid, all_threads))
             .expect("every engine and thread count is a contestant");
         times.secs[c].clone()
     };
-    let structure = grid.bytes();
-    drop(grid);
+    Ok(Race {
+        grid_secs: [secs(true, false), secs(true, true)],
+        grid,
+        #[cfg(feature = "embree")]
+        embree_secs: [secs(false, false), secs(false, true)],
+        #[cfg(feature = "embree")]
+        embree,
+    })
+}
 
-    // Answers: the grid's on every ray, against itself across thread counts and against brute
-    // force on a subset.
-    let hits: Vec<Option<Hit>> = grid_all.iter().map(|q| q.hit).collect();
-    let thread_diffs = grid_all
-        .iter()
-        .zip(&grid_one)
-        .filter(|(x, y)| x != y)
-        .count() as u64;
+/// The grid's rows (one thread, all threads) and brute force's: the grid's answers on every ray
+/// checked against themselves across thread counts and against brute force on a subset.
+fn grid_measured(
+    spheres: &[Sphere],
+    rays: &[Ray],
+    race: &Race,
+    plan: &Plan,
+    all: usize,
+    grid_row: Measured,
+    scene_bytes: u64,
+) -> anyhow::Result<Vec<Measured>> {
+    let n = grid_row.n;
+    let many = pool(all)?;
+    let hits: Vec<Option<Hit>> = race.grid.all.iter().map(|q| q.hit).collect();
+    let thread_diffs = differing(&race.grid, |q| *q);
     if thread_diffs > 0 {
         eprintln!("grid: {thread_diffs} rays answered differently on 1 and {all} threads");
     }
     let bf_n = plan.brute_force_rays.min(rays.len());
-    let bf_start = Instant::now();
-    let mut grid_check =
-        many.install(|| agreement::grid_vs_brute_force(&spheres, &rays[..bf_n], &hits[..bf_n]));
-    let bf_s = bf_start.elapsed().as_secs_f64();
+    let (mut grid_check, bf_s) = timed(|| {
+        many.install(|| agreement::grid_vs_brute_force(spheres, &rays[..bf_n], &hits[..bf_n]))
+    });
     grid_check.mismatches += thread_diffs;
     let mean = |f: fn(&FastTrace) -> u32| {
-        grid_all.iter().map(|q| f64::from(f(q))).sum::<f64>() / grid_all.len() as f64
+        let all = &race.grid.all;
+        all.iter().map(|q| f64::from(f(q))).sum::<f64>() / all.len() as f64
     };
     let (n_i, n_s) = (mean(|q| q.n_i), mean(|q| q.n_s));
-    let mut out = Vec::new();
-    for threads_all in [false, true] {
-        out.push(Measured {
-            engine: "grid",
-            n,
-            threads: if threads_all { all } else { 1 },
-            cell_width: a,
-            secs: secs_of(true, threads_all),
-            rays_per_round: per,
-            build_s: grid_build,
-            peak_mem_bytes: scene_bytes + grid_peak,
-            structure_bytes: structure,
+    let mut out: Vec<Measured> = [1, all]
+        .into_iter()
+        .zip(&race.grid_secs)
+        .map(|(threads, secs)| Measured {
+            threads,
+            secs: secs.clone(),
             agreement: grid_check,
             n_i,
             n_s,
-        });
-    }
+            ..grid_row.clone()
+        })
+        .collect();
     out.push(Measured {
         engine: "brute-force",
         n,
@@ -476,33 +578,6 @@ fn bench_size(
         n_i: n as f64,
         n_s: 0.0,
     });
-    #[cfg(feature = "embree")]
-    {
-        // Embree against the grid on every ray, on both thread counts.
-        let mut check = agreement::embree_vs_grid(&spheres, rays, &embree_all, &hits);
-        let diffs = embree_all
-            .iter()
-            .zip(&embree_one)
-            .filter(|(x, y)| x.map(|h| h.0) != y.map(|h| h.0))
-            .count() as u64;
-        check.mismatches += diffs;
-        for threads_all in [false, true] {
-            out.push(Measured {
-                engine: "embree",
-                n,
-                threads: if threads_all { all } else { 1 },
-                cell_width: f64::NAN,
-                secs: secs_of(false, threads_all),
-                rays_per_round: per,
-                build_s: embree_build,
-                peak_mem_bytes: scene_bytes + embree_peak,
-                structure_bytes: 0,
-                agreement: check,
-                n_i: f64::NAN,
-                n_s: f64::NAN,
-            });
-        }
-    }
     Ok(out)
 }
 

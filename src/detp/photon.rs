@@ -33,6 +33,18 @@ pub fn trace_photons(scene: &Scene, photons: u64, seed: u64) -> SegmentStore {
     trace_photons_with(scene, scene, photons, seed)
 }
 
+/// The photons `ids` of a run of `photons` photons (`--photon-shard`): each bit-identical to the
+/// one [`trace_photons`] traces, because a photon's stream and power depend on its id and the
+/// run's photon count only. `photon_start` still spans every id (empty outside `ids`).
+pub fn trace_photon_range(
+    scene: &Scene,
+    ids: std::ops::Range<u64>,
+    photons: u64,
+    seed: u64,
+) -> SegmentStore {
+    trace_range_with(scene, scene, ids, photons, seed)
+}
+
 /// [`trace_photons`] with the rays cast by `caster` (the scene's own core, or Embree in
 /// `raycost bench`).
 pub fn trace_photons_with<C: Caster>(
@@ -41,16 +53,28 @@ pub fn trace_photons_with<C: Caster>(
     photons: u64,
     seed: u64,
 ) -> SegmentStore {
+    trace_range_with(scene, caster, 0..photons, photons, seed)
+}
+
+/// The photons `ids` of `photons`, cast by `caster`.
+fn trace_range_with<C: Caster>(
+    scene: &Scene,
+    caster: &C,
+    ids: std::ops::Range<u64>,
+    photons: u64,
+    seed: u64,
+) -> SegmentStore {
     assert!(
-        photons > 0 && photons <= u64::from(u32::MAX),
+        photons > 0 && photons <= u64::from(u32::MAX) && ids.end <= photons,
         "photon count out of range"
     );
     let (scale, units) = photon_units(scene, photons);
-    let paths: Vec<Vec<Segment>> = (0..photons.div_ceil(BATCH))
+    let lo = ids.start;
+    let paths: Vec<Vec<Segment>> = (0..(ids.end - lo).div_ceil(BATCH))
         .into_par_iter()
         .map(|b| {
-            let hi = ((b + 1) * BATCH).min(photons);
-            (b * BATCH..hi)
+            let hi = (lo + (b + 1) * BATCH).min(ids.end);
+            (lo + b * BATCH..hi)
                 .flat_map(|p| trace_one(scene, caster, seed, p as u32, units))
                 .collect()
         })

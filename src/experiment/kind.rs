@@ -183,6 +183,9 @@ pub struct Context<'a> {
     pub threads: usize,
     /// Called with the number of work units just finished.
     pub progress: &'a (dyn Fn(u64) + Sync),
+    /// `raycost merge` of photon shards: the point's parts, one per shard in shard order
+    /// ([`Kind::trace_part`]), to measure instead of tracing photons.
+    pub merged: Option<&'a [serde_json::Value]>,
 }
 
 /// One experiment kind (see the module doc).
@@ -234,12 +237,30 @@ pub trait Kind: Send + Sync + 'static {
     fn shared_meta(_s: &Self::Shared) -> toml::Table {
         toml::Table::new()
     }
-    /// Runs one point.
+    /// Runs one point (from [`Context::merged`] parts where given).
     fn run(
         p: &Self::Point,
         shared: &Self::Shared,
         ctx: &Context,
     ) -> Result<Output<Self::Measured, Self::Tables>, Error>;
+    /// `--photon-shard`: why this point's photons cannot be split (None: they can). A kind without
+    /// photons keeps this default.
+    fn photon_refusal(_p: &Self::Point) -> Option<String> {
+        Some(format!("kind {} has no photons to split", Self::NAME))
+    }
+    /// `--photon-shard K/N`: the point's photons `[K·P/N, (K+1)·P/N)` traced into parts that add
+    /// across shards; [`Kind::run`] with every shard's part measures the point as an unsplit run.
+    fn trace_part(
+        _p: &Self::Point,
+        _shared: &Self::Shared,
+        _ctx: &Context,
+        _shard: (u64, u64),
+    ) -> Result<serde_json::Value, Error> {
+        Err(Error::internal(format!(
+            "kind {} has no photons to split",
+            Self::NAME
+        )))
+    }
 }
 
 /// A spec tree read once by a kind ([`DynKind::read`]).
@@ -337,6 +358,16 @@ pub trait DynKind: Send + Sync {
         shared: &(dyn Any + Send + Sync),
         ctx: &Context,
     ) -> Result<ErasedOutput, Error>;
+    /// [`Kind::photon_refusal`].
+    fn photon_refusal(&self, point: &dyn DynPoint) -> Option<String>;
+    /// [`Kind::trace_part`].
+    fn trace_part(
+        &self,
+        point: &dyn DynPoint,
+        shared: &(dyn Any + Send + Sync),
+        ctx: &Context,
+        shard: (u64, u64),
+    ) -> Result<serde_json::Value, Error>;
 }
 
 /// Kind `K` behind [`DynKind`].
@@ -345,6 +376,11 @@ pub struct Registered<K: Kind>(PhantomData<fn() -> K>);
 impl<K: Kind> Registered<K> {
     /// The registry entry.
     pub const NEW: Self = Self(PhantomData);
+}
+
+fn shared_of<K: Kind>(s: &(dyn Any + Send + Sync)) -> &K::Shared {
+    s.downcast_ref::<K::Shared>()
+        .expect("the shared measurement comes from the same kind")
 }
 
 fn point_of<K: Kind>(p: &dyn DynPoint) -> &K::Point {
@@ -416,12 +452,23 @@ impl<K: Kind> DynKind for Registered<K> {
         shared: &(dyn Any + Send + Sync),
         ctx: &Context,
     ) -> Result<ErasedOutput, Error> {
-        let shared = shared
-            .downcast_ref::<K::Shared>()
-            .expect("the shared measurement comes from the same kind");
+        let shared = shared_of::<K>(shared);
         let p = point_of::<K>(point);
         let out = K::run(p, shared, ctx)?;
         rows_of::<K>(p, out).map_err(|e| Error::internal(format!("kind {}: {e}", K::NAME)))
+    }
+    fn photon_refusal(&self, point: &dyn DynPoint) -> Option<String> {
+        K::photon_refusal(point_of::<K>(point))
+    }
+    fn trace_part(
+        &self,
+        point: &dyn DynPoint,
+        shared: &(dyn Any + Send + Sync),
+        ctx: &Context,
+        shard: (u64, u64),
+    ) -> Result<serde_json::Value, Error> {
+        let shared = shared_of::<K>(shared);
+        K::trace_part(point_of::<K>(point), shared, ctx, shard)
     }
 }
 

@@ -67,6 +67,9 @@ pub struct RunOptions {
     pub threads: usize,
     /// `--run R`: the results go to `OUT/NAME/runs/R/` (the spec's `experiment.run` is R).
     pub run: Option<u64>,
+    /// `raycost merge` of photon shards: each point's parts, one per shard in shard order
+    /// (`super::photon_shards`); points measure these instead of tracing.
+    pub merged: Option<BTreeMap<usize, Vec<serde_json::Value>>>,
 }
 
 impl RunOptions {
@@ -345,6 +348,11 @@ fn run_points(
             stream_point: plan.spec.experiment.stream_point(i),
             threads: opts.threads,
             progress: &|k| bar.inc(k),
+            merged: opts
+                .merged
+                .as_ref()
+                .and_then(|m| m.get(&i))
+                .map(Vec::as_slice),
         };
         let out = kind
             .run(plan.points[i].as_ref(), shared.as_ref(), &ctx)
@@ -626,6 +634,7 @@ mod tests {
             sets: Vec::new(),
             threads: 1,
             run: None,
+            merged: None,
         };
         let e = run(&plan, &opts).expect_err("a planted fault");
         let table = ["out/p/p.csv", "out/p/p.csv.partial"]

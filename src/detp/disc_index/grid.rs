@@ -6,7 +6,7 @@
 
 use glam::DVec3;
 
-use super::{clip, DiscIndex, LocalDiscs, Mailbox, Reach, Walk};
+use super::{clip, DiscIndex, LocalDiscs, Mailbox, Reach, SimdPath, Walk};
 use crate::detp::disc::Discs;
 use crate::detp::store::Segment;
 use crate::geom::{Aabb, Ray, Sphere};
@@ -23,6 +23,7 @@ pub struct GridIndex {
     /// Discs of cell slot s are `items[offsets[s]..offsets[s + 1]]`.
     offsets: Vec<u32>,
     items: Vec<u32>,
+    path: SimdPath,
 }
 
 impl GridIndex {
@@ -66,7 +67,18 @@ impl GridIndex {
             dims,
             offsets,
             items,
+            path: SimdPath::detect(),
         }
+    }
+
+    /// The same grid with its kernels on `path` (tests force every path this CPU has).
+    ///
+    /// # Panics
+    /// If this CPU cannot run `path`.
+    pub fn with_path(mut self, path: SimdPath) -> Self {
+        assert!(path.is_available(), "SIMD path {path:?} not available");
+        self.path = path;
+        self
     }
 
     /// The grid's frame.
@@ -94,7 +106,7 @@ impl DiscIndex for GridIndex {
         &self.reach
     }
 
-    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, f: &mut dyn FnMut(u32)) -> Walk {
+    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, out: &mut Vec<u32>) -> Walk {
         mailbox.clear();
         let v = seg.d();
         let len = v.length();
@@ -110,23 +122,90 @@ impl DiscIndex for GridIndex {
         };
         let ray = Ray::new(o + dir * t0, dir);
         let stop = t1 - t0 + self.reach.pad;
-        for (cell, t_enter, _) in Dda::new(&self.frame, &ray) {
-            if t_enter > stop {
-                break;
-            }
-            walk.entered += 1;
-            walk.steps += 1;
-            let s = ((cell[2] * self.dims[1] + cell[1]) * self.dims[0] + cell[0]) as usize;
-            for &i in &self.items[self.offsets[s] as usize..self.offsets[s + 1] as usize] {
-                if mailbox.insert(i) {
-                    f(i);
-                }
-            }
-        }
+        let (items, offsets, dims) = (&self.items, &self.offsets, self.dims);
+        walk.steps = Dda::new(&self.frame, &ray).visit_until(stop, |cell| {
+            let s = ((cell[2] * dims[1] + cell[1]) * dims[0] + cell[0]) as usize;
+            mailbox.collect(&items[offsets[s] as usize..offsets[s + 1] as usize], out);
+        });
+        walk.entered = walk.steps;
         walk
+    }
+
+    fn path(&self) -> SimdPath {
+        self.path
     }
 
     fn bytes(&self) -> usize {
         self.offsets.len() * 4 + self.items.len() * 4 + self.discs.bytes()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::tests::{adversarial_segments, scene};
+    use super::*;
+
+    /// The first version's walk, kept as the oracle of the counters: the `Dda` iterator, one
+    /// cell at a time, the mailbox's `insert` per listing.
+    fn reference(g: &GridIndex, seg: &Segment, mailbox: &mut Mailbox) -> (Walk, Vec<u32>) {
+        mailbox.clear();
+        let v = seg.d();
+        let len = v.length();
+        let dir = v / len;
+        let o = seg.o();
+        let mut walk = Walk {
+            box_tests: 1,
+            ..Walk::default()
+        };
+        let mut out = Vec::new();
+        if let Some((t0, t1)) = clip(o, dir, &g.grid_box(), 0.0, seg.t_end() * len) {
+            let ray = Ray::new(o + dir * t0, dir);
+            let stop = t1 - t0 + g.reach.pad;
+            for (cell, t_enter, _) in Dda::new(&g.frame, &ray) {
+                if t_enter > stop {
+                    break;
+                }
+                walk.entered += 1;
+                walk.steps += 1;
+                let s = ((cell[2] * g.dims[1] + cell[1]) * g.dims[0] + cell[0]) as usize;
+                for &i in &g.items[g.offsets[s] as usize..g.offsets[s + 1] as usize] {
+                    if mailbox.insert(i) {
+                        out.push(i);
+                    }
+                }
+            }
+        }
+        out.sort_unstable();
+        (walk, out)
+    }
+
+    #[test]
+    fn every_path_walks_as_the_reference_walk_does() {
+        let (store, discs) = scene(3_000, 2_000, 0.03, 8);
+        for width in [0.03, 0.06, 0.5, 5.0] {
+            let base = GridIndex::build(&discs, width);
+            let segs: Vec<Segment> = store
+                .segments
+                .iter()
+                .copied()
+                .chain(adversarial_segments(&base.discs.discs, 12))
+                .collect();
+            let mut mb = Mailbox::new(discs.len());
+            let want: Vec<(Walk, Vec<u32>)> =
+                segs.iter().map(|s| reference(&base, s, &mut mb)).collect();
+            for path in SimdPath::all_available() {
+                let g = GridIndex::build(&discs, width).with_path(path);
+                for (k, (s, w)) in segs.iter().zip(&want).enumerate() {
+                    let mut got = Vec::new();
+                    let walk = g.candidates(s, &mut mb, &mut got);
+                    got.sort_unstable();
+                    assert_eq!(
+                        (walk, got),
+                        w.clone(),
+                        "{path:?}, width {width}, segment {k}"
+                    );
+                }
+            }
+        }
     }
 }

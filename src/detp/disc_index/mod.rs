@@ -21,13 +21,16 @@
 //! P, and reaches the disc. Segments starting farther than R (none in the scenes studied: photons
 //! start on the scene's surfaces) are tested against every disc, which is trivially conservative.
 
+pub mod cross;
 pub mod grid;
 pub mod octree;
+pub mod path;
+pub mod slab;
 
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::disc::{crosses, Discs};
+use super::disc::Discs;
 use super::fixed::{add, Acc};
 use super::order::{permutation, Order};
 use super::store::{Segment, SegmentStore};
@@ -35,6 +38,7 @@ use crate::geom::Aabb;
 
 pub use grid::GridIndex;
 pub use octree::Octree;
+pub use path::SimdPath;
 
 /// What one segment's walk through an index cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -100,12 +104,15 @@ pub trait DiscIndex: Sync {
     /// The index's reach (see the module doc): pad, centre and the origin radius R.
     fn reach(&self) -> &Reach;
 
-    /// Calls `f` with every candidate disc of `seg` (each once, thanks to `mailbox`, which is
+    /// Appends to `out` every candidate disc of `seg` (each once, thanks to `mailbox`, which is
     /// started afresh here) and returns what the walk cost. Only for segments within the reach.
-    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, f: &mut dyn FnMut(u32)) -> Walk;
+    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, out: &mut Vec<u32>) -> Walk;
 
     /// Bytes held by the index (discs included).
     fn bytes(&self) -> usize;
+
+    /// The SIMD path of the index's kernels (all paths give the same answers and counts).
+    fn path(&self) -> SimdPath;
 
     /// Adds `sign ×` the power of each segment (all, or those listed in `segments`) to every disc
     /// it crosses. Parallel over segments; integer sums make the result order-free.
@@ -118,54 +125,94 @@ pub trait DiscIndex: Sync {
     ) -> IndexStats {
         let discs = self.discs();
         assert!(acc.len() >= discs.len(), "one accumulator per disc");
-        let n = segments.map_or(store.len(), <[u32]>::len);
-        let seg_at = |k: usize| &store.segments[segments.map_or(k, |s| s[k] as usize)];
-        let (sums, stats) = (0..n)
-            .into_par_iter()
-            .with_min_len(1 << 12)
-            .fold(
-                || {
-                    (
-                        vec![0 as Acc; discs.len()],
-                        Mailbox::new(discs.len()),
-                        IndexStats::default(),
-                    )
-                },
-                |(mut sums, mut mb, mut st), k| {
-                    let s = seg_at(k);
-                    let mut test = |i: u32| {
-                        st.ray_disc_tests += 1;
-                        let [c, n] = discs.packed[i as usize];
-                        let r = discs.discs.radius_of(i as usize);
-                        // The very call `Discs::crossed_by` makes, on exact copies of the values.
-                        if crosses(s.o(), s.d(), s.t_end(), c, n, r) {
-                            add(&mut sums[i as usize], s.power, sign);
-                        }
-                    };
-                    if self.reach().holds(s.o()) {
-                        let w = self.candidates(s, &mut mb, &mut test);
-                        st.nodes_visited += w.entered;
-                        st.box_tests += w.box_tests;
-                        st.dda_steps += w.steps;
-                    } else {
-                        (0..discs.len() as u32).for_each(test);
-                    }
-                    (sums, mb, st)
-                },
-            )
-            .map(|(sums, _, st)| (sums, st))
-            .reduce(
-                || (vec![0; discs.len()], IndexStats::default()),
-                |(mut a, sa), (b, sb)| {
-                    a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
-                    (a, sa.merge(sb))
-                },
-            );
+        let (sums, stats) = walk_segments(
+            self,
+            store,
+            segments,
+            || vec![0 as Acc; discs.len()],
+            // `crosses` on exact copies of the discs' values: `Discs::crossed_by`'s decisions.
+            |sums, s, cands| {
+                cross::crossed(self.path(), s, discs, cands, &mut |i| {
+                    add(&mut sums[i as usize], s.power, sign);
+                });
+            },
+            |a, b| a.iter_mut().zip(b).for_each(|(x, y)| *x += y),
+        );
         for (&i, s) in discs.original.iter().zip(sums) {
             acc[i as usize] += s;
         }
         stats
     }
+
+    /// **Traversal alone**, for timing it (eq. 8 assumes it negligible): walks the index for every
+    /// segment exactly as [`DiscIndex::accumulate`] does — the same cells or nodes, box tests, DDA
+    /// steps, mailbox and candidate lists — but tests no disc and adds nothing. Returns the
+    /// counters `accumulate` would return, `ray_disc_tests` included (the candidates it would have
+    /// tested), so that seconds(accumulate) − seconds(traversal_only) is the disc tests' share.
+    fn traversal_only(&self, store: &SegmentStore, segments: Option<&[u32]>) -> IndexStats {
+        walk_segments(
+            self,
+            store,
+            segments,
+            || 0u64,
+            |n, _, c| *n += c.len() as u64,
+            |a, b| *a += b,
+        )
+        .1
+    }
+}
+
+/// The per-segment driver shared by [`DiscIndex::accumulate`] and [`DiscIndex::traversal_only`]:
+/// walks each segment (all, or those in `segments`) in parallel and hands its candidates to
+/// `test`, with one state `T` per worker, merged by `merge`. A segment starting outside the reach
+/// gets every disc as a candidate.
+fn walk_segments<I, T, N, F, M>(
+    ix: &I,
+    store: &SegmentStore,
+    segments: Option<&[u32]>,
+    init: N,
+    test: F,
+    merge: M,
+) -> (T, IndexStats)
+where
+    I: DiscIndex + ?Sized,
+    T: Send,
+    N: Fn() -> T + Sync + Send,
+    F: Fn(&mut T, &Segment, &[u32]) + Sync + Send,
+    M: Fn(&mut T, T) + Sync + Send,
+{
+    let nd = ix.discs().len();
+    let n = segments.map_or(store.len(), <[u32]>::len);
+    let seg_at = |k: usize| &store.segments[segments.map_or(k, |s| s[k] as usize)];
+    let (state, stats, _, _) = (0..n)
+        .into_par_iter()
+        .with_min_len(1 << 12)
+        .fold(
+            || (init(), IndexStats::default(), Mailbox::new(nd), Vec::new()),
+            |(mut t, mut st, mut mb, mut cands), k| {
+                let s = seg_at(k);
+                cands.clear();
+                if ix.reach().holds(s.o()) {
+                    let w = ix.candidates(s, &mut mb, &mut cands);
+                    st.nodes_visited += w.entered;
+                    st.box_tests += w.box_tests;
+                    st.dda_steps += w.steps;
+                } else {
+                    cands.extend(0..nd as u32);
+                }
+                st.ray_disc_tests += cands.len() as u64;
+                test(&mut t, s, &cands);
+                (t, st, mb, cands)
+            },
+        )
+        .reduce(
+            || (init(), IndexStats::default(), Mailbox::new(0), Vec::new()),
+            |(mut a, sa, mb, c), (b, sb, _, _)| {
+                merge(&mut a, b);
+                (a, sa.merge(sb), mb, c)
+            },
+        );
+    (state, stats)
 }
 
 /// The discs of an index, renumbered along a Hilbert curve through their centres and packed
@@ -251,6 +298,29 @@ impl Mailbox {
             self.seen.iter_mut().for_each(|s| *s = 0);
             self.stamp = 1;
         }
+    }
+
+    /// Appends to `out` the discs of `items` not yet seen for this segment, and marks them. Without
+    /// a branch per disc: whether a disc is new is a coin flip along a walk (the branchy loop
+    /// mispredicted on about every other listing), so each disc is written and `out` grows by one
+    /// only if it was new.
+    #[inline]
+    pub fn collect(&mut self, items: &[u32], out: &mut Vec<u32>) {
+        out.reserve(items.len());
+        let mut len = out.len();
+        let spare = out.spare_capacity_mut().as_mut_ptr();
+        let base = len;
+        for &i in items {
+            let s = &mut self.seen[i as usize];
+            let new = *s != self.stamp;
+            *s = self.stamp;
+            // SAFETY: `len − base < items.len()` ≤ the spare capacity reserved above.
+            unsafe { (*spare.add(len - base)).write(i) };
+            len += usize::from(new);
+        }
+        // SAFETY: the first `len` elements are initialised (those before `base` were; every
+        // element in `base..len` was written above).
+        unsafe { out.set_len(len) };
     }
 
     /// Marks disc `i`; true if it was not yet tested for this segment.

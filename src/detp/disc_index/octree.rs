@@ -7,10 +7,21 @@
 //! ([`Discs::bounds`]), so a disc on a split plane sits on both sides. Traversal tests the segment
 //! against each node's box enlarged by the index pad (slab test over t ∈ [0, t_end]) and reports
 //! the discs of the leaves it reaches, each once per segment (mailbox).
+//!
+//! # Layout and speed
+//! The eight children of an inner node are one [`Boxes8`] block (448 bytes, structure of arrays),
+//! tested together by one eight-lane slab test ([`SimdPath`]: AVX-512, AVX2 or scalar, all deciding
+//! as [`super::clip`] does, bit for bit) with the segment's reciprocals computed once. The first
+//! version popped each child from a stack and clipped it alone (three divisions and NaN-aware
+//! min/max per box, ≈ 200 instructions; 78 % of a 10⁴-disc, leaf-8 run). The counters are those of
+//! the algorithm and do not change: one box test per child of every inner node entered (all eight
+//! are tested), one per root, a node *entered* when its box test passes.
 
 use glam::DVec3;
 
-use super::{clip, DiscIndex, LocalDiscs, Mailbox, Reach, Walk};
+use super::slab::{Boxes8, SlabRay};
+use super::SimdPath;
+use super::{DiscIndex, LocalDiscs, Mailbox, Reach, Walk};
 use crate::detp::disc::Discs;
 use crate::detp::store::Segment;
 use crate::geom::Aabb;
@@ -28,13 +39,25 @@ struct Node {
     count: u32,
 }
 
-const INNER: u32 = u32::MAX;
+/// `count` of an inner node.
+pub(super) const INNER: u32 = u32::MAX;
 
 /// An octree of disc lists.
 #[derive(Debug)]
 pub struct Octree {
     discs: LocalDiscs,
     reach: Reach,
+    /// The root (inner: `first` is its children's block).
+    root: Node,
+    /// The children of inner node blocks: block b holds nodes 1 + 8b … 8 + 8b of the build order,
+    /// an inner child's `first` naming its own block.
+    blocks: Vec<Boxes8>,
+    items: Vec<u32>,
+    path: SimdPath,
+}
+
+/// The octree as built: nodes in creation order (children of a node contiguous).
+struct Built {
     nodes: Vec<Node>,
     items: Vec<u32>,
 }
@@ -53,27 +76,82 @@ impl Octree {
         let reach = Reach::new(discs);
         let boxes: Vec<Aabb> = (0..discs.len()).map(|i| discs.bounds(i)).collect();
         let all: Vec<u32> = (0..discs.len() as u32).collect();
-        let mut t = Self {
-            discs: local,
-            reach,
-            nodes: Vec::new(),
+        let root = reach.bounds;
+        let mut t = Built {
+            nodes: vec![Node {
+                lo: root.lo,
+                hi: root.hi,
+                first: 0,
+                count: 0,
+            }],
             items: Vec::new(),
         };
-        let root = reach.bounds;
-        t.nodes.push(Node {
-            lo: root.lo,
-            hi: root.hi,
-            first: 0,
-            count: 0,
-        });
         t.split(0, root, all, &boxes, max_leaf, min_side, 0);
         for n in &mut t.nodes {
             let p = reach.padded(&Aabb::new(n.lo, n.hi));
             (n.lo, n.hi) = (p.lo, p.hi);
         }
-        t
+        let block_of = |n: &Node| {
+            if n.count == INNER {
+                Node {
+                    first: (n.first - 1) / 8,
+                    ..*n
+                }
+            } else {
+                *n
+            }
+        };
+        let blocks = t.nodes[1..]
+            .chunks_exact(8)
+            .map(|kids| {
+                let mut b = Boxes8 {
+                    lo: [[0.0; 8]; 3],
+                    hi: [[0.0; 8]; 3],
+                    first: [0; 8],
+                    count: [0; 8],
+                };
+                for (l, k) in kids.iter().map(block_of).enumerate() {
+                    for a in 0..3 {
+                        (b.lo[a][l], b.hi[a][l]) = (k.lo[a], k.hi[a]);
+                    }
+                    (b.first[l], b.count[l]) = (k.first, k.count);
+                }
+                b
+            })
+            .collect();
+        Self {
+            discs: local,
+            reach,
+            root: block_of(&t.nodes[0]),
+            blocks,
+            items: t.items,
+            path: SimdPath::detect(),
+        }
     }
 
+    /// The same octree with its kernels on `path` (tests force every path this CPU has).
+    ///
+    /// # Panics
+    /// If this CPU cannot run `path`.
+    pub fn with_path(mut self, path: SimdPath) -> Self {
+        assert!(path.is_available(), "slab path {path:?} not available");
+        self.path = path;
+        self
+    }
+
+    /// Number of nodes.
+    pub fn nodes(&self) -> usize {
+        1 + 8 * self.blocks.len()
+    }
+
+    /// Reports leaf `first..first + count`'s discs not yet seen for this segment.
+    #[inline]
+    fn leaf(&self, first: u32, count: u32, mailbox: &mut Mailbox, out: &mut Vec<u32>) {
+        mailbox.collect(&self.items[first as usize..(first + count) as usize], out);
+    }
+}
+
+impl Built {
     #[allow(clippy::too_many_arguments)]
     fn split(
         &mut self,
@@ -129,11 +207,6 @@ impl Octree {
             self.split(first + k, kb, sub, boxes, max_leaf, min_side, depth + 1);
         }
     }
-
-    /// Number of nodes.
-    pub fn nodes(&self) -> usize {
-        self.nodes.len()
-    }
 }
 
 impl DiscIndex for Octree {
@@ -145,37 +218,124 @@ impl DiscIndex for Octree {
         &self.reach
     }
 
-    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, f: &mut dyn FnMut(u32)) -> Walk {
+    fn candidates(&self, seg: &Segment, mailbox: &mut Mailbox, out: &mut Vec<u32>) -> Walk {
         mailbox.clear();
-        let (o, v, t_end) = (seg.o(), seg.d(), seg.t_end());
-        let mut walk = Walk::default();
+        let ray = SlabRay::new(seg);
+        let mut walk = Walk {
+            box_tests: 1,
+            ..Walk::default()
+        };
+        if !ray.meets(&Aabb::new(self.root.lo, self.root.hi)) {
+            return walk;
+        }
+        walk.entered = 1;
+        if self.root.count != INNER {
+            self.leaf(self.root.first, self.root.count, mailbox, out);
+            return walk;
+        }
         let mut stack = [0u32; 8 * MAX_DEPTH as usize + 8];
+        stack[0] = self.root.first;
         let mut top = 1;
         while top > 0 {
             top -= 1;
-            let n = self.nodes[stack[top] as usize];
-            walk.box_tests += 1;
-            if clip(o, v, &Aabb::new(n.lo, n.hi), 0.0, t_end).is_none() {
-                continue;
-            }
-            walk.entered += 1;
-            if n.count == INNER {
-                for k in 0..8 {
-                    stack[top] = n.first + k;
+            let b = &self.blocks[stack[top] as usize];
+            let mut hit = self.path.test8(&ray, b);
+            walk.box_tests += 8;
+            walk.entered += u64::from(hit.count_ones());
+            while hit != 0 {
+                let l = hit.trailing_zeros() as usize;
+                hit &= hit - 1;
+                if b.count[l] == INNER {
+                    stack[top] = b.first[l];
                     top += 1;
-                }
-            } else {
-                for &i in &self.items[n.first as usize..(n.first + n.count) as usize] {
-                    if mailbox.insert(i) {
-                        f(i);
-                    }
+                } else {
+                    self.leaf(b.first[l], b.count[l], mailbox, out);
                 }
             }
         }
         walk
     }
 
+    fn path(&self) -> SimdPath {
+        self.path
+    }
+
     fn bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<Node>() + self.items.len() * 4 + self.discs.bytes()
+        self.nodes() * std::mem::size_of::<Node>() + self.items.len() * 4 + self.discs.bytes()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::clip;
+    use super::super::tests::{adversarial_segments, scene};
+    use super::*;
+
+    /// The first version's walk, kept as the oracle of the counters: every node popped from a
+    /// stack and clipped alone (`clip` per box), children pushed in order.
+    fn reference(t: &Octree, seg: &Segment, mailbox: &mut Mailbox) -> (Walk, Vec<u32>) {
+        mailbox.clear();
+        let (o, v, t_end) = (seg.o(), seg.d(), seg.t_end());
+        let mut walk = Walk::default();
+        let mut out = Vec::new();
+        let mut stack = vec![t.root];
+        while let Some(n) = stack.pop() {
+            walk.box_tests += 1;
+            if clip(o, v, &Aabb::new(n.lo, n.hi), 0.0, t_end).is_none() {
+                continue;
+            }
+            walk.entered += 1;
+            if n.count == INNER {
+                let b = &t.blocks[n.first as usize];
+                for l in 0..8 {
+                    stack.push(Node {
+                        lo: DVec3::new(b.lo[0][l], b.lo[1][l], b.lo[2][l]),
+                        hi: DVec3::new(b.hi[0][l], b.hi[1][l], b.hi[2][l]),
+                        first: b.first[l],
+                        count: b.count[l],
+                    });
+                }
+            } else {
+                for &i in &t.items[n.first as usize..(n.first + n.count) as usize] {
+                    if mailbox.insert(i) {
+                        out.push(i);
+                    }
+                }
+            }
+        }
+        out.sort_unstable();
+        (walk, out)
+    }
+
+    #[test]
+    fn every_path_walks_as_the_reference_walk_does() {
+        let (store, discs) = scene(3_000, 2_000, 0.03, 7);
+        for (leaf, side) in [(8, 0.06), (32, 0.06), (1, 0.2), (4000, 0.06)] {
+            let base = Octree::build(&discs, leaf, side);
+            let segs: Vec<Segment> = store
+                .segments
+                .iter()
+                .copied()
+                .chain(adversarial_segments(&base.discs.discs, 11))
+                .collect();
+            let mut mb = Mailbox::new(discs.len());
+            let want: Vec<(Walk, Vec<u32>)> =
+                segs.iter().map(|s| reference(&base, s, &mut mb)).collect();
+            let deep = want.iter().any(|w| w.0.entered > 3);
+            assert_eq!(
+                deep,
+                leaf < 4000,
+                "leaf {leaf}: walks go deep below the root"
+            );
+            for path in SimdPath::all_available() {
+                let t = Octree::build(&discs, leaf, side).with_path(path);
+                for (k, (s, w)) in segs.iter().zip(&want).enumerate() {
+                    let mut got = Vec::new();
+                    let walk = t.candidates(s, &mut mb, &mut got);
+                    got.sort_unstable();
+                    assert_eq!((walk, got), w.clone(), "{path:?}, leaf {leaf}, segment {k}");
+                }
+            }
+        }
     }
 }

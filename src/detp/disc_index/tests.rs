@@ -6,10 +6,52 @@ use super::*;
 use crate::detp::brute;
 use crate::sample::rng::stream;
 
-fn scene(n_seg: u32, n_disc: usize, d: f64, seed: u64) -> (SegmentStore, Discs) {
+pub(super) fn scene(n_seg: u32, n_disc: usize, d: f64, seed: u64) -> (SegmentStore, Discs) {
     let mut rng = stream(&[0xd1, seed]);
     let store = SegmentStore::test_lines(&mut rng, n_seg);
     (store, Discs::in_ball(&mut rng, n_disc, DVec3::ZERO, 1.0, d))
+}
+
+/// Segments that stress the walks' arithmetic: starting at disc centres and on the discs' box
+/// (the root's and the grid's faces), axis-parallel and in coordinate planes (zero direction
+/// components), with tiny components, of zero and tiny length, through the box's corners.
+pub(super) fn adversarial_segments(discs: &Discs, seed: u64) -> Vec<Segment> {
+    use rand::Rng;
+    let mut rng = stream(&[0xad5, seed]);
+    let b = discs.bounds_all();
+    let dirs = [
+        DVec3::X,
+        -DVec3::Y,
+        DVec3::Z,
+        DVec3::new(1.0, 1.0, 0.0),
+        DVec3::new(0.0, -1.0, 1.0),
+        DVec3::new(1.0, 1.0, 1.0),
+        DVec3::new(1.0, 1e-30, -1e-30),
+        DVec3::new(-1.0, 1.0, 1e-300),
+    ];
+    let mut out = Vec::new();
+    for k in 0..600u32 {
+        let c = discs.centers[rng.gen_range(0..discs.len())];
+        let o = match k % 4 {
+            0 => c,
+            1 => DVec3::new(b.lo.x, c.y, c.z),
+            2 => b.hi,
+            _ => DVec3::new(c.x, b.lo.y, b.hi.z),
+        };
+        let d = if k % 3 == 0 {
+            crate::sample::lines::uniform_on_sphere(&mut rng)
+        } else {
+            dirs[rng.gen_range(0..dirs.len())] * if rng.gen_bool(0.5) { 1.0 } else { -1.0 }
+        };
+        let t_end = match k % 5 {
+            0 => 0.0,
+            1 => 1e-9,
+            2 => rng.gen_range(0.0..0.5),
+            _ => f64::INFINITY,
+        };
+        out.push(Segment::new(o, d, 0.0, t_end, 1 + k % 7, k));
+    }
+    out
 }
 
 fn indexes(discs: &Discs) -> Vec<(&'static str, Box<dyn Run>)> {
@@ -63,6 +105,38 @@ fn both_indexes_equal_brute_force_and_add_then_remove_equals_the_complement() {
         // Discs (48 B each) plus at least one listing (4 B) per disc.
         assert!(ix.size() >= discs.len() * 52, "{name}: {} bytes", ix.size());
         assert_eq!(acc, only_kept, "{name}: add all, remove a third");
+    }
+}
+
+/// Every SIMD path, on random and adversarial segments, with one radius and radii per disc: the
+/// sums equal brute force, and `traversal_only` counts exactly what `accumulate` counts.
+#[test]
+fn every_path_equals_brute_force_and_the_walk_alone_counts_the_same() {
+    let (mut store, discs) = scene(4_000, 1_500, 0.05, 5);
+    store.segments.extend(adversarial_segments(&discs, 5));
+    let radii = (0..discs.len()).map(|i| 0.01 + 0.04 * (i % 5) as f64 / 4.0);
+    let each = discs.clone().with_radii(radii.collect()).unwrap();
+    for discs in [discs, each] {
+        let mut want = vec![0; discs.len()];
+        brute::accumulate(&store, &discs, None, 1, &mut want);
+        for path in SimdPath::all_available() {
+            let ixs: Vec<(&str, Box<dyn DiscIndex>)> = vec![
+                (
+                    "grid",
+                    Box::new(GridIndex::build(&discs, 0.1).with_path(path)),
+                ),
+                (
+                    "octree",
+                    Box::new(Octree::build(&discs, 8, 0.02).with_path(path)),
+                ),
+            ];
+            for (name, ix) in ixs {
+                let mut acc = vec![0; discs.len()];
+                let st = ix.accumulate(&store, None, 1, &mut acc);
+                assert_eq!(acc, want, "{name} {path:?}");
+                assert_eq!(ix.traversal_only(&store, None), st, "{name} {path:?}");
+            }
+        }
     }
 }
 

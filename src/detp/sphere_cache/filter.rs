@@ -45,6 +45,9 @@ use crate::detp::store::Segment;
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
+/// Lanes a list has room for before a filter first grows it.
+const FIRST_ROOM: usize = 1024;
+
 /// The deepest level a cache may build: keeps `κ_j` positive and ≥ 2⁻³⁸ (see the module doc).
 pub const MAX_LEVEL: usize = 255;
 
@@ -134,8 +137,9 @@ impl RayList {
         m * (1.0 + 1e-6)
     }
 
-    fn clear(&mut self) {
-        for v in [
+    /// The seven per-lane columns (not `idx`), for what is done to each alike.
+    fn lanes_mut(&mut self) -> [&mut Vec<f32>; 7] {
+        [
             &mut self.ox,
             &mut self.oy,
             &mut self.oz,
@@ -143,25 +147,51 @@ impl RayList {
             &mut self.dy,
             &mut self.dz,
             &mut self.te,
-        ] {
+        ]
+    }
+
+    fn clear(&mut self) {
+        for v in self.lanes_mut() {
             v.clear();
         }
         self.idx.clear();
     }
 
     fn reserve(&mut self, n: usize) {
-        for v in [
-            &mut self.ox,
-            &mut self.oy,
-            &mut self.oz,
-            &mut self.dx,
-            &mut self.dy,
-            &mut self.dz,
-            &mut self.te,
-        ] {
+        for v in self.lanes_mut() {
             v.reserve(n);
         }
         self.idx.reserve(n);
+    }
+
+    /// Lanes every column can hold without reallocating.
+    #[inline]
+    fn capacity(&self) -> usize {
+        [
+            &self.ox, &self.oy, &self.oz, &self.dx, &self.dy, &self.dz, &self.te,
+        ]
+        .iter()
+        .map(|v| v.capacity())
+        .min()
+        .unwrap_or(0)
+        .min(self.idx.capacity())
+    }
+
+    /// Makes room for `len + 16` lanes after the vector paths wrote `len` lanes past the columns'
+    /// lengths: the lengths are set to `len` first (those lanes are written), then every column
+    /// grows (at least doubling, so a list that grows to L lanes reallocates O(log L) times).
+    ///
+    /// # Safety
+    /// The first `len` lanes of every column must have been written.
+    #[cold]
+    unsafe fn room(&mut self, len: usize) {
+        // SAFETY: the caller wrote the first `len` lanes of every column.
+        unsafe { set_lanes(self, len) };
+        let more = len.max(FIRST_ROOM) + 16;
+        for v in self.lanes_mut() {
+            v.reserve(more);
+        }
+        self.idx.reserve(more);
     }
 
     #[inline]
@@ -306,8 +336,9 @@ pub fn filter(
     out: &mut RayList,
 ) {
     out.clear();
-    // 16 lanes of slack: the AVX-512 path stores whole vectors past the last kept lane.
-    out.reserve(src.len() + 16);
+    // Room for a first block; the vector paths grow `out` as lanes are kept (`RayList::room`),
+    // so a reused list keeps its capacity and holds no more than what it was ever asked to keep.
+    out.reserve(FIRST_ROOM.min(src.len()) + 16);
     match path {
         FilterPath::Portable => portable(src, 0, probe, segments, out),
         #[cfg(target_arch = "x86_64")]
@@ -330,6 +361,27 @@ pub fn filter(
         #[cfg(not(target_arch = "x86_64"))]
         _ => panic!("filter path {path:?} needs x86_64"),
     }
+}
+
+/// Sets every column of `out` to `len` lanes after the vector paths wrote them.
+///
+/// # Safety
+/// The first `len` elements of every column must have been written (within capacity).
+unsafe fn set_lanes(out: &mut RayList, len: usize) {
+    for v in [
+        &mut out.ox,
+        &mut out.oy,
+        &mut out.oz,
+        &mut out.dx,
+        &mut out.dy,
+        &mut out.dz,
+        &mut out.te,
+    ] {
+        // SAFETY: see the function's contract.
+        unsafe { v.set_len(len) };
+    }
+    // SAFETY: as above.
+    unsafe { out.idx.set_len(len) };
 }
 
 /// Lanes `from..` one at a time (the portable path, and the tail of the 8-lane path).

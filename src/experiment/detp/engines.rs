@@ -30,6 +30,74 @@ pub(super) enum Output {
     Baseline,
 }
 
+/// One replica's engine counts over a subset of its photons (`--photon-shard`): counts that add
+/// across disjoint photon subsets, so the sum over a run's shards is what the engine counts on all
+/// its photons. An engine whose counts do not add (the sphere cache's builds depend on how many
+/// rays a sphere holds; the photon map's neighbours on every photon) has none.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize, PartialEq)]
+pub enum EnginePart {
+    /// The disc index: its [`IndexStats`] (nodes, box tests, DDA steps, disc tests), build and
+    /// query seconds, bytes.
+    DiscIndex {
+        /// Nodes visited, box tests, DDA steps, disc tests.
+        stats: [u64; 4],
+        /// Build seconds.
+        build_s: f64,
+        /// Query seconds.
+        query_s: f64,
+        /// Bytes of the index.
+        bytes: usize,
+    },
+    /// Brute force: its tests and seconds.
+    BruteForce {
+        /// Segment–disc tests.
+        tests: u64,
+        /// Seconds.
+        seconds: f64,
+    },
+    /// The reference: photon-independent, computed where the shards are merged.
+    Reference,
+}
+
+impl EnginePart {
+    /// The part of the union of two disjoint photon subsets (seconds add; bytes are the larger).
+    pub fn add(&self, o: &Self) -> Option<Self> {
+        Some(match (self, o) {
+            (
+                Self::DiscIndex {
+                    stats: a,
+                    build_s,
+                    query_s,
+                    bytes,
+                },
+                Self::DiscIndex {
+                    stats: b,
+                    build_s: b_build,
+                    query_s: b_query,
+                    bytes: b_bytes,
+                },
+            ) => Self::DiscIndex {
+                stats: std::array::from_fn(|i| a[i] + b[i]),
+                build_s: build_s + b_build,
+                query_s: query_s + b_query,
+                bytes: (*bytes).max(*b_bytes),
+            },
+            (
+                Self::BruteForce { tests, seconds },
+                Self::BruteForce {
+                    tests: t,
+                    seconds: s,
+                },
+            ) => Self::BruteForce {
+                tests: tests + t,
+                seconds: seconds + s,
+            },
+            (Self::Reference, Self::Reference) => Self::Reference,
+            _ => return None,
+        })
+    }
+}
+
 /// What the point knows when its engines pool their replicas.
 pub(super) struct Pooled<'a> {
     /// The point's config.
@@ -81,6 +149,16 @@ pub(super) trait Engine: Send {
     /// The levels table (the sphere cache only).
     fn levels(&self, _p: &Pooled, _law: &Law) -> Vec<LevelRow> {
         Vec::new()
+    }
+    /// The last replica's counts as an [`EnginePart`] (None where they do not add across photon
+    /// subsets: such an engine refuses `--photon-shard`).
+    fn part(&self) -> Option<EnginePart> {
+        None
+    }
+    /// Records `part`, the counts of one replica summed over its photon shards, as if `run` had
+    /// counted them (`raycost merge` of photon shards).
+    fn absorb(&mut self, _cfg: &DetpConfig, _pts: &PointSet, _part: &EnginePart) {
+        unreachable!("an engine without parts refuses --photon-shard before anything runs")
     }
 }
 
@@ -388,6 +466,33 @@ impl Engine for Index {
     fn seconds(&self) -> f64 {
         self.runs.iter().map(|r| r.2).sum()
     }
+    fn part(&self) -> Option<EnginePart> {
+        let &(st, build_s, query_s, bytes) = self.runs.last()?;
+        Some(EnginePart::DiscIndex {
+            stats: [st.nodes_visited, st.box_tests, st.dda_steps, st.ray_disc_tests],
+            build_s,
+            query_s,
+            bytes,
+        })
+    }
+    fn absorb(&mut self, _cfg: &DetpConfig, _pts: &PointSet, part: &EnginePart) {
+        let EnginePart::DiscIndex {
+            stats: [nodes_visited, box_tests, dda_steps, ray_disc_tests],
+            build_s,
+            query_s,
+            bytes,
+        } = *part
+        else {
+            unreachable!("parts are matched to engines by the merge")
+        };
+        let stats = IndexStats {
+            nodes_visited,
+            box_tests,
+            dda_steps,
+            ray_disc_tests,
+        };
+        self.runs.push((stats, build_s, query_s, bytes));
+    }
     fn measured(&self, p: &Pooled) -> EngineMeasured {
         let tests: Vec<f64> = self
             .runs
@@ -425,6 +530,16 @@ impl Engine for BruteForce {
     }
     fn seconds(&self) -> f64 {
         self.runs.iter().map(|r| r.1).sum()
+    }
+    fn part(&self) -> Option<EnginePart> {
+        let &(tests, seconds) = self.runs.last()?;
+        Some(EnginePart::BruteForce { tests, seconds })
+    }
+    fn absorb(&mut self, _cfg: &DetpConfig, _pts: &PointSet, part: &EnginePart) {
+        let EnginePart::BruteForce { tests, seconds } = *part else {
+            unreachable!("parts are matched to engines by the merge")
+        };
+        self.runs.push((tests, seconds));
     }
     fn measured(&self, p: &Pooled) -> EngineMeasured {
         let tests: Vec<f64> = self.runs.iter().map(|r| r.0 as f64).collect();
@@ -515,11 +630,12 @@ struct Reference {
     result: Option<Arc<(Vec<Irradiance>, f64)>>,
 }
 
-impl Engine for Reference {
-    fn run(&mut self, cfg: &DetpConfig, _rays: &RaySet, pts: &PointSet) -> Output {
-        // Once per point: the reference does not depend on the replica's photons.
+impl Reference {
+    /// The reference at the point's discs, once per point (it does not depend on the replica's
+    /// photons), shared through the run's cache.
+    fn compute(&mut self, cfg: &DetpConfig, pts: &PointSet) {
         if self.result.is_some() {
-            return Output::Baseline;
+            return;
         }
         let Some(scene) = cfg.scene() else {
             unreachable!("configure refuses the reference without a scene")
@@ -560,7 +676,20 @@ impl Engine for Reference {
             r
         });
         self.result = Some(r);
+    }
+}
+
+impl Engine for Reference {
+    fn run(&mut self, cfg: &DetpConfig, _rays: &RaySet, pts: &PointSet) -> Output {
+        self.compute(cfg, pts);
         Output::Baseline
+    }
+    fn part(&self) -> Option<EnginePart> {
+        Some(EnginePart::Reference)
+    }
+    /// Photon shards skip the reference (it needs no photons); the merge computes it, once.
+    fn absorb(&mut self, cfg: &DetpConfig, pts: &PointSet, _part: &EnginePart) {
+        self.compute(cfg, pts);
     }
     fn seconds(&self) -> f64 {
         0.0

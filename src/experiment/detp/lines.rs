@@ -1,6 +1,7 @@
 //! The DETP paper's validation rays (§4.2): μ-random lines through the unit ball, and the exact
 //! irradiance they give a disc.
 
+use std::ops::Range;
 use std::time::Instant;
 
 use glam::DVec3;
@@ -16,26 +17,33 @@ use crate::sample::rng::{domain, stream};
 /// μ-random lines through the unit ball (Alg. 4.1/4.2), each a segment with 1 W of power that starts
 /// 1 unit before its entry point and ends 1 unit past its exit, so every disc near the ball (d ≤ 1)
 /// sees the whole chord.
-pub(super) fn lines(cfg: &DetpConfig, point: u64, replica: u64) -> RaySet {
+///
+/// Only the lines `ids` are kept (`--photon-shard`; all of them otherwise): a line's stream is its
+/// batch's, so the batches that `ids` cuts are drawn whole and the others' lines dropped, and every
+/// kept line is bit-identical to the same line of the whole set.
+pub(super) fn lines(cfg: &DetpConfig, point: u64, replica: u64, ids: Range<u64>) -> RaySet {
     let start = Instant::now();
     let scale = PowerScale::for_max_power(1.0);
     let units = scale.units(1.0);
     let n = cfg.photons;
-    let batches = n.div_ceil(BATCH);
-    let segments: Vec<Segment> = (0..batches)
+    let batches = (ids.start / BATCH)..n.min(ids.end).div_ceil(BATCH);
+    let segments: Vec<Segment> = batches
         .into_par_iter()
         .flat_map_iter(|b| {
             let mut rng = stream(&[domain::LINES, cfg.seed, point, replica, b]);
             let lo = b * BATCH;
             let hi = (lo + BATCH).min(n);
-            (lo..hi).map(move |id| {
+            let ids = ids.clone();
+            (lo..hi).filter_map(move |id| {
                 let (p, d) = uniform_line(&mut rng);
                 // The chord from p along d has length −2 p·d (p on the unit sphere).
                 let chord = -2.0 * p.dot(d);
-                Segment::new(p - d, d, 1.0 + chord, 2.0 + chord, units, id as u32)
+                ids.contains(&id)
+                    .then(|| Segment::new(p - d, d, 1.0 + chord, 2.0 + chord, units, id as u32))
             })
         })
         .collect();
+    let n = segments.len() as u64;
     RaySet {
         store: SegmentStore::new(segments, scale),
         // The root holds every disc (points lie in the unit ball, discs reach d beyond it), so no disc

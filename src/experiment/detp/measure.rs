@@ -4,12 +4,15 @@
 //! value and the path-traced reference, the levels table and (if asked) the points table.
 //! `columns.rs` declares how each value becomes a column.
 
+use std::ops::Range;
+
 use glam::DVec3;
 
 use super::config::DetpConfig;
 use super::engines::{self, EngineMeasured, Law, LevelRow, Output, Pooled, ReferenceCache, Sizes};
 use super::spec::EngineChoice;
-use super::{agree, points, rays, PointSet};
+use super::shards::ReplicaPart;
+use super::{agree, check_sums, points, rays, PointSet};
 use crate::error::Error;
 use crate::stats::Estimate;
 
@@ -104,6 +107,95 @@ pub(super) struct Replicated {
     bf_checked: u64,
 }
 
+impl Replicated {
+    /// A point's replicas before any has run: its sample points and fresh engines.
+    fn new(cfg: &DetpConfig, point: u64, refs: &ReferenceCache) -> Result<Self, Error> {
+        Ok(Self {
+            engines: cfg
+                .engines
+                .iter()
+                .map(|&e| engines::engine(e, refs))
+                .collect(),
+            irr: Vec::with_capacity(cfg.replicas as usize),
+            law_radius: 1.0,
+            root_radius: 1.0,
+            mean_segment_watts: 0.0,
+            segments: 0,
+            rays_in_root: 0,
+            trace_s: 0.0,
+            edge_s: 0.0,
+            mismatches: 0,
+            bf_checked: 0,
+            pts: points(cfg, point)?,
+        })
+        .map(|mut r| {
+            r.edge_s = r.pts.edge_s;
+            r
+        })
+    }
+
+    /// Adds one replica's sums and counts (traced here, or summed over its photon shards): the
+    /// engines' agreement, DETP's irradiance per disc, the segment counts. The one place a
+    /// replica's integer sums become values, so a merged run equals an unsplit one bit for bit.
+    fn absorb(&mut self, cfg: &DetpConfig, point: u64, replica: u64, part: &ReplicaPart) {
+        let scale = part.scale();
+        self.law_radius = f64::from_bits(part.law_radius);
+        self.root_radius = f64::from_bits(part.root_radius);
+        self.segments += part.segments;
+        self.rays_in_root += part.rays_in_root;
+        self.trace_s += part.trace_s;
+        self.edge_s += part.edge_s;
+        if part.segments > 0 {
+            // Σ power is an integer: the same bits whichever photons were traced where.
+            self.mean_segment_watts =
+                part.power_units() as f64 * scale.watts_per_unit / part.segments as f64;
+        }
+        let n = self.pts.discs.len();
+        let a = agree(cfg, point, replica, n, &part.sums, &part.bf);
+        self.mismatches += a.mismatches;
+        self.bf_checked += a.bf_checked;
+        let discs = &self.pts.discs;
+        self.irr.push(
+            a.sums
+                .iter()
+                .enumerate()
+                .map(|(i, &s)| discs.irradiance(i, scale.watts(s)))
+                .collect(),
+        );
+    }
+}
+
+/// The photons `ids` of one replica through every engine (the reference skipped where `shard`:
+/// it needs no photons and is computed once by the merge): their sums, the check subset's
+/// brute-force sums and the counts, as a [`ReplicaPart`].
+pub(super) fn trace_replica(
+    cfg: &DetpConfig,
+    point: u64,
+    replica: u64,
+    ids: Range<u64>,
+    engines: &mut [Box<dyn engines::Engine>],
+    pts: &PointSet,
+    shard: bool,
+) -> ReplicaPart {
+    let span = (ids.start, ids.end);
+    let rays = rays(cfg, point, replica, pts, ids);
+    let sums: Vec<Vec<_>> = engines
+        .iter_mut()
+        .zip(&cfg.engines)
+        .filter(|(_, &c)| !(shard && c == EngineChoice::Reference))
+        .filter_map(|(e, _)| match e.run(cfg, &rays, pts) {
+            Output::Sums(s) => Some(s),
+            Output::Baseline => None,
+        })
+        .collect();
+    ReplicaPart::new(
+        span,
+        &rays,
+        sums,
+        check_sums(cfg, point, replica, &rays, pts),
+    )
+}
+
 /// Every replica through every engine.
 pub(super) fn replicate(
     cfg: &DetpConfig,
@@ -111,62 +203,73 @@ pub(super) fn replicate(
     progress: &(dyn Fn(u64) + Sync),
     refs: &ReferenceCache,
 ) -> Result<Replicated, Error> {
-    let pts = points(cfg, point)?;
-    let mut r = Replicated {
-        engines: cfg
-            .engines
-            .iter()
-            .map(|&e| engines::engine(e, refs))
-            .collect(),
-        irr: Vec::with_capacity(cfg.replicas as usize),
-        law_radius: 1.0,
-        root_radius: 1.0,
-        mean_segment_watts: 0.0,
-        segments: 0,
-        rays_in_root: 0,
-        trace_s: 0.0,
-        edge_s: pts.edge_s,
-        mismatches: 0,
-        bf_checked: 0,
-        pts,
-    };
+    let mut r = Replicated::new(cfg, point, refs)?;
     for replica in 0..cfg.replicas {
-        let rays = rays(cfg, point, replica, &r.pts);
-        let scale = rays.store.scale;
-        r.law_radius = rays.law_radius;
-        r.root_radius = rays.root.1;
-        r.segments += rays.store.len() as u64;
-        r.rays_in_root += rays.rays_in_root;
-        r.trace_s += rays.trace_s;
-        r.edge_s += rays.edge_s;
-        if !rays.store.is_empty() {
-            r.mean_segment_watts = rays
-                .store
-                .segments
-                .iter()
-                .map(|s| scale.watts(i64::from(s.power)))
-                .sum::<f64>()
-                / rays.store.len() as f64;
-        }
-        let sums: Vec<Vec<_>> = r
-            .engines
-            .iter_mut()
-            .filter_map(|e| match e.run(cfg, &rays, &r.pts) {
-                Output::Sums(s) => Some(s),
-                Output::Baseline => None,
-            })
-            .collect();
-        let a = agree(cfg, point, replica, &rays, &r.pts, &sums);
-        r.mismatches += a.mismatches;
-        r.bf_checked += a.bf_checked;
-        let discs = &r.pts.discs;
-        r.irr.push(
-            a.sums
-                .iter()
-                .enumerate()
-                .map(|(i, &s)| discs.irradiance(i, scale.watts(s)))
-                .collect(),
+        let part = trace_replica(
+            cfg,
+            point,
+            replica,
+            0..cfg.photons,
+            &mut r.engines,
+            &r.pts,
+            false,
         );
+        r.absorb(cfg, point, replica, &part);
+        progress(cfg.photons);
+    }
+    Ok(r)
+}
+
+/// A point's photons `ids` of every replica (`--photon-shard`): the parts a merge adds.
+pub(super) fn replicate_part(
+    cfg: &DetpConfig,
+    point: u64,
+    ids: Range<u64>,
+    progress: &(dyn Fn(u64) + Sync),
+    refs: &ReferenceCache,
+) -> Result<Vec<ReplicaPart>, Error> {
+    let mut engines: Vec<Box<dyn engines::Engine>> = cfg
+        .engines
+        .iter()
+        .map(|&e| engines::engine(e, refs))
+        .collect();
+    let pts = points(cfg, point)?;
+    let mut parts = Vec::with_capacity(cfg.replicas as usize);
+    for replica in 0..cfg.replicas {
+        let mut part = trace_replica(
+            cfg,
+            point,
+            replica,
+            ids.clone(),
+            &mut engines,
+            &pts,
+            true,
+        );
+        part.engines = engines
+            .iter()
+            .map(|e| e.part().ok_or_else(|| Error::internal("an engine without parts")))
+            .collect::<Result<_, _>>()?;
+        parts.push(part);
+        progress(ids.end - ids.start);
+    }
+    Ok(parts)
+}
+
+/// A point's replicas from their parts summed over every photon shard (`raycost merge`): each
+/// engine records its summed counts, then every replica is absorbed as [`replicate`] absorbs it.
+pub(super) fn replicate_merged(
+    cfg: &DetpConfig,
+    point: u64,
+    parts: &[ReplicaPart],
+    progress: &(dyn Fn(u64) + Sync),
+    refs: &ReferenceCache,
+) -> Result<Replicated, Error> {
+    let mut r = Replicated::new(cfg, point, refs)?;
+    for (replica, part) in (0..cfg.replicas).zip(parts) {
+        for (e, p) in r.engines.iter_mut().zip(&part.engines) {
+            e.absorb(cfg, &r.pts, p);
+        }
+        r.absorb(cfg, point, replica, part);
         progress(cfg.photons);
     }
     Ok(r)

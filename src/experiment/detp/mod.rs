@@ -29,6 +29,8 @@
 //! [`describe`], [`DynamicEngine`] (quasi-static's engine choice), [`EngineChoice`], the edge
 //! remedies' defaults [`EDGE_MIN_RADIUS`] and [`EDGE_GAP`], and [`lattice_spacing`].
 
+use std::ops::Range;
+
 use glam::DVec3;
 use rand::seq::index::sample as sample_indices;
 use rayon::prelude::*;
@@ -39,6 +41,7 @@ pub mod engines;
 mod lines;
 pub mod measure;
 mod scene;
+pub mod shards;
 pub mod spec;
 
 // The DETP module's interface for kind `quasi-static` and `raycost render`: the validated `[detp]`
@@ -163,11 +166,17 @@ fn lattice(seed: u64, point: u64, k: u64) -> (Vec<DVec3>, Vec<DVec3>) {
     pairs.into_iter().unzip()
 }
 
-/// The rays of one replica.
-pub(crate) fn rays(cfg: &DetpConfig, point: u64, replica: u64, pts: &PointSet) -> RaySet {
+/// The rays `ids` of one replica (`0..cfg.photons` unless `--photon-shard` splits them).
+pub(crate) fn rays(
+    cfg: &DetpConfig,
+    point: u64,
+    replica: u64,
+    pts: &PointSet,
+    ids: Range<u64>,
+) -> RaySet {
     match cfg.scene() {
-        None => lines::lines(cfg, point, replica),
-        Some(s) => scene::photons(cfg, point, replica, &s.scene, &pts.discs),
+        None => lines::lines(cfg, point, replica, ids),
+        Some(s) => scene::photons(cfg, point, replica, ids, &s.scene, &pts.discs),
     }
 }
 
@@ -181,42 +190,60 @@ struct Agreement {
     bf_checked: u64,
 }
 
-/// Every DETP engine against the first, disc by disc, and a keyed subset of discs against brute
-/// force (unless brute force ran on all of them already).
+/// The keyed subset of discs that brute force re-computes (None where brute force runs on every
+/// disc anyway, or is not asked for): it depends on the seed, the point and the replica only, so
+/// photon shards and their merge draw the same subset.
+fn check_subset(cfg: &DetpConfig, point: u64, replica: u64, n: usize) -> Option<Vec<u32>> {
+    if cfg.engines.contains(&EngineChoice::BruteForce) || cfg.brute_force_points == 0 || n == 0 {
+        return None;
+    }
+    let k = (cfg.brute_force_points as usize).min(n);
+    let mut rng = stream(&[domain::CHECK, cfg.seed, point, replica]);
+    let mut subset: Vec<u32> = sample_indices(&mut rng, n, k)
+        .into_iter()
+        .map(|i| i as u32)
+        .collect();
+    subset.sort_unstable();
+    Some(subset)
+}
+
+/// Brute force's sums on the check subset of discs (in subset order; empty without a subset).
+fn check_sums(cfg: &DetpConfig, point: u64, replica: u64, rays: &RaySet, pts: &PointSet) -> Vec<Acc> {
+    let Some(subset) = check_subset(cfg, point, replica, pts.discs.len()) else {
+        return Vec::new();
+    };
+    let mut bf = vec![0; pts.discs.len()];
+    brute::accumulate(&rays.store, &pts.discs, Some(&subset), 1, &mut bf);
+    subset.iter().map(|&i| bf[i as usize]).collect()
+}
+
+/// Every DETP engine against the first, disc by disc, and the check subset's brute-force sums
+/// `bf` against it (brute force ran on every disc already where there is no subset).
 fn agree(
     cfg: &DetpConfig,
     point: u64,
     replica: u64,
-    rays: &RaySet,
-    pts: &PointSet,
+    n: usize,
     sums: &[Vec<Acc>],
+    bf: &[Acc],
 ) -> Agreement {
-    let n = pts.discs.len();
     let (first, rest) = sums
         .split_first()
         .expect("configure refuses a spec without a DETP engine");
     let mut mismatches = (0..n)
         .filter(|&i| rest.iter().any(|o| o[i] != first[i]))
         .count() as u64;
-    let bf_checked = if cfg.engines.contains(&EngineChoice::BruteForce) {
-        n as u64
-    } else if cfg.brute_force_points > 0 && n > 0 {
-        let k = (cfg.brute_force_points as usize).min(n);
-        let mut rng = stream(&[domain::CHECK, cfg.seed, point, replica]);
-        let mut subset: Vec<u32> = sample_indices(&mut rng, n, k)
-            .into_iter()
-            .map(|i| i as u32)
-            .collect();
-        subset.sort_unstable();
-        let mut bf = vec![0; n];
-        brute::accumulate(&rays.store, &pts.discs, Some(&subset), 1, &mut bf);
-        mismatches += subset
-            .iter()
-            .filter(|&&i| bf[i as usize] != first[i as usize])
-            .count() as u64;
-        k as u64
-    } else {
-        0
+    let bf_checked = match check_subset(cfg, point, replica, n) {
+        _ if cfg.engines.contains(&EngineChoice::BruteForce) => n as u64,
+        Some(subset) => {
+            mismatches += subset
+                .iter()
+                .zip(bf)
+                .filter(|&(&i, &b)| b != first[i as usize])
+                .count() as u64;
+            subset.len() as u64
+        }
+        None => 0,
     };
     Agreement {
         sums: first.clone(),
@@ -387,7 +414,18 @@ impl Kind for DetpKind {
         refs: &ReferenceCache,
         ctx: &Context,
     ) -> Result<Output<DetpMeasured, DetpTables>, Error> {
-        let replicated = measure::replicate(p, ctx.stream_point, ctx.progress, refs)?;
+        let replicated = match ctx.merged {
+            None => measure::replicate(p, ctx.stream_point, ctx.progress, refs)?,
+            Some(parts) => {
+                let shards = parts
+                    .iter()
+                    .map(|v| serde_json::from_value(v.clone()))
+                    .collect::<Result<Vec<Vec<shards::ReplicaPart>>, _>>()
+                    .map_err(|e| Error::usage(format!("a photon shard's part does not read: {e}")))?;
+                let total = shards::add_parts(p, &shards).map_err(Error::usage)?;
+                measure::replicate_merged(p, ctx.stream_point, &total, ctx.progress, refs)?
+            }
+        };
         let (measured, levels, points, warnings) = measure::measure(p, &replicated);
         let checks = vec![Check {
             name: col::MISMATCHES.name,
@@ -406,5 +444,18 @@ impl Kind for DetpKind {
             rate,
             warnings,
         })
+    }
+    fn photon_refusal(p: &DetpConfig) -> Option<String> {
+        shards::refusal(p)
+    }
+    fn trace_part(
+        p: &DetpConfig,
+        refs: &ReferenceCache,
+        ctx: &Context,
+        (k, n): (u64, u64),
+    ) -> Result<serde_json::Value, Error> {
+        let ids = shards::photon_range(p.photons, k, n);
+        let parts = measure::replicate_part(p, ctx.stream_point, ids, ctx.progress, refs)?;
+        serde_json::to_value(parts).map_err(Error::internal)
     }
 }

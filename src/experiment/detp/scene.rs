@@ -2,13 +2,14 @@
 //! surfaces (or read from a CSV), the exact irradiance where the scene has a closed form, and the
 //! photon-map baseline over the same photons.
 
+use std::ops::Range;
 use std::time::Instant;
 
 use super::config::{DetpConfig, Points};
 use super::{PointSet, RaySet};
 use crate::detp::disc::Discs;
 use crate::detp::edge::{clamped_radii, clip_to_first_hit};
-use crate::detp::photon::trace_photons;
+use crate::detp::photon::trace_photon_range;
 use crate::detp::sphere_cache::root_sphere;
 use crate::detp::surface_points::open_surface_points;
 use crate::error::Error;
@@ -50,16 +51,18 @@ pub(super) fn points(cfg: &DetpConfig, scene: &Scene) -> Result<PointSet, Error>
     })
 }
 
-/// The photons of one replica, and a root sphere that holds the scene and every disc.
+/// The photons `ids` of one replica (all of them unless `--photon-shard` splits them), and a root sphere that holds the scene and every disc.
 pub(super) fn photons(
     cfg: &DetpConfig,
     point: u64,
     replica: u64,
+    ids: Range<u64>,
     scene: &Scene,
     discs: &Discs,
 ) -> RaySet {
     let start = Instant::now();
-    let mut store = trace_photons(scene, cfg.photons, hash_key(&[cfg.seed, point, replica]));
+    let key = hash_key(&[cfg.seed, point, replica]);
+    let mut store = trace_photon_range(scene, ids, cfg.photons, key);
     let trace_s = start.elapsed().as_secs_f64();
     let start = Instant::now();
     if let Some(gap) = cfg.edge.first_hit_gap() {

@@ -348,6 +348,9 @@ impl Kind for QuasiStaticKind {
     fn shared(_: &[&QuasiStaticConfig]) -> Result<(), Error> {
         Ok(())
     }
+    fn photon_refusal(_: &QuasiStaticConfig) -> Option<String> {
+        Some("kind quasi-static cannot split its photons: its per-frame counts do not add across photon shards (the segment index is sized by the frame's segments, the sphere cache subdivides by the rays a sphere holds); split its sweep points with --shard instead".into())
+    }
     fn run(
         p: &QuasiStaticConfig,
         _: &(),

@@ -4,34 +4,24 @@
 
 use std::arch::x86_64::*;
 
-use super::{portable, Probe, RayList};
+use super::{portable, set_lanes, Probe, RayList};
 use crate::detp::store::Segment;
 
 /// 16 lanes at a time; the tail uses masked loads. Passing lanes are compress-stored into `out`.
 ///
 /// # Safety
-/// The CPU must have AVX-512 F and VL, and `out` must be empty with capacity for `src.len() + 16`
-/// lanes in every column.
+/// The CPU must have AVX-512 F and VL, and `out` must be empty with capacity for 16 lanes.
 #[target_feature(enable = "avx512f,avx512vl")]
 pub unsafe fn avx512(src: &RayList, probe: &Probe, segments: &[Segment], out: &mut RayList) {
     let n = src.len();
-    debug_assert!(out.is_empty() && out.idx.capacity() >= n + 16);
+    debug_assert!(out.is_empty() && out.capacity() >= 16);
     let sx = _mm512_set1_ps(probe.s[0]);
     let sy = _mm512_set1_ps(probe.s[1]);
     let sz = _mm512_set1_ps(probe.s[2]);
     let sure2 = _mm512_set1_ps(probe.sure2);
     let maybe2 = _mm512_set1_ps(probe.maybe2);
     let zero = _mm512_setzero_ps();
-    let outs = [
-        out.ox.as_mut_ptr(),
-        out.oy.as_mut_ptr(),
-        out.oz.as_mut_ptr(),
-        out.dx.as_mut_ptr(),
-        out.dy.as_mut_ptr(),
-        out.dz.as_mut_ptr(),
-        out.te.as_mut_ptr(),
-    ];
-    let oidx = out.idx.as_mut_ptr();
+    let (mut outs, mut oidx, mut cap) = pointers(out);
     let ins = [
         src.ox.as_ptr(),
         src.oy.as_ptr(),
@@ -77,6 +67,11 @@ pub unsafe fn avx512(src: &RayList, probe: &Probe, segments: &[Segment], out: &m
                 keep |= 1 << l;
             }
         }
+        if kept + 16 > cap {
+            // SAFETY: lanes 0..kept of every column were written by earlier stores.
+            unsafe { out.room(kept) };
+            (outs, oidx, cap) = pointers(out);
+        }
         if keep != 0 {
             // Compress in registers, then a full 16-lane store: the memory form of vcompressps is
             // microcoded and ~10× slower on AMD Zen 4. The lanes past `kept` are scratch that the
@@ -90,7 +85,7 @@ pub unsafe fn avx512(src: &RayList, probe: &Probe, segments: &[Segment], out: &m
         }
         i += 16;
     }
-    set_len(out, kept);
+    set_lanes(out, kept);
 }
 
 /// For each 8-bit mask, the lane indices of its set bits first (AVX2 has no compress: a
@@ -117,28 +112,18 @@ const PACK: [[u32; 8]; 256] = {
 /// goes through the portable lane.
 ///
 /// # Safety
-/// The CPU must have AVX2 and FMA, and `out` must be empty with capacity for `src.len() + 16`
-/// lanes in every column.
+/// The CPU must have AVX2 and FMA, and `out` must be empty with capacity for 16 lanes.
 #[target_feature(enable = "avx2,fma")]
 pub unsafe fn avx2(src: &RayList, probe: &Probe, segments: &[Segment], out: &mut RayList) {
     let n = src.len();
-    debug_assert!(out.is_empty() && out.idx.capacity() >= n + 16);
+    debug_assert!(out.is_empty() && out.capacity() >= 16);
     let sx = _mm256_set1_ps(probe.s[0]);
     let sy = _mm256_set1_ps(probe.s[1]);
     let sz = _mm256_set1_ps(probe.s[2]);
     let sure2 = _mm256_set1_ps(probe.sure2);
     let maybe2 = _mm256_set1_ps(probe.maybe2);
     let zero = _mm256_setzero_ps();
-    let outs = [
-        out.ox.as_mut_ptr(),
-        out.oy.as_mut_ptr(),
-        out.oz.as_mut_ptr(),
-        out.dx.as_mut_ptr(),
-        out.dy.as_mut_ptr(),
-        out.dz.as_mut_ptr(),
-        out.te.as_mut_ptr(),
-    ];
-    let oidx = out.idx.as_mut_ptr();
+    let (mut outs, mut oidx, mut cap) = pointers(out);
     let ins = [
         src.ox.as_ptr(),
         src.oy.as_ptr(),
@@ -180,6 +165,11 @@ pub unsafe fn avx2(src: &RayList, probe: &Probe, segments: &[Segment], out: &mut
                 keep |= 1 << l;
             }
         }
+        if kept + 16 > cap {
+            // SAFETY: lanes 0..kept of every column were written by earlier stores.
+            unsafe { out.room(kept) };
+            (outs, oidx, cap) = pointers(out);
+        }
         if keep != 0 {
             let perm = _mm256_loadu_si256(PACK[keep as usize].as_ptr().cast());
             for (k, &o) in outs.iter().enumerate() {
@@ -191,25 +181,25 @@ pub unsafe fn avx2(src: &RayList, probe: &Probe, segments: &[Segment], out: &mut
         }
         i += 8;
     }
-    set_len(out, kept);
+    set_lanes(out, kept);
     portable(src, i, probe, segments, out);
 }
 
-/// Sets every column of `out` to `len` lanes after the compress-stores wrote them.
-///
-/// # Safety
-/// The first `len` elements of every column must have been written.
-unsafe fn set_len(out: &mut RayList, len: usize) {
-    for v in [
-        &mut out.ox,
-        &mut out.oy,
-        &mut out.oz,
-        &mut out.dx,
-        &mut out.dy,
-        &mut out.dz,
-        &mut out.te,
-    ] {
-        v.set_len(len);
-    }
-    out.idx.set_len(len);
+/// The columns' write pointers and the lanes they have room for.
+#[inline]
+fn pointers(out: &mut RayList) -> ([*mut f32; 7], *mut u32, usize) {
+    let cap = out.capacity();
+    (
+        [
+            out.ox.as_mut_ptr(),
+            out.oy.as_mut_ptr(),
+            out.oz.as_mut_ptr(),
+            out.dx.as_mut_ptr(),
+            out.dy.as_mut_ptr(),
+            out.dz.as_mut_ptr(),
+            out.te.as_mut_ptr(),
+        ],
+        out.idx.as_mut_ptr(),
+        cap,
+    )
 }
