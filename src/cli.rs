@@ -246,9 +246,17 @@ pub struct RunArgs {
     /// Continue a partial run, skipping the points it finished.
     #[arg(long)]
     pub resume: bool,
+    /// Separate run R of the spec: sets experiment.run = R (mixed into the seed) and writes
+    /// OUT/NAME/runs/R/NAME.csv.
+    #[arg(long, value_name = "R")]
+    pub run: Option<u64>,
+    /// Runs the spec K times, as K separate processes (runs 0 … K−1, each as --run R would run it
+    /// alone).
+    #[arg(long, value_name = "K", conflicts_with = "run", value_parser = clap::value_parser!(u64).range(1..=1000))]
+    pub repeat: Option<u64>,
     /// Trace only photons [K·P/N, (K+1)·P/N) of every point and replica (kind detp); writes
     /// NAME.photon-shard-K-of-N.json for raycost merge.
-    #[arg(long, value_name = "K/N", conflicts_with_all = ["shard", "resume"])]
+    #[arg(long, value_name = "K/N", conflicts_with_all = ["shard", "resume", "run", "repeat"])]
     pub photon_shard: Option<Shard>,
 }
 

@@ -21,6 +21,7 @@ mod render;
 mod report;
 mod reproducible;
 mod resume;
+mod runs;
 mod sanity;
 mod slurm;
 mod stability;

@@ -179,8 +179,9 @@ pub fn refuse<T>(key: &str, message: impl Into<String>) -> Result<T, ConfigError
 
 /// What a point runner is given.
 pub struct Context<'a> {
-    /// The point's index in the sweep (part of every random stream's key).
-    pub index: u64,
+    /// The point's part of every random stream's key: its index in the sweep, or 0 for every
+    /// point under `experiment.common_random_numbers` (so points share their samples).
+    pub stream_point: u64,
     /// Worker threads of the run (`--threads`, or the machine's), passed down, never read back
     /// from the pool. Only timings may depend on it.
     pub threads: usize,

@@ -65,9 +65,22 @@ pub struct RunOptions {
     pub sets: Vec<String>,
     /// Worker threads (`--threads`, or the machine's): passed to every point and recorded.
     pub threads: usize,
+    /// `--run R`: the results go to `OUT/NAME/runs/R/` (the spec's `experiment.run` is R).
+    pub run: Option<u64>,
     /// `raycost merge` of photon shards: each point's parts, one per shard in shard order
     /// (`super::photon_shards`); points measure these instead of tracing.
     pub merged: Option<BTreeMap<usize, Vec<serde_json::Value>>>,
+}
+
+impl RunOptions {
+    /// The folder of experiment `name`'s results: `OUT/NAME`, or `OUT/NAME/runs/R` for run R.
+    pub fn dir(&self, name: &str) -> PathBuf {
+        let dir = self.out.join(name);
+        match self.run {
+            None => dir,
+            Some(r) => dir.join("runs").join(r.to_string()),
+        }
+    }
 }
 
 /// The file stem of a run.
@@ -195,6 +208,9 @@ fn interrupt_line(
     if let Some(s) = opts.shard {
         cmd.push_str(&format!(" --shard {}/{}", s.k, s.n));
     }
+    if let Some(r) = opts.run {
+        cmd.push_str(&format!(" --run {r}"));
+    }
     for s in &opts.sets {
         cmd.push_str(&format!(" --set '{s}'"));
     }
@@ -222,7 +238,7 @@ fn known_warnings(plan: &Plan, mine: &[usize]) -> Vec<String> {
 pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Error> {
     let kind: &dyn DynKind = plan.kind;
     let name = &plan.spec.experiment.name;
-    let dir = opts.out.join(name);
+    let dir = opts.dir(name);
     let stem = stem(name, opts.shard);
     let mine: Vec<usize> = (0..plan.points.len())
         .filter(|i| opts.shard.is_none_or(|s| i % s.n == s.k))
@@ -317,8 +333,7 @@ fn run_points(
     let bar = progress(total, unit, todo.len(), opts.quiet);
     let name = &plan.spec.experiment.name;
     let partial = opts
-        .out
-        .join(name)
+        .dir(name)
         .join(format!("{}.csv.partial", stem(name, opts.shard)));
     let all = resumed + todo.len();
     interrupt::kept(interrupt_line(plan, opts, &partial, resumed, all));
@@ -328,7 +343,7 @@ fn run_points(
         bar.point(n, todo.len());
         let start = Instant::now();
         let ctx = Context {
-            index: i as u64,
+            stream_point: plan.spec.experiment.stream_point(i),
             threads: opts.threads,
             progress: &|k| bar.inc(k),
             merged: opts
@@ -626,6 +641,7 @@ mod tests {
             shard: None,
             sets: Vec::new(),
             threads: 1,
+            run: None,
             merged: None,
         };
         let e = run(&plan, &opts).expect_err("a planted fault");

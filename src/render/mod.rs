@@ -115,11 +115,16 @@ fn config(plan: &Plan, point: usize) -> anyhow::Result<(QuasiStaticConfig, Optio
                     points_frame: None,
                     reference_photons: None,
                     predict: None,
+                    warm_repeats: 0,
                     feed: crate::detp::quasi_static::Feed::default(),
                     warnings: Vec::new(),
                 },
                 // Replica 0's photons of a `detp` run.
-                Some(crate::sample::rng::hash_key(&[d.seed, point as u64, 0])),
+                Some(crate::sample::rng::hash_key(&[
+                    d.seed,
+                    plan.spec.experiment.stream_point(point),
+                    0,
+                ])),
             ))
         }
         _ => Err(spec_error(

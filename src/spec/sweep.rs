@@ -34,6 +34,14 @@ crate::spec_table! {
         /// Master seed of every random stream: the same spec and seed give the same measured
         /// columns on any machine, thread count or shard split.
         seed: u64 = {default 1} read seed, "integer", "", "0 … 2⁶³ − 1 (TOML's largest integer)";
+        /// Which separate run of the spec this is (`raycost run --run R` or `--repeat K` set it):
+        /// mixed into the seed, so runs are independent samples (run 0 keeps the seed as given).
+        run: u64 = {default 0}, "integer", "", "0 … 2⁶³ − 1 (TOML's largest integer)";
+        /// Common random numbers: every sweep point draws the same lines, photons, points and
+        /// scenes (random streams keyed by the seed, run and replica, not by the sweep point), so
+        /// points that differ only in an engine, a list mode or Q are compared on the same samples.
+        /// The quasi-static kind shares its streams across points either way.
+        common_random_numbers: bool = {default false}, "bool", "", "`true`, `false`";
         /// Rays traced per sweep point (DETP kinds count their rays in `detp.photons`, lines in
         /// `lines.count`).
         rays: Option<u64> = {absent "required by the grid kinds, unused by others"}
@@ -76,6 +84,28 @@ macro_rules! spec_file {
             }
         }
     };
+}
+
+impl RawExperiment {
+    /// The seed every random stream of this run is keyed by: `experiment.seed` for run 0, the seed
+    /// and the run index hashed together for the others (so runs are independent samples).
+    pub fn stream_seed(&self) -> u64 {
+        if self.run == 0 {
+            self.seed
+        } else {
+            crate::sample::rng::hash_key(&[crate::sample::rng::domain::RUN, self.seed, self.run])
+        }
+    }
+
+    /// The sweep point's part of every random stream's key: its index, or 0 for every point under
+    /// common random numbers.
+    pub fn stream_point(&self, index: usize) -> u64 {
+        if self.common_random_numbers {
+            0
+        } else {
+            index as u64
+        }
+    }
 }
 
 fn name<'de, D: serde::Deserializer<'de>>(d: D) -> Result<String, D::Error> {

@@ -8,7 +8,7 @@ use super::spec::QuasiStaticConfig;
 use super::Predictions;
 use crate::detp::disc::Discs;
 use crate::detp::fixed::Acc;
-use crate::detp::quasi_static::{FrameStats, Prediction, QuasiStatic};
+use crate::detp::quasi_static::{FrameStats, Prediction, QuasiStatic, Used};
 use crate::stats::{ClusteredMean, Estimate};
 use crate::theory::detp as th;
 
@@ -22,6 +22,9 @@ pub(super) struct ReplicaRun {
     pub(super) n_r: f64,
     /// The predictor's run, where asked.
     pub(super) predictions: Option<Predictions>,
+    /// Warm timings of both engines on every segment for the first object, round by round
+    /// (`dynamic.warm_repeats`).
+    pub(super) warm: Vec<[f64; 2]>,
     /// The relative RMSE of the last frame against a high-photon reference and its seconds.
     pub(super) reference: Option<(f64, f64)>,
     /// The points table's sums and discs, where asked.
@@ -61,6 +64,11 @@ pub struct QsMeasured {
     pub full_checked: u64,
     /// The predictor's figures (replica 0), where asked.
     pub predictor: Option<Predictor>,
+    /// The engine the predictor picked for the first object, replica by replica.
+    pub picks: Vec<Used>,
+    /// Warm seconds of each engine (sphere cache, disc index) on every segment for the first
+    /// object: one cluster per replica (the mean of its rounds), where timed.
+    pub warm: Option<[Estimate; 2]>,
     /// Against a reference run: (relative RMSE, seconds, photons), means over replicas.
     pub reference: Option<(f64, f64, u64)>,
 }
@@ -108,6 +116,9 @@ pub struct FrameRow {
     pub replica: u64,
     /// The frame's counts and seconds.
     pub stats: FrameStats,
+    /// Frame 0's row: the seconds this replica spent building the static points' index (an
+    /// amortisation needs each replica's build, not only their mean).
+    pub static_index_build_s: Option<f64>,
     /// A checked frame: (seconds of the full recalculation, points differing).
     pub full: Option<(f64, u64)>,
 }
@@ -174,6 +185,11 @@ pub(super) fn measure(
                     .filter(|(p, r)| p.best == **r)
                     .count(),
             }),
+        picks: runs
+            .iter()
+            .filter_map(|r| r.predictions.as_ref().map(|p| p.1[0].pick))
+            .collect(),
+        warm: warm_seconds(runs),
         reference: first.reference.map(|_| {
             (
                 mean_of(&|r| r.reference.map_or(f64::NAN, |x| x.0)),
@@ -182,6 +198,21 @@ pub(super) fn measure(
             )
         }),
     }
+}
+
+/// Each engine's warm seconds, one cluster per replica (its rounds pooled), where any were timed.
+fn warm_seconds(runs: &[ReplicaRun]) -> Option<[Estimate; 2]> {
+    if runs.iter().all(|r| r.warm.is_empty()) {
+        return None;
+    }
+    Some([0, 1].map(|e| {
+        let mut m = ClusteredMean::default();
+        for r in runs {
+            r.warm.iter().for_each(|w| m.push(w[e]));
+            m.end_batch();
+        }
+        m.estimate()
+    }))
 }
 
 /// The irradiance at every sample point at one frame, with its Poisson standard error

@@ -132,6 +132,11 @@ fn run_replica(
         let p = qs.predict_and_pick(fraction, cfg.engine == DynamicEngine::Predicted);
         (fraction, p, rule)
     });
+    let warm = if predictions.is_some() && !qs.scene.movers.is_empty() {
+        qs.warm_timings(0, cfg.warm_repeats)
+    } else {
+        Vec::new()
+    };
     let n_r = qs.live_segments() as f64;
     // One replica: batches of consecutive frames (correlated) are the clusters; several: each
     // replica is one cluster, so the standard error is across independent realisations.
@@ -143,6 +148,7 @@ fn run_replica(
     frames.push(FrameRow {
         replica,
         stats: f0.clone(),
+        static_index_build_s: Some(qs.static_index_build_s),
         full: None,
     });
     let points_frame = cfg.points_frame.unwrap_or(cfg.frames - 1);
@@ -171,6 +177,7 @@ fn run_replica(
         frames.push(FrameRow {
             replica,
             stats: st,
+            static_index_build_s: None,
             full: checked,
         });
         if f == points_frame && write_points {
@@ -201,6 +208,7 @@ fn run_replica(
         f0,
         n_r,
         predictions,
+        warm,
         reference,
         points_at,
     }
