@@ -10,6 +10,10 @@ metadata; every column that is not of class `timing` (read from `[[columns.TABLE
 `NAME.meta.toml`) must be equal byte for byte in every row. Timing columns (seconds, rates and what
 a clock decided) are the only ones allowed to differ between two runs of one spec and seed.
 
+`--added COLUMN` (repeatable) names a column the new binary adds (a new parameter): it may appear in
+the new tables only, and is left out before the headers are compared; `--added TABLE:COLUMN` only in
+that side table (`frames:static_index_build_s`), `main:COLUMN` only in the main table.
+
 Prints one line per table: "N measured columns of M compared, 0 differ", or the first differences;
 exits 1 on any difference (or a missing table), 0 otherwise.
 """
@@ -33,9 +37,12 @@ def classes(meta_path: Path) -> dict:
     }
 
 
-def read_csv(path: Path):
+def read_csv(path: Path, drop=()):
+    """(header, rows) without the columns named in `drop`."""
     with path.open(newline="") as f:
         rows = list(csv.reader(f))
+    keep = [i for i, c in enumerate(rows[0]) if c not in drop]
+    rows = [[r[i] for i in keep] for r in rows]
     return rows[0], rows[1:]
 
 
@@ -51,13 +58,14 @@ def table_files(exp_dir: Path, name: str):
     return out
 
 
-def compare_table(label, old_path, new_path, old_cls, new_cls):
-    """Returns (ok, line)."""
+def compare_table(label, old_path, new_path, old_cls, new_cls, added=()):
+    """Returns (ok, line); the columns `added` are dropped from the new table first."""
     problems = []
     if not new_path.exists():
         return False, f"{label}: missing in the new folder"
     old_header, old_rows = read_csv(old_path)
-    new_header, new_rows = read_csv(new_path)
+    new_header, new_rows = read_csv(new_path, added)
+    new_cls = [(c, k) for c, k in new_cls if c not in added]
     if old_header != new_header:
         gone = [c for c in old_header if c not in new_header]
         added = [c for c in new_header if c not in old_header]
@@ -99,6 +107,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("old", type=Path, help="folder of the reference results")
     ap.add_argument("new", type=Path, help="folder of the results to check")
+    ap.add_argument("--added", action="append", default=[], metavar="COLUMN",
+                    help="a column only the new tables have (dropped before comparing)")
     args = ap.parse_args()
     ok_all = True
     n_tables = 0
@@ -122,12 +132,15 @@ def main():
         for table, path in old_tables:
             n_tables += 1
             label = name if table == "main" else f"{name}.{table}"
+            added = [a.split(":", 1)[-1] for a in args.added
+                     if ":" not in a or a.split(":", 1)[0] == table]
             ok, line = compare_table(
                 label,
                 path,
                 new_exp / path.name,
                 old_meta.get(table, []),
                 new_meta.get(table, []),
+                added,
             )
             ok_all &= ok
             print(("" if ok else "DIFFERS ") + line)

@@ -44,7 +44,7 @@ specs=(
   "lines-rays-per-level|detp.photons=32768 detp.points=2000 detp.replicas=2"
   "predict-engine|detp.photons=20000 detp.replicas=2"
   "quasi-static-amortisation|sweep.\"detp.photons\"=[10000,20000] detp.replicas=2"
-  "quasi-static-crossover|detp.photons=10000 detp.replicas=2"
+  "quasi-static-crossover|detp.photons=10000 detp.replicas=2 sweep.\"dynamic.ratio\"=[0.2,0.35,0.55]"
   "quasi-static-frames|detp.photons=20000 dynamic.frames=4 dynamic.check_every=2 detp.replicas=2"
   "quasi-static-robots|detp.photons=20000 dynamic.frames=4 dynamic.check_every=2 detp.replicas=2"
   "quasi-static-static-points|detp.photons=20000 detp.replicas=2"

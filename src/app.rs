@@ -90,7 +90,17 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
 /// `raycost run`.
 fn run_spec(a: crate::cli::RunArgs) -> crate::error::Result<()> {
     let threads = thread_pool(a.threads)?;
-    let plan = Plan::load(&a.spec, &a.set, threads)?;
+    if a.set.iter().any(|s| set_key(s) == "experiment.run") {
+        return Err(Error::usage(
+            "--set experiment.run: give --run R (or --repeat K) instead, so the run's results get their own folder",
+        ));
+    }
+    if let Some(k) = a.repeat {
+        return repeat(&a, threads, k);
+    }
+    let mut sets = a.set.clone();
+    sets.extend(a.run.map(|r| format!("experiment.run={r}")));
+    let plan = Plan::load(&a.spec, &sets, threads)?;
     let opts = RunOptions {
         out: a.out,
         force: a.force,
@@ -99,6 +109,7 @@ fn run_spec(a: crate::cli::RunArgs) -> crate::error::Result<()> {
         shard: a.shard,
         sets: a.set,
         threads,
+        run: a.run,
         merged: None,
     };
     let (written, summary) = match a.photon_shard {
@@ -122,6 +133,60 @@ fn print_run(
         write!(out, "{summary}")?;
         for p in written {
             writeln!(out, "wrote {}", p.display())?;
+        }
+    }
+    Ok(())
+}
+
+/// The key of a `--set KEY=VALUE` flag, as written (spaces and quotes trimmed).
+fn set_key(flag: &str) -> String {
+    let key = flag.split_once('=').map_or(flag, |(k, _)| k);
+    key.trim().replace(['"', '\'', ' '], "")
+}
+
+/// `raycost run --repeat K`: runs 0 … K−1, each a separate process of this binary with `--run R`
+/// and the other flags as given (so each run is exactly what `--run R` alone gives). The spec is
+/// validated here first, so bad input is refused before any run starts.
+fn repeat(a: &crate::cli::RunArgs, threads: usize, k: u64) -> crate::error::Result<()> {
+    let mut sets = a.set.clone();
+    sets.push("experiment.run=0".into());
+    Plan::load(&a.spec, &sets, threads)?;
+    let exe = std::env::current_exe().context("could not find this raycost binary to repeat it")?;
+    for r in 0..k {
+        let mut cmd = std::process::Command::new(&exe);
+        cmd.arg("run").arg(&a.spec).arg("--out").arg(&a.out);
+        cmd.args(["--run", &r.to_string(), "--threads", &threads.to_string()]);
+        for s in &a.set {
+            cmd.args(["--set", s]);
+        }
+        if let Some(s) = a.shard {
+            cmd.args(["--shard", &format!("{}/{}", s.k, s.n)]);
+        }
+        for (on, flag) in [
+            (a.force, "--force"),
+            (a.quiet, "--quiet"),
+            (a.resume, "--resume"),
+        ] {
+            if on {
+                cmd.arg(flag);
+            }
+        }
+        let status = cmd
+            .status()
+            .with_context(|| format!("could not start run {r} of {k}"))?;
+        match status.code() {
+            Some(0) => {}
+            Some(130) => {
+                return Err(Error::Interrupted(format!(
+                    "run {r} of {k} was interrupted (runs before it are complete); continue it with --run {r} --resume, then the runs after it"
+                )))
+            }
+            code => {
+                return Err(Error::internal(format!(
+                    "run {r} of {k} failed (exit {}); its message is above",
+                    code.map_or("by a signal".into(), |c| c.to_string())
+                )))
+            }
         }
     }
     Ok(())

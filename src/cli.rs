@@ -79,7 +79,8 @@ Examples:
   raycost merge results/detp-big            # its NAME.photon-shard-*-of-N.json: sums added
   raycost merge a/x.shard-0-of-2.csv b/x.shard-1-of-2.csv --out x.csv")]
     Merge(MergeArgs),
-    /// Render the DETP irradiance of a quasi-static spec's frame(s), seen from the scene's camera.
+    /// Render the DETP radiosity (B = albedo·E/π) of a quasi-static spec's frame(s), seen from the
+    /// scene's camera.
     #[command(after_help = "\
 Examples:
   raycost render experiments/render-cornell.toml --frame 3 --out cornell.png
@@ -245,9 +246,17 @@ pub struct RunArgs {
     /// Continue a partial run, skipping the points it finished.
     #[arg(long)]
     pub resume: bool,
+    /// Separate run R of the spec: sets experiment.run = R (mixed into the seed) and writes
+    /// OUT/NAME/runs/R/NAME.csv.
+    #[arg(long, value_name = "R")]
+    pub run: Option<u64>,
+    /// Runs the spec K times, as K separate processes (runs 0 … K−1, each as --run R would run it
+    /// alone).
+    #[arg(long, value_name = "K", conflicts_with = "run", value_parser = clap::value_parser!(u64).range(1..=1000))]
+    pub repeat: Option<u64>,
     /// Trace only photons [K·P/N, (K+1)·P/N) of every point and replica (kinds detp and
     /// quasi-static); writes NAME.photon-shard-K-of-N.json for raycost merge.
-    #[arg(long, value_name = "K/N", conflicts_with_all = ["shard", "resume"])]
+    #[arg(long, value_name = "K/N", conflicts_with_all = ["shard", "resume", "run", "repeat"])]
     pub photon_shard: Option<Shard>,
 }
 

@@ -90,6 +90,54 @@ impl OutputError {
     }
 }
 
+/// What a file that is not a regular file is, in words (for messages about special files).
+pub fn file_kind(t: &std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return "a FIFO (named pipe)";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+        if t.is_char_device() {
+            return "a character device";
+        }
+        if t.is_block_device() {
+            return "a block device";
+        }
+    }
+    if t.is_dir() {
+        "a folder"
+    } else if t.is_symlink() {
+        "a symlink"
+    } else if t.is_file() {
+        "a regular file"
+    } else {
+        "a special file"
+    }
+}
+
+/// Whether `path` is an input file raycost can use: an existing regular file (a symlink to one is
+/// fine). Scenes, OBJ meshes, AFF includes and points files are read twice — once to load, once to
+/// hash for the metadata that `--resume` and `raycost merge` check — so a FIFO, `/dev/stdin`, a
+/// socket or a device (`/dev/zero` never ends) is refused by what it is, never called missing.
+/// `Err` holds the reason, to follow the path: "no such file", "is a folder, …", "is a FIFO …".
+pub fn regular_input(path: &std::path::Path) -> std::result::Result<(), String> {
+    match std::fs::metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err("no such file".into()),
+        Err(e) => Err(format!("cannot read: {e}")),
+        Ok(m) if m.is_file() => Ok(()),
+        Ok(m) if m.is_dir() => Err("is a folder, not a file".into()),
+        Ok(m) => Err(format!(
+            "is {}, not a regular file: an input is read twice (to load it, and to hash it for \
+             the metadata --resume and merge check), so save it to a regular file first",
+            file_kind(&m.file_type())
+        )),
+    }
+}
+
 /// A value that is out of range or inconsistent, said in words; the caller locates it (a spec key, a
 /// line of a scene file, a metadata file).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

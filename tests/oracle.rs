@@ -17,7 +17,7 @@ use raycost::grid::{
 use raycost::sample::{directions::uniform_direction, rng::stream};
 
 /// Traces every ray through the grid and brute force; panics with a rerun hint on the first mismatch.
-fn check(label: &str, frame: GridFrame, spheres: &[Sphere], rays: &[Ray]) -> usize {
+pub(crate) fn check(label: &str, frame: GridFrame, spheres: &[Sphere], rays: &[Ray]) -> usize {
     let grid = FiniteGrid::build(frame, spheres);
     // The query-optimised grid on every walk this CPU has (AVX-512, AVX2, portable).
     let fast: Vec<FastGrid> = Walk::all_available()
@@ -65,7 +65,7 @@ fn check(label: &str, frame: GridFrame, spheres: &[Sphere], rays: &[Ray]) -> usi
     hits
 }
 
-fn frame(lo: DVec3, a: f64, cells: i64) -> GridFrame {
+pub(crate) fn frame(lo: DVec3, a: f64, cells: i64) -> GridFrame {
     GridFrame {
         origin: lo,
         width: a,

@@ -119,7 +119,10 @@ fn resume_matches_uninterrupted(signal: &str, tear: bool) {
         fs::write(&p, text).expect("write");
         let p = dir.join("resume-me.hist.csv.partial");
         let mut text = fs::read(&p).expect("partial hist");
-        text.extend_from_slice(format!("{done},t_hit,0.0,9.5,41\n{done},t_hit,9.5").as_bytes());
+        // A whole row of the unfinished point, then one cut short (rows are 6 fields wide).
+        text.extend_from_slice(
+            format!("{done},t_hit,0.0,9.5,41,40.5\n{done},t_hit,9.5").as_bytes(),
+        );
         fs::write(&p, text).expect("write");
     }
     run_ok(&spec, &out, &["--resume"]);

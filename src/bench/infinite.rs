@@ -348,178 +348,273 @@ pub fn run(
     classes: &[RadiusClass],
     all: usize,
 ) -> anyhow::Result<Infinite> {
-    let plan = Plan::new(quick);
-    let thread_counts: Vec<usize> = if all > 1 { vec![1, all] } else { vec![1] };
-    let pools = thread_counts
-        .iter()
-        .map(|&t| pool(t))
-        .collect::<anyhow::Result<Vec<_>>>()?;
-    // One cache per worker of each pool, kept from batch to batch and round to round.
-    let caches: Vec<Vec<Mutex<InfiniteCaches>>> = thread_counts
-        .iter()
-        .map(|&t| {
-            (0..t)
-                .map(|_| Mutex::new(InfiniteCaches::default()))
-                .collect()
-        })
-        .collect();
+    let field = Field::new(quick, finite_a, classes, all)?;
+    let peak = field.warm_up();
+    let raced = field.race();
+    let finite = field.finite_refs(&raced);
+    Ok(Infinite {
+        rows: field.rows(&raced, &finite, &peak),
+    })
+}
 
-    // The finite reference: the bench's n-sphere scene (the same realisation as its grid rows).
-    let (spheres, bounds) = bench_scene(classes, plan.finite_n, KEY ^ plan.finite_n);
-    let grid = FastGrid::build(frame_around(bounds, finite_a, DVec3::ZERO), &spheres);
-    drop(spheres);
-    let fin_per = plan.finite_rays_per_round;
-    let fin_rays: Vec<Ray> = directions(plan.rounds * fin_per, KEY)
-        .into_iter()
-        .map(|d| Ray::new(DVec3::ZERO, d))
-        .collect();
-    let mut fin_out: Vec<Vec<FastTrace>> =
-        vec![vec![FastTrace::default(); fin_rays.len()]; thread_counts.len()];
+/// What every round shares: the pools and per-worker caches of each thread count, the finite
+/// grid, and both ray sets.
+struct Field<'a> {
+    plan: Plan,
+    classes: &'a [RadiusClass],
+    finite_a: f64,
+    thread_counts: Vec<usize>,
+    pools: Vec<rayon::ThreadPool>,
+    /// One cache per worker of each pool, kept from batch to batch and round to round.
+    caches: Vec<Vec<Mutex<InfiniteCaches>>>,
+    grid: FastGrid,
+    fin_rays: Vec<Ray>,
+    /// The infinite scene's rays, per width: one warm-up slice, then one slice per round.
+    inf_rays: Vec<Vec<Ray>>,
+    warm: usize,
+}
 
-    // The infinite scene's rays, per width: one warm-up slice, then one slice per round.
-    let per = plan.rays_per_round;
-    let warm = 2 * BATCH as usize * all;
-    let inf_rays: Vec<Vec<Ray>> = plan
-        .widths
-        .iter()
-        .enumerate()
-        .map(|(i, &a)| eye_rays(a, warm + plan.rounds * per, &[KEY, 3, i as u64]))
-        .collect();
-    let mut inf_out: Vec<Vec<Vec<TraceCounts>>> = plan
-        .widths
-        .iter()
-        .map(|_| vec![vec![TraceCounts::default(); plan.rounds * per]; thread_counts.len()])
-        .collect();
+/// The rounds' seconds and every contestant's answers.
+struct Raced {
+    times: rounds::RoundTimes,
+    who: Vec<Who>,
+    /// Per thread count, the finite grid's answer per ray.
+    fin_out: Vec<Vec<FastTrace>>,
+    /// Per width and thread count, the infinite scene's counts per ray.
+    inf_out: Vec<Vec<Vec<TraceCounts>>>,
+    /// Per width, spheres generated in the rounds (on one thread).
+    generated: Vec<u64>,
+}
 
-    let mut who = Vec::new();
-    for (t, _) in thread_counts.iter().enumerate() {
-        who.push(Who::Finite(t));
-        who.extend((0..plan.widths.len()).map(|i| Who::Infinite(i, t)));
-    }
-
-    // Untimed warm-up: fault in the finite grid; grow each width's caches from fresh ones (their
-    // growth is the row's memory), then leave every cache grown.
-    let mut peak = vec![vec![0u64; thread_counts.len()]; plan.widths.len()];
-    let mut generated = vec![0u64; plan.widths.len()];
-    for (t, p) in pools.iter().enumerate() {
-        let mut scratch = vec![FastTrace::default(); fin_per];
-        p.install(|| trace_into(&grid, &fin_rays[..fin_per], &mut scratch));
-        for (i, &a) in plan.widths.iter().enumerate() {
-            let fresh: Vec<Mutex<InfiniteCaches>> = (0..thread_counts[t])
-                .map(|_| Mutex::new(InfiniteCaches::default()))
-                .collect();
-            let mut out = vec![TraceCounts::default(); warm];
-            let (_, grew) = memory::peak_increment(|| {
-                p.install(|| trace_lazy(classes, a, &inf_rays[i][..warm], 0, &mut out, &fresh))
-            });
-            peak[i][t] = grew;
-            drop(fresh);
-            p.install(|| trace_lazy(classes, a, &inf_rays[i][..warm], 0, &mut out, &caches[t]));
-        }
-    }
-
-    let times = alternate(who.len(), plan.rounds, |c, r| match who[c] {
-        Who::Finite(t) => {
-            let span = r * fin_per..(r + 1) * fin_per;
-            let out = &mut fin_out[t][span.clone()];
-            pools[t].install(|| trace_into(&grid, &fin_rays[span], out));
-        }
-        Who::Infinite(i, t) => {
-            let span = r * per..(r + 1) * per;
-            let rays = &inf_rays[i][warm + span.start..warm + span.end];
-            let out = &mut inf_out[i][t][span];
-            // Batch keys continue the warm-up's, so every round traces fresh realisations.
-            let first_batch = (warm + r * per) / BATCH as usize;
-            let a = plan.widths[i];
-            let g = pools[t].install(|| trace_lazy(classes, a, rays, first_batch, out, &caches[t]));
-            if t == 0 {
-                generated[i] += g;
-            }
-        }
-    });
-    drop(grid);
-
-    let cells_of = |counts: &[u32]| -> u64 { counts.iter().map(|&s| u64::from(s) + 1).sum() };
-    let finite: Vec<FiniteRef> = thread_counts
-        .iter()
-        .enumerate()
-        .map(|(t, _)| {
-            let c = who
-                .iter()
-                .position(|&w| w == Who::Finite(t))
-                .expect("finite");
-            FiniteRef {
-                n: plan.finite_n,
-                cell_width: finite_a,
-                rays_per_round: fin_per,
-                secs: times.secs[c].clone(),
-                cells: fin_out[t]
-                    .chunks(fin_per)
-                    .map(|ch| cells_of(&ch.iter().map(|q| q.n_s).collect::<Vec<_>>()))
-                    .collect(),
-            }
-        })
-        .collect();
-
-    let mut rows = Vec::new();
-    for (t, &threads) in thread_counts.iter().enumerate() {
-        for (i, &a) in plan.widths.iter().enumerate() {
-            let c = who
-                .iter()
-                .position(|&w| w == Who::Infinite(i, t))
-                .expect("infinite");
-            let counts = &inf_out[i][t];
-            let rays = counts.len() as f64;
-            let mean = |f: fn(&TraceCounts) -> f64| counts.iter().map(f).sum::<f64>() / rays;
-            // Against the first thread count (1): the same rays and realisations, so the same
-            // counts and hits, to the bit.
-            let mismatches = counts
-                .iter()
-                .zip(&inf_out[i][0])
-                .filter(|(x, y)| x != y)
-                .count() as u64;
-            let secs = times.secs[c].clone();
-            let fin = &finite[t];
-            let ratios = secs
-                .iter()
-                .zip(&fin.secs)
-                .map(|(&s, &fs)| (per as f64 / s) / (fin_per as f64 / fs))
-                .collect();
-            let scenes = (plan.rounds * per).div_ceil(RAYS_PER_SCENE) as f64;
-            rows.push(InfiniteRow {
-                cell_width: a,
-                threads,
-                rays_per_round: per,
-                secs,
-                cells: counts
-                    .chunks(per)
-                    .map(|ch| cells_of(&ch.iter().map(|q| q.n_s).collect::<Vec<_>>()))
-                    .collect(),
-                n_i: mean(|q| f64::from(q.n_i)),
-                n_i_mb: mean(|q| f64::from(q.n_i_mb)),
-                n_s: mean(|q| f64::from(q.n_s)),
-                hit: mean(|q| f64::from(u8::from(q.hit.is_some()))),
-                truncated: counts.iter().filter(|q| q.truncated).count() as u64,
-                generated: generated[i] as f64 / scenes,
-                peak_mem_bytes: peak[i][t],
-                checked: if t == 0 { 0 } else { counts.len() as u64 },
-                mismatches,
-                best: false,
-                finite: fin.clone(),
-                ratios,
-            });
-        }
-        let group = rows.len() - plan.widths.len()..rows.len();
-        if let Some(b) = rows[group.clone()]
+impl<'a> Field<'a> {
+    fn new(
+        quick: bool,
+        finite_a: f64,
+        classes: &'a [RadiusClass],
+        all: usize,
+    ) -> anyhow::Result<Self> {
+        let plan = Plan::new(quick);
+        let thread_counts: Vec<usize> = if all > 1 { vec![1, all] } else { vec![1] };
+        let pools = thread_counts
+            .iter()
+            .map(|&t| pool(t))
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        let caches = thread_counts.iter().map(|&t| fresh_caches(t)).collect();
+        // The finite reference: the bench's n-sphere scene (the same realisation as its grid rows).
+        let (spheres, bounds) = bench_scene(classes, plan.finite_n, KEY ^ plan.finite_n);
+        let grid = FastGrid::build(frame_around(bounds, finite_a, DVec3::ZERO), &spheres);
+        drop(spheres);
+        let fin_rays: Vec<Ray> = directions(plan.rounds * plan.finite_rays_per_round, KEY)
+            .into_iter()
+            .map(|d| Ray::new(DVec3::ZERO, d))
+            .collect();
+        let warm = 2 * BATCH as usize * all;
+        let inf_rays = plan
+            .widths
             .iter()
             .enumerate()
-            .max_by(|x, y| x.1.rays_per_s().total_cmp(&y.1.rays_per_s()))
-            .map(|(k, _)| group.start + k)
-        {
-            rows[b].best = true;
+            .map(|(i, &a)| {
+                eye_rays(
+                    a,
+                    warm + plan.rounds * plan.rays_per_round,
+                    &[KEY, 3, i as u64],
+                )
+            })
+            .collect();
+        Ok(Field {
+            plan,
+            classes,
+            finite_a,
+            thread_counts,
+            pools,
+            caches,
+            grid,
+            fin_rays,
+            inf_rays,
+            warm,
+        })
+    }
+
+    /// Untimed warm-up: fault in the finite grid; grow each width's caches from fresh ones (their
+    /// growth is the row's memory), then leave every cache grown. Returns the growth per width and
+    /// thread count.
+    fn warm_up(&self) -> Vec<Vec<u64>> {
+        let (plan, warm) = (&self.plan, self.warm);
+        let fin_per = plan.finite_rays_per_round;
+        let mut peak = vec![vec![0u64; self.thread_counts.len()]; plan.widths.len()];
+        for (t, p) in self.pools.iter().enumerate() {
+            let mut scratch = vec![FastTrace::default(); fin_per];
+            p.install(|| trace_into(&self.grid, &self.fin_rays[..fin_per], &mut scratch));
+            for (i, &a) in plan.widths.iter().enumerate() {
+                let fresh = fresh_caches(self.thread_counts[t]);
+                let rays = &self.inf_rays[i][..warm];
+                let mut out = vec![TraceCounts::default(); warm];
+                let (_, grew) = memory::peak_increment(|| {
+                    p.install(|| trace_lazy(self.classes, a, rays, 0, &mut out, &fresh))
+                });
+                peak[i][t] = grew;
+                drop(fresh);
+                p.install(|| trace_lazy(self.classes, a, rays, 0, &mut out, &self.caches[t]));
+            }
+        }
+        peak
+    }
+
+    /// Every contestant (the finite grid, then each width, per thread count) in alternating rounds.
+    fn race(&self) -> Raced {
+        let (plan, warm) = (&self.plan, self.warm);
+        let (per, fin_per) = (plan.rays_per_round, plan.finite_rays_per_round);
+        let threads = self.thread_counts.len();
+        let mut fin_out = vec![vec![FastTrace::default(); self.fin_rays.len()]; threads];
+        let mut inf_out: Vec<Vec<Vec<TraceCounts>>> = plan
+            .widths
+            .iter()
+            .map(|_| vec![vec![TraceCounts::default(); plan.rounds * per]; threads])
+            .collect();
+        let mut who = Vec::new();
+        for t in 0..threads {
+            who.push(Who::Finite(t));
+            who.extend((0..plan.widths.len()).map(|i| Who::Infinite(i, t)));
+        }
+        let mut generated = vec![0u64; plan.widths.len()];
+        let times = alternate(who.len(), plan.rounds, |c, r| match who[c] {
+            Who::Finite(t) => {
+                let span = r * fin_per..(r + 1) * fin_per;
+                let out = &mut fin_out[t][span.clone()];
+                self.pools[t].install(|| trace_into(&self.grid, &self.fin_rays[span], out));
+            }
+            Who::Infinite(i, t) => {
+                let span = r * per..(r + 1) * per;
+                let rays = &self.inf_rays[i][warm + span.start..warm + span.end];
+                let out = &mut inf_out[i][t][span];
+                // Batch keys continue the warm-up's, so every round traces fresh realisations.
+                let first_batch = (warm + r * per) / BATCH as usize;
+                let (a, caches) = (plan.widths[i], &self.caches[t]);
+                let g = self.pools[t]
+                    .install(|| trace_lazy(self.classes, a, rays, first_batch, out, caches));
+                if t == 0 {
+                    generated[i] += g;
+                }
+            }
+        });
+        Raced {
+            times,
+            who,
+            fin_out,
+            inf_out,
+            generated,
         }
     }
-    Ok(Infinite { rows })
+
+    /// The finite grid's reference per thread count.
+    fn finite_refs(&self, raced: &Raced) -> Vec<FiniteRef> {
+        let fin_per = self.plan.finite_rays_per_round;
+        (0..self.thread_counts.len())
+            .map(|t| FiniteRef {
+                n: self.plan.finite_n,
+                cell_width: self.finite_a,
+                rays_per_round: fin_per,
+                secs: raced.secs_of(Who::Finite(t)),
+                cells: raced.fin_out[t]
+                    .chunks(fin_per)
+                    .map(|ch| cells_of(ch.iter().map(|q| q.n_s)))
+                    .collect(),
+            })
+            .collect()
+    }
+
+    /// One row per thread count and width, the fastest width of each thread count marked.
+    fn rows(&self, raced: &Raced, finite: &[FiniteRef], peak: &[Vec<u64>]) -> Vec<InfiniteRow> {
+        let plan = &self.plan;
+        let mut rows = Vec::new();
+        for (t, &threads) in self.thread_counts.iter().enumerate() {
+            for (i, &a) in plan.widths.iter().enumerate() {
+                let mut row = raced.row(plan, i, t, &finite[t]);
+                row.cell_width = a;
+                row.threads = threads;
+                row.peak_mem_bytes = peak[i][t];
+                rows.push(row);
+            }
+            let group = rows.len() - plan.widths.len()..rows.len();
+            if let Some(b) = rows[group.clone()]
+                .iter()
+                .enumerate()
+                .max_by(|x, y| x.1.rays_per_s().total_cmp(&y.1.rays_per_s()))
+                .map(|(k, _)| group.start + k)
+            {
+                rows[b].best = true;
+            }
+        }
+        rows
+    }
+}
+
+impl Raced {
+    /// The seconds of each round of contestant `w`.
+    fn secs_of(&self, w: Who) -> Vec<f64> {
+        let c = self
+            .who
+            .iter()
+            .position(|&x| x == w)
+            .expect("every contestant raced");
+        self.times.secs[c].clone()
+    }
+
+    /// Width `i` on thread count `t` (cell width, threads and memory left for the caller).
+    fn row(&self, plan: &Plan, i: usize, t: usize, fin: &FiniteRef) -> InfiniteRow {
+        let per = plan.rays_per_round;
+        let counts = &self.inf_out[i][t];
+        let rays = counts.len() as f64;
+        let mean = |f: fn(&TraceCounts) -> f64| counts.iter().map(f).sum::<f64>() / rays;
+        // Against the first thread count (1): the same rays and realisations, so the same
+        // counts and hits, to the bit.
+        let mismatches = counts
+            .iter()
+            .zip(&self.inf_out[i][0])
+            .filter(|(x, y)| x != y)
+            .count() as u64;
+        let secs = self.secs_of(Who::Infinite(i, t));
+        let ratios = secs
+            .iter()
+            .zip(&fin.secs)
+            .map(|(&s, &fs)| (per as f64 / s) / (fin.rays_per_round as f64 / fs))
+            .collect();
+        let scenes = (plan.rounds * per).div_ceil(RAYS_PER_SCENE) as f64;
+        InfiniteRow {
+            cell_width: f64::NAN,
+            threads: 0,
+            rays_per_round: per,
+            secs,
+            cells: counts
+                .chunks(per)
+                .map(|ch| cells_of(ch.iter().map(|q| q.n_s)))
+                .collect(),
+            n_i: mean(|q| f64::from(q.n_i)),
+            n_i_mb: mean(|q| f64::from(q.n_i_mb)),
+            n_s: mean(|q| f64::from(q.n_s)),
+            hit: mean(|q| f64::from(u8::from(q.hit.is_some()))),
+            truncated: counts.iter().filter(|q| q.truncated).count() as u64,
+            generated: self.generated[i] as f64 / scenes,
+            peak_mem_bytes: 0,
+            checked: if t == 0 { 0 } else { counts.len() as u64 },
+            mismatches,
+            best: false,
+            finite: fin.clone(),
+            ratios,
+        }
+    }
+}
+
+/// Cells visited by a round's rays: N_S + 1 each.
+fn cells_of(steps: impl Iterator<Item = u32>) -> u64 {
+    steps.map(|s| u64::from(s) + 1).sum()
+}
+
+/// One empty cache per worker of a pool of `threads`.
+fn fresh_caches(threads: usize) -> Vec<Mutex<InfiniteCaches>> {
+    (0..threads)
+        .map(|_| Mutex::new(InfiniteCaches::default()))
+        .collect()
 }
 
 /// `n` rays with the eye uniform in the cell [0, a)³ and uniform directions, from stream `key`.

@@ -210,33 +210,8 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         crate::grid::fast::Walk::detect()
     );
 
-    let (cal_n, cal_rays, cal_rounds) = plan.calibration;
-    let (cal_spheres, cal_bounds) = bench_scene(&classes, cal_n, KEY ^ 1);
-    let cal = calibrate::calibrate(
-        &cal_spheres,
-        cal_bounds,
-        &directions(cal_rays, KEY ^ 2)
-            .into_iter()
-            .map(|d| Ray::new(DVec3::ZERO, d))
-            .collect::<Vec<_>>(),
-        cal_rounds,
-        RHO,
-        &classes,
-    )?;
-    drop(cal_spheres);
+    let cal = calibrate_here(&plan, &classes)?;
     let a = cal.cell_width;
-    println!(
-        "cost model of the query grid, fitted on this machine (n = {cal_n}): T_I = {:.2} ns, T_S = {:.2} ns → cell width a = {a:.3}",
-        cal.costs.t_i * 1e9,
-        cal.costs.t_s * 1e9
-    );
-    for &(w, ni, ns, t) in &cal.points {
-        println!(
-            "  a = {w:.2}: N_I {ni:6.1}, N_S {ns:5.1}, measured {:6.0} ns/ray, model {:6.0} ns/ray",
-            t * 1e9,
-            (ni * cal.costs.t_i + ns * cal.costs.t_s) * 1e9
-        );
-    }
 
     let total = plan.rounds * plan.rays_per_round;
     let rays: Vec<Ray> = directions(total, KEY)
@@ -286,31 +261,10 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         .chain(qs_rows.iter().map(|_| Vec::new()))
         .chain(lt_rows.iter().map(|_| Vec::new()));
     for (row, side) in table::union_columns(&rows).iter().zip(sides) {
-        sink.append(row, &side)
+        sink.append(row, &side, &meta)
             .context("could not append to the bench table")?;
     }
-    let mut bench = toml::Table::new();
-    bench.insert("quick".into(), quick.into());
-    bench.insert("rounds".into(), (plan.rounds as i64).into());
-    bench.insert("rays_per_round".into(), (plan.rays_per_round as i64).into());
-    let mut calibration = toml::Table::new();
-    calibration.insert("spheres".into(), (cal_n as i64).into());
-    calibration.insert("t_i_s".into(), cal.costs.t_i.into());
-    calibration.insert("t_s_s".into(), cal.costs.t_s.into());
-    calibration.insert("cell_width".into(), a.into());
-    // [cell width, N_I, N_S, median seconds per ray]
-    calibration.insert(
-        "points".into(),
-        toml::Value::Array(
-            cal.points
-                .iter()
-                .map(|&(w, ni, ns, t)| {
-                    toml::Value::Array(vec![w.into(), ni.into(), ns.into(), t.into()])
-                })
-                .collect(),
-        ),
-    );
-    bench.insert("calibration".into(), calibration.into());
+    let bench = bench_meta(quick, &plan, &cal);
     meta.extra.insert("bench".into(), bench.into());
     if let Some(r) = table::union_columns(&rows).first() {
         meta.columns.insert("main".into(), r.columns());
@@ -325,6 +279,66 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         println!("wrote {}", p.display());
     }
     Ok(())
+}
+
+/// The query grid's cost model fitted on this machine, printed; its cell width is the bench's.
+fn calibrate_here(plan: &Plan, classes: &[RadiusClass]) -> anyhow::Result<calibrate::Calibration> {
+    let (cal_n, cal_rays, cal_rounds) = plan.calibration;
+    let (cal_spheres, cal_bounds) = bench_scene(classes, cal_n, KEY ^ 1);
+    let cal = calibrate::calibrate(
+        &cal_spheres,
+        cal_bounds,
+        &directions(cal_rays, KEY ^ 2)
+            .into_iter()
+            .map(|d| Ray::new(DVec3::ZERO, d))
+            .collect::<Vec<_>>(),
+        cal_rounds,
+        RHO,
+        classes,
+    )?;
+    drop(cal_spheres);
+    let a = cal.cell_width;
+    println!(
+        "cost model of the query grid, fitted on this machine (n = {cal_n}): T_I = {:.2} ns, T_S = {:.2} ns → cell width a = {a:.3}",
+        cal.costs.t_i * 1e9,
+        cal.costs.t_s * 1e9
+    );
+    for &(w, ni, ns, t) in &cal.points {
+        println!(
+            "  a = {w:.2}: N_I {ni:6.1}, N_S {ns:5.1}, measured {:6.0} ns/ray, model {:6.0} ns/ray",
+            t * 1e9,
+            (ni * cal.costs.t_i + ns * cal.costs.t_s) * 1e9
+        );
+    }
+
+    Ok(cal)
+}
+
+/// The bench's own metadata: its plan and the calibration (`[cell width, N_I, N_S, median
+/// seconds per ray]` per width timed).
+fn bench_meta(quick: bool, plan: &Plan, cal: &calibrate::Calibration) -> toml::Table {
+    let mut bench = toml::Table::new();
+    bench.insert("quick".into(), quick.into());
+    bench.insert("rounds".into(), (plan.rounds as i64).into());
+    bench.insert("rays_per_round".into(), (plan.rays_per_round as i64).into());
+    let mut calibration = toml::Table::new();
+    calibration.insert("spheres".into(), (plan.calibration.0 as i64).into());
+    calibration.insert("t_i_s".into(), cal.costs.t_i.into());
+    calibration.insert("t_s_s".into(), cal.costs.t_s.into());
+    calibration.insert("cell_width".into(), cal.cell_width.into());
+    calibration.insert(
+        "points".into(),
+        toml::Value::Array(
+            cal.points
+                .iter()
+                .map(|&(w, ni, ns, t)| {
+                    toml::Value::Array(vec![w.into(), ni.into(), ns.into(), t.into()])
+                })
+                .collect(),
+        ),
+    );
+    bench.insert("calibration".into(), calibration.into());
+    bench
 }
 
 /// The grid, Embree and brute force on the n-sphere scene.

@@ -110,7 +110,7 @@ pub fn edge_distances(scene: &Scene, c: &[DVec3], n: &[DVec3], reach: f64) -> Ve
 /// point's own surface), or `reach` if none is nearer.
 pub fn nearest_other_surface(scene: &Scene, p: DVec3, n: DVec3, reach: f64) -> f64 {
     // Tolerance for "lies in the plane": rounding of the points and vertices, far below any d.
-    let tol = 1e-9 * scene.magnitude() + 1e-9 * reach;
+    let tol = scene.precision().offset() + 1e-9 * reach;
     let mut best = reach;
     scene.triangles_near(p, reach, &mut |i| {
         let t = &scene.triangles[i as usize];

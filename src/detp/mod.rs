@@ -23,7 +23,8 @@
 //! - [`surface_points`]: sample points on a scene's surfaces at spacing ≈ d;
 //! - [`quasi_static`]: frame-by-frame incremental recalculation as dynamic objects move;
 //! - [`photon_map`]: Jensen's k-nearest-neighbour estimate over the same photons (the baseline);
-//! - [`indirect`]: the store's segments after the first bounce, for DETP of indirect light only.
+//! - [`indirect`]: the store's segments after the first bounce, for DETP of indirect light only;
+//! - [`stability`]: the same irradiance wherever the scene is placed (issue 26's stability suite and table).
 
 pub mod brute;
 pub mod disc;
@@ -36,5 +37,6 @@ pub mod photon;
 pub mod photon_map;
 pub mod quasi_static;
 pub mod sphere_cache;
+pub mod stability;
 pub mod store;
 pub mod surface_points;

@@ -196,7 +196,7 @@ fn trace_one<C: Caster>(
     units: Units,
 ) -> Vec<Segment> {
     let mut rng = stream(&[domain::PHOTON, seed, u64::from(photon)]);
-    let eps = 1e-9 * scene.magnitude();
+    let eps = scene.precision().offset();
     let (mut o, mut d, mut leaving) = emit(scene, &mut rng);
     let mut path = Vec::new();
     for bounce in 0..=MAX_BOUNCES {

@@ -9,8 +9,8 @@
 //! [`open_surface_points`] drops the lattice points that other geometry covers — floor under a box
 //! standing on it, ceiling behind a lamp — where the true irradiance is 0 but a disc of radius d
 //! reaches past the cover and reads leaked light (issue 18). A point is covered when
-//! - another surface lies within δ = 10⁻⁶ of the scene's size of it along its normal (contact:
-//!   a box's bottom on the floor), or
+//! - another surface lies within δ of it along its normal (contact: a box's bottom on the floor;
+//!   δ = 10⁻⁶ of the scene's scale, [`crate::lt::precision::Precision::contact`]), or
 //! - every probe of a fixed fan over its hemisphere (the normal and six directions 60° from it)
 //!   meets the *back* of a surface first (the point lies inside a solid, or under an open-bottomed
 //!   box). One probe meeting a front face or escaping the scene keeps the point, so a single
@@ -70,13 +70,13 @@ pub fn open_surface_points(scene: &Scene, spacing: f64) -> (Vec<DVec3>, Vec<DVec
 /// Is the point `p` with unit normal `n` on primitive `own` covered by other geometry? (See the
 /// module doc.)
 pub fn covered(scene: &Scene, p: DVec3, n: DVec3, own: Prim) -> bool {
-    let mag = scene.magnitude();
-    let delta = 1e-6 * mag;
+    let precision = scene.precision();
+    let (delta, offset) = (precision.contact(), precision.offset());
     // Contact: from δ behind the point (a coplanar cover sits at t ≈ δ), skipping its own
     // triangle; a sphere's own surface is left behind by starting at the point.
     let contact = match own {
         Prim::Triangle(_) => scene.first_hit(p - n * delta, n, 0.0, Some(own)),
-        Prim::Ball(_) => scene.first_hit(p, n, 1e-9 * mag, None),
+        Prim::Ball(_) => scene.first_hit(p, n, offset, None),
     };
     if contact.is_some_and(|h| {
         let reach = if matches!(own, Prim::Triangle(_)) {
@@ -97,7 +97,7 @@ pub fn covered(scene: &Scene, p: DVec3, n: DVec3, own: Prim) -> bool {
     }));
     let skip = matches!(own, Prim::Triangle(_)).then_some(own);
     for d in fan {
-        let Some(h) = scene.first_hit(p, d, 1e-9 * mag, skip) else {
+        let Some(h) = scene.first_hit(p, d, offset, skip) else {
             return false;
         };
         let q = p + d * h.t;

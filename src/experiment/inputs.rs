@@ -56,31 +56,28 @@ impl Inputs {
     /// Resolves `relative` (named by spec key `key`) against the spec's folder; it must be a file.
     pub fn file(&self, key: &str, relative: &str) -> Result<PathBuf, ConfigError> {
         let path = self.dir.join(relative);
-        if path.is_dir() {
-            return Err(KeyError::new(
-                key,
-                format!("{} is a directory, not a file", path.display()),
-            )
-            .into());
-        }
-        if !path.is_file() {
-            let aff = matches!(
-                path.extension().and_then(|x| x.to_str()),
-                Some("aff" | "nff")
-            );
-            let hint = if aff {
-                format!("; {}", crate::lt::aff::BART_HINT)
-            } else {
-                String::new()
-            };
-            return Err(KeyError::new(
-                key,
-                format!(
-                    "{}: no such file (paths are relative to the spec's folder){hint}",
-                    path.display()
-                ),
-            )
-            .into());
+        match crate::error::regular_input(&path) {
+            Ok(()) => {}
+            Err(why) if why == "no such file" => {
+                let aff = matches!(
+                    path.extension().and_then(|x| x.to_str()),
+                    Some("aff" | "nff")
+                );
+                let hint = if aff {
+                    format!("; {}", crate::lt::aff::BART_HINT)
+                } else {
+                    String::new()
+                };
+                return Err(KeyError::new(
+                    key,
+                    format!(
+                        "{}: no such file (paths are relative to the spec's folder){hint}",
+                        path.display()
+                    ),
+                )
+                .into());
+            }
+            Err(why) => return Err(KeyError::new(key, format!("{}: {why}", path.display())).into()),
         }
         Ok(path)
     }

@@ -35,13 +35,17 @@ pub use crate::output::table::{col, Cell, Cells, Entry, Line, Table};
 use crate::toml_text::de::{from_tree, KeyError};
 use crate::toml_text::keys::{keys_of, KeyDoc, SpecTable};
 
-/// What a point does, for progress and ETA: `units` of `unit` (rays, photons, photon-frames).
+/// What a point does, for progress and ETA: `units` of `unit` (rays, photons, photon-frames); and
+/// for `raycost check`'s total, the sample points each unit meets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Work {
     /// How many.
     pub units: u64,
     /// Of what (plural noun).
     pub unit: &'static str,
+    /// Sample points each unit is held against (DETP's discs); 1 where units meet no points (rays
+    /// of the grid kinds, lines). `check` sums `units × points` and warns above its threshold.
+    pub points: u64,
 }
 
 /// Memory a point needs before it allocates: one entry per large structure.
@@ -175,8 +179,9 @@ pub fn refuse<T>(key: &str, message: impl Into<String>) -> Result<T, ConfigError
 
 /// What a point runner is given.
 pub struct Context<'a> {
-    /// The point's index in the sweep (part of every random stream's key).
-    pub index: u64,
+    /// The point's part of every random stream's key: its index in the sweep, or 0 for every
+    /// point under `experiment.common_random_numbers` (so points share their samples).
+    pub stream_point: u64,
     /// Worker threads of the run (`--threads`, or the machine's), passed down, never read back
     /// from the pool. Only timings may depend on it.
     pub threads: usize,

@@ -94,7 +94,7 @@ impl Kind for LinesInSphereKind {
 
     fn configure(raw: &LinesSpec, _: &mut Inputs) -> Result<LinesPoint, ConfigError> {
         Ok(LinesPoint {
-            seed: raw.experiment.seed,
+            seed: raw.experiment.stream_seed(),
             count: raw.lines.count,
             r: raw.lines.inner_radius,
         })
@@ -106,6 +106,7 @@ impl Kind for LinesInSphereKind {
         Work {
             units: p.count,
             unit: "lines",
+            points: 1,
         }
     }
     fn shared(_: &[&LinesPoint]) -> Result<(), Error> {
@@ -117,7 +118,7 @@ impl Kind for LinesInSphereKind {
         let hits: Vec<(u64, u64)> = (0..p.count.div_ceil(BATCH))
             .into_par_iter()
             .map(|b| {
-                let mut rng = stream(&[domain::LINES, p.seed, ctx.index, b]);
+                let mut rng = stream(&[domain::LINES, p.seed, ctx.stream_point, b]);
                 let n = BATCH.min(p.count - b * BATCH);
                 let h = (0..n)
                     .filter(|_| {

@@ -136,7 +136,7 @@ pub fn run_shard(plan: &Plan, opts: &RunOptions, shard: Shard) -> Result<(PathBu
     for (i, p) in points.iter().enumerate() {
         bar.point(i, points.len());
         let ctx = super::kind::Context {
-            index: i as u64,
+            stream_point: plan.spec.experiment.stream_point(i),
             threads: opts.threads,
             progress: &|k| bar.inc(k),
             merged: None,
@@ -335,6 +335,7 @@ pub fn merge(
         shard: None,
         sets,
         threads,
+        run: None,
         merged: Some(merged),
     };
     runner::run(&plan, &opts)

@@ -94,6 +94,8 @@ impl Plan {
         let mut points = Vec::with_capacity(spec.points.len());
         let mut params = Vec::with_capacity(spec.points.len());
         for p in &spec.points {
+            crate::spec::magnitude::check_point(&p.tree)
+                .map_err(|k| spec.locate(Some(p.index), k))?;
             // A point nothing was swept into is the base tree: its reading is the base's.
             let own = if p.tree == spec.tree {
                 None
@@ -159,7 +161,7 @@ impl Plan {
             let params = p
                 .params
                 .iter()
-                .map(|(k, v)| format!("{k} = {v}"))
+                .map(|(k, v)| format!("{k} = {}", crate::spec::sweep::show(v)))
                 .collect::<Vec<_>>()
                 .join(", ");
             let _ = writeln!(
@@ -172,6 +174,17 @@ impl Plan {
             for w in point.warnings() {
                 let _ = writeln!(s, "      warning: {w}");
             }
+        }
+        let works: Vec<_> = self.points.iter().map(|p| p.work()).collect();
+        let (lines, warning) = crate::output::work::total(
+            &works
+                .iter()
+                .map(|w| (w.units, w.unit, w.points))
+                .collect::<Vec<_>>(),
+        );
+        let warning = warning.map(|w| format!("warning: {w}"));
+        for l in lines.iter().chain(warning.iter()) {
+            let _ = writeln!(s, "  {l}");
         }
         for f in &self.inputs {
             let _ = writeln!(
@@ -217,7 +230,7 @@ impl Plan {
                     "point": p.index,
                     "params": params,
                     "describe": point.describe(),
-                    "work": { "units": work.units, "unit": work.unit },
+                    "work": { "units": work.units, "unit": work.unit, "points": work.points },
                     "memory": {
                         "bytes": memory.needs.iter().map(|n| n.bytes).sum::<f64>(),
                         "needs": needs,
@@ -234,11 +247,19 @@ impl Plan {
                 |f| json!({ "path": f.path, "role": f.role, "sha256": f.sha256, "bytes": f.bytes }),
             )
             .collect();
+        let works: Vec<_> = self.points.iter().map(|p| p.work()).collect();
+        let (total, warning) = crate::output::work::total(
+            &works
+                .iter()
+                .map(|w| (w.units, w.unit, w.points))
+                .collect::<Vec<_>>(),
+        );
         json!({
             "spec": self.spec.path,
             "kind": self.kind.name(),
             "spec_hash": self.hash,
             "points": points,
+            "total_work": { "lines": total, "warning": warning },
             "inputs": inputs,
         })
     }

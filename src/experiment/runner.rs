@@ -65,9 +65,22 @@ pub struct RunOptions {
     pub sets: Vec<String>,
     /// Worker threads (`--threads`, or the machine's): passed to every point and recorded.
     pub threads: usize,
+    /// `--run R`: the results go to `OUT/NAME/runs/R/` (the spec's `experiment.run` is R).
+    pub run: Option<u64>,
     /// `raycost merge` of photon shards: each point's parts, one per shard in shard order
     /// (`super::photon_shards`); points measure these instead of tracing.
     pub merged: Option<BTreeMap<usize, Vec<serde_json::Value>>>,
+}
+
+impl RunOptions {
+    /// The folder of experiment `name`'s results: `OUT/NAME`, or `OUT/NAME/runs/R` for run R.
+    pub fn dir(&self, name: &str) -> PathBuf {
+        let dir = self.out.join(name);
+        match self.run {
+            None => dir,
+            Some(r) => dir.join("runs").join(r.to_string()),
+        }
+    }
 }
 
 /// The file stem of a run.
@@ -156,6 +169,7 @@ mod interrupt {
                 let kept = KEPT.lock().ok().and_then(|m| m.clone());
                 let kept = kept.unwrap_or_else(|| "before any point finished".into());
                 eprintln!("\nerror: interrupted: {kept} (the point in progress is lost)");
+                crate::output::folder::release_locks();
                 std::process::exit(130);
             });
         });
@@ -194,6 +208,9 @@ fn interrupt_line(
     if let Some(s) = opts.shard {
         cmd.push_str(&format!(" --shard {}/{}", s.k, s.n));
     }
+    if let Some(r) = opts.run {
+        cmd.push_str(&format!(" --run {r}"));
+    }
     for s in &opts.sets {
         cmd.push_str(&format!(" --set '{s}'"));
     }
@@ -209,23 +226,19 @@ type Finished = (usize, String, ErasedOutput, f64);
 
 /// The warnings of this shard's points known before running, each once.
 fn known_warnings(plan: &Plan, mine: &[usize]) -> Vec<String> {
-    let mut warnings: Vec<String> = Vec::new();
-    for &i in mine {
-        for w in plan.points[i].warnings() {
-            let w = format!("point {i}: {w}");
-            if !warnings.contains(&w) {
-                warnings.push(w);
-            }
-        }
-    }
-    warnings
+    crate::output::meta::point_warnings(
+        &mine
+            .iter()
+            .flat_map(|&i| plan.points[i].warnings().into_iter().map(move |w| (i, w)))
+            .collect::<Vec<_>>(),
+    )
 }
 
 /// Runs `plan`; returns the written paths and the summary text.
 pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Error> {
     let kind: &dyn DynKind = plan.kind;
     let name = &plan.spec.experiment.name;
-    let dir = opts.out.join(name);
+    let dir = opts.dir(name);
     let stem = stem(name, opts.shard);
     let mine: Vec<usize> = (0..plan.points.len())
         .filter(|i| opts.shard.is_none_or(|s| i % s.n == s.k))
@@ -248,6 +261,7 @@ pub fn run(plan: &Plan, opts: &RunOptions) -> Result<(Vec<PathBuf>, String), Err
     if let Some(then) = sink.previous() {
         meta.columns = then.columns.clone();
     }
+    meta.warnings.extend(sink.notes().iter().cloned());
     // Warnings are printed even with --quiet (which silences progress and the summary only).
     for w in &meta.warnings {
         eprintln!("warning: {w}");
@@ -319,8 +333,7 @@ fn run_points(
     let bar = progress(total, unit, todo.len(), opts.quiet);
     let name = &plan.spec.experiment.name;
     let partial = opts
-        .out
-        .join(name)
+        .dir(name)
         .join(format!("{}.csv.partial", stem(name, opts.shard)));
     let all = resumed + todo.len();
     interrupt::kept(interrupt_line(plan, opts, &partial, resumed, all));
@@ -330,7 +343,7 @@ fn run_points(
         bar.point(n, todo.len());
         let start = Instant::now();
         let ctx = Context {
-            index: i as u64,
+            stream_point: plan.spec.experiment.stream_point(i),
             threads: opts.threads,
             progress: &|k| bar.inc(k),
             merged: opts
@@ -366,9 +379,18 @@ fn keep_point(
     sink: &mut Sink,
 ) -> Result<Finished, Error> {
     let kind = plan.kind;
-    check_declared(kind, "main", std::slice::from_ref(&out.row))?;
+    // An overflow names the point and its parameters, not only the column.
+    let at = |e: Error| {
+        let params: Vec<String> = plan.spec.points[i]
+            .params
+            .iter()
+            .map(|(k, v)| format!("{k} = {}", crate::spec::sweep::show(v)))
+            .collect();
+        Error::internal(format!("point {i} ({}): {e:#}", params.join(", ")))
+    };
+    check_declared(kind, "main", std::slice::from_ref(&out.row)).map_err(at)?;
     for (name, rows) in &out.tables {
-        check_declared(kind, name, rows)?;
+        check_declared(kind, name, rows).map_err(at)?;
     }
     let row = with_point_columns(i, &plan.params[i], &out.row);
     let side: Vec<(&'static str, Vec<Row>)> = out
@@ -385,7 +407,7 @@ fn keep_point(
             record_columns(&mut meta.columns, name, r);
         }
     }
-    sink.append(&row, &side)
+    sink.append(&row, &side, meta)
         .map_err(|e| Error::Internal(e.into()))
         .context_with(|| format!("could not append point {i}"))?;
     for w in &out.warnings {
@@ -574,6 +596,7 @@ mod tests {
             Work {
                 units: 1,
                 unit: "points",
+                points: 1,
             }
         }
         fn shared(_: &[&f64]) -> Result<(), Error> {
@@ -618,6 +641,7 @@ mod tests {
             shard: None,
             sets: Vec::new(),
             threads: 1,
+            run: None,
             merged: None,
         };
         let e = run(&plan, &opts).expect_err("a planted fault");

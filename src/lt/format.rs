@@ -29,7 +29,7 @@ use glam::DVec3;
 use serde::{de::Error as _, Deserialize, Deserializer, Serialize};
 
 use super::motion::{Motion, Mover, MoverPart};
-use super::shapes::{Ball, Triangle};
+use super::shapes::{self, Ball, Triangle};
 use super::{Camera, InputError, Light, SceneParts, Surface};
 use crate::toml_text::find_key;
 
@@ -353,8 +353,8 @@ impl RawScene {
 }
 
 impl RawSurface {
-    /// Adds surface `si` to `parts`: its geometry by its kind (degenerate triangles skipped and
-    /// counted), its material, its light if it emits, or to its dynamic object's geometry.
+    /// Adds surface `si` to `parts`: its geometry by its kind (degenerate and duplicate triangles
+    /// skipped and counted), its material, its light if it emits, or to its dynamic object's geometry.
     fn add_to(
         &self,
         si: usize,
@@ -380,6 +380,14 @@ impl RawSurface {
                 "{}: {label}: skipped {} degenerate triangle(s) (zero area or not finite)",
                 cx.name,
                 before - first - kept.len()
+            ));
+        }
+        let (kept, duplicates) = shapes::without_duplicates(kept);
+        if duplicates > 0 {
+            parts.warnings.push(format!(
+                "{}: {label}: skipped {duplicates} duplicate triangle(s) (the same three \
+                 vertices, wound the same way, as another triangle of this surface)",
+                cx.name
             ));
         }
         parts.triangles.extend(kept);
@@ -459,6 +467,13 @@ impl RawSurface {
                     return Err(cx.err(key("path"), "an obj surface needs a path"));
                 };
                 let file: PathBuf = cx.dir.join(p);
+                // A FIFO or device is refused by what it is; a missing file by the OBJ reader.
+                if let Err(why) = file
+                    .metadata()
+                    .map_or(Ok(()), |_| crate::error::regular_input(&file))
+                {
+                    return Err(cx.err(key("path"), format!("{}: {why}", file.display())));
+                }
                 parts.sources.push((file.clone(), "obj"));
                 parts.triangles.extend(obj(&file, id, &key("path"), cx)?);
             }

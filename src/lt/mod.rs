@@ -14,6 +14,7 @@ pub mod direct;
 pub mod format;
 pub mod motion;
 pub mod pathtrace;
+pub mod precision;
 pub mod reference;
 pub mod shapes;
 pub mod spline;
@@ -346,6 +347,12 @@ impl Scene {
         self.bounds.magnitude().max(1e-300)
     }
 
+    /// The scene's coordinate magnitude and size, and the tolerances they allow
+    /// ([`precision::Precision`]).
+    pub fn precision(&self) -> precision::Precision {
+        precision::Precision::of(&self.bounds)
+    }
+
     /// The nearest hit with t > t_min (skipping triangle `skip`, the one a photon leaves) and the
     /// next intersection beyond it along the same line (+∞ if none).
     pub fn first_two_hits(
@@ -515,7 +522,7 @@ impl Scene {
     /// relative 10⁻⁹ of the scene's size, so that the surface `p` lies on does not shadow it).
     pub fn direct_light(&self, p: DVec3, n: DVec3) -> f64 {
         let n = n.normalize();
-        let tol = 1e-9 * self.magnitude();
+        let tol = self.precision().offset();
         let mut e = 0.0;
         for l in &self.lights {
             let (pos, intensity) = match l {

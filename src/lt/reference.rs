@@ -160,9 +160,9 @@ impl Lights {
     }
 }
 
-/// Self-intersection epsilon, the photon tracer's.
+/// Self-intersection epsilon, the photon tracer's ([`crate::lt::precision::Precision::offset`]).
 fn eps(scene: &Scene) -> f64 {
-    1e-9 * scene.magnitude()
+    scene.precision().offset()
 }
 
 /// Is the straight path from `x` (leaving primitive `from`) to `y` (on primitive `to`, if any)

@@ -13,6 +13,61 @@ pub struct Triangle {
     pub surface: u32,
 }
 
+/// `triangles` without the duplicates: a triangle with the same surface and the same three vertices
+/// (bit for bit, −0 = +0) as an earlier one, wound the same way, is dropped, and the number dropped
+/// comes back. Two copies wound opposite ways (a double-sided sheet) are both kept.
+///
+/// O(n log n): a sort of canonical keys. Why it matters: n copies of one face give a bounding-volume
+/// hierarchy no split can separate, so every query tests all of them and placing surface points
+/// became quadratic (10⁵ copies: over a minute; 10⁵ distinct faces: 0.2 s).
+pub fn without_duplicates(triangles: Vec<Triangle>) -> (Vec<Triangle>, usize) {
+    let bits = |v: DVec3| {
+        let b = |x: f64| (x + 0.0).to_bits();
+        [b(v.x), b(v.y), b(v.z)]
+    };
+    // The key: surface, winding class, and the vertices in sorted order.
+    let key = |t: &Triangle| {
+        let mut v = t.v.map(bits);
+        // The winding of the given order relative to the sorted order: an even permutation keeps it.
+        let mut parity = false;
+        for i in 0..3 {
+            for j in 0..2 - i {
+                if v[j] > v[j + 1] {
+                    v.swap(j, j + 1);
+                    parity = !parity;
+                }
+            }
+        }
+        (t.surface, parity, v)
+    };
+    let mut order: Vec<(u32, bool, [[u64; 3]; 3], usize)> = triangles
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let (s, p, v) = key(t);
+            (s, p, v, i)
+        })
+        .collect();
+    order.sort_unstable();
+    let mut keep = vec![true; triangles.len()];
+    for w in order.windows(2) {
+        if w[0].0 == w[1].0 && w[0].1 == w[1].1 && w[0].2 == w[1].2 {
+            // Keep the earliest of each run (the sort puts it first: index is the last key).
+            keep[w[1].3] = false;
+        }
+    }
+    let dropped = keep.iter().filter(|&&k| !k).count();
+    if dropped == 0 {
+        return (triangles, 0);
+    }
+    let kept = triangles
+        .into_iter()
+        .zip(keep)
+        .filter_map(|(t, k)| k.then_some(t))
+        .collect();
+    (kept, dropped)
+}
+
 impl Triangle {
     /// Unnormalised normal (its length is twice the area).
     pub fn cross(&self) -> DVec3 {

@@ -7,15 +7,23 @@
 //! wrong number of fields). Any problem is an [`OutputError`] naming the file (exit code 2), and no
 //! output is created. Rows are re-serialised with the same CSV writer settings as the runner, so the
 //! merged table is byte-identical to an unsharded run's in every non-timing column; side-table rows
-//! keep their order within a point. Outputs are written to temporary files and renamed into place;
-//! existing outputs are replaced only with `--force`.
+//! keep their order within a point. Every row is read back and checked ([`super::readback`]; a torn
+//! row anywhere is refused), and each table's header must be the columns its metadata records.
+//!
+//! Written through the result-folder protocol ([`super::folder`]): the shards' locks are held while
+//! they are read (a shard being rerun or resumed is refused), the output's lock while it is written;
+//! an `--out` that would overwrite any file the merge reads is refused; outputs are staged as new
+//! temporary files, fsynced, and published with the main table last. Existing outputs are replaced
+//! only with `--force`.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+use super::folder::{self, Lock};
 use super::meta::{changed_input, Meta, ShardRecord};
+use super::readback::{check_table, Line, Table, Torn};
 use super::OutputError;
 
 fn err(path: &Path, message: impl Into<String>) -> OutputError {
@@ -59,13 +67,39 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>, force: bool) -> Result<Merg
     let files = collect(inputs)?;
     let n = files[0].n;
     let name = files[0].name.clone();
+    // No shard may be written while it is read (a rerun with --force, a --resume).
+    let _shard_locks = files
+        .iter()
+        .map(|f| Lock::acquire_if_writable(parent_dir(&f.csv), &f.stem))
+        .collect::<Result<Vec<_>, _>>()?;
     let shards: Vec<Shard> = files
         .into_iter()
         .map(Shard::load)
         .collect::<Result<_, _>>()?;
-    let first = &shards[0];
+    check_same_run(&shards)?;
+    let total = shards[0].points_total;
+    // Main table: one header, every point exactly once, in its own shard.
+    let with_rows: Vec<&Shard> = shards.iter().filter(|s| s.main.header.is_some()).collect();
+    let header = with_rows.first().and_then(|s| s.main.header.clone());
+    for s in &with_rows[..] {
+        check_header(&s.main, &with_rows[0].main)?;
+    }
+    check_main_rows(&shards, n, total)?;
+    let table_names = check_side_tables(&shards)?;
+    let outputs = Outputs::new(out, &shards[0], &name, &table_names)?;
+    let _out_lock = outputs.claim(&shards, force)?;
+    let contents = outputs.assemble(&shards, header, total, n);
+    outputs.publish(&contents)?;
+    Ok(Merged {
+        shards: n,
+        points: total,
+        written: outputs.all,
+    })
+}
 
-    // One spec, one version, one sweep size.
+/// One spec, one version, one set of inputs, one sweep size.
+fn check_same_run(shards: &[Shard]) -> Result<(), OutputError> {
+    let first = &shards[0];
     for s in &shards[1..] {
         if s.spec_hash != first.spec_hash {
             return Err(err(
@@ -105,16 +139,14 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>, force: bool) -> Result<Merg
             ));
         }
     }
-    let total = first.points_total;
+    Ok(())
+}
 
-    // Main table: one header, every point exactly once, in its own shard.
-    let with_rows: Vec<&Shard> = shards.iter().filter(|s| s.main.header.is_some()).collect();
-    let header = with_rows.first().and_then(|s| s.main.header.clone());
-    for s in &with_rows[..] {
-        check_header(&s.main, &with_rows[0].main)?;
-    }
+/// Every point exactly once, in its own shard, and each shard's rows the points its metadata
+/// lists.
+fn check_main_rows(shards: &[Shard], n: usize, total: usize) -> Result<(), OutputError> {
     let mut seen: BTreeMap<usize, (&Path, u64)> = BTreeMap::new();
-    for s in &shards {
+    for s in shards {
         for r in &s.main.rows {
             if r.point >= total {
                 return Err(err(
@@ -153,7 +185,7 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>, force: bool) -> Result<Merg
             seen.insert(r.point, (&s.main.path, r.line));
         }
     }
-    for s in &shards {
+    for s in shards {
         let missing: Vec<usize> = (s.k..total)
             .step_by(n)
             .filter(|p| !seen.contains_key(p))
@@ -193,15 +225,19 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>, force: bool) -> Result<Merg
         }
     }
 
-    // Side tables (e.g. `hist`): every shard with points has the same ones, with one header, and
-    // their rows belong to points of the shard's main table.
+    Ok(())
+}
+
+/// Side tables (e.g. `hist`): every shard with points has the same ones, with one header, and
+/// their rows belong to points of the shard's main table. Returns their names.
+fn check_side_tables(shards: &[Shard]) -> Result<BTreeSet<String>, OutputError> {
     let mut table_names: BTreeSet<String> = BTreeSet::new();
-    for s in &shards {
+    for s in shards {
         table_names.extend(s.tables.keys().cloned());
     }
     for t in &table_names {
         let mut reference: Option<&Table> = None;
-        for s in &shards {
+        for s in shards {
             let Some(tab) = s.tables.get(t) else {
                 if s.main.rows.is_empty() {
                     continue;
@@ -233,77 +269,165 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>, force: bool) -> Result<Merg
         }
     }
 
-    // Output paths; refuse to replace anything without --force.
-    let main_out = match out {
-        Some(p) => {
-            if p.extension().and_then(|e| e.to_str()) != Some("csv") {
-                return Err(err(p, "--out must name the merged .csv file (its .hist.csv and .meta.toml go beside it)"));
+    Ok(table_names)
+}
+
+/// Where a merge writes: the main table, each side table beside it, the metadata.
+struct Outputs {
+    main: PathBuf,
+    /// The main table's path without `.csv`.
+    base: String,
+    meta: PathBuf,
+    /// Every output, the main table first and the metadata last.
+    all: Vec<PathBuf>,
+}
+
+impl Outputs {
+    /// The paths for `--out` (or `NAME.csv` beside the first shard).
+    fn new(
+        out: Option<&Path>,
+        first: &Shard,
+        name: &str,
+        table_names: &BTreeSet<String>,
+    ) -> Result<Self, OutputError> {
+        let main = match out {
+            Some(p) => {
+                if p.extension().and_then(|e| e.to_str()) != Some("csv") {
+                    return Err(err(p, "--out must name the merged .csv file (its .hist.csv and .meta.toml go beside it)"));
+                }
+                p.to_path_buf()
             }
-            p.to_path_buf()
-        }
-        None => first.csv.with_file_name(format!("{name}.csv")),
-    };
-    let base = main_out
-        .to_string_lossy()
-        .strip_suffix(".csv")
-        .map(str::to_string)
-        .unwrap_or_default();
-    let table_out = |t: &str| PathBuf::from(format!("{base}.{t}.csv"));
-    let meta_out = PathBuf::from(format!("{base}.meta.toml"));
-    let mut outputs: Vec<PathBuf> = vec![main_out.clone()];
-    outputs.extend(table_names.iter().map(|t| table_out(t)));
-    outputs.push(meta_out.clone());
-    for p in &outputs {
-        if shards.iter().any(|s| same_file(p, &s.csv)) {
-            return Err(err(
-                p,
-                "is one of the shard files being merged; choose another --out",
-            ));
-        }
-        if p.exists() && !force {
-            return Err(err(
-                p,
-                "exists already; pass --force to replace it (nothing was written)",
-            ));
-        }
+            None => first.csv.with_file_name(format!("{name}.csv")),
+        };
+        let base = main
+            .to_string_lossy()
+            .strip_suffix(".csv")
+            .map(str::to_string)
+            .unwrap_or_default();
+        let meta = PathBuf::from(format!("{base}.meta.toml"));
+        let mut o = Outputs {
+            main: main.clone(),
+            base,
+            meta: meta.clone(),
+            all: vec![main],
+        };
+        let tables: Vec<PathBuf> = table_names.iter().map(|t| o.table(t)).collect();
+        o.all.extend(tables);
+        o.all.push(meta);
+        Ok(o)
     }
 
-    // Assemble, in point order (stable: side-table rows keep their order within a point).
-    let mut contents: Vec<(PathBuf, Vec<u8>)> = Vec::new();
-    let mut main_bytes = header.unwrap_or_default();
-    let mut rows: Vec<&Line> = shards.iter().flat_map(|s| s.main.rows.iter()).collect();
-    rows.sort_by_key(|r| r.point);
-    for r in rows {
-        main_bytes.extend_from_slice(&r.bytes);
+    fn table(&self, t: &str) -> PathBuf {
+        PathBuf::from(format!("{}.{t}.csv", self.base))
     }
-    for t in &table_names {
-        let tabs: Vec<&Table> = shards.iter().filter_map(|s| s.tables.get(t)).collect();
-        let mut bytes = tabs
+
+    /// Refuses an output that is one of the inputs, or that exists without `--force`; takes the
+    /// output's lock and removes a killed merge's temporaries. The lock is held while it lives.
+    fn claim(&self, shards: &[Shard], force: bool) -> Result<Lock, OutputError> {
+        let outputs = &self.all;
+        let main_out = &self.main;
+        let base = &self.base;
+        let read: Vec<&Path> = shards.iter().flat_map(Shard::files).collect();
+        for p in outputs {
+            if let Some(input) = read.iter().find(|r| same_file(p, r)) {
+                return Err(err(
+                    p,
+                    format!(
+                        "would overwrite {}, which this merge reads; choose another --out",
+                        input.display()
+                    ),
+                ));
+            }
+        }
+        let out_dir = parent_dir(main_out);
+        fs::create_dir_all(out_dir)
+            .map_err(|e| err(out_dir, format!("cannot create the folder: {e}")))?;
+        let out_stem = Path::new(base)
+            .file_name()
+            .map_or_else(String::new, |f| f.to_string_lossy().into_owned());
+        let lock = Lock::acquire(out_dir, &out_stem)?;
+        folder::remove_stale_temporaries(outputs).map_err(|e| {
+            err(
+                out_dir,
+                format!("cannot remove a killed merge's temporary files: {e}"),
+            )
+        })?;
+        for p in outputs {
+            if p.exists() && !force {
+                return Err(err(
+                    p,
+                    "exists already; pass --force to replace it (nothing was written)",
+                ));
+            }
+        }
+        Ok(lock)
+    }
+
+    /// The merged files' bytes, in point order (stable: side-table rows keep their order within
+    /// a point), the main table last (published last).
+    fn assemble(
+        &self,
+        shards: &[Shard],
+        header: Option<Vec<u8>>,
+        total: usize,
+        n: usize,
+    ) -> Vec<(PathBuf, Vec<u8>)> {
+        let table_names: Vec<String> = shards
             .iter()
-            .find_map(|t| t.header.clone())
-            .unwrap_or_default();
-        let mut rows: Vec<&Line> = tabs.iter().flat_map(|t| t.rows.iter()).collect();
+            .flat_map(|s| s.tables.keys().cloned())
+            .collect::<BTreeSet<_>>()
+            .into_iter()
+            .collect();
+        let mut contents: Vec<(PathBuf, Vec<u8>)> = Vec::new();
+        let mut main_bytes = header.unwrap_or_default();
+        let mut rows: Vec<&Line> = shards.iter().flat_map(|s| s.main.rows.iter()).collect();
         rows.sort_by_key(|r| r.point);
         for r in rows {
-            bytes.extend_from_slice(&r.bytes);
+            main_bytes.extend_from_slice(&r.bytes);
         }
-        contents.push((table_out(t), bytes));
+        for t in &table_names {
+            let tabs: Vec<&Table> = shards.iter().filter_map(|s| s.tables.get(t)).collect();
+            let mut bytes = tabs
+                .iter()
+                .find_map(|t| t.header.clone())
+                .unwrap_or_default();
+            let mut rows: Vec<&Line> = tabs.iter().flat_map(|t| t.rows.iter()).collect();
+            rows.sort_by_key(|r| r.point);
+            for r in rows {
+                bytes.extend_from_slice(&r.bytes);
+            }
+            contents.push((self.table(t), bytes));
+        }
+        contents.push((
+            self.meta.clone(),
+            merged_meta(shards, total, n).render().into_bytes(),
+        ));
+        contents.push((self.main.clone(), main_bytes));
+        contents
     }
-    contents.push((
-        meta_out.clone(),
-        merged_meta(&shards, total, n).render().into_bytes(),
-    ));
-    contents.push((main_out.clone(), main_bytes));
-    write_all_atomically(&contents)?;
 
-    let mut written = vec![main_out];
-    written.extend(table_names.iter().map(|t| table_out(t)));
-    written.push(meta_out);
-    Ok(Merged {
-        shards: n,
-        points: total,
-        written,
-    })
+    /// Stages every file, then publishes them all (the main table last).
+    fn publish(&self, contents: &[(PathBuf, Vec<u8>)]) -> Result<(), OutputError> {
+        let main_out = &self.main;
+        let staged = contents
+            .iter()
+            .map(|(p, bytes)| {
+                folder::stage(p, bytes).map_err(|e| {
+                    err(
+                        p,
+                        format!("cannot write the merged file: {e} (nothing was replaced)"),
+                    )
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        folder::publish_staged(staged).map_err(|e| {
+            err(
+                main_out,
+                format!("cannot move the merged files into place: {e}"),
+            )
+        })?;
+        Ok(())
+    }
 }
 
 /// One shard's file names.
@@ -452,98 +576,6 @@ fn collect(inputs: &[PathBuf]) -> Result<Vec<ShardFile>, OutputError> {
     Ok(files)
 }
 
-/// One CSV row: its point, its line number (1-based), and its bytes as the runner writes them.
-#[derive(Debug)]
-struct Line {
-    point: usize,
-    line: u64,
-    bytes: Vec<u8>,
-}
-
-/// A CSV table of one shard.
-#[derive(Debug)]
-struct Table {
-    path: PathBuf,
-    /// Header line bytes; `None` for an empty file (a shard without points).
-    header: Option<Vec<u8>>,
-    columns: Vec<String>,
-    rows: Vec<Line>,
-}
-
-fn record_bytes<'a>(fields: impl IntoIterator<Item = &'a [u8]>) -> Vec<u8> {
-    let mut w = ::csv::Writer::from_writer(Vec::new());
-    w.write_record(fields)
-        .expect("writing to memory cannot fail");
-    w.into_inner().expect("flush to memory")
-}
-
-/// Reads and checks a table: ends with a newline, every row has the header's number of fields and a
-/// point index in its first column.
-fn read_table(path: &Path) -> Result<Table, OutputError> {
-    let bytes = fs::read(path).map_err(|e| err(path, format!("cannot read: {e}")))?;
-    let mut table = Table {
-        path: path.to_path_buf(),
-        header: None,
-        columns: Vec::new(),
-        rows: Vec::new(),
-    };
-    if bytes.is_empty() {
-        return Ok(table);
-    }
-    if !bytes.ends_with(b"\n") {
-        let line = bytes.iter().filter(|&&b| b == b'\n').count() + 1;
-        return Err(err(path, format!("line {line} is truncated (the file does not end with a newline: was the run killed mid-write?)")));
-    }
-    let mut reader = ::csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .from_reader(&bytes[..]);
-    let mut record = ::csv::ByteRecord::new();
-    let mut width = 0;
-    loop {
-        match reader.read_byte_record(&mut record) {
-            Ok(false) => break,
-            Ok(true) => {}
-            Err(e) => return Err(err(path, format!("unreadable CSV: {e}"))),
-        }
-        let line = record.position().map_or(0, |p| p.line());
-        if table.header.is_none() {
-            table.columns = record
-                .iter()
-                .map(|f| String::from_utf8_lossy(f).into_owned())
-                .collect();
-            if table.columns.first().map(String::as_str) != Some("point") {
-                return Err(err(
-                    path,
-                    format!(
-                        "line {line}: the first column is '{}', expected 'point'",
-                        table.columns.first().map_or("", String::as_str)
-                    ),
-                ));
-            }
-            width = record.len();
-            table.header = Some(record_bytes(record.iter()));
-            continue;
-        }
-        if record.len() != width {
-            return Err(err(path, format!("line {line} has {} fields, but the header has {width} (a torn or corrupted row)", record.len())));
-        }
-        let cell = String::from_utf8_lossy(&record[0]).into_owned();
-        let point = cell.parse::<usize>().map_err(|_| {
-            err(
-                path,
-                format!("line {line}: point '{cell}' is not a point index"),
-            )
-        })?;
-        table.rows.push(Line {
-            point,
-            line,
-            bytes: record_bytes(record.iter()),
-        });
-    }
-    Ok(table)
-}
-
 fn check_header(t: &Table, reference: &Table) -> Result<(), OutputError> {
     if t.header == reference.header {
         return Ok(());
@@ -572,6 +604,17 @@ fn check_header(t: &Table, reference: &Table) -> Result<(), OutputError> {
     ))
 }
 
+/// A finished table of a shard, every row checked (a torn row anywhere is refused); its header must
+/// be the columns `meta` records for `table`.
+fn read_finished(path: &Path, meta: &Meta, table: &str) -> Result<Table, OutputError> {
+    let text = fs::read(path).map_err(|e| err(path, format!("cannot read: {e}")))?;
+    let declared: Option<Vec<String>> = meta
+        .columns
+        .get(table)
+        .map(|c| c.iter().map(|c| c.name.clone()).collect());
+    check_table(path, text, declared.as_deref(), Torn::Refuse)
+}
+
 /// One shard, read and checked on its own.
 #[derive(Debug)]
 struct Shard {
@@ -590,6 +633,13 @@ struct Shard {
 }
 
 impl Shard {
+    /// Every file of the shard this merge reads.
+    fn files(&self) -> impl Iterator<Item = &Path> {
+        [self.csv.as_path(), self.meta_path.as_path()]
+            .into_iter()
+            .chain(self.tables.values().map(|t| t.path.as_path()))
+    }
+
     fn load(f: ShardFile) -> Result<Shard, OutputError> {
         let meta_path = f.csv.with_file_name(format!("{}.meta.toml", f.stem));
         if !meta_path.is_file() {
@@ -612,7 +662,7 @@ impl Shard {
         let mut meta_points = meta.run.points.clone();
         meta_points.extend(meta.run.resumed_points.iter().copied());
 
-        let main = read_table(&f.csv)?;
+        let main = read_finished(&f.csv, &meta, "main")?;
         let mut tables = BTreeMap::new();
         let dir = match f.csv.parent() {
             Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
@@ -632,7 +682,10 @@ impl Shard {
             if table.is_empty() || table.contains('.') || !entry.path().is_file() {
                 continue;
             }
-            tables.insert(table.to_string(), read_table(&entry.path())?);
+            tables.insert(
+                table.to_string(),
+                read_finished(&entry.path(), &meta, table)?,
+            );
         }
         Ok(Shard {
             csv: f.csv,
@@ -703,53 +756,11 @@ fn merged_meta(shards: &[Shard], total: usize, n: usize) -> Meta {
     merged
 }
 
-/// Writes every file to a temporary beside it, then renames them into place in order (the last one
-/// last); on any failure the temporaries are removed and nothing is renamed.
-fn write_all_atomically(contents: &[(PathBuf, Vec<u8>)]) -> Result<(), OutputError> {
-    let tmp_of = |p: &Path| {
-        p.with_file_name(format!(
-            ".{}.merge-tmp-{}",
-            p.file_name()
-                .map_or_else(String::new, |f| f.to_string_lossy().into_owned()),
-            std::process::id()
-        ))
-    };
-    let mut made: Vec<PathBuf> = Vec::new();
-    let cleanup = |made: &[PathBuf]| {
-        for t in made {
-            let _ = fs::remove_file(t);
-        }
-    };
-    for (path, bytes) in contents {
-        let tmp = tmp_of(path);
-        let res = (|| -> std::io::Result<()> {
-            if let Some(d) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-                fs::create_dir_all(d)?;
-            }
-            let mut f = fs::File::create(&tmp)?;
-            f.write_all(bytes)?;
-            f.sync_all()
-        })();
-        if let Err(e) = res {
-            cleanup(&made);
-            let _ = fs::remove_file(&tmp);
-            return Err(err(
-                path,
-                format!("cannot write the merged file: {e} (nothing was written)"),
-            ));
-        }
-        made.push(tmp);
-    }
-    for (i, (path, _)) in contents.iter().enumerate() {
-        if let Err(e) = fs::rename(&made[i], path) {
-            cleanup(&made[i..]);
-            return Err(err(
-                path,
-                format!("cannot move the merged file into place: {e}"),
-            ));
-        }
-    }
-    Ok(())
+/// The folder of `path` (`.` for a bare file name).
+fn parent_dir(path: &Path) -> &Path {
+    path.parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
 }
 
 fn same_file(a: &Path, b: &Path) -> bool {

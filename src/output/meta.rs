@@ -228,6 +228,38 @@ impl InputFile {
     }
 }
 
+/// Warnings of sweep points, each text once: `point 3: W`, or `points 0, 1, 2: W` when several
+/// points have the same warning (the same points file or scene warns at every point that reads it).
+pub fn point_warnings(warnings: &[(usize, String)]) -> Vec<String> {
+    let mut grouped: Vec<(&str, Vec<usize>)> = Vec::new();
+    for (point, w) in warnings {
+        match grouped.iter_mut().find(|(t, _)| *t == w.as_str()) {
+            Some((_, points)) if !points.contains(point) => points.push(*point),
+            Some(_) => {}
+            None => grouped.push((w.as_str(), vec![*point])),
+        }
+    }
+    grouped
+        .into_iter()
+        .map(|(w, points)| match points.as_slice() {
+            [p] => format!("point {p}: {w}"),
+            ps if ps.len() <= 10 => format!(
+                "points {}: {w}",
+                ps.iter()
+                    .map(usize::to_string)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            ps => format!(
+                "points {} … {} ({} points): {w}",
+                ps[0],
+                ps[ps.len() - 1],
+                ps.len()
+            ),
+        })
+        .collect()
+}
+
 /// The first input of `now` whose content differs from what `then` recorded (or that is new or
 /// gone): the file a resume or merge must name when it refuses.
 pub fn changed_input<'a>(then: &'a [InputFile], now: &'a [InputFile]) -> Option<String> {
@@ -316,8 +348,11 @@ impl Meta {
     }
 
     /// Whether the run's timings were taken on a busy machine (see [`RunInfo::other_cores`]).
+    /// Judged only for runs of a second or more (as [`Meta::end`] does: shorter ones are below the
+    /// kernel's tick accounting), so that it is true exactly when `end` recorded the warning.
     pub fn busy(&self) -> bool {
         self.run.other_cores.is_some_and(|c| c > BUSY_CORES)
+            && self.run.wall_s.is_some_and(|w| w >= 1.0)
     }
 
     /// TOML text (the one writer).

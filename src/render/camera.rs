@@ -81,7 +81,7 @@ pub struct View {
 /// disc of radius `d` at each visible point.
 pub fn view(scene: &Scene, cam: &Camera, width: u32, height: u32, d: f64) -> View {
     let pin = Pinhole::new(cam, width, height);
-    let t_min = 1e-9 * scene.magnitude();
+    let t_min = scene.precision().offset();
     let hits: Vec<Option<(DVec3, DVec3, u32)>> = (0..width as usize * height as usize)
         .into_par_iter()
         .map(|k| {

@@ -1,11 +1,14 @@
-//! PNG and animated GIF files of palette images, written atomically (a temporary file beside the
-//! target, renamed over it).
+//! PNG and animated GIF files of palette images, written through the result-folder protocol
+//! ([`crate::output::folder`]: the target's lock, a new temporary file beside it, fsync, rename).
 
 use std::fs;
-use std::io::{BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::io::BufWriter;
+use std::path::Path;
 
 use anyhow::Context;
+
+use crate::output::folder::{self, Lock};
+use crate::output::OutputError;
 
 /// An image of palette indices.
 pub struct Indexed<'a> {
@@ -19,40 +22,33 @@ pub struct Indexed<'a> {
     pub palette: Option<&'a [u8]>,
 }
 
-/// Writes `path` through a temporary file in the same folder and a rename.
+/// Writes `path` through the result-folder protocol: its lock (`PATH.lock`) held, the refusal to
+/// replace it without `force` checked under the lock, a new temporary file, fsync, rename.
 fn atomic(
     path: &Path,
+    force: bool,
     write: impl FnOnce(&mut BufWriter<fs::File>) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    }
-    let mut tmp: PathBuf = path.to_path_buf();
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    tmp.set_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    let res = (|| {
-        let f =
-            fs::File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
-        let mut w = BufWriter::new(f);
-        write(&mut w)?;
-        w.flush()?;
-        w.get_ref().sync_all()?;
-        drop(w);
-        fs::rename(&tmp, path)
-            .with_context(|| format!("cannot rename {} to {}", tmp.display(), path.display()))
-    })();
-    if res.is_err() {
-        let _ = fs::remove_file(&tmp);
+    let _lock = Lock::acquire(dir, &name)?;
+    folder::remove_stale_temporaries(&[path.to_path_buf()])?;
+    if path.exists() && !force {
+        return Err(OutputError::new(path, "exists; add --force to replace it").into());
     }
-    res
+    folder::write_atomic_with(path, write)
 }
 
 /// A PNG: 8-bit grey, or indexed colour with the palette.
-pub fn write_png(path: &Path, im: &Indexed) -> anyhow::Result<()> {
-    atomic(path, |w| {
+pub fn write_png(path: &Path, im: &Indexed, force: bool) -> anyhow::Result<()> {
+    atomic(path, force, |w| {
         let mut e = png::Encoder::new(w, im.width, im.height);
         e.set_depth(png::BitDepth::Eight);
         match im.palette {
@@ -79,12 +75,13 @@ pub fn write_gif(
     frames: &[Vec<u8>],
     palette: &[u8],
     delay_cs: u16,
+    force: bool,
 ) -> anyhow::Result<()> {
     let (w, h) = (
         u16::try_from(width).context("GIF images are at most 65 535 pixels wide")?,
         u16::try_from(height).context("GIF images are at most 65 535 pixels high")?,
     );
-    atomic(path, |out| {
+    atomic(path, force, |out| {
         let mut e = gif::Encoder::new(out, w, h, palette)?;
         e.set_repeat(gif::Repeat::Infinite)?;
         for f in frames {

@@ -1,4 +1,6 @@
-//! `raycost render`: the DETP irradiance of a quasi-static run, seen from the scene's camera.
+//! `raycost render`: the DETP radiosity of a quasi-static run (B = albedo·E/π from the DETP irradiance
+//! E), seen from the scene's camera. A picture with no lit pixel is written with a warning saying
+//! why (no surface in view, every surface of albedo 0, or no light reaching them).
 //!
 //! For each frame asked for, the quasi-static engine is advanced incrementally (frame 0 is a full
 //! trace; later frames are reached by [`QuasiStatic::step`], whose poses are pure functions of
@@ -113,11 +115,16 @@ fn config(plan: &Plan, point: usize) -> anyhow::Result<(QuasiStaticConfig, Optio
                     points_frame: None,
                     reference_photons: None,
                     predict: None,
+                    warm_repeats: 0,
                     feed: crate::detp::quasi_static::Feed::default(),
                     warnings: Vec::new(),
                 },
                 // Replica 0's photons of a `detp` run.
-                Some(crate::sample::rng::hash_key(&[d.seed, point as u64, 0])),
+                Some(crate::sample::rng::hash_key(&[
+                    d.seed,
+                    plan.spec.experiment.stream_point(point),
+                    0,
+                ])),
             ))
         }
         _ => Err(spec_error(
@@ -148,6 +155,33 @@ fn radiosity(view: &View, discs: &Discs, acc: &[i64], watts_per_unit: f64) -> Ve
             }
         })
         .collect()
+}
+
+/// Why a frame whose pixels `b` show no light at all is black, or `None` if some pixel is lit (an
+/// emitter, or a surface with B > 0).
+fn black(view: &View, b: &[Radiosity]) -> Option<String> {
+    if b.iter().any(|&x| x > 0.0) {
+        return None;
+    }
+    let albedos: Vec<f64> = view
+        .pixels
+        .iter()
+        .filter_map(|p| match *p {
+            Pixel::Disc { albedo, .. } => Some(albedo),
+            _ => None,
+        })
+        .collect();
+    Some(if albedos.is_empty() {
+        "the camera sees no surface (every pixel misses the scene): check [camera] eye, look_at and fov_deg".into()
+    } else if albedos.iter().all(|&a| a == 0.0) {
+        "every surface in view has albedo 0, and a pixel shows radiosity B = albedo·E/π, which is 0 \
+         whatever the irradiance E (give the surfaces an albedo > 0, or measure E with raycost run)"
+            .into()
+    } else {
+        "no light reached the surfaces in view (E = 0 at every pixel): do the lights face them, \
+         and are there enough detp.photons?"
+            .into()
+    })
 }
 
 fn default_out(plan: &Plan, frames: &[u32]) -> PathBuf {
@@ -201,6 +235,7 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
         times.trace_s
     )?;
     let mut shown: Vec<Frame> = Vec::new();
+    let mut black_frames: Vec<String> = Vec::new();
     for &f in &o.frames {
         if f != qs.frame {
             let t = Instant::now();
@@ -218,6 +253,15 @@ pub fn run(plan: &Plan, o: &RenderOptions) -> anyhow::Result<String> {
                 shown.extend(compare_frame(&qs, &view, mode, f, &mut times, &mut log)?);
             }
             None => shown.push(frame(&qs, &view, &cfg, o, f, &mut times, &mut log)?),
+        }
+        if let Some(why) = shown.last().and_then(|fr| black(&view, &fr.b)) {
+            black_frames.push(why);
+        }
+    }
+    // An all-black picture is almost always a scene or spec mistake: say why, once.
+    if black_frames.len() == o.frames.len() {
+        if let Some(why) = black_frames.first() {
+            eprintln!("warning: every pixel of the picture is black: {why}");
         }
     }
     let t = Instant::now();
@@ -432,6 +476,7 @@ fn encode_frames(
             data: &data,
             palette: pal,
         },
+        o.force,
     )?;
     let frames_txt: Vec<String> = o.frames.iter().map(u32::to_string).collect();
     writeln!(
@@ -442,11 +487,11 @@ fn encode_frames(
         frames_txt.join(", ")
     )?;
     if let Some(g) = &o.gif {
-        encode::write_gif(g, w, h, &images, &rgb, 50)?;
+        encode::write_gif(g, w, h, &images, &rgb, 50, o.force)?;
         writeln!(log, "wrote {} ({w}×{h}, {k} frame(s))", g.display())?;
     }
     if let Some(dpath) = &o.diff {
-        encode_diff(shown, dpath, (w, h), log)?;
+        encode_diff(shown, dpath, (w, h), o.force, log)?;
     }
     Ok(())
 }
@@ -456,6 +501,7 @@ fn encode_diff(
     shown: &[Frame],
     dpath: &Path,
     (w, h): (u32, u32),
+    force: bool,
     log: &mut String,
 ) -> anyhow::Result<()> {
     let red: Vec<u8> = (0..=255u8).flat_map(|i| [i, 0, 0]).collect();
@@ -489,6 +535,7 @@ fn encode_diff(
             data: &data,
             palette: Some(&red),
         },
+        force,
     )?;
     writeln!(
         log,

@@ -3,8 +3,9 @@
 //! its own codec; schema 1 files (written before the schema was versioned: no `schema` key, the
 //! commit under `[raycost]`, no CPU; a bench's under `[bench]`) are read key by key, and whatever
 //! they do not record is left `None`, which the page shows as "not recorded". A file that is not
-//! TOML, or a schema-2 file its codec refuses, or a schema this raycost does not know, is an error:
-//! the report would otherwise show wrong provenance.
+//! TOML, an empty file, TOML with none of either schema's tables, a schema-2 file its codec refuses,
+//! or a schema this raycost does not know, is an error: the report would otherwise show wrong
+//! provenance.
 
 use std::path::Path;
 
@@ -74,6 +75,21 @@ impl MetaView {
             .parse()
             .map_err(|e: toml::de::Error| format!("not TOML: {}", e.message().trim()))?;
         match table.get("schema") {
+            // A schema-1 file has at least one of its tables; an empty file (a run killed or a disk
+            // full while writing it, by a raycost older than the result-folder protocol) or
+            // unrelated TOML is not an older run.
+            None if !["raycost", "run", "bench", "spec"]
+                .iter()
+                .any(|t| table.get(*t).is_some_and(toml::Value::is_table)) =>
+            {
+                Err(if text.trim().is_empty() {
+                    "is empty: not the metadata of a finished run (a write cut short?); rerun or                      --resume the experiment, or move the folder out of the results"
+                        .to_string()
+                } else {
+                    "has none of raycost's metadata tables ([raycost], [run], [bench], [spec]):                      not the metadata of a run"
+                        .to_string()
+                })
+            }
             None => Ok(schema1(&table)),
             Some(toml::Value::Integer(1)) => Ok(schema1(&table)),
             Some(toml::Value::Integer(v)) if *v == i64::from(SCHEMA) => {
@@ -243,5 +259,13 @@ description = "a <b> test"
             .contains("schema 3"));
         // A schema-2 file missing required tables is refused by the codec, not half-shown.
         assert!(MetaView::parse("schema = 2").is_err());
+        // An empty file (a write cut short) is not an older schema (issue 26), nor is other TOML.
+        for empty in ["", "\n  \n"] {
+            let e = MetaView::parse(empty).expect_err("empty");
+            assert!(e.contains("is empty"), "{e}");
+        }
+        assert!(MetaView::parse("title = \"x\"\n")
+            .expect_err("not metadata")
+            .contains("none of raycost's metadata tables"));
     }
 }

@@ -149,6 +149,15 @@ pub fn run(opts: &ReportOptions) -> Result<PathBuf, Error> {
     std::fs::create_dir_all(&opts.out).map_err(|e| {
         OutputError::new(&opts.out, format!("cannot create the output folder: {e}"))
     })?;
+    // One report writes DIR at a time; the refusal to replace a page is decided under the lock.
+    let _lock = crate::output::folder::Lock::acquire(&opts.out, "index")?;
+    if index.exists() && !opts.force {
+        return Err(OutputError::new(
+            &index,
+            "exists; pass --force to replace it (nothing was written)",
+        )
+        .into());
+    }
     let canon = |p: &Path| {
         p.canonicalize()
             .map_err(|e| OutputError::new(p, format!("cannot resolve the path: {e}")))

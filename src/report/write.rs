@@ -1,14 +1,15 @@
-//! Puts the report's files in place so that no reader ever sees a half-written one: each file is
-//! written to a hidden temporary file in its final folder and renamed over its name (atomic on one
-//! file system). The images go first and `index.html` last, so a page on disk only ever refers to
+//! Puts the report's files in place so that no reader ever sees a half-written one: each file goes
+//! through the result-folder protocol ([`crate::output::folder::write_atomic`]: a new hidden
+//! temporary file in its final folder, fsync, rename over its name). The images go first and `index.html` last, so a page on disk only ever refers to
 //! images that are there. Nothing else in DIR is touched (an image of a folder since removed from
 //! RESULTS stays in `DIR/img/` until deleted by hand).
 
 use std::fs;
-use std::io::Write as _;
 use std::path::Path;
 
 use anyhow::Context;
+
+use crate::output::folder::write_atomic;
 
 use super::Copy;
 
@@ -21,29 +22,11 @@ pub fn write(out: &Path, html: &str, copies: &[Copy]) -> anyhow::Result<()> {
     atomic(&out.join("index.html"), html.as_bytes())
 }
 
-/// Writes `bytes` to `path` through a temporary file beside it and a rename.
+/// Writes `bytes` to `path` whole (the result-folder protocol: a new temporary file, fsync, rename).
 fn atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     let dir = path.parent().context("a file path has a folder")?;
     fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let res = (|| {
-        let mut f =
-            fs::File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
-        f.write_all(bytes)
-            .and_then(|()| f.sync_all())
-            .with_context(|| format!("cannot write {}", tmp.display()))?;
-        drop(f);
-        fs::rename(&tmp, path)
-            .with_context(|| format!("cannot rename {} to {}", tmp.display(), path.display()))
-    })();
-    if res.is_err() {
-        let _ = fs::remove_file(&tmp);
-    }
-    res
+    write_atomic(path, bytes).with_context(|| format!("cannot write {}", path.display()))
 }
 
 #[cfg(test)]
@@ -71,6 +54,6 @@ mod tests {
             .expect("list")
             .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
             .collect();
-        assert!(names.iter().all(|n| !n.ends_with(".tmp")), "{names:?}");
+        assert!(names.iter().all(|n| !n.contains(".tmp")), "{names:?}");
     }
 }

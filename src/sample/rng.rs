@@ -70,6 +70,8 @@ pub mod domain {
     pub const DIRECT: u64 = 0x6469_7265;
     /// Bootstrap resamples of an analysis: `[BOOTSTRAP, seed]`.
     pub const BOOTSTRAP: u64 = 0x626f_6f74;
+    /// The seed of a separate run of a spec (`experiment.run` ≥ 1): `[RUN, seed, run]`.
+    pub const RUN: u64 = 0x7275_6e73;
 }
 
 #[cfg(test)]
@@ -108,6 +110,7 @@ mod tests {
             domain::REFERENCE,
             domain::PATH_TRACE,
             domain::DIRECT,
+            domain::RUN,
             domain::BOOTSTRAP,
         ];
         for (i, a) in all.iter().enumerate() {

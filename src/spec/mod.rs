@@ -8,6 +8,7 @@
 //! back here to be located ([`Spec::locate`]): file, line, column and dotted key, or the `--set` flag
 //! that set the value.
 
+pub mod magnitude;
 pub mod sweep;
 
 pub use crate::error::InputError;

@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::error::InputError;
-use crate::toml_text::de::{from_tree, opt_count, KeyError};
+use crate::toml_text::de::{from_tree, opt_count, seed, KeyError};
 use crate::toml_text::document::Document;
 use crate::toml_text::find_key;
 
@@ -33,13 +33,31 @@ crate::spec_table! {
         kind: String = {required}, "string", "", "a kind of `raycost doc kinds`";
         /// Master seed of every random stream: the same spec and seed give the same measured
         /// columns on any machine, thread count or shard split.
-        seed: u64 = {default 1}, "integer", "", "0 … 2⁶⁴ − 1";
+        seed: u64 = {default 1} read seed, "integer", "", "0 … 2⁶³ − 1 (TOML's largest integer)";
+        /// Which separate run of the spec this is (`raycost run --run R` or `--repeat K` set it):
+        /// mixed into the seed, so runs are independent samples (run 0 keeps the seed as given).
+        run: u64 = {default 0}, "integer", "", "0 … 2⁶³ − 1 (TOML's largest integer)";
+        /// Common random numbers: every sweep point draws the same lines, photons, points and
+        /// scenes (random streams keyed by the seed, run and replica, not by the sweep point), so
+        /// points that differ only in an engine, a list mode or Q are compared on the same samples.
+        /// The quasi-static kind shares its streams across points either way.
+        common_random_numbers: bool = {default false}, "bool", "", "`true`, `false`";
         /// Rays traced per sweep point (DETP kinds count their rays in `detp.photons`, lines in
         /// `lines.count`).
         rays: Option<u64> = {absent "required by the grid kinds, unused by others"}
             read opt_count, "integer", "rays", "≥ 1 (grid: ≤ 10¹⁰)";
         /// Free text copied into `NAME.meta.toml`.
         description: Option<String> = {absent "none"}, "string", "", "any text";
+    }
+}
+
+/// A value as a message shows it: floats in their shortest form, in scientific notation when very
+/// large or small (`1e-200`, not 200 zeros), everything else as TOML writes it.
+pub fn show(v: &toml::Value) -> String {
+    match v {
+        toml::Value::Float(x) => format!("{x:?}"),
+        toml::Value::Array(a) => format!("[{}]", a.iter().map(show).collect::<Vec<_>>().join(", ")),
+        other => other.to_string(),
     }
 }
 
@@ -66,6 +84,28 @@ macro_rules! spec_file {
             }
         }
     };
+}
+
+impl RawExperiment {
+    /// The seed every random stream of this run is keyed by: `experiment.seed` for run 0, the seed
+    /// and the run index hashed together for the others (so runs are independent samples).
+    pub fn stream_seed(&self) -> u64 {
+        if self.run == 0 {
+            self.seed
+        } else {
+            crate::sample::rng::hash_key(&[crate::sample::rng::domain::RUN, self.seed, self.run])
+        }
+    }
+
+    /// The sweep point's part of every random stream's key: its index, or 0 for every point under
+    /// common random numbers.
+    pub fn stream_point(&self, index: usize) -> u64 {
+        if self.common_random_numbers {
+            0
+        } else {
+            index as u64
+        }
+    }
 }
 
 fn name<'de, D: serde::Deserializer<'de>>(d: D) -> Result<String, D::Error> {
@@ -292,7 +332,7 @@ impl Spec {
                 p.index,
                 p.params
                     .iter()
-                    .map(|(k, v)| format!("{k} = {v}"))
+                    .map(|(k, v)| format!("{k} = {}", show(v)))
                     .collect::<Vec<_>>()
                     .join(", ")
             ),

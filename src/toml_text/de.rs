@@ -173,6 +173,19 @@ pub fn count_or_zero<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
     }
 }
 
+/// A seed: an integer 0 … 2⁶³ − 1 (TOML integers stop at 2⁶³ − 1; a larger one is refused where
+/// the text is parsed, naming the key).
+pub fn seed<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
+    match toml::Value::deserialize(d)? {
+        toml::Value::Integer(i) if i >= 0 => Ok(i as u64),
+        other => Err(D::Error::custom(format!(
+            "got {}, expected an integer 0 … 2⁶³ − 1 = {}",
+            shown(&other),
+            i64::MAX
+        ))),
+    }
+}
+
 /// An optional whole number ≥ 0.
 pub fn opt_count_or_zero<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
     count_or_zero(d).map(Some)

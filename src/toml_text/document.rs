@@ -26,14 +26,32 @@ impl Document {
     /// Parses `text` (a syntax error comes back located by line and column). No key of a spec or
     /// scene takes a date or time, so one is refused here, where it is.
     pub fn parse(text: &str) -> Result<Document, TextError> {
-        let root: Spanned<Node> = toml::from_str(text).map_err(|e: toml::de::Error| TextError {
-            key: None,
-            at: e.span().map(|s| line_col(text, s.start)),
-            message: if e.message().contains(DATETIME) {
-                "a date or time is not a value any key takes".to_string()
-            } else {
-                e.message().trim().to_string()
-            },
+        let root: Spanned<Node> = toml::from_str(text).map_err(|e: toml::de::Error| {
+            let at = e.span().map(|s| line_col(text, s.start));
+            let message = e.message().trim().to_string();
+            match e.span().filter(|_| message.starts_with("number too large")) {
+                // Name the key and TOML's range rather than serde's "target type".
+                Some(span) => {
+                    let (key, number) = key_and_value_at(text, span.start);
+                    TextError {
+                        key,
+                        at,
+                        message: format!(
+                            "{number} is larger than TOML's largest integer, 2⁶³ − 1 = {}",
+                            i64::MAX
+                        ),
+                    }
+                }
+                None => TextError {
+                    key: None,
+                    at,
+                    message: if message.contains(DATETIME) {
+                        "a date or time is not a value any key takes".to_string()
+                    } else {
+                        message
+                    },
+                },
+            }
         })?;
         let mut places = HashMap::new();
         places.insert(String::new(), (None, root.span()));
@@ -156,6 +174,33 @@ impl<'de> Visitor<'de> for NodeVisitor {
         }
         Ok(Node::Table(entries))
     }
+}
+
+/// The dotted key assigned on the line holding byte `at` of a TOML text (its `[table]` header
+/// prefixed), and the value text from `at` to the end of that token.
+fn key_and_value_at(text: &str, at: usize) -> (Option<String>, String) {
+    let line_start = text[..at].rfind('\n').map_or(0, |i| i + 1);
+    let line = &text[line_start..];
+    let line = &line[..line.find('\n').unwrap_or(line.len())];
+    let number: String = text[at..]
+        .chars()
+        .take_while(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '+' | '-' | '.'))
+        .collect();
+    let Some((key, _)) = line.split_once('=') else {
+        return (None, number);
+    };
+    let table = text[..line_start]
+        .lines()
+        .rev()
+        .map(str::trim)
+        .find(|l| l.starts_with('[') && !l.starts_with("[["))
+        .map(|l| l.trim_matches(|c| c == '[' || c == ']').trim().to_string());
+    let key = key.trim().trim_matches('"');
+    let key = match table {
+        Some(t) if !t.is_empty() => format!("{t}.{key}"),
+        _ => key.to_string(),
+    };
+    (Some(key), number)
 }
 
 #[cfg(test)]

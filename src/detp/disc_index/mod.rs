@@ -10,11 +10,14 @@
 //!
 //! # Why the culling is conservative
 //! Let `B` be the box around all discs ([`Discs::bounds_all`], which holds every disc with a pad),
-//! `M = |B|_∞ + diag(B)` its coordinate scale and `P = 2⁻³⁰·M` the *index pad*: every box the
-//! indexes test (cells, octree nodes, the clip box) is enlarged by at least `P`. For a segment
-//! whose origin lies within `R = 2¹⁰·M` of B's centre, every quantity a traversal computes (a slab
-//! parameter, a clipped entry point, a DDA boundary) is a handful of f64 operations on magnitudes
-//! ≤ 4R, so it is off by at most ~100ε·4R = 400·2⁻⁵³·2¹⁰·M < 2⁻³³·M, eight times below P. A
+//! `M = min(|B|_∞, 4·diag(B)) + diag(B)` its scale (`|B|_∞ + diag(B)` whenever B holds the origin)
+//! and `P = max(2⁻³⁰·M, 2⁻⁴⁰·|B|_∞)` the *index pad*: every box the indexes test (cells, octree
+//! nodes, the clip box) is enlarged by at least `P`. For a segment whose origin lies within
+//! `R = 2¹⁰·M` of B's centre, every quantity a traversal computes (a slab parameter, a clipped
+//! entry point, a DDA boundary) is a handful of f64 operations on magnitudes ≤ |B|_∞ + 4R, so it is
+//! off by at most ~100ε·(|B|_∞ + 4R) < 2⁻⁴⁶·|B|_∞ + 2⁻³³·M, four times below P. (With
+//! `M = |B|_∞ + diag`, as before, a scene translated far from the origin got pads proportional to
+//! its translation — 93 mm for a Cornell box at 10¹¹ mm — and every cell listed every disc.) A
 //! crossing that [`crate::detp::disc::crosses`] accepts happens at a point x of the segment inside
 //! the disc, hence inside B and inside the box of every cell or node that lists the disc and
 //! contains x; the computed traversal passes within 2⁻³³·M of x, so it tests that box, enlarged by
@@ -349,10 +352,11 @@ impl Reach {
     pub fn new(discs: &Discs) -> Self {
         assert!(!discs.is_empty(), "an index needs at least one disc");
         let bounds = discs.bounds_all();
-        let m = bounds.magnitude() + (bounds.hi - bounds.lo).length();
+        let p = crate::lt::precision::Precision::of(&bounds);
+        let m = p.scale() + p.size;
         Self {
             bounds,
-            pad: m * (-30f64).exp2(),
+            pad: (m * (-30f64).exp2()).max(p.rounding()),
             center: (bounds.lo + bounds.hi) * 0.5,
             radius: m * 1024.0,
         }

@@ -756,6 +756,23 @@ impl QuasiStatic {
         out
     }
 
+    /// Warm timings of both dynamic-point engines on every live segment, for mover `mover`:
+    /// `repeats` rounds, each timing the sphere cache then the disc index (interleaved, so a slow
+    /// spell of the machine falls on both). Each entry is one round's (sphere cache, disc index)
+    /// seconds. Call after the engines ran once (the predictor's measured pass warms them).
+    pub fn warm_timings(&self, mover: usize, repeats: u64) -> Vec<[f64; 2]> {
+        let live = self.live_store();
+        (0..repeats)
+            .map(|_| {
+                [Used::SphereCache, Used::DiscIndex].map(|u| {
+                    let t = Instant::now();
+                    let _ = self.dynamic_sums_with(&live, false, Some(u), Some(mover));
+                    t.elapsed().as_secs_f64()
+                })
+            })
+            .collect()
+    }
+
     /// Irradiance at every sample point (order of [`Self::sums`]): power over πd².
     pub fn irradiance(&self) -> Vec<f64> {
         let area = std::f64::consts::PI * self.params.disc_radius.powi(2);

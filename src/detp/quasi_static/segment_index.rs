@@ -57,8 +57,10 @@ pub struct SegmentIndex {
 impl SegmentIndex {
     /// An empty index over `bounds` with about `cells` cells (cubic cells, at least 1 per axis).
     pub fn new(bounds: Aabb, cells: usize) -> Self {
-        let scale = bounds.magnitude() + (bounds.hi - bounds.lo).length();
-        let pad = 1e-6 * scale.max(1e-300);
+        // Relative to the box's own scale, not to its distance from the origin (a box translated
+        // far away got a pad as large as the translation allowed, and every cell every segment).
+        let p = crate::lt::precision::Precision::of(&bounds);
+        let pad = (1e-6 * (p.scale() + p.size)).max(p.rounding());
         let lo = bounds.lo - DVec3::splat(pad);
         let hi = bounds.hi + DVec3::splat(pad);
         let ext = hi - lo;

@@ -609,6 +609,13 @@ pub const POINT_DISC_RADIUS: Column = Column::value(
     Class::Measured,
     "the point's disc radius: d, or with detp.edge = \"clamp-radius\" its own radius (distance to the nearest other surface, clamped to [edge_min_radius·d, d]); its sum is divided by π·disc_radius²",
 );
+/// The point's distance to an edge.
+pub const POINT_EDGE_DISTANCE: Column = Column::value(
+    "edge_distance",
+    "length",
+    Class::Measured,
+    "s: the distance from the point to the nearest edge or other surface (not its own plane), capped at 2·d (2·d: none nearer); the paper's open-surface case is s ≥ d. NaN without a scene",
+);
 /// A baseline's estimate at the point.
 pub const POINT_BASELINE_E: Column = Column::value(
     "{}_e",
@@ -648,6 +655,7 @@ pub const POINTS_TABLE: Table<DetpConfig, PointRow> = Table::of(&[
     col(&NY, |_, r| r.normal.y.into()),
     col(&NZ, |_, r| r.normal.z.into()),
     col(&POINT_DISC_RADIUS, |_, r| r.disc_radius.into()),
+    col(&POINT_EDGE_DISTANCE, |_, r| r.edge_distance.into()),
     col(&POINT_IRRADIANCE_MEAN, |_, r| r.mean.into()),
     col(&POINT_IRRADIANCE_SE, |_, r| r.se.into()),
     col(&POINT_IRRADIANCE_REPLICA, |_, r| {

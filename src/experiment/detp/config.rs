@@ -11,7 +11,7 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use super::spec::{
-    DiscRadius, EdgeChoice, EngineChoice, FilterChoice, IndexChoice, ListModeChoice, OrderChoice,
+    DiscRadius, LengthUnit, EdgeChoice, EngineChoice, FilterChoice, IndexChoice, ListModeChoice, OrderChoice,
     PointSourceKind, PopRuleChoice, RawDetp, RaySource, EDGE_GAP, EDGE_MIN_RADIUS,
 };
 use crate::detp::disc_index::IndexKind;
@@ -221,6 +221,8 @@ impl DetpConfig {
     /// loading the scene and points files once through `inputs`.
     pub fn from_raw(seed: u64, d: &RawDetp, inputs: &mut Inputs) -> Result<Self, ConfigError> {
         let rays = Rays::from_raw(d, inputs)?;
+        let in_scene_units = in_scene_units(d, &rays);
+        let d = &in_scene_units;
         let points = Points::from_raw(d, &rays, inputs)?;
         check_engines(d, &rays)?;
         check_sizes(d, &points)?;
@@ -364,6 +366,26 @@ impl Points {
     }
 }
 
+/// `[detp]` with its lengths in the scene's units: with `length_unit = "root"`, the spacing, d and
+/// the index cell width times r_s (the half diagonal of the scene's bounds; 1 for lines).
+fn in_scene_units(d: &RawDetp, rays: &Rays) -> RawDetp {
+    let r = match (d.length_unit, rays) {
+        (LengthUnit::Scene, _) | (LengthUnit::Root, Rays::Lines) => return d.clone(),
+        (LengthUnit::Root, Rays::Scene(s)) => {
+            crate::detp::sphere_cache::root_sphere(&s.scene.bounds()).1
+        }
+    };
+    RawDetp {
+        point_spacing: d.point_spacing.map(|x| x * r),
+        disc_radius: match d.disc_radius {
+            DiscRadius::Value(x) => DiscRadius::Value(x * r),
+            DiscRadius::Spacing => DiscRadius::Spacing,
+        },
+        index_cell_width: d.index_cell_width.map(|x| x * r),
+        ..d.clone()
+    }
+}
+
 /// The spacing of surface points: `detp.point_spacing`, else 2d.
 fn surface_spacing(d: &RawDetp, rays: &Rays) -> Result<f64, ConfigError> {
     if matches!(rays, Rays::Lines) {
@@ -473,6 +495,13 @@ fn disc_radius(d: &RawDetp, points: &Points, rays: &Rays) -> Result<f64, ConfigE
             if matches!(d.disc_radius, DiscRadius::Spacing) { "detp.point_spacing" } else { "detp.disc_radius" },
             format!("d = {disc_radius:e} is larger than {}: a tangent disc must be small against the scene", reach.1),
         );
+    }
+    // Enough of f64 left for d and the scene at the scene's coordinates (issue 26).
+    if let Rays::Scene(s) = rays {
+        s.scene
+            .precision()
+            .check(disc_radius)
+            .or_else(|m| refuse("detp.scene", m))?;
     }
     Ok(disc_radius)
 }

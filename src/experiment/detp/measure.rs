@@ -75,6 +75,9 @@ pub struct PointRow {
     pub normal: DVec3,
     /// Its disc radius.
     pub disc_radius: f64,
+    /// Distance to the nearest edge or other surface, capped at [`EDGE_REACH`]·d (NaN without a
+    /// scene).
+    pub edge_distance: f64,
     /// DETP's irradiance (mean over replicas).
     pub mean: f64,
     /// Its standard error.
@@ -320,7 +323,7 @@ pub(super) fn measure(
         .flat_map(|e| e.levels(&pooled, &law))
         .collect();
     let rows = if cfg.write_points {
-        point_rows(r, &detp_points, &baselines)
+        point_rows(cfg, r, &detp_points, &baselines)
     } else {
         Vec::new()
     };
@@ -445,14 +448,26 @@ fn mean_irradiance(r: &Replicated) -> (Estimate, f64) {
     (mean_irr, exact_mean)
 }
 
+/// How far the points table looks for an edge, in d: the open-surface rule needs s ≥ d, and a
+/// little beyond shows how near the others are.
+pub const EDGE_REACH: f64 = 2.0;
+
 /// The points table: DETP's estimate and SE per disc, its value in each replica, then each
 /// baseline's.
 fn point_rows(
+    cfg: &DetpConfig,
     r: &Replicated,
     detp_points: &[(f64, f64)],
     baselines: &[(EngineChoice, Vec<(f64, f64)>)],
 ) -> Vec<PointRow> {
     let discs = &r.pts.discs;
+    let edge = cfg.scene().map_or_else(
+        || vec![f64::NAN; discs.len()],
+        |s| {
+            let reach = EDGE_REACH * cfg.disc_radius;
+            crate::detp::edge::edge_distances(&s.scene, &discs.centers, &discs.normals, reach)
+        },
+    );
     detp_points
         .iter()
         .enumerate()
@@ -461,6 +476,7 @@ fn point_rows(
             center: discs.centers[i],
             normal: discs.normals[i],
             disc_radius: discs.radius_of(i),
+            edge_distance: edge[i],
             mean,
             se,
             replicas: if r.irr.len() >= 2 {

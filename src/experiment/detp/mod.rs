@@ -385,7 +385,7 @@ impl Kind for DetpKind {
                 "belongs to kind quasi-static (it chooses the engine of moving frames); kind \"detp\" runs the engines listed in detp.engines",
             );
         }
-        DetpConfig::from_raw(raw.experiment.seed, &raw.detp, inputs)
+        DetpConfig::from_raw(raw.experiment.stream_seed(), &raw.detp, inputs)
     }
     fn describe(p: &DetpConfig) -> String {
         describe(p)
@@ -398,6 +398,7 @@ impl Kind for DetpKind {
             } else {
                 "lines"
             },
+            points: p.point_count(),
         }
     }
     fn memory(p: &DetpConfig, threads: usize) -> Memory {
@@ -415,7 +416,7 @@ impl Kind for DetpKind {
         ctx: &Context,
     ) -> Result<Output<DetpMeasured, DetpTables>, Error> {
         let replicated = match ctx.merged {
-            None => measure::replicate(p, ctx.index, ctx.progress, refs)?,
+            None => measure::replicate(p, ctx.stream_point, ctx.progress, refs)?,
             Some(parts) => {
                 let shards = parts
                     .iter()
@@ -423,7 +424,7 @@ impl Kind for DetpKind {
                     .collect::<Result<Vec<Vec<shards::ReplicaPart>>, _>>()
                     .map_err(|e| Error::usage(format!("a photon shard's part does not read: {e}")))?;
                 let total = shards::add_parts(p, &shards).map_err(Error::usage)?;
-                measure::replicate_merged(p, ctx.index, &total, ctx.progress, refs)?
+                measure::replicate_merged(p, ctx.stream_point, &total, ctx.progress, refs)?
             }
         };
         let (measured, levels, points, warnings) = measure::measure(p, &replicated);
@@ -455,7 +456,7 @@ impl Kind for DetpKind {
         (k, n): (u64, u64),
     ) -> Result<serde_json::Value, Error> {
         let ids = shards::photon_range(p.photons, k, n);
-        let parts = measure::replicate_part(p, ctx.index, ids, ctx.progress, refs)?;
+        let parts = measure::replicate_part(p, ctx.stream_point, ids, ctx.progress, refs)?;
         serde_json::to_value(parts).map_err(Error::internal)
     }
 }

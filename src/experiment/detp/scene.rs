@@ -12,7 +12,7 @@ use crate::detp::edge::{clamped_radii, clip_to_first_hit};
 use crate::detp::photon::trace_photon_range;
 use crate::detp::sphere_cache::root_sphere;
 use crate::detp::surface_points::open_surface_points;
-use crate::error::Error;
+use crate::error::{Error, InputError};
 use crate::geom::Aabb;
 use crate::lt::Scene;
 use crate::sample::rng::hash_key;
@@ -30,6 +30,9 @@ pub(super) fn points(cfg: &DetpConfig, scene: &Scene) -> Result<PointSet, Error>
             unreachable!("the spec check gives a scene surface or file points")
         }
     };
+    if centers.is_empty() {
+        return Err(no_open_points(cfg, covered));
+    }
     let mut discs = Discs::new(centers, normals, cfg.disc_radius).map_err(Error::internal)?;
     let start = Instant::now();
     if let Some(min) = cfg.edge.clamp_min() {
@@ -49,6 +52,25 @@ pub(super) fn points(cfg: &DetpConfig, scene: &Scene) -> Result<PointSet, Error>
         edge_s,
         covered,
     })
+}
+
+/// Every lattice point covered (exactly coincident surfaces cover each other: a floor given twice):
+/// nothing to measure, said by what covers what rather than an engine's panic on zero discs.
+fn no_open_points(cfg: &DetpConfig, covered: Option<u64>) -> Error {
+    let file = cfg
+        .scene()
+        .map_or_else(String::new, |s| s.path.display().to_string());
+    let why = match covered {
+        Some(k) => format!(
+            "all {k} surface points are covered by other geometry (a surface within the contact \
+             distance along each point's normal, or inside a solid); exactly coincident surfaces \
+             cover each other: remove the duplicate, or give points with point_source = \"file\""
+        ),
+        None => "the points file holds no points".to_string(),
+    };
+    InputError::new(file, format!("no sample points to measure: {why}"))
+        .key("detp.scene")
+        .into()
 }
 
 /// The photons `ids` of one replica (all of them unless `--photon-shard` splits them), and a root sphere that holds the scene and every disc.

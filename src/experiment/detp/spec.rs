@@ -44,6 +44,11 @@ crate::spec_table! {
         /// The sample points, relative to the spec's folder (normals need not be unit length).
         points_file: Option<String> = {absent "none; required with `point_source = \"file\"`"},
             "string (path)", "", "a CSV with header `x,y,z,nx,ny,nz`";
+        /// The unit of `point_spacing`, `disc_radius` and `index_cell_width`: the scene's own,
+        /// or r_s, the radius of the sphere around the scene's bounds (so one sweep over scenes of
+        /// different sizes keeps the same points per r_s²; lines: r_s = 1 either way).
+        length_unit: LengthUnit = {default LengthUnit::Scene}, "string", "",
+            "`\"scene\"`, `\"root\"`";
         /// Spacing of surface points.
         point_spacing: Option<f64> = {absent "2·d (the paper's optimum)"} read opt_positive,
             "number", "length", "> 0";
@@ -133,6 +138,10 @@ use crate::choice;
 choice!(
     /// Where the rays come from.
     RaySource { Lines => "lines", Scene => "scene" } default Lines
+);
+choice!(
+    /// The unit of `[detp]`'s lengths.
+    LengthUnit { Scene => "scene", Root => "root" } default Scene
 );
 choice!(
     /// Where the sample points come from.

@@ -244,7 +244,7 @@ impl GridConfig {
         let sc = raw.scaling.clone().unwrap_or_default();
         Ok(Self {
             variant,
-            seed: raw.experiment.seed,
+            seed: raw.experiment.stream_seed(),
             rays,
             intensity: raw.scene.intensity,
             classes: scene.classes,

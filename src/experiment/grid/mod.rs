@@ -122,6 +122,7 @@ impl<V: GridVariant> Kind for Grid<V> {
         Work {
             units: p.rays,
             unit: "rays",
+            points: 1,
         }
     }
     fn memory(p: &GridConfig, threads: usize) -> Memory {
@@ -145,7 +146,7 @@ impl<V: GridVariant> Kind for Grid<V> {
         s: &V::Shared,
         ctx: &Context,
     ) -> Result<Output<GridMeasured, GridTables>, Error> {
-        let traced = run::run_point(p, ctx.index, ctx.threads, ctx.progress);
+        let traced = run::run_point(p, ctx.stream_point, ctx.threads, ctx.progress);
         let (measured, hist) = measure::measure(p, &traced, V::machine(s));
         let checks = measured
             .scaling

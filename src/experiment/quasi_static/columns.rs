@@ -332,6 +332,18 @@ pub const TIMED_RULE_PICK_RIGHT: Column = timing(
     "objects",
     "objects whose Theorem 2 rule pick was the faster engine",
 );
+/// The predictor's pick in each replica.
+pub const PICK_REPLICA: Column = timing(
+    "pick_replica_{}",
+    "",
+    "the engine the predictor picked for the first object in replica {} (\"sphere-cache\" or \"disc-index\")",
+);
+/// Warm seconds of each engine.
+pub const WARM_S: Column = Column::timed_estimate(
+    "warm_{}_s",
+    "s",
+    "the engine's seconds on every segment for the first object's points, timed warm dynamic.warm_repeats times per replica, the engines interleaved (one cluster per replica)",
+);
 /// Error against a reference.
 pub const IRRADIANCE_RMSE: Column = measured(
     "irradiance_rmse",
@@ -454,6 +466,21 @@ pub const MAIN: Table<QuasiStaticConfig, QsMeasured> = Table {
         }),
         col(&TIMED_RULE_PICK_RIGHT, |_, m| {
             m.predictor.map(|p| p.rule_pick_right).into()
+        }),
+        col(&PICK_REPLICA, |_, m| {
+            Cell::members(
+                m.picks
+                    .iter()
+                    .enumerate()
+                    .map(|(k, u)| (k.to_string(), u.as_str())),
+            )
+        }),
+        col(&WARM_S, |_, m| match m.warm {
+            Some([sc, di]) => Cell::members([
+                ("sphere_cache".to_string(), sc),
+                ("disc_index".to_string(), di),
+            ]),
+            None => Cell::Absent,
         }),
         col(&IRRADIANCE_RMSE, |_, m| m.reference.map(|r| r.0).into()),
         col(&REFERENCE_PHOTONS, |_, m| m.reference.map(|r| r.2).into()),
@@ -637,6 +664,12 @@ pub mod frame {
         timing("dynamic_s", "s", "seconds gathering the dynamic points").decided_by_timing();
     /// Frame seconds.
     pub const FRAME_S: Column = timing("frame_s", "s", "seconds of the frame");
+    /// The static index's build in one replica.
+    pub const STATIC_INDEX_BUILD_S: Column = timing(
+        "static_index_build_s",
+        "s",
+        "seconds this replica spent building the static points' index (frame 0's row; NaN on the others)",
+    );
     /// Full recalculation seconds.
     pub const FULL_FRAME_S: Column = timing(
         "full_frame_s",
@@ -714,6 +747,9 @@ pub const FRAMES_TABLE: Table<QuasiStaticConfig, FrameRow> = Table::of(&[
     col(&frame::STATIC_S, |_, r| r.stats.static_s.into()),
     col(&frame::DYNAMIC_S, |_, r| r.stats.dynamic_s.into()),
     col(&frame::FRAME_S, |_, r| r.stats.frame_s.into()),
+    col(&frame::STATIC_INDEX_BUILD_S, |_, r| {
+        r.static_index_build_s.unwrap_or(f64::NAN).into()
+    }),
     col(&frame::FULL_FRAME_S, |_, r| {
         r.full.map_or(f64::NAN, |f| f.0).into()
     }),

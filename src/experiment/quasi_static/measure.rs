@@ -9,7 +9,7 @@ use super::shards::{Facts, PointsAt, ReplicaPart};
 use super::spec::QuasiStaticConfig;
 use super::Predictions;
 use crate::detp::fixed::PowerScale;
-use crate::detp::quasi_static::{FrameStats, Prediction};
+use crate::detp::quasi_static::{FrameStats, Prediction, Used};
 use crate::stats::{ClusteredMean, Estimate};
 use crate::theory::detp as th;
 
@@ -18,6 +18,9 @@ use crate::theory::detp as th;
 pub(super) struct Extras {
     /// The predictor's run, where asked.
     pub(super) predictions: Option<Predictions>,
+    /// Warm timings of both engines on every segment for the first object, round by round
+    /// (`dynamic.warm_repeats`).
+    pub(super) warm: Vec<[f64; 2]>,
     /// The relative RMSE of the last frame against a high-photon reference and its seconds.
     pub(super) reference: Option<(f64, f64)>,
 }
@@ -87,6 +90,7 @@ fn per_frame(cfg: &QuasiStaticConfig, parts: &[ReplicaPart]) -> PerFrame {
             acc.rows.push(FrameRow {
                 replica,
                 stats: fp.stats.clone(),
+                static_index_build_s: (f == 0).then_some(part.static_index_build_s),
                 full,
             });
         }
@@ -127,6 +131,11 @@ pub struct QsMeasured {
     pub full_checked: u64,
     /// The predictor's figures (replica 0), where asked.
     pub predictor: Option<Predictor>,
+    /// The engine the predictor picked for the first object, replica by replica.
+    pub picks: Vec<Used>,
+    /// Warm seconds of each engine (sphere cache, disc index) on every segment for the first
+    /// object: one cluster per replica (the mean of its rounds), where timed.
+    pub warm: Option<[Estimate; 2]>,
     /// Against a reference run: (relative RMSE, seconds, photons), means over replicas.
     pub reference: Option<(f64, f64, u64)>,
 }
@@ -174,6 +183,9 @@ pub struct FrameRow {
     pub replica: u64,
     /// The frame's counts and seconds.
     pub stats: FrameStats,
+    /// Frame 0's row: the seconds this replica spent building the static points' index (an
+    /// amortisation needs each replica's build, not only their mean).
+    pub static_index_build_s: Option<f64>,
     /// A checked frame: (seconds of the full recalculation, points differing).
     pub full: Option<(f64, u64)>,
 }
@@ -238,6 +250,11 @@ pub(super) fn measure(
                     .filter(|(p, r)| p.best == **r)
                     .count(),
             }),
+        picks: extras
+            .iter()
+            .filter_map(|r| r.predictions.as_ref().map(|p| p.1[0].pick))
+            .collect(),
+        warm: warm_seconds(extras),
         reference: reference(&extras[0]).map(|_| {
             let of = |i: usize| {
                 extras.iter().map(|e| reference(e).map_or(f64::NAN, |x| [x.0, x.1][i]))
@@ -248,6 +265,21 @@ pub(super) fn measure(
         }),
     };
     (m, acc.rows)
+}
+
+/// Each engine's warm seconds, one cluster per replica (its rounds pooled), where any were timed.
+fn warm_seconds(runs: &[Extras]) -> Option<[Estimate; 2]> {
+    if runs.iter().all(|r| r.warm.is_empty()) {
+        return None;
+    }
+    Some([0, 1].map(|e| {
+        let mut m = ClusteredMean::default();
+        for r in runs {
+            r.warm.iter().for_each(|w| m.push(w[e]));
+            m.end_batch();
+        }
+        m.estimate()
+    }))
 }
 
 /// The irradiance at every sample point at one frame, with its Poisson standard error

@@ -130,6 +130,11 @@ fn trace_replica(
         let p = qs.predict_and_pick(fraction, cfg.engine == DynamicEngine::Predicted);
         (fraction, p, rule)
     });
+    let warm = if predictions.is_some() && !qs.scene.movers.is_empty() {
+        qs.warm_timings(0, cfg.warm_repeats)
+    } else {
+        Vec::new()
+    };
     let n_r = qs.live_segments() as u64;
     let points_frame = cfg.points_frame.unwrap_or(cfg.frames - 1);
     let write_points = cfg.detp.write_points && replica == 0;
@@ -173,6 +178,7 @@ fn trace_replica(
         part,
         Extras {
             predictions,
+            warm,
             reference,
         },
     )
@@ -316,6 +322,7 @@ impl Kind for QuasiStaticKind {
         Work {
             units: p.detp.photons * u64::from(p.frames) * p.detp.replicas.max(1),
             unit: "photon-frames",
+            points: p.detp.point_count(),
         }
     }
     /// DETP's needs, and the segment index of the incremental frames: about segments/64 cubic cells

@@ -50,6 +50,10 @@ crate::spec_table! {
         /// cost at frame 0.
         predict: Option<f64> = {absent "0.05 with `detp.engine = \"predicted\"`, else none"}
             read opt_fraction, "number", "", "(0, 1]";
+        /// With the predictor: each replica also times both engines warm on every segment this
+        /// many times, interleaved (`warm_sphere_cache_s`, `warm_disc_index_s`: the faster engine
+        /// the pick is judged against); 0: only the predictor's one measured pass.
+        warm_repeats: u64 = {default 0} read count_or_zero, "integer", "", "≥ 0 (needs the predictor)";
         /// Which segments the dynamic points' engines get: Theorem 2's model (the sphere cache
         /// the segment index's answer, the disc index every segment), both the segment index's
         /// answer, or both every segment.
@@ -113,6 +117,8 @@ pub struct QuasiStaticConfig {
     pub reference_photons: Option<u64>,
     /// The predictor's fraction of photons (set, or 0.05 when the engine is "predicted").
     pub predict: Option<f64>,
+    /// Warm timings of both engines per replica, with the predictor.
+    pub warm_repeats: u64,
     /// Which segments the dynamic points' engines get.
     pub feed: Feed,
     /// Counted warnings about the scene and its motion (shown by `check`, printed and counted by
@@ -131,7 +137,7 @@ impl QuasiStaticConfig {
             );
         };
         let d = &raw.detp;
-        let detp = DetpConfig::from_raw(raw.experiment.seed, d, inputs)?;
+        let detp = DetpConfig::from_raw(raw.experiment.stream_seed(), d, inputs)?;
         let Rays::Scene(file) = &detp.rays else {
             return refuse(
                 "detp.source",
@@ -167,6 +173,21 @@ impl QuasiStaticConfig {
         let mut warnings = check_motion(&scene, dy.frames as u32, blame)?;
         warnings.extend(scene.warnings.iter().cloned());
         check_lights(&scene)?;
+        let predict = dy
+            .predict
+            .or((d.engine == Some(DynamicEngine::Predicted)).then_some(0.05));
+        if dy.warm_repeats > 0 && predict.is_none() {
+            return refuse(
+                "dynamic.warm_repeats",
+                "times the engines beside the predictor: set dynamic.predict or detp.engine = \"predicted\"",
+            );
+        }
+        if dy.warm_repeats > 1000 {
+            return refuse(
+                "dynamic.warm_repeats",
+                format!("got {}, at most 1000", dy.warm_repeats),
+            );
+        }
         Ok(Self {
             detp,
             scene,
@@ -183,9 +204,8 @@ impl QuasiStaticConfig {
                 FeedChoice::SegmentIndex => Feed::SegmentIndex,
                 FeedChoice::All => Feed::All,
             },
-            predict: dy
-                .predict
-                .or((d.engine == Some(DynamicEngine::Predicted)).then_some(0.05)),
+            predict,
+            warm_repeats: dy.warm_repeats,
             warnings,
         })
     }

@@ -72,7 +72,22 @@ pub(super) struct Loader {
     pub(super) material: Option<u32>,
     pub(super) counts: Counts,
     pub(super) cache: HashMap<PathBuf, Rc<[u8]>>,
+    /// Inclusions read so far, repeats counted (bounded by [`MAX_INCLUSIONS`]).
+    pub(super) inclusions: u64,
+    /// Bytes of scene text read so far, top file and every inclusion, repeats counted (bounded by
+    /// [`MAX_SCENE_BYTES`]).
+    pub(super) bytes_read: u64,
 }
+
+/// Inclusions (`i` directives followed, a file included twice counted twice) one scene may make.
+/// BART's robot makes 835 (the kitchen 186, the museum 6); a file that includes the next twice,
+/// 40 deep, makes 2⁴¹ — without a bound it ran for ever, growing past 1.4 GB.
+pub(super) const MAX_INCLUSIONS: u64 = 100_000;
+
+/// Bytes of scene text one scene may expand to, its includes counted every time they are included.
+/// BART's robot expands to 11.2 MB (the kitchen 5.8 MB); 128 MiB of text is a few million
+/// triangles, a few hundred MB once built.
+pub(super) const MAX_SCENE_BYTES: u64 = 128 << 20;
 
 /// Counts above this are refused (a corrupt count would otherwise allocate wildly).
 pub(super) const MAX_COUNT: usize = 1 << 26;
@@ -106,6 +121,8 @@ impl Loader {
             material: None,
             counts: Counts::default(),
             cache: HashMap::new(),
+            inclusions: 0,
+            bytes_read: 0,
         }
     }
 

@@ -228,8 +228,14 @@ impl AffScene {
         } else {
             (0.0, 0.0)
         };
-        let mut triangles = self.triangles;
+        let (mut triangles, duplicates) = super::shapes::without_duplicates(self.triangles);
         let mut warnings = self.warnings;
+        if duplicates > 0 {
+            warnings.push(format!(
+                "{duplicates} duplicate triangle(s) skipped (the same three vertices, wound the same \
+                 way and of the same material, as another)"
+            ));
+        }
         if !self.patches.is_empty() {
             warnings.push(format!(
                 "{} animated triangle(s) (tpa) deform rather than move rigidly: frozen at t = {start}",
@@ -585,6 +591,51 @@ mod tests {
         std::fs::write(sub.join("leaf.aff"), "i 0 mid.aff\n").unwrap();
         let e = load_aff(&dir.path().join("top.aff")).unwrap_err();
         assert!(e.message.contains("cycle"), "{e}");
+    }
+
+    /// Issue 26: each file includes the next twice, 40 deep (2⁴¹ inclusions of a few bytes each), and
+    /// one large file included from many places: both refused in milliseconds with the bound named.
+    #[test]
+    fn include_fan_out_and_expanded_size_are_bounded() {
+        let dir = tempfile::tempdir().unwrap();
+        for i in 0..40 {
+            std::fs::write(
+                dir.path().join(format!("f{i}.aff")),
+                format!("i 0 f{n}.aff\ni 0 f{n}.aff\n", n = i + 1),
+            )
+            .unwrap();
+        }
+        std::fs::write(dir.path().join("f40.aff"), "p 3 0 0 0 1 0 0 0 1 0\n").unwrap();
+        let t = std::time::Instant::now();
+        let e = load_aff(&dir.path().join("f0.aff")).unwrap_err();
+        assert!(
+            e.message.contains("fan-out") && e.message.contains("100000"),
+            "{e}"
+        );
+        assert!(t.elapsed().as_secs() < 10, "{:?}", t.elapsed());
+        // A 2 MiB file included 100 times from one file: under the inclusion bound, over the size one.
+        let big = "% padding\n".repeat(200_000);
+        std::fs::write(dir.path().join("big.aff"), big).unwrap();
+        std::fs::write(dir.path().join("top.aff"), "i 0 big.aff\n".repeat(100)).unwrap();
+        let e = load_aff(&dir.path().join("top.aff")).unwrap_err();
+        assert!(
+            e.message.contains("MiB") && e.message.contains("fan-out"),
+            "{e}"
+        );
+        // A FIFO is refused by what it is, not called missing.
+        #[cfg(unix)]
+        {
+            let fifo = dir.path().join("pipe.aff");
+            if std::process::Command::new("mkfifo")
+                .arg(&fifo)
+                .status()
+                .is_ok_and(|s| s.success())
+            {
+                std::fs::write(dir.path().join("p.aff"), "i 0 pipe.aff\n").unwrap();
+                let e = load_aff(&dir.path().join("p.aff")).unwrap_err();
+                assert!(e.message.contains("FIFO"), "{e}");
+            }
+        }
     }
 
     #[test]

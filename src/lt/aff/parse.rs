@@ -7,7 +7,10 @@ use std::rc::Rc;
 
 use glam::{DAffine3, DVec3};
 
-use super::build::{mean, trs, Frame, Link, Loader, PartBuild, PatchBuild, MAX_COUNT};
+use super::build::{
+    mean, trs, Frame, Link, Loader, PartBuild, PatchBuild, MAX_COUNT, MAX_INCLUSIONS,
+    MAX_SCENE_BYTES,
+};
 use super::lexer::{Ctx, Lexer, Tok};
 use crate::error::InputError;
 use crate::lt::spline::{axis_angle_deg, KbKey, KbTrack, KbTransform};
@@ -29,6 +32,19 @@ impl Loader {
             key: "",
             at: (1, 1),
         };
+        self.bytes_read += bytes.len() as u64;
+        if self.bytes_read > MAX_SCENE_BYTES {
+            return Err(cx.err_at(
+                (1, 1),
+                format!(
+                    "the scene expands to more than {} MiB of text, includes counted each time they \
+                     are included ({} inclusions so far): an include fan-out? (at most {} MiB)",
+                    MAX_SCENE_BYTES >> 20,
+                    self.inclusions,
+                    MAX_SCENE_BYTES >> 20
+                ),
+            ));
+        }
         let base = self.stack.len();
         let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
         while let Some(t) = cx.lx.next() {
@@ -351,6 +367,12 @@ impl Loader {
         let f = cx.tok("the file to include")?;
         let fname = f.show();
         let candidates = [dir.join(&fname), self.root.join(&fname)];
+        // The first that exists; a folder, FIFO or device there is refused by what it is.
+        if let Some(p) = candidates.iter().find(|p| p.exists()) {
+            if let Err(why) = crate::error::regular_input(p) {
+                return Err(cx.err_at((f.line, f.col), format!("include `{}`: {why}", p.display())));
+            }
+        }
         let Some(p) = candidates.iter().find(|p| p.is_file()) else {
             return Err(cx.err_at(
                 (f.line, f.col),
@@ -361,6 +383,16 @@ impl Loader {
                 ),
             ));
         };
+        self.inclusions += 1;
+        if self.inclusions > MAX_INCLUSIONS {
+            return Err(cx.err_at(
+                (f.line, f.col),
+                format!(
+                    "more than {MAX_INCLUSIONS} inclusions, repeats counted: an include fan-out? \
+                     (`{fname}` and the files it includes are included over and over)"
+                ),
+            ));
+        }
         if depth + 1 > MAX_INCLUDE_DEPTH {
             return Err(cx.err_at(
                 (f.line, f.col),
