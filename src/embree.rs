@@ -96,6 +96,31 @@ mod ffi {
         }
     }
 
+    /// One `rtcIntersect1` of `ray` in `scene` with an empty hit record: the nearest hit's
+    /// (`primID`, f32 `tfar`), if any.
+    ///
+    /// # Safety
+    /// `scene` must be a committed scene.
+    pub unsafe fn intersect1(scene: RTCScene, ray: RTCRay) -> Option<(u32, f32)> {
+        let mut ctx = RTCIntersectContext::new();
+        let mut rh = RTCRayHit {
+            ray,
+            hit: RTCHit {
+                Ng_x: 0.0,
+                Ng_y: 0.0,
+                Ng_z: 0.0,
+                u: 0.0,
+                v: 0.0,
+                primID: RTC_INVALID_GEOMETRY_ID,
+                geomID: RTC_INVALID_GEOMETRY_ID,
+                instID: [RTC_INVALID_GEOMETRY_ID],
+            },
+        };
+        // SAFETY: the caller's scene, an initialised context and a fully initialised ray/hit.
+        unsafe { rtcIntersect1(scene, &mut ctx, &mut rh) };
+        (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID).then_some((rh.hit.primID, rh.ray.tfar))
+    }
+
     /// `struct RTCRay`.
     #[repr(C, align(16))]
     #[derive(Clone, Copy)]
@@ -306,37 +331,22 @@ impl EmbreeScene {
     /// One `rtcIntersect1` call over `[tnear, ∞)`: Embree's nearest hit (`primID`, f32 `t`).
     #[inline]
     fn trace1(&self, ray: &Ray, tnear: f32) -> Option<(usize, f32)> {
-        let mut ctx = ffi::RTCIntersectContext::new();
-        let mut rh = ffi::RTCRayHit {
-            ray: ffi::RTCRay {
-                org_x: ray.o.x as f32,
-                org_y: ray.o.y as f32,
-                org_z: ray.o.z as f32,
-                tnear,
-                dir_x: ray.d.x as f32,
-                dir_y: ray.d.y as f32,
-                dir_z: ray.d.z as f32,
-                time: 0.0,
-                tfar: f32::INFINITY,
-                mask: u32::MAX,
-                id: 0,
-                flags: 0,
-            },
-            hit: ffi::RTCHit {
-                Ng_x: 0.0,
-                Ng_y: 0.0,
-                Ng_z: 0.0,
-                u: 0.0,
-                v: 0.0,
-                primID: ffi::RTC_INVALID_GEOMETRY_ID,
-                geomID: ffi::RTC_INVALID_GEOMETRY_ID,
-                instID: [ffi::RTC_INVALID_GEOMETRY_ID],
-            },
+        let r = ffi::RTCRay {
+            org_x: ray.o.x as f32,
+            org_y: ray.o.y as f32,
+            org_z: ray.o.z as f32,
+            tnear,
+            dir_x: ray.d.x as f32,
+            dir_y: ray.d.y as f32,
+            dir_z: ray.d.z as f32,
+            time: 0.0,
+            tfar: f32::INFINITY,
+            mask: u32::MAX,
+            id: 0,
+            flags: 0,
         };
-        // SAFETY: a committed scene, an initialised context and a fully initialised ray/hit.
-        unsafe { ffi::rtcIntersect1(self.scene, &mut ctx, &mut rh) };
-        (rh.hit.geomID != ffi::RTC_INVALID_GEOMETRY_ID)
-            .then_some((rh.hit.primID as usize, rh.ray.tfar))
+        // SAFETY: a committed scene.
+        unsafe { ffi::intersect1(self.scene, r) }.map(|(i, t)| (i as usize, t))
     }
 
     /// [`first_hit`](Self::first_hit) for every ray, `out[i]` for `rays[i]`.

@@ -137,24 +137,9 @@ impl<'s> EmbreeTriangles<'s> {
 
     /// One `rtcIntersect1`: the nearest triangle hit in [t_min, limit] (index, f32 t).
     fn intersect(&self, o: DVec3, d: DVec3, t_min: f64, limit: f64) -> Option<(u32, f64)> {
-        let mut ctx = ffi::RTCIntersectContext::new();
-        let mut rh = ffi::RTCRayHit {
-            ray: self.ray(o, d, t_min, limit),
-            hit: ffi::RTCHit {
-                Ng_x: 0.0,
-                Ng_y: 0.0,
-                Ng_z: 0.0,
-                u: 0.0,
-                v: 0.0,
-                primID: ffi::RTC_INVALID_GEOMETRY_ID,
-                geomID: ffi::RTC_INVALID_GEOMETRY_ID,
-                instID: [ffi::RTC_INVALID_GEOMETRY_ID],
-            },
-        };
-        // SAFETY: a committed scene, an initialised context and a fully initialised ray/hit.
-        unsafe { ffi::rtcIntersect1(self.scene, &mut ctx, &mut rh) };
-        (rh.hit.geomID != ffi::RTC_INVALID_GEOMETRY_ID)
-            .then_some((rh.hit.primID, f64::from(rh.ray.tfar)))
+        // SAFETY: a committed scene.
+        unsafe { ffi::intersect1(self.scene, self.ray(o, d, t_min, limit)) }
+            .map(|(i, t)| (i, f64::from(t)))
     }
 
     /// The nearest sphere root in (t_min, limit), in f64 as the scene tests spheres.
