@@ -104,7 +104,7 @@ fn config(plan: &Plan, point: usize) -> anyhow::Result<(QuasiStaticConfig, Optio
                     scene: file.scene.clone(),
                     // The engine's own sample points are not shown; any spacing will do.
                     spacing: match d.points {
-                        Points::Surface(s) => s,
+                        Points::Surface(s) => s.spacing,
                         _ => 4.0 * d.disc_radius,
                     },
                     frames: 1,

@@ -7,7 +7,9 @@
 //! as the scene, leave the scene's box at any frame, or overlap another object.
 
 use crate::detp::quasi_static::Feed;
-use crate::experiment::detp::{DetpConfig, DynamicEngine, EngineChoice, Points, RawDetp, Rays};
+use crate::experiment::detp::{
+    DetpConfig, DynamicEngine, EngineChoice, Points, RawDetp, Rays, SurfacePoints,
+};
 use crate::experiment::inputs::{Inputs, SceneFile};
 use crate::experiment::kind::{refuse, ConfigError};
 use crate::lt::Scene;
@@ -144,12 +146,18 @@ impl QuasiStaticConfig {
                 "kind quasi-static traces photons in a scene: set detp.source = \"scene\"",
             );
         };
-        let Points::Surface(spacing) = detp.points else {
+        let Points::Surface(SurfacePoints { spacing, keep }) = detp.points else {
             return refuse(
                 "detp.point_source",
                 "kind quasi-static puts its points on the scene's surfaces (\"surface\")",
             );
         };
+        if keep.is_some() {
+            return refuse(
+                "detp.points",
+                "kind quasi-static keeps every lattice point of its surfaces (static and dynamic ones move apart): give point_spacing instead of a count",
+            );
+        }
         if detp.edge != crate::detp::edge::EdgeMode::Paper {
             return refuse(
                 "detp.edge",
