@@ -118,6 +118,7 @@ fn config(plan: &Plan, point: usize) -> anyhow::Result<(QuasiStaticConfig, Optio
                     warm_repeats: 0,
                     feed: crate::detp::quasi_static::Feed::default(),
                     warnings: Vec::new(),
+                    lines: false,
                 },
                 // Replica 0's photons of a `detp` run.
                 Some(crate::sample::rng::hash_key(&[

@@ -36,7 +36,7 @@ use self::spec::QuasiStaticSpec;
 use super::detp::DynamicEngine;
 use super::inputs::Inputs;
 use super::kind::{Check, ConfigError, Context, Kind, Memory, Output, Rate, Table, Work};
-use crate::detp::quasi_static::{Engine, FrameStats, Params, QuasiStatic, Used};
+use crate::detp::quasi_static::{Engine, FrameStats, Params, QuasiStatic, RaySource, Used};
 use crate::error::Error;
 use crate::theory::detp as th;
 
@@ -104,7 +104,13 @@ fn start_photons(
             area / (cfg.spacing * cfg.spacing)
         })
         .unwrap_or(1.0);
-    QuasiStatic::start_photons(cfg.scene.clone(), params(cfg, n_d, replica), ids)
+    let source = if cfg.lines {
+        let set = super::detp::points(&cfg.detp, 0).expect("points uniform in the ball are finite");
+        RaySource::Lines(set.discs)
+    } else {
+        RaySource::Photons
+    };
+    QuasiStatic::start_from(cfg.scene.clone(), params(cfg, n_d, replica), ids, source)
 }
 
 /// The predictor's run (engine "predicted" or `dynamic.predict`): its fraction, its predictions per
