@@ -99,7 +99,9 @@ fn more_surface_points_than_the_lattice_holds_are_refused() {
         "{stderr}"
     );
     assert!(
-        files_below(&out).iter().all(|p| !p.to_string_lossy().ends_with(".csv")),
+        files_below(&out)
+            .iter()
+            .all(|p| !p.to_string_lossy().ends_with(".csv")),
         "no table written: {:?}",
         files_below(&out)
     );

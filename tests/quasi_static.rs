@@ -266,7 +266,10 @@ ratio = 0.05
             assert!((num("retraced_rays_theory") - f_r).abs() < 1e-9);
             // 8 frames of ~100 lines each: Poisson SE of the mean ≈ √(100/8) ≈ 3.5.
             let new = num("rays_meeting_object_mean");
-            assert!((new - f_r).abs() < 5.0 * (f_r / 8.0).sqrt(), "{new} vs {f_r}");
+            assert!(
+                (new - f_r).abs() < 5.0 * (f_r / 8.0).sqrt(),
+                "{new} vs {f_r}"
+            );
             let both = num("retraced_rays_mean");
             assert!(
                 (both - 2.0 * f_r).abs() < 5.0 * (2.0 * f_r / 8.0).sqrt(),

@@ -115,6 +115,9 @@ position = [0.0, 0.0, 0.0]
 power = 1.0
 "#
     );
-    Scene::parse(&text, std::path::Path::new("(lines: a sphere circling in the unit ball)"))
-        .expect("the lines' scene is well formed for every ratio in (0, 1)")
+    Scene::parse(
+        &text,
+        std::path::Path::new("(lines: a sphere circling in the unit ball)"),
+    )
+    .expect("the lines' scene is well formed for every ratio in (0, 1)")
 }

@@ -23,7 +23,8 @@ crate::spec_table! {
     /// `[detp]` (kinds `detp` and `quasi-static`).
     pub struct RawDetp {
         /// Where the rays come from: μ-random lines through the unit ball, or photons traced from
-        /// `detp.scene`.
+        /// `detp.scene`. In kind `quasi-static`, lines meet one absorbing sphere of radius
+        /// `dynamic.ratio` circling inside the ball (r_0 = 1), with static points uniform in it.
         source: RaySource = {default RaySource::Lines}, "string", "", "`\"lines\"`, `\"scene\"`";
         /// The scene file, relative to the spec's folder.
         scene: Option<String> = {absent "none; required with `source = \"scene\"`"},
