@@ -63,10 +63,10 @@ pub fn trace_lines(scene: &Scene, ids: Range<u64>, lines: u64, seed: u64) -> Seg
         })
         .collect();
     let mut photon_start = Vec::with_capacity(lines as usize + 1);
-    photon_start.extend(std::iter::repeat(0).take(lo as usize));
+    photon_start.extend(std::iter::repeat_n(0, lo as usize));
     photon_start.extend((0..segments.len() as u32).take((ids.end - lo) as usize));
     let n = segments.len() as u32;
-    photon_start.extend(std::iter::repeat(n).take((lines - ids.end) as usize + 1));
+    photon_start.extend(std::iter::repeat_n(n, (lines - ids.end) as usize + 1));
     let mut store = SegmentStore::new(segments, line_units().0);
     store.photon_start = photon_start;
     store
