@@ -12,7 +12,7 @@ if [ ${#names[@]} -eq 0 ]; then
          lines-rays-per-level lines-cache-misses-unsorted lines-cache-misses sphere-cache-q detp-engines-cost
          detp-accuracy cornell-levels quasi-static-frames quasi-static-crossover quasi-static-static-points
          quasi-static-amortisation real-scene-levels speed-vs-error speed-vs-error-cornell predict-engine quasi-static-robots
-         theorem1-decomposition detp-hard-cases)
+         theorem1-decomposition detp-hard-cases quasi-static-lines)
 fi
 secs=()
 failed=""

@@ -206,3 +206,83 @@ fn class_of(out: &std::path::Path, name: &str, table: &str, column: &str) -> Str
         .as_str()
         .to_string()
 }
+
+/// `detp.source = "lines"`: μ-random lines and a sphere circling in the unit ball. Every checked
+/// frame is exact with both engines, the measured columns are the same on 1 and 2 threads, r_0 = 1,
+/// and the lines meeting the sphere's new pose match f_R = n_R·(r_D/r_0)² (eq. 11, one pose) while
+/// those meeting its old or new pose (retraced_rays) are nearly twice as many (the two poses a
+/// quarter turn apart barely overlap at r_D = 0.05).
+#[test]
+fn uniform_lines_are_exact_thread_independent_and_count_eq_11() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = write_spec(
+        dir.path(),
+        "qsl",
+        r#"[experiment]
+name = "qsl"
+kind = "quasi-static"
+seed = 2
+
+[detp]
+source = "lines"
+photons = 40_000
+points = 2000
+disc_radius = "spacing"
+index = "grid"
+replicas = 2
+
+[dynamic]
+frames = 5
+check_every = 1
+ratio = 0.05
+
+[sweep]
+"detp.engine" = ["disc-index", "sphere-cache"]
+"#,
+    );
+    let mut tables = Vec::new();
+    for threads in ["1", "2"] {
+        let out = dir.path().join(format!("out{threads}"));
+        run_quiet(&s, &out)
+            .args(["--threads", threads])
+            .assert()
+            .success();
+        let csv = out.join("qsl/qsl.csv");
+        let (h, rows) = read_csv(&csv);
+        assert_eq!(rows.len(), 2);
+        for r in &rows {
+            let col = |n: &str| {
+                r[h.iter()
+                    .position(|c| c == n)
+                    .unwrap_or_else(|| panic!("{n}"))]
+                .clone()
+            };
+            let num = |n: &str| col(n).parse::<f64>().unwrap();
+            assert_eq!(col("full_mismatch"), "0");
+            assert_eq!(col("full_checked"), "8", "4 frames × 2 replicas");
+            assert_eq!(num("r0"), 1.0);
+            assert_eq!(num("segments"), 40_000.0, "one segment per line");
+            let f_r = 40_000.0 * 0.05 * 0.05;
+            assert!((num("retraced_rays_theory") - f_r).abs() < 1e-9);
+            // 8 frames of ~100 lines each: Poisson SE of the mean ≈ √(100/8) ≈ 3.5.
+            let new = num("rays_meeting_object_mean");
+            assert!(
+                (new - f_r).abs() < 5.0 * (f_r / 8.0).sqrt(),
+                "{new} vs {f_r}"
+            );
+            let both = num("retraced_rays_mean");
+            assert!(
+                (both - 2.0 * f_r).abs() < 5.0 * (2.0 * f_r / 8.0).sqrt(),
+                "{both} vs 2·{f_r}"
+            );
+        }
+        tables.push((
+            measured_columns(&csv),
+            measured_columns(&out.join("qsl/qsl.frames.csv")),
+        ));
+    }
+    assert_eq!(
+        tables[0], tables[1],
+        "measured columns differ between 1 and 2 threads"
+    );
+}

@@ -8,6 +8,7 @@ mod conventions;
 mod detp_edge;
 mod detp_engines;
 mod detp_runs;
+mod detp_surface_subsample;
 mod layers;
 mod lt;
 mod merge;

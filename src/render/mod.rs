@@ -104,7 +104,7 @@ fn config(plan: &Plan, point: usize) -> anyhow::Result<(QuasiStaticConfig, Optio
                     scene: file.scene.clone(),
                     // The engine's own sample points are not shown; any spacing will do.
                     spacing: match d.points {
-                        Points::Surface(s) => s,
+                        Points::Surface(s) => s.spacing,
                         _ => 4.0 * d.disc_radius,
                     },
                     frames: 1,
@@ -118,6 +118,7 @@ fn config(plan: &Plan, point: usize) -> anyhow::Result<(QuasiStaticConfig, Optio
                     warm_repeats: 0,
                     feed: crate::detp::quasi_static::Feed::default(),
                     warnings: Vec::new(),
+                    lines: false,
                 },
                 // Replica 0's photons of a `detp` run.
                 Some(crate::sample::rng::hash_key(&[

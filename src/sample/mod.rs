@@ -1,5 +1,5 @@
 //! Reproducible randomness: streams keyed by logical work items, and the samplers built on them
-//! (directions, lines, Poisson counts, and the radius laws of [`radius`], which `theory` integrates
+//! (directions, lines, Poisson counts, keyed nested subsamples, and the radius laws of [`radius`], which `theory` integrates
 //! and `scene` draws from).
 
 pub mod counter;
@@ -7,6 +7,7 @@ pub mod directions;
 pub mod lines;
 pub mod radius;
 pub mod rng;
+pub mod subset;
 
 pub use rng::Stream;
 

@@ -72,6 +72,9 @@ pub mod domain {
     pub const BOOTSTRAP: u64 = 0x626f_6f74;
     /// The seed of a separate run of a spec (`experiment.run` ≥ 1): `[RUN, seed, run]`.
     pub const RUN: u64 = 0x7275_6e73;
+    /// The keyed order of a nested subsample (surface points with `detp.points`):
+    /// `[SUBSET, seed, item]`, no sweep point, so every point of a sweep keeps the same items.
+    pub const SUBSET: u64 = 0x7375_6273;
 }
 
 #[cfg(test)]

@@ -25,6 +25,7 @@
 //! so a static point's sum after "minus old, plus new" is the sum over those segments, whatever the
 //! order; dynamic points are summed afresh. [`QuasiStatic::full_recalculation`] checks it.
 
+pub mod lines;
 pub mod segment_index;
 
 use std::ops::Range;
@@ -242,8 +243,20 @@ impl DynamicPoints {
     }
 }
 
+/// Where a run's rays come from.
+#[derive(Clone, Debug)]
+pub enum RaySource {
+    /// Photons from the scene's lights; static points on its static surfaces.
+    Photons,
+    /// μ-random lines through the unit ball, stopped by the movers ([`lines`]); these static
+    /// points (the scene has no static geometry), and r_0 = 1, the lines' ball.
+    Lines(Discs),
+}
+
 /// The state of a quasi-static run at its current frame.
 pub struct QuasiStatic {
+    /// Photons or lines (the lines' static points moved out into `static_discs`).
+    lines: bool,
     /// The scene, posed at the current frame.
     pub scene: Scene,
     params: Params,
@@ -311,25 +324,52 @@ impl QuasiStatic {
     /// run's — they add across disjoint ranges, except the counts of the accelerators whose work
     /// depends on the other photons (the segment index, sized and compacted by this range's own
     /// segments; the sphere cache, which subdivides by the rays a sphere holds).
-    pub fn start_photons(mut scene: Scene, params: Params, ids: Range<u64>) -> (Self, FrameStats) {
+    pub fn start_photons(scene: Scene, params: Params, ids: Range<u64>) -> (Self, FrameStats) {
+        Self::start_from(scene, params, ids, RaySource::Photons)
+    }
+
+    /// [`Self::start_photons`] with the rays of `source`: μ-random lines need no lights, and their
+    /// scene holds only the movers.
+    pub fn start_from(
+        mut scene: Scene,
+        params: Params,
+        ids: Range<u64>,
+        source: RaySource,
+    ) -> (Self, FrameStats) {
         let t_all = Instant::now();
         scene.set_tau(tau(0, params.frames));
-        let (st, sb) = scene.static_geometry();
-        let (c, n) = points_on(st, sb, &scene.surfaces, params.spacing);
-        let static_discs = Discs::new(c, n, params.disc_radius).expect("surface points are finite");
+        let lines = matches!(source, RaySource::Lines(_));
+        let static_discs = match source {
+            RaySource::Lines(discs) => discs,
+            RaySource::Photons => {
+                let (st, sb) = scene.static_geometry();
+                let (c, n) = points_on(st, sb, &scene.surfaces, params.spacing);
+                Discs::new(c, n, params.disc_radius).expect("surface points are finite")
+            }
+        };
         let (store, trace_s) =
-            timed(|| trace_photon_range(&scene, ids.clone(), params.photons, params.seed));
+            timed(|| trace_range(lines, &scene, ids.clone(), params.photons, params.seed));
         let paths = (0..params.photons as usize)
             .map(|p| {
                 let (a, b) = (store.photon_start[p], store.photon_start[p + 1]);
                 (a, b - a)
             })
             .collect();
-        let root = sphere_cache::root_sphere(&{
-            let (b, d) = (scene.bounds(), static_discs.bounds_all());
-            crate::geom::Aabb::new(b.lo.min(d.lo), b.hi.max(d.hi))
-        });
-        let index = SegmentIndex::new(scene.bounds(), (store.len() / 64).clamp(64, 1 << 18));
+        // Lines: the unit ball and every disc reaching d beyond it, as kind detp roots them.
+        let root = if lines {
+            (DVec3::ZERO, 1.0 + params.disc_radius)
+        } else {
+            sphere_cache::root_sphere(&{
+                let (b, d) = (scene.bounds(), static_discs.bounds_all());
+                crate::geom::Aabb::new(b.lo.min(d.lo), b.hi.max(d.hi))
+            })
+        };
+        let rays_box = if lines {
+            lines::lines_bounds()
+        } else {
+            scene.bounds()
+        };
+        let index = SegmentIndex::new(rays_box, (store.len() / 64).clamp(64, 1 << 18));
         let (static_index, static_index_build_s) =
             timed(|| params.index.build(&static_discs, params.disc_radius));
         let static_perm = permutation(&static_discs.centers, params.order, 10);
@@ -337,6 +377,7 @@ impl QuasiStatic {
             .map(|k| DynamicPoints::new(&scene, k, params.spacing, params.disc_radius))
             .collect();
         let mut qs = Self {
+            lines,
             spheres: scene
                 .movers
                 .iter()
@@ -376,6 +417,25 @@ impl QuasiStatic {
         qs.apply_dynamic(dynamic, &mut stats);
         stats.frame_s = t_all.elapsed().as_secs_f64();
         (qs, stats)
+    }
+
+    /// Photon or line `p` at the current pose.
+    fn retrace(&self, p: u32) -> Vec<Segment> {
+        if self.lines {
+            vec![lines::trace_line(&self.scene, self.params.seed, p)]
+        } else {
+            retrace(&self.scene, self.params.seed, self.params.photons, p)
+        }
+    }
+
+    /// r_0 of eq. 11: the root sphere's radius, or 1 for lines (their ball; the root reaches d
+    /// beyond it to hold every disc).
+    pub fn r0(&self) -> f64 {
+        if self.lines {
+            1.0
+        } else {
+            self.root.1
+        }
     }
 
     /// The run's settings.
@@ -448,7 +508,7 @@ impl QuasiStatic {
             Engine::SphereCache => Used::SphereCache,
             Engine::DiscIndex => Used::DiscIndex,
             Engine::Hybrid => {
-                if self.scene.movers[mover].radius() / self.root.1 < self.params.crossover {
+                if self.scene.movers[mover].radius() / self.r0() < self.params.crossover {
                     Used::SphereCache
                 } else {
                     Used::DiscIndex
@@ -621,7 +681,7 @@ impl QuasiStatic {
         let (new_paths, s) = timed(|| {
             photons
                 .par_iter()
-                .map(|&p| retrace(&self.scene, self.params.seed, self.params.photons, p))
+                .map(|&p| self.retrace(p))
                 .collect::<Vec<Vec<Segment>>>()
         });
         stats.retrace_s = s;
@@ -818,7 +878,8 @@ impl QuasiStatic {
     /// store, and seconds.
     pub fn full_recalculation(&self) -> (Vec<Acc>, SegmentStore, f64) {
         let t = Instant::now();
-        let store = trace_photon_range(
+        let store = trace_range(
+            self.lines,
             &self.scene,
             self.ids.clone(),
             self.params.photons,
@@ -829,6 +890,15 @@ impl QuasiStatic {
             sums.extend(acc);
         }
         (sums, store, t.elapsed().as_secs_f64())
+    }
+}
+
+/// The rays `ids` of a run: photons from the scene's lights, or μ-random lines.
+fn trace_range(lines: bool, scene: &Scene, ids: Range<u64>, n: u64, seed: u64) -> SegmentStore {
+    if lines {
+        lines::trace_lines(scene, ids, n, seed)
+    } else {
+        trace_photon_range(scene, ids, n, seed)
     }
 }
 

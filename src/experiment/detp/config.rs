@@ -38,10 +38,22 @@ pub enum Points {
     Ball(u64),
     /// k³ points on eq. 4's lattice (k per side, spacing 2/(√3·k)) with uniform normals.
     Grid(u64),
-    /// On the scene's surfaces at this spacing.
-    Surface(f64),
+    /// On the scene's surfaces: a lattice, or a keyed nested subsample of it.
+    Surface(SurfacePoints),
     /// Read from a CSV (once per run).
     File(Arc<PointsFile>),
+}
+
+/// Surface points: the lattice of `detp.point_spacing` on the scene's open surfaces and, with
+/// `detp.points = n`, the first n of its permutation keyed by the seed alone
+/// ([`crate::sample::subset::keyed_prefix`]): the same n on the same scene and spacing gives the
+/// same points at every sweep point, and a smaller n keeps a prefix of a larger one's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfacePoints {
+    /// The lattice's spacing (scene units).
+    pub spacing: f64,
+    /// The points kept from the lattice (all of them when `None`).
+    pub keep: Option<u64>,
 }
 
 /// Everything a DETP point needs, validated, in the engines' own types.
@@ -180,7 +192,8 @@ impl DetpConfig {
             Points::Ball(n) => *n,
             Points::Grid(k) => k.pow(3),
             Points::File(f) => f.centers.len() as u64,
-            Points::Surface(s) => self.scene().map_or(0, |sc| {
+            Points::Surface(SurfacePoints { keep: Some(n), .. }) => *n,
+            Points::Surface(SurfacePoints { spacing: s, .. }) => self.scene().map_or(0, |sc| {
                 let tris: f64 = sc
                     .scene
                     .triangles
@@ -339,7 +352,10 @@ impl Points {
             PointSourceKind::Grid => Points::Grid(lattice_side(count(
                 "missing: points on a lattice need a count (k = round(∛points) per side)",
             )?)),
-            PointSourceKind::Surface => Points::Surface(surface_spacing(d, rays)?),
+            PointSourceKind::Surface => Points::Surface(SurfacePoints {
+                spacing: surface_spacing(d, rays)?,
+                keep: d.points,
+            }),
             PointSourceKind::File => match d.points_file.as_deref() {
                 Some(p) => Points::File(inputs.points("detp.points_file", p)?),
                 None => {
@@ -350,11 +366,11 @@ impl Points {
                 }
             },
         };
-        if d.points.is_some() && !in_ball {
+        if d.points.is_some() && !in_ball && kind != PointSourceKind::Surface {
             return refuse(
                 "detp.points",
                 format!(
-                    "a count belongs to point_source = \"ball\" or \"grid\", not \"{}\"",
+                    "a count belongs to point_source = \"ball\", \"grid\" or \"surface\", not \"{}\"",
                     kind.as_str()
                 ),
             );
@@ -386,13 +402,25 @@ fn in_scene_units(d: &RawDetp, rays: &Rays) -> RawDetp {
     }
 }
 
-/// The spacing of surface points: `detp.point_spacing`, else 2d.
+/// How much finer than √(area/n) the lattice of a subsample is by default: a lattice of spacing
+/// √(area/n)/1.2 holds about 1.44·n points before covered points are dropped, so n of them usually
+/// remain to choose from.
+const SUBSAMPLE_REFINEMENT: f64 = 1.2;
+
+/// The spacing of surface points: `detp.point_spacing`; else, with `detp.points = n`,
+/// √(area/n)/1.2 over the scene's whole surface area (covered parts included); else 2d.
 fn surface_spacing(d: &RawDetp, rays: &Rays) -> Result<f64, ConfigError> {
-    if matches!(rays, Rays::Lines) {
+    let Rays::Scene(file) = rays else {
         return refuse(
             "detp.point_source",
             "\"surface\" needs a scene (detp.source = \"scene\")",
         );
+    };
+    if let (None, Some(n)) = (d.point_spacing, d.points) {
+        let sc = &file.scene;
+        let area: f64 = sc.triangles.iter().map(|t| t.area()).sum::<f64>()
+            + sc.balls.iter().map(|b| b.area()).sum::<f64>();
+        return Ok((area / n as f64).sqrt() / SUBSAMPLE_REFINEMENT);
     }
     match (d.point_spacing, d.disc_radius) {
         (Some(s), _) => Ok(s),
@@ -454,7 +482,8 @@ fn check_sizes(d: &RawDetp, points: &Points) -> Result<(), ConfigError> {
     let n = match points {
         Points::Ball(n) => *n,
         Points::Grid(k) => k.pow(3),
-        Points::Surface(_) | Points::File(_) => 0,
+        Points::Surface(s) => s.keep.unwrap_or(0),
+        Points::File(_) => 0,
     };
     if n > 1 << 28 {
         return refuse("detp.points", format!("got {n}, at most 2²⁸"));
@@ -468,7 +497,7 @@ fn disc_radius(d: &RawDetp, points: &Points, rays: &Rays) -> Result<f64, ConfigE
         (DiscRadius::Value(r), _) => r,
         (DiscRadius::Spacing, Points::Ball(n)) => crate::theory::detp::ball_spacing(1.0, *n as f64),
         (DiscRadius::Spacing, Points::Grid(k)) => lattice_spacing(*k),
-        (DiscRadius::Spacing, Points::Surface(s)) => *s,
+        (DiscRadius::Spacing, Points::Surface(s)) => s.spacing,
         (DiscRadius::Spacing, Points::File(_)) => {
             return refuse(
                 "detp.disc_radius",

@@ -47,7 +47,7 @@ pub mod spec;
 // The DETP module's interface for kind `quasi-static` and `raycost render`: the validated `[detp]`
 // table and its parts, what a point needs in memory, the one-line description, and the defaults of
 // the edge remedies.
-pub use self::config::{lattice_spacing, DetpConfig, Points, Rays};
+pub use self::config::{lattice_spacing, DetpConfig, Points, Rays, SurfacePoints};
 pub use self::spec::{DynamicEngine, EngineChoice, RawDetp, EDGE_GAP, EDGE_MIN_RADIUS};
 
 use self::columns as col;
@@ -274,7 +274,10 @@ pub fn describe(cfg: &DetpConfig) -> String {
             k.pow(3),
             config::lattice_spacing(*k)
         ),
-        Points::Surface(s) => format!("surface points at spacing {s}"),
+        Points::Surface(s) => match s.keep {
+            Some(n) => format!("{n} surface points keyed from the lattice of spacing {}", s.spacing),
+            None => format!("surface points at spacing {}", s.spacing),
+        },
         Points::File(p) => format!("{} points from {}", p.centers.len(), p.path.display()),
     };
     let engines: Vec<&str> = cfg.engines.iter().map(|e| e.as_str()).collect();
@@ -325,6 +328,7 @@ pub fn memory(cfg: &DetpConfig, threads: usize) -> Memory {
                 Points::Ball(_) | Points::Grid(_) => "detp.points",
                 Points::File(_) => "detp.points_file",
                 // Surface points: one per spacing² (the spacing defaults to 2d).
+                Points::Surface(s) if s.keep.is_some() => "detp.points",
                 Points::Surface(_) if cfg.spacing_given => "detp.point_spacing",
                 Points::Surface(_) => "detp.disc_radius",
             },

@@ -16,13 +16,20 @@ use crate::error::{Error, InputError};
 use crate::geom::Aabb;
 use crate::lt::Scene;
 use crate::sample::rng::hash_key;
+use crate::sample::subset::keyed_prefix;
+use glam::DVec3;
 
 /// Sample points on the scene's surfaces or from a CSV, with the scene's exact irradiance.
-/// (The lattice is deterministic: every sweep point of a scene gets the same surface points.)
+/// (The lattice is deterministic and a subsample of it keyed by the seed alone: every sweep point of
+/// a scene gets the same surface points.)
 pub(super) fn points(cfg: &DetpConfig, scene: &Scene) -> Result<PointSet, Error> {
     let (centers, normals, covered) = match &cfg.points {
-        Points::Surface(spacing) => {
-            let (c, n, k) = open_surface_points(scene, *spacing);
+        Points::Surface(s) => {
+            let (c, n, k) = open_surface_points(scene, s.spacing);
+            let (c, n) = match s.keep {
+                Some(keep) => keyed_subsample(cfg, c, n, keep)?,
+                None => (c, n),
+            };
             (c, n, Some(k))
         }
         Points::File(p) => (p.centers.clone(), p.normals.clone(), None),
@@ -52,6 +59,36 @@ pub(super) fn points(cfg: &DetpConfig, scene: &Scene) -> Result<PointSet, Error>
         edge_s,
         covered,
     })
+}
+
+/// The first `keep` open lattice points of the permutation keyed by the seed (never the sweep point:
+/// the same n gives the same points everywhere, a smaller n a prefix); refused when the lattice holds
+/// fewer.
+fn keyed_subsample(
+    cfg: &DetpConfig,
+    centers: Vec<DVec3>,
+    normals: Vec<DVec3>,
+    keep: u64,
+) -> Result<(Vec<DVec3>, Vec<DVec3>), Error> {
+    let Some(ids) = keyed_prefix(centers.len(), keep as usize, cfg.seed) else {
+        let file = cfg
+            .scene()
+            .map_or_else(String::new, |s| s.path.display().to_string());
+        let spacing = match &cfg.points {
+            Points::Surface(s) => s.spacing,
+            _ => f64::NAN,
+        };
+        return Err(InputError::new(
+            file,
+            format!(
+                "got {keep} points, but the surface lattice of spacing {spacing} holds only {} open points: give fewer points or a smaller detp.point_spacing",
+                centers.len()
+            ),
+        )
+        .key("detp.points")
+        .into());
+    };
+    Ok(ids.iter().map(|&i| (centers[i], normals[i])).unzip())
 }
 
 /// Every lattice point covered (exactly coincident surfaces cover each other: a floor given twice):

@@ -23,7 +23,8 @@ crate::spec_table! {
     /// `[detp]` (kinds `detp` and `quasi-static`).
     pub struct RawDetp {
         /// Where the rays come from: μ-random lines through the unit ball, or photons traced from
-        /// `detp.scene`.
+        /// `detp.scene`. In kind `quasi-static`, lines meet one absorbing sphere of radius
+        /// `dynamic.ratio` circling inside the ball (r_0 = 1), with static points uniform in it.
         source: RaySource = {default RaySource::Lines}, "string", "", "`\"lines\"`, `\"scene\"`";
         /// The scene file, relative to the spec's folder.
         scene: Option<String> = {absent "none; required with `source = \"scene\"`"},
@@ -32,9 +33,11 @@ crate::spec_table! {
         /// n_R: lines drawn, or photons emitted from the scene's lights (their paths' segments
         /// are the rays).
         photons: u64 = {required} read count, "integer", "photons", "≥ 1";
-        /// n_P: sample points uniform in the unit ball (a file name here is refused with a hint
-        /// to `points_file`).
-        points: Option<u64> = {absent "required with `point_source = \"ball\"`"}
+        /// n_P: sample points uniform in the unit ball; or, with `point_source = "surface"`, the
+        /// first n_P of the surface lattice's points in an order keyed by the seed alone (the same
+        /// n_P gives the same points at every sweep point, a smaller one a subset; refused when the
+        /// lattice holds fewer). A file name here is refused with a hint to `points_file`.
+        points: Option<u64> = {absent "required with `point_source = \"ball\"`; with `\"surface\"`: the whole lattice"}
             read point_count, "integer", "points", "≥ 1";
         /// Where the sample points come from: uniform in the unit ball with uniform normals, on
         /// the scene's surfaces, or a CSV.
@@ -50,7 +53,7 @@ crate::spec_table! {
         length_unit: LengthUnit = {default LengthUnit::Scene}, "string", "",
             "`\"scene\"`, `\"root\"`";
         /// Spacing of surface points.
-        point_spacing: Option<f64> = {absent "2·d (the paper's optimum)"} read opt_positive,
+        point_spacing: Option<f64> = {absent "2·d (the paper's optimum); with `points = n`, √(area/n)/1.2 (about 1.44·n lattice points over the scene's whole area)"} read opt_positive,
             "number", "length", "> 0";
         /// d: the discs' radius, or the points' mean spacing ((4π/3/n_P)^⅓ in the ball,
         /// `point_spacing` on surfaces), the paper's d for Theorem 1.

@@ -18,6 +18,14 @@
 //! A point's run leaves a typed measurement ([`QsMeasured`], `measure.rs`), its frames and points
 //! rows; `columns.rs` declares every column with the accessor that reads it.
 //!
+//! With `detp.source = "lines"` (the control of eq. 11, [`crate::detp::quasi_static::lines`]) the
+//! rays are μ-random lines through the unit ball (r_0 = 1), the one object an absorbing sphere of
+//! radius `dynamic.ratio` on a circle of radius (1 − ratio)/2 about the centre, and the static
+//! points uniform in the ball (`detp.points`, kind detp's draw). `retraced_rays` then counts the
+//! lines meeting the sphere at its old or new pose, and `retraced_rays_theory` stays f_R as eq. 11
+//! writes it, the count at one pose (the paper's eq. 14 charges 2·f_R for the old and new lists):
+//! the union is expected at up to 2·f_R, less the lines meeting both poses.
+//!
 //! `raycost render` and `raycost bench` use [`QuasiStaticConfig`] (a validated point), [`start`],
 //! [`params`] and [`apply_ratio`]; the DETP settings inside come from the DETP module's interface
 //! ([`super::detp`]).
@@ -36,7 +44,7 @@ use self::spec::QuasiStaticSpec;
 use super::detp::DynamicEngine;
 use super::inputs::Inputs;
 use super::kind::{Check, ConfigError, Context, Kind, Memory, Output, Rate, Table, Work};
-use crate::detp::quasi_static::{Engine, FrameStats, Params, QuasiStatic, Used};
+use crate::detp::quasi_static::{Engine, FrameStats, Params, QuasiStatic, RaySource, Used};
 use crate::error::Error;
 use crate::theory::detp as th;
 
@@ -104,7 +112,13 @@ fn start_photons(
             area / (cfg.spacing * cfg.spacing)
         })
         .unwrap_or(1.0);
-    QuasiStatic::start_photons(cfg.scene.clone(), params(cfg, n_d, replica), ids)
+    let source = if cfg.lines {
+        let set = super::detp::points(&cfg.detp, 0).expect("points uniform in the ball are finite");
+        RaySource::Lines(set.discs)
+    } else {
+        RaySource::Photons
+    };
+    QuasiStatic::start_from(cfg.scene.clone(), params(cfg, n_d, replica), ids, source)
 }
 
 /// The predictor's run (engine "predicted" or `dynamic.predict`): its fraction, its predictions per
@@ -301,7 +315,7 @@ impl Kind for QuasiStaticKind {
         "detp.engines",
         "quasi-static frames choose their engine with detp.engine",
     )];
-    const ABOUT: &'static str = "A scene whose dynamic objects move over F frames: frame 0 is a full DETP photon trace and gather; every later frame re-traces only the photons whose segments meet an object at its old or new pose (against f_R = n_R·Σ(r_D/r_0)²), updates the static points' sums and gathers the dynamic objects' points with the sphere cache or the disc index (Theorem 2's crossover r_D/r_0 ≈ 0.35, or a timed predictor). Frames are checked against a full recalculation, bit for bit.";
+    const ABOUT: &'static str = "A scene whose dynamic objects move over F frames: frame 0 is a full DETP photon trace and gather; every later frame re-traces only the photons whose segments meet an object at its old or new pose (against f_R = n_R·Σ(r_D/r_0)²), updates the static points' sums and gathers the dynamic objects' points with the sphere cache or the disc index (Theorem 2's crossover r_D/r_0 ≈ 0.35, or a timed predictor). Frames are checked against a full recalculation, bit for bit. With detp.source = \"lines\" the rays are μ-random lines through the unit ball (eq. 11's own assumption, r_0 = 1) and the object an absorbing sphere of radius dynamic.ratio circling inside it, static points uniform in the ball.";
     type Raw = QuasiStaticSpec;
     type Point = QuasiStaticConfig;
     type Measured = QsMeasured;

@@ -104,7 +104,7 @@ pub struct Facts {
 impl Facts {
     /// The facts of a run after its last frame.
     pub fn of(qs: &QuasiStatic) -> Self {
-        let r0 = qs.root().1;
+        let r0 = qs.r0();
         let (n_s, n_dyn) = qs.point_counts();
         Self {
             r0: r0.to_bits(),

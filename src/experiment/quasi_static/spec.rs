@@ -7,7 +7,9 @@
 //! as the scene, leave the scene's box at any frame, or overlap another object.
 
 use crate::detp::quasi_static::Feed;
-use crate::experiment::detp::{DetpConfig, DynamicEngine, EngineChoice, Points, RawDetp, Rays};
+use crate::experiment::detp::{
+    DetpConfig, DynamicEngine, EngineChoice, Points, RawDetp, Rays, SurfacePoints,
+};
 use crate::experiment::inputs::{Inputs, SceneFile};
 use crate::experiment::kind::{refuse, ConfigError};
 use crate::lt::Scene;
@@ -124,6 +126,9 @@ pub struct QuasiStaticConfig {
     /// Counted warnings about the scene and its motion (shown by `check`, printed and counted by
     /// `run`).
     pub warnings: Vec<String>,
+    /// `detp.source = "lines"`: μ-random lines and a sphere circling in the unit ball
+    /// ([`crate::detp::quasi_static::lines`]), static points uniform in the ball.
+    pub lines: bool,
 }
 
 impl QuasiStaticConfig {
@@ -139,17 +144,20 @@ impl QuasiStaticConfig {
         let d = &raw.detp;
         let detp = DetpConfig::from_raw(raw.experiment.stream_seed(), d, inputs)?;
         let Rays::Scene(file) = &detp.rays else {
-            return refuse(
-                "detp.source",
-                "kind quasi-static traces photons in a scene: set detp.source = \"scene\"",
-            );
+            return lines_config(raw, dy, detp);
         };
-        let Points::Surface(spacing) = detp.points else {
+        let Points::Surface(SurfacePoints { spacing, keep }) = detp.points else {
             return refuse(
                 "detp.point_source",
                 "kind quasi-static puts its points on the scene's surfaces (\"surface\")",
             );
         };
+        if keep.is_some() {
+            return refuse(
+                "detp.points",
+                "kind quasi-static keeps every lattice point of its surfaces (static and dynamic ones move apart): give point_spacing instead of a count",
+            );
+        }
         if detp.edge != crate::detp::edge::EdgeMode::Paper {
             return refuse(
                 "detp.edge",
@@ -207,8 +215,76 @@ impl QuasiStaticConfig {
             predict,
             warm_repeats: dy.warm_repeats,
             warnings,
+            lines: false,
         })
     }
+}
+
+/// A lines point (`detp.source = "lines"`): static points uniform in the ball (`detp.points`), a
+/// sphere of radius `dynamic.ratio` circling inside it (the scene-file keys and the reference
+/// recalculation, which traces the scene's lights, are refused); its points lie every
+/// (4π/3/n_P)^⅓ on the sphere, the static points' mean spacing.
+fn lines_config(
+    raw: &QuasiStaticSpec,
+    dy: &RawDynamicSpec,
+    detp: DetpConfig,
+) -> Result<QuasiStaticConfig, ConfigError> {
+    let Points::Ball(n) = detp.points else {
+        return refuse(
+            "detp.point_source",
+            "kind quasi-static with lines puts its static points uniform in the unit ball: point_source = \"ball\" with detp.points",
+        );
+    };
+    let Some(ratio) = dy.ratio else {
+        return refuse(
+            "dynamic.ratio",
+            "missing: with detp.source = \"lines\" the moving object is a sphere of radius r_D = ratio·r_0 (r_0 = 1) that the spec sizes",
+        );
+    };
+    if dy.reference_photons.is_some() {
+        return refuse(
+            "dynamic.reference_photons",
+            "a reference run traces a scene's lights: with detp.source = \"lines\" there is none",
+        );
+    }
+    if detp.edge != crate::detp::edge::EdgeMode::Paper {
+        return refuse(
+            "detp.edge",
+            "kind quasi-static runs the paper's method only (its incremental updates keep the stored segments and d); the remedies are measured by kind \"detp\"",
+        );
+    }
+    if detp.engines != [EngineChoice::SphereCache] {
+        return refuse(
+            "detp.engines",
+            "kind quasi-static chooses its engine per object with detp.engine (hybrid, sphere-cache, disc-index, predicted)",
+        );
+    }
+    dy.check()?;
+    let d = &raw.detp;
+    let predict = dy
+        .predict
+        .or((d.engine == Some(DynamicEngine::Predicted)).then_some(0.05));
+    Ok(QuasiStaticConfig {
+        scene: crate::detp::quasi_static::lines::lines_scene(ratio),
+        spacing: crate::theory::detp::ball_spacing(1.0, n as f64),
+        detp,
+        frames: dy.frames as u32,
+        ratio: Some(ratio),
+        crossover: dy.crossover,
+        check_every: dy.check_every,
+        engine: d.engine.unwrap_or_default(),
+        points_frame: dy.points_frame.map(|f| f as u32),
+        reference_photons: None,
+        feed: match dy.feed {
+            FeedChoice::Paper => Feed::Paper,
+            FeedChoice::SegmentIndex => Feed::SegmentIndex,
+            FeedChoice::All => Feed::All,
+        },
+        predict,
+        warm_repeats: dy.warm_repeats,
+        warnings: Vec::new(),
+        lines: true,
+    })
 }
 
 impl RawDynamicSpec {
