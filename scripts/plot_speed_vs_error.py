@@ -8,6 +8,8 @@ engine), ± 95 % CI: DETP with the sphere cache and with the disc index (one cur
 over photon counts; both engines give the same estimate, so they differ in time only) and the photon
 map (one curve per k). The grey steps are the front of best choices: configurations no other is both
 faster and more accurate than. Right: the relative bias (mean error over the points) ± 95 % CI.
+One row of panels per scene (detp.scene), DETP curves per d and edge mode (detp.edge): rows of
+different scenes or edge modes are never averaged together.
 """
 
 import raycost_plot as rp
@@ -29,9 +31,10 @@ def configurations(rows):
     out = {}
     for r in rows:
         ref = r["reference_irradiance_mean"]
+        detp = "d = %g" % r["detp.disc_radius"] + (", %s" % r["detp.edge"] if "detp.edge" in r else "")
         for method, cost, stem, setting in (
-                ("DETP sphere cache", "cost_sphere_cache_s", "irradiance_ref", "d = %g" % r["detp.disc_radius"]),
-                ("DETP disc index", "cost_disc_index_s", "irradiance_ref", "d = %g" % r["detp.disc_radius"]),
+                ("DETP sphere cache", "cost_sphere_cache_s", "irradiance_ref", detp),
+                ("DETP disc index", "cost_disc_index_s", "irradiance_ref", detp),
                 ("photon map", "cost_photon_map_s", "photon_map_ref", "k = %d" % r["detp.photon_map_k"])):
             key = (method, setting, r["detp.photons"])
             out.setdefault(key, []).append((r["trace_s"] + r[cost], r[stem + "_rmse_mean"] / ref,
@@ -61,21 +64,30 @@ def front(points):
 
 def plot(args):
     rows = rp.read_csv(args.input, REQUIRED)
-    conf = configurations(rows)
-    fig, axes = rp.subplots(1, 2, panel_w=6.0, panel_h=4.6)
-    ax_r, ax_b = axes[0]
+    scenes = sorted({r["detp.scene"] for r in rows}) if rp.has(rows, "detp.scene") else [None]
+    fig, axes = rp.subplots(len(scenes), 2, panel_w=6.0, panel_h=4.6)
+    for row, scene in enumerate(scenes):
+        mine = [r for r in rows if scene is None or r["detp.scene"] == scene]
+        if scene is not None:
+            print("== %s" % scene)
+        panels(axes[row], configurations(mine), scene)
+    rp.finish(fig, args)
+
+
+def panels(axes, conf, scene):
+    """One scene's RMSE-vs-seconds panel (with its front) and bias panel."""
+    ax_r, ax_b = axes
     series = sorted({(m, s) for m, s, _ in conf})
     styles = {"DETP sphere cache": "o-", "DETP disc index": "s--", "photon map": "^:"}
     for i, (m, s) in enumerate(series):
         pts = sorted((p, conf[(m, s, p)]) for mm, ss, p in conf if (mm, ss) == (m, s))
         t = [v[0] for _, v in pts]
-        c = "C%d" % i
-        ax_r.errorbar(t, [v[1] for _, v in pts], yerr=[v[2] for _, v in pts], fmt=styles[m], color=c,
-                      ms=4, capsize=2, label="%s, %s" % (m, s))
-        ax_b.errorbar(t, [v[3] for _, v in pts], yerr=[v[4] for _, v in pts], fmt=styles[m], color=c,
-                      ms=4, capsize=2, label="%s, %s" % (m, s))
+        c = "C%d" % (i % 10)
+        for ax, y, e in ((ax_r, 1, 2), (ax_b, 3, 4)):
+            ax.errorbar(t, [v[y] for _, v in pts], yerr=[v[e] for _, v in pts], fmt=styles[m], color=c,
+                        ms=4, capsize=2, label="%s, %s" % (m, s))
         for p, v in pts:
-            print("%-18s %-9s %9d photons: %8.3f s, relative RMSE %.4f ± %.4f, relative bias %+.4f ± %.4f"
+            print("%-18s %-24s %9d photons: %8.3f s, relative RMSE %.4f ± %.4f, relative bias %+.4f ± %.4f"
                   % (m, s, p, v[0], v[1], v[2], v[3], v[4]))
     best = front([(v[0], v[1]) for v in conf.values()])
     ax_r.step([b[0] for b in best], [b[1] for b in best], where="post", color="0.5", lw=3, alpha=0.35,
@@ -83,16 +95,18 @@ def plot(args):
     names = {(round(v[0], 9), round(v[1], 12)): k for k, v in conf.items()}
     for t, e in best:
         m, s, p = names[(round(t, 9), round(e, 12))]
-        print("front: %-18s %-9s %9d photons: %8.3f s, relative RMSE %.4f" % (m, s, p, t, e))
+        print("front: %-18s %-24s %9d photons: %8.3f s, relative RMSE %.4f" % (m, s, p, t, e))
     rp.log_scale(ax_r, x=True, y=True)
+    title = "" if scene is None else scene.split("/")[-1] + ": "
+    ax_r.set_title(title + "error against seconds", fontsize=9)
     ax_r.set_xlabel("seconds (photon tracing + engine)")
     ax_r.set_ylabel("relative RMSE vs truth (reference variance removed)")
-    ax_r.legend(fontsize=6)
+    ax_r.legend(fontsize=5)
     ax_b.axhline(0.0, color="0.5", lw=0.8)
     rp.log_scale(ax_b, x=True)
+    ax_b.set_title(title + "bias", fontsize=9)
     ax_b.set_xlabel("seconds (photon tracing + engine)")
     ax_b.set_ylabel("relative bias vs reference (mean error / mean E)")
-    rp.finish(fig, args)
 
 
 if __name__ == "__main__":
