@@ -33,25 +33,30 @@ ratio = 0.08
     )
 }
 
+/// Runs `spec` on `threads` threads into `out`; returns `out`.
+fn run_on(spec: &std::path::Path, threads: &str, out: &std::path::Path) -> std::path::PathBuf {
+    raycost()
+        .args([
+            "run",
+            spec.to_str().unwrap(),
+            "--quiet",
+            "--threads",
+            threads,
+            "--out",
+        ])
+        .arg(out)
+        .assert()
+        .success();
+    out.to_path_buf()
+}
+
 #[test]
 fn a_run_is_exact_and_thread_independent() {
     let dir = tempfile::tempdir().unwrap();
     let s = spec(dir.path(), "qs");
     let mut tables = Vec::new();
     for threads in ["1", "2"] {
-        let out = dir.path().join(format!("out{threads}"));
-        raycost()
-            .args([
-                "run",
-                s.to_str().unwrap(),
-                "--quiet",
-                "--threads",
-                threads,
-                "--out",
-            ])
-            .arg(&out)
-            .assert()
-            .success();
+        let out = run_on(&s, threads, &dir.path().join(format!("out{threads}")));
         let csv = out.join("qs/qs.csv");
         let (h, rows) = read_csv(&csv);
         let col = |n: &str| {
@@ -224,19 +229,7 @@ fn the_traversal_alone_is_timed_where_the_disc_index_runs() {
     std::fs::write(&s, text).unwrap();
     let mut tables = Vec::new();
     for threads in ["1", "2"] {
-        let out = dir.path().join(format!("out{threads}"));
-        raycost()
-            .args([
-                "run",
-                s.to_str().unwrap(),
-                "--quiet",
-                "--threads",
-                threads,
-                "--out",
-            ])
-            .arg(&out)
-            .assert()
-            .success();
+        let out = run_on(&s, threads, &dir.path().join(format!("out{threads}")));
         let (main, frames) = (out.join("trav/trav.csv"), out.join("trav/trav.frames.csv"));
         for (table, path, column) in [
             ("main", &main, "dynamic_traversal_s_mean"),

@@ -304,7 +304,7 @@ pub struct Prediction {
 type DynamicSums = (Discs, Vec<Acc>, Used, Counts, Option<IndexWalk>);
 
 /// A mover's disc index and the segments its pass walked (all of the store's, or those listed),
-/// kept so that [`QuasiStatic::traversal_seconds`] can walk them again without disc tests.
+/// kept so that `QuasiStatic::time_traversal` can walk them again without disc tests.
 struct IndexWalk {
     index: Box<dyn DiscIndex>,
     ids: Option<Vec<u32>>,
