@@ -45,6 +45,60 @@ fn same_side_tables(a: &Path, b: &Path, stem: &str) {
     }
 }
 
+/// The disc index's walk alone (eq. 8 in seconds): `traversal_disc_index_per_replica_s` beside
+/// `cost_disc_index_per_replica_s`, positive with one sample per replica, in the disc index's
+/// columns only, classed timing.
+fn traversal_is_timed_per_replica(csv: &Path, replicas: usize) {
+    let (h, rows) = crate::common::read_csv(csv);
+    let at = |c: &str| {
+        h.iter()
+            .position(|x| x == c)
+            .unwrap_or_else(|| panic!("{c}"))
+    };
+    let family = "traversal_disc_index_per_replica_s";
+    for r in &rows {
+        let v = |c: &str| r[at(&format!("{family}_{c}"))].parse::<f64>().unwrap();
+        assert!(v("mean").is_finite() && v("mean") > 0.0, "{}", v("mean"));
+        assert!(v("se").is_finite() && v("se") >= 0.0, "{}", v("se"));
+        assert_eq!((v("n"), v("clusters")), (replicas as f64, replicas as f64));
+    }
+    assert!(!h.iter().any(|c| c.starts_with("traversal_sphere_cache")));
+    let meta = raycost::output::meta::Meta::read(&csv.with_extension("meta.toml"))
+        .expect("the run's metadata");
+    let class = |name: &str| {
+        meta.columns["main"]
+            .iter()
+            .find(|c| c.name == name)
+            .unwrap_or_else(|| panic!("{name}"))
+            .class
+            .as_str()
+            .to_string()
+    };
+    assert_eq!(class(&format!("{family}_mean")), "timing");
+}
+
+/// Without the disc index there is no walk to time: the family is not written.
+#[test]
+fn without_the_disc_index_no_traversal_is_written() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let text = SPEC
+        .replace(
+            r#"engines = ["sphere-cache", "disc-index"]"#,
+            r#"engines = ["sphere-cache"]"#,
+        )
+        .replace("photons = 20_000", "photons = 2_000")
+        .replace("points = 2_000", "points = 200")
+        .replace("chunk_points = 500", "chunk_points = 100");
+    let spec = write_spec(tmp.path(), "detp-small", &text);
+    let out = tmp.path().join("out");
+    run_ok(&spec, &out, &[]);
+    let (h, _) = crate::common::read_csv(&out.join("detp-small/detp-small.csv"));
+    assert!(h
+        .iter()
+        .any(|c| c == "cost_sphere_cache_per_replica_s_mean"));
+    assert!(!h.iter().any(|c| c.starts_with("traversal_")), "{h:?}");
+}
+
 #[test]
 fn detp_shards_on_one_thread_merge_into_the_two_thread_table() {
     let tmp = tempfile::tempdir().expect("tempdir");
@@ -77,6 +131,8 @@ fn detp_shards_on_one_thread_merge_into_the_two_thread_table() {
         assert_eq!(r[at("mismatches")], "0", "engines agree with brute force");
         assert_eq!(r[at("bf_checked")], "200");
     }
+    traversal_is_timed_per_replica(&w.join("detp-small.csv"), 2);
+    traversal_is_timed_per_replica(&s.join("detp-small.csv"), 2);
     // Two replicas: every point's value in each replica, whose mean is the pooled value (so a mean
     // error over a group of points can take its SE across replicas).
     let (h, rows) = crate::common::read_csv(&w.join("detp-small.points.csv"));

@@ -33,25 +33,30 @@ ratio = 0.08
     )
 }
 
+/// Runs `spec` on `threads` threads into `out`; returns `out`.
+fn run_on(spec: &std::path::Path, threads: &str, out: &std::path::Path) -> std::path::PathBuf {
+    raycost()
+        .args([
+            "run",
+            spec.to_str().unwrap(),
+            "--quiet",
+            "--threads",
+            threads,
+            "--out",
+        ])
+        .arg(out)
+        .assert()
+        .success();
+    out.to_path_buf()
+}
+
 #[test]
 fn a_run_is_exact_and_thread_independent() {
     let dir = tempfile::tempdir().unwrap();
     let s = spec(dir.path(), "qs");
     let mut tables = Vec::new();
     for threads in ["1", "2"] {
-        let out = dir.path().join(format!("out{threads}"));
-        raycost()
-            .args([
-                "run",
-                s.to_str().unwrap(),
-                "--quiet",
-                "--threads",
-                threads,
-                "--out",
-            ])
-            .arg(&out)
-            .assert()
-            .success();
+        let out = run_on(&s, threads, &dir.path().join(format!("out{threads}")));
         let csv = out.join("qs/qs.csv");
         let (h, rows) = read_csv(&csv);
         let col = |n: &str| {
@@ -280,6 +285,52 @@ ratio = 0.05
             measured_columns(&csv),
             measured_columns(&out.join("qsl/qsl.frames.csv")),
         ));
+/// `dynamic_traversal_s` (eq. 8's traversal in seconds): with the disc index gathering the dynamic
+/// points it is positive in the main table and every frame, 0 with the sphere cache, classed
+/// timing; and the extra walk leaves the measured columns thread-independent as before.
+#[test]
+fn the_traversal_alone_is_timed_where_the_disc_index_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = spec(dir.path(), "trav");
+    let text = std::fs::read_to_string(&s)
+        .unwrap()
+        .replace("frames = 12", "frames = 3")
+        .replace(
+            "ratio = 0.08",
+            "ratio = 0.08\n\n[sweep]\n\"detp.engine\" = [\"sphere-cache\", \"disc-index\"]",
+        );
+    std::fs::write(&s, text).unwrap();
+    let mut tables = Vec::new();
+    for threads in ["1", "2"] {
+        let out = run_on(&s, threads, &dir.path().join(format!("out{threads}")));
+        let (main, frames) = (out.join("trav/trav.csv"), out.join("trav/trav.frames.csv"));
+        for (table, path, column) in [
+            ("main", &main, "dynamic_traversal_s_mean"),
+            ("frames", &frames, "dynamic_traversal_s"),
+        ] {
+            assert_eq!(class_of(&out, "trav", table, column), "timing");
+            let (h, rows) = read_csv(path);
+            let at = |c: &str| {
+                h.iter()
+                    .position(|x| x == c)
+                    .unwrap_or_else(|| panic!("{c}"))
+            };
+            let engines = ["sphere-cache", "disc-index"];
+            for r in &rows {
+                let engine = if table == "main" {
+                    r[at("detp.engine")].as_str()
+                } else {
+                    engines[r[at("point")].parse::<usize>().unwrap()]
+                };
+                let v: f64 = r[at(column)].parse().unwrap();
+                if engine == "disc-index" {
+                    assert!(v.is_finite() && v > 0.0, "{table} {column}: {v}");
+                } else {
+                    assert_eq!(v, 0.0, "{table} {column} with the sphere cache");
+                }
+            }
+        }
+        tables.push((measured_columns(&main), measured_columns(&frames)));
     }
     assert_eq!(
         tables[0], tables[1],

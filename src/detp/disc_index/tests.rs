@@ -109,7 +109,8 @@ fn both_indexes_equal_brute_force_and_add_then_remove_equals_the_complement() {
 }
 
 /// Every SIMD path, on random and adversarial segments, with one radius and radii per disc: the
-/// sums equal brute force, and `traversal_only` counts exactly what `accumulate` counts.
+/// sums equal brute force, and `traversal_only` counts exactly what `accumulate` counts (all
+/// segments, or a listed subset).
 #[test]
 fn every_path_equals_brute_force_and_the_walk_alone_counts_the_same() {
     let (mut store, discs) = scene(4_000, 1_500, 0.05, 5);
@@ -135,6 +136,14 @@ fn every_path_equals_brute_force_and_the_walk_alone_counts_the_same() {
                 let st = ix.accumulate(&store, None, 1, &mut acc);
                 assert_eq!(acc, want, "{name} {path:?}");
                 assert_eq!(ix.traversal_only(&store, None), st, "{name} {path:?}");
+                // And over a listed subset (how quasi-static frames walk the index).
+                let some: Vec<u32> = (0..store.len() as u32).step_by(3).collect();
+                let st = ix.accumulate(&store, Some(&some), 1, &mut acc);
+                assert_eq!(
+                    ix.traversal_only(&store, Some(&some)),
+                    st,
+                    "{name} {path:?}"
+                );
             }
         }
     }

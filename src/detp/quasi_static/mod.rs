@@ -126,6 +126,10 @@ pub struct Params {
     pub index: IndexKind,
     /// Which segments the dynamic points' engines get.
     pub feed: Feed,
+    /// Also time the disc index's traversal alone for the dynamic points
+    /// ([`FrameStats::dynamic_traversal_s`]): a second walk of each mover's index after the frame's
+    /// pass, kept out of every other seconds (eq. 8's assumption measured; the bench leaves it off).
+    pub time_traversal: bool,
 }
 
 pub use super::disc_index::IndexKind;
@@ -188,6 +192,12 @@ pub struct FrameStats {
     pub static_s: f64,
     /// Dynamic-points seconds.
     pub dynamic_s: f64,
+    /// Seconds of the disc index's traversal alone for the dynamic points: every mover whose points
+    /// used the disc index, its index walked again for the same segments without a disc test
+    /// ([`DiscIndex::traversal_only`]), after the pass and outside `dynamic_s` and `frame_s`. 0 when
+    /// no mover used the disc index (as `dynamic_traversal`), NaN when [`Params::time_traversal`]
+    /// is off.
+    pub dynamic_traversal_s: f64,
     /// Whole frame seconds.
     pub frame_s: f64,
 }
@@ -302,6 +312,17 @@ pub struct Prediction {
     pub best: Used,
 }
 
+/// One mover's dynamic points recomputed: its posed discs, their sums, the engine used, its counts,
+/// and (disc index) the walk to time alone afterwards.
+type DynamicSums = (Discs, Vec<Acc>, Used, Counts, Option<IndexWalk>);
+
+/// A mover's disc index and the segments its pass walked (all of the store's, or those listed),
+/// kept so that `QuasiStatic::time_traversal` can walk them again without disc tests.
+struct IndexWalk {
+    index: Box<dyn DiscIndex>,
+    ids: Option<Vec<u32>>,
+}
+
 /// Seconds spent in `f`, with its value.
 fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
     let t = Instant::now();
@@ -412,10 +433,11 @@ impl QuasiStatic {
         qs.static_acc = acc;
         t.add_static(&mut stats);
         stats.static_s = s;
-        let (dynamic, s) = timed(|| qs.dynamic_sums(&qs.store, true));
+        let (mut dynamic, s) = timed(|| qs.dynamic_sums(&qs.store, true));
         stats.dynamic_s = s;
+        let aside = qs.time_traversal(&mut dynamic, &mut stats);
         qs.apply_dynamic(dynamic, &mut stats);
-        stats.frame_s = t_all.elapsed().as_secs_f64();
+        stats.frame_s = t_all.elapsed().as_secs_f64() - aside;
         (qs, stats)
     }
 
@@ -527,11 +549,7 @@ impl QuasiStatic {
 
     /// Every mover's points posed at the current frame and summed afresh from `store`. `indexed`:
     /// `store` is the state's own (the segment index may feed the sphere cache).
-    fn dynamic_sums(
-        &self,
-        store: &SegmentStore,
-        indexed: bool,
-    ) -> Vec<(Discs, Vec<Acc>, Used, Counts)> {
+    fn dynamic_sums(&self, store: &SegmentStore, indexed: bool) -> Vec<DynamicSums> {
         self.dynamic_sums_with(store, indexed, None, None)
     }
 
@@ -544,7 +562,7 @@ impl QuasiStatic {
         indexed: bool,
         force: Option<Used>,
         only: Option<usize>,
-    ) -> Vec<(Discs, Vec<Acc>, Used, Counts)> {
+    ) -> Vec<DynamicSums> {
         let t = self.scene.tau();
         self.dynamic
             .iter()
@@ -555,7 +573,7 @@ impl QuasiStatic {
                 let used = force.unwrap_or_else(|| self.engine_for(dp.mover));
                 let mut counts = Counts::default();
                 if discs.is_empty() {
-                    return (discs, acc, used, counts);
+                    return (discs, acc, used, counts, None);
                 }
                 let (c, r) = self.spheres[dp.mover];
                 // The mover's sphere padded by d (and the index's pad): every segment crossing one
@@ -588,7 +606,7 @@ impl QuasiStatic {
                 } else {
                     None
                 };
-                match used {
+                let walk = match used {
                     Used::SphereCache => {
                         let perm = permutation(&discs.centers, self.params.order, 10);
                         let sub;
@@ -602,20 +620,48 @@ impl QuasiStatic {
                         let cs =
                             sphere_cache::run(s, &discs, &perm, root, &self.params.cache, &mut acc);
                         counts.merge(&Counts::cache(&cs));
+                        None
                     }
                     Used::DiscIndex => {
-                        let idx = self.params.index.build(&discs, self.params.disc_radius);
-                        let is = idx.accumulate(store, ids.as_deref(), 1, &mut acc);
+                        let index = self.params.index.build(&discs, self.params.disc_radius);
+                        let is = index.accumulate(store, ids.as_deref(), 1, &mut acc);
                         counts.merge(&Counts::index(&is));
+                        // Kept for the walk alone only when it is timed (otherwise released here).
+                        self.params
+                            .time_traversal
+                            .then_some(IndexWalk { index, ids })
                     }
-                }
-                (discs, acc, used, counts)
+                };
+                (discs, acc, used, counts, walk)
             })
             .collect()
     }
 
-    fn apply_dynamic(&mut self, out: Vec<(Discs, Vec<Acc>, Used, Counts)>, stats: &mut FrameStats) {
-        for (dp, (discs, acc, used, k)) in self.dynamic.iter_mut().zip(out) {
+    /// Times the disc index's traversal alone for the movers of `out` whose points used it (see
+    /// [`FrameStats::dynamic_traversal_s`]: their indexes walked again over the state's own store
+    /// as their pass walked it; 0 when none did, NaN when [`Params::time_traversal`] is off), then
+    /// releases those indexes, charging the release to `dynamic_s` as when the pass dropped them
+    /// itself. Returns the seconds to keep out of `frame_s`.
+    fn time_traversal(&self, out: &mut [DynamicSums], stats: &mut FrameStats) -> f64 {
+        let walks: Vec<IndexWalk> = out.iter_mut().filter_map(|o| o.4.take()).collect();
+        let (traversal_s, aside) = timed(|| {
+            let each = walks
+                .iter()
+                .map(|w| timed(|| w.index.traversal_only(&self.store, w.ids.as_deref())).1);
+            if self.params.time_traversal {
+                each.sum()
+            } else {
+                f64::NAN
+            }
+        });
+        stats.dynamic_traversal_s = traversal_s;
+        let ((), release_s) = timed(|| drop(walks));
+        stats.dynamic_s += release_s;
+        aside
+    }
+
+    fn apply_dynamic(&mut self, out: Vec<DynamicSums>, stats: &mut FrameStats) {
+        for (dp, (discs, acc, used, k, _)) in self.dynamic.iter_mut().zip(out) {
             dp.discs = discs;
             dp.acc = acc;
             stats.used.push(used);
@@ -727,14 +773,16 @@ impl QuasiStatic {
         });
         stats.static_s = s;
         // 4. Dynamic points, afresh.
-        let (dynamic, s) = timed(|| self.dynamic_sums(&self.store, true));
+        let (mut dynamic, s) = timed(|| self.dynamic_sums(&self.store, true));
         stats.dynamic_s = s;
+        // Before compaction moves the slots the walks list.
+        let aside = self.time_traversal(&mut dynamic, &mut stats);
         self.apply_dynamic(dynamic, &mut stats);
         if self.dead > self.live_segments() {
             self.compact();
         }
         self.frame = f;
-        stats.frame_s = t_all.elapsed().as_secs_f64();
+        stats.frame_s = t_all.elapsed().as_secs_f64() - aside;
         stats
     }
 
@@ -990,6 +1038,7 @@ impl FrameStats {
             retrace_s: self.retrace_s + o.retrace_s,
             static_s: self.static_s + o.static_s,
             dynamic_s: self.dynamic_s + o.dynamic_s,
+            dynamic_traversal_s: self.dynamic_traversal_s + o.dynamic_traversal_s,
             frame_s: self.frame_s + o.frame_s,
         })
     }

@@ -32,6 +32,7 @@ fn params(engine: Engine, photons: u64, frames: u32) -> Params {
             IndexKind::Grid(40.0)
         },
         feed: Feed::Paper,
+        time_traversal: false,
     }
 }
 
@@ -262,5 +263,64 @@ fn photon_ranges_add_up_to_the_whole_run_frame_by_frame() {
             }
         }
         assert_eq!(full, whole.sums());
+    }
+}
+
+/// The frame's stats without its seconds (every count, the engines used).
+fn counts_only(s: &FrameStats) -> FrameStats {
+    FrameStats {
+        search_s: 0.0,
+        retrace_s: 0.0,
+        static_s: 0.0,
+        dynamic_s: 0.0,
+        dynamic_traversal_s: 0.0,
+        frame_s: 0.0,
+        ..s.clone()
+    }
+}
+
+/// Timing the disc index's traversal alone (`Params::time_traversal`) is a second walk beside the
+/// frame's: every sum and every count stay those of a run without it, frame by frame, for each
+/// feed the disc index can get; its seconds are positive wherever the disc index gathers the
+/// dynamic points (frame 0 included), 0 with the sphere cache, NaN when not timed.
+#[test]
+fn timing_the_traversal_alone_changes_no_sum_or_count() {
+    let frames = 4;
+    for (engine, feed) in [
+        (Engine::DiscIndex, Feed::Paper),
+        (Engine::DiscIndex, Feed::SegmentIndex),
+        (Engine::SphereCache, Feed::Paper),
+    ] {
+        let run = |time_traversal: bool| {
+            let p = Params {
+                feed,
+                time_traversal,
+                ..params(engine, 2000, frames)
+            };
+            let (mut qs, f0) = QuasiStatic::start(scene(), p);
+            let mut out = vec![(f0, qs.sums())];
+            for f in 1..frames {
+                let st = qs.step(f);
+                out.push((st, qs.sums()));
+            }
+            out
+        };
+        let (plain, timed) = (run(false), run(true));
+        for ((p, p_sums), (t, t_sums)) in plain.iter().zip(&timed) {
+            let at = format!("{engine:?} {feed:?} frame {}", t.frame);
+            assert_eq!(t_sums, p_sums, "{at}: sums");
+            assert_eq!(counts_only(t), counts_only(p), "{at}: counts");
+            assert!(p.dynamic_traversal_s.is_nan(), "{at}: not timed");
+            if engine == Engine::DiscIndex {
+                assert!(t.dynamic_traversal > 0, "{at}: the index was walked");
+                assert!(
+                    t.dynamic_traversal_s.is_finite() && t.dynamic_traversal_s > 0.0,
+                    "{at}: {}",
+                    t.dynamic_traversal_s
+                );
+            } else {
+                assert_eq!(t.dynamic_traversal_s, 0.0, "{at}: no disc index");
+            }
+        }
     }
 }

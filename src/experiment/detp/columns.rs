@@ -65,6 +65,12 @@ pub const COST_PER_REPLICA_S: Column = Column::timed_estimate(
     "s",
     "seconds the engine took in one replica: mean, standard error across replicas, replicas",
 );
+/// The disc index's walk alone, per replica.
+pub const TRAVERSAL_PER_REPLICA_S: Column = Column::timed_estimate(
+    "traversal_{}_per_replica_s",
+    "s",
+    "disc index: seconds of a second pass in one replica that walks the index for the same segments exactly as the engine's pass does (cells or nodes, box tests, DDA steps, candidate lists) but tests no disc, timed apart right after it on the same threads (not in cost_disc_index_s); over cost_disc_index_per_replica_s it is eq. 8's traversal share in seconds: mean, standard error across replicas, replicas",
+);
 /// Theorem 1 for them.
 pub const TESTS_THEORY: Column = Column::value(
     "tests_{}_theory",
@@ -318,6 +324,9 @@ pub const DISC_INDEX: Table<DetpConfig, IndexMeasured> = Table::of(&[
     col(&BYTES, |_, e| e.bytes.into()),
     col(&TESTS_PER_REPLICA, |_, e| e.tests_per_replica.into()),
     col(&COST_PER_REPLICA_S, |_, e| e.seconds_per_replica.into()),
+    col(&TRAVERSAL_PER_REPLICA_S, |_, e| {
+        e.traversal_per_replica.into()
+    }),
 ]);
 
 /// Brute force's columns.

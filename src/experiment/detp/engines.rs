@@ -36,8 +36,8 @@ pub(super) enum Output {
 /// rays a sphere holds; the photon map's neighbours on every photon) has none.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize, PartialEq)]
 pub enum EnginePart {
-    /// The disc index: its [`IndexStats`] (nodes, box tests, DDA steps, disc tests), build and
-    /// query seconds, bytes.
+    /// The disc index: its [`IndexStats`] (nodes, box tests, DDA steps, disc tests), build,
+    /// query and traversal-alone seconds, bytes.
     DiscIndex {
         /// Nodes visited, box tests, DDA steps, disc tests.
         stats: [u64; 4],
@@ -45,6 +45,8 @@ pub enum EnginePart {
         build_s: f64,
         /// Query seconds.
         query_s: f64,
+        /// Seconds of the same walk without disc tests ([`DiscIndex::traversal_only`]).
+        traversal_s: f64,
         /// Bytes of the index.
         bytes: usize,
     },
@@ -68,18 +70,21 @@ impl EnginePart {
                     stats: a,
                     build_s,
                     query_s,
+                    traversal_s,
                     bytes,
                 },
                 Self::DiscIndex {
                     stats: b,
                     build_s: b_build,
                     query_s: b_query,
+                    traversal_s: b_traversal,
                     bytes: b_bytes,
                 },
             ) => Self::DiscIndex {
                 stats: std::array::from_fn(|i| a[i] + b[i]),
                 build_s: build_s + b_build,
                 query_s: query_s + b_query,
+                traversal_s: traversal_s + b_traversal,
                 bytes: (*bytes).max(*b_bytes),
             },
             (
@@ -219,6 +224,9 @@ pub struct IndexMeasured {
     pub tests_per_replica: Estimate,
     /// Seconds per replica, with their spread.
     pub seconds_per_replica: Estimate,
+    /// Seconds per replica of the same walk without disc tests (eq. 8's traversal), with their
+    /// spread.
+    pub traversal_per_replica: Estimate,
 }
 
 /// Brute force's tests, summed over replicas.
@@ -439,14 +447,28 @@ impl SphereCache {
     }
 }
 
+/// One replica of the disc index.
+#[derive(Clone, Copy)]
+struct IndexRun {
+    stats: IndexStats,
+    build_s: f64,
+    /// Seconds of the engine's pass (`accumulate`).
+    query_s: f64,
+    /// Seconds of the walk alone (`traversal_only`), timed after the pass.
+    traversal_s: f64,
+    bytes: usize,
+}
+
 /// The disc index (octree or grid).
 #[derive(Default)]
 struct Index {
-    /// Per replica: stats, build seconds, query seconds, bytes.
-    runs: Vec<(disc_index::IndexStats, f64, f64, usize)>,
+    runs: Vec<IndexRun>,
 }
 
 impl Engine for Index {
+    /// Builds the index and runs its pass; then, untimed by the pass and adding nothing, walks it
+    /// again for the same segments without testing a disc (eq. 8 assumes that walk negligible
+    /// against the tests): the same thread pool, so the two seconds compare like for like.
     fn run(&mut self, cfg: &DetpConfig, rays: &RaySet, pts: &PointSet) -> Output {
         let discs = &pts.discs;
         let mut acc = vec![0; discs.len()];
@@ -459,20 +481,30 @@ impl Engine for Index {
                 timed(|| Box::new(disc_index::GridIndex::build(discs, w)) as Box<dyn DiscIndex>)
             }
         };
-        let (stats, s) = timed(|| ix.accumulate(&rays.store, None, 1, &mut acc));
-        self.runs.push((stats, build_s, s, ix.bytes()));
+        let (stats, query_s) = timed(|| ix.accumulate(&rays.store, None, 1, &mut acc));
+        let (walked, traversal_s) = timed(|| ix.traversal_only(&rays.store, None));
+        debug_assert_eq!(walked, stats, "the walk alone is the pass's walk");
+        self.runs.push(IndexRun {
+            stats,
+            build_s,
+            query_s,
+            traversal_s,
+            bytes: ix.bytes(),
+        });
         Output::Sums(acc)
     }
     fn seconds(&self) -> f64 {
-        self.runs.iter().map(|r| r.2).sum()
+        self.runs.iter().map(|r| r.query_s).sum()
     }
     fn part(&self) -> Option<EnginePart> {
-        let &(st, build_s, query_s, bytes) = self.runs.last()?;
+        let r = self.runs.last()?;
+        let st = r.stats;
         Some(EnginePart::DiscIndex {
             stats: [st.nodes_visited, st.box_tests, st.dda_steps, st.ray_disc_tests],
-            build_s,
-            query_s,
-            bytes,
+            build_s: r.build_s,
+            query_s: r.query_s,
+            traversal_s: r.traversal_s,
+            bytes: r.bytes,
         })
     }
     fn absorb(&mut self, _cfg: &DetpConfig, _pts: &PointSet, part: &EnginePart) {
@@ -480,6 +512,7 @@ impl Engine for Index {
             stats: [nodes_visited, box_tests, dda_steps, ray_disc_tests],
             build_s,
             query_s,
+            traversal_s,
             bytes,
         } = *part
         else {
@@ -491,26 +524,28 @@ impl Engine for Index {
             dda_steps,
             ray_disc_tests,
         };
-        self.runs.push((stats, build_s, query_s, bytes));
+        self.runs.push(IndexRun {
+            stats,
+            build_s,
+            query_s,
+            traversal_s,
+            bytes,
+        });
     }
     fn measured(&self, p: &Pooled) -> EngineMeasured {
-        let tests: Vec<f64> = self
-            .runs
-            .iter()
-            .map(|r| r.0.ray_disc_tests as f64)
-            .collect();
-        let secs: Vec<f64> = self.runs.iter().map(|r| r.2).collect();
+        let per = |f: fn(&IndexRun) -> f64| per_replica(&self.runs.iter().map(f).collect::<Vec<_>>());
         EngineMeasured::DiscIndex(IndexMeasured {
             sizes: p.sizes,
             stats: self
                 .runs
                 .iter()
-                .fold(IndexStats::default(), |a, r| a.merge(r.0)),
+                .fold(IndexStats::default(), |a, r| a.merge(r.stats)),
             seconds: self.seconds(),
-            build_s: self.runs.iter().map(|r| r.1).sum(),
-            bytes: self.runs.iter().map(|r| r.3).max().unwrap_or(0),
-            tests_per_replica: per_replica(&tests),
-            seconds_per_replica: per_replica(&secs),
+            build_s: self.runs.iter().map(|r| r.build_s).sum(),
+            bytes: self.runs.iter().map(|r| r.bytes).max().unwrap_or(0),
+            tests_per_replica: per(|r| r.stats.ray_disc_tests as f64),
+            seconds_per_replica: per(|r| r.query_s),
+            traversal_per_replica: per(|r| r.traversal_s),
         })
     }
 }

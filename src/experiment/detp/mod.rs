@@ -6,6 +6,7 @@
 //!   counters per level — rays held, rebuilds (cache misses), ray–sphere tests — against
 //!   n_R·Q^(2i) and Theorem 1;
 //! - `disc-index`: the discs in an octree or a grid that every segment traverses, against Theorem 1;
+//!   its walk alone (no disc tests) is timed apart after its pass, for eq. 8's traversal share;
 //! - `brute-force`: every segment against every disc;
 //! - `photon-map`: Jensen's k-nearest-neighbour estimate over the same photons (scenes only);
 //! - `reference`: the path-traced irradiance at every point ([`crate::lt::reference`]), the ground

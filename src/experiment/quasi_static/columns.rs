@@ -216,6 +216,13 @@ pub const DYNAMIC_S: Column = Column::timed_estimate(
     "seconds gathering the dynamic points, per frame",
 )
 .decided_by_timing();
+/// The dynamic points' disc-index traversal alone, seconds.
+pub const DYNAMIC_TRAVERSAL_S: Column = Column::timed_estimate(
+    "dynamic_traversal_s",
+    "s",
+    "seconds of the disc index's traversal alone for the dynamic points: each object's index walked again for the same segments as its pass (cells or nodes, box tests, DDA steps, candidate lists) but testing no disc, timed apart after the pass (in neither dynamic_s nor frame_s); over dynamic_s it is eq. 8's traversal share in seconds. Objects on the sphere cache add nothing (0 with the sphere cache, as dynamic_traversal). Per frame",
+)
+.decided_by_timing();
 /// Frame seconds.
 pub const FRAME_S: Column =
     Column::timed_estimate("frame_s", "s", "seconds of an incremental frame");
@@ -250,6 +257,7 @@ pub const PER_FRAME_VALUES: &[(Column, FrameValue)] = &[
     (RETRACE_S, |s| s.retrace_s),
     (STATIC_S, |s| s.static_s),
     (DYNAMIC_S, |s| s.dynamic_s),
+    (DYNAMIC_TRAVERSAL_S, |s| s.dynamic_traversal_s),
     (FRAME_S, |s| s.frame_s),
 ];
 
@@ -662,6 +670,13 @@ pub mod frame {
     /// Dynamic seconds.
     pub const DYNAMIC_S: Column =
         timing("dynamic_s", "s", "seconds gathering the dynamic points").decided_by_timing();
+    /// The dynamic points' disc-index traversal alone.
+    pub const DYNAMIC_TRAVERSAL_S: Column = timing(
+        "dynamic_traversal_s",
+        "s",
+        "seconds of the disc index's traversal alone for the dynamic points (walked again without disc tests after the pass; in neither dynamic_s nor frame_s); 0 with the sphere cache",
+    )
+    .decided_by_timing();
     /// Frame seconds.
     pub const FRAME_S: Column = timing("frame_s", "s", "seconds of the frame");
     /// The static index's build in one replica.
@@ -746,6 +761,9 @@ pub const FRAMES_TABLE: Table<QuasiStaticConfig, FrameRow> = Table::of(&[
     col(&frame::RETRACE_S, |_, r| r.stats.retrace_s.into()),
     col(&frame::STATIC_S, |_, r| r.stats.static_s.into()),
     col(&frame::DYNAMIC_S, |_, r| r.stats.dynamic_s.into()),
+    col(&frame::DYNAMIC_TRAVERSAL_S, |_, r| {
+        r.stats.dynamic_traversal_s.into()
+    }),
     col(&frame::FRAME_S, |_, r| r.stats.frame_s.into()),
     col(&frame::STATIC_INDEX_BUILD_S, |_, r| {
         r.static_index_build_s.unwrap_or(f64::NAN).into()

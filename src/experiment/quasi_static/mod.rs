@@ -11,8 +11,9 @@
 //! the new pose) beside f_R = n_R·Σ(r_D/r_0)² (`retraced_rays_theory`), photons and segments
 //! re-traced, the search's tests, the static and dynamic points' tests, the disc index's traversal,
 //! the sphere cache's list building, the feed's query and each side's counted cost (weights and the
-//! `dynamic.feed` choices in `docs/detp-costs.md`), each phase's seconds,
-//! `frame_s` and `full_frame_s`; the theory of Theorem 2 for the same n: the static points' costs
+//! `dynamic.feed` choices in `docs/detp-costs.md`), each phase's seconds, the disc index's
+//! traversal alone for the dynamic points (`dynamic_traversal_s`: a second walk without disc tests,
+//! timed apart), `frame_s` and `full_frame_s`; the theory of Theorem 2 for the same n: the static points' costs
 //! (2 vs 8.08·t·f_R·∛n_S) and the dynamic points' (sphere cache vs disc index). Side tables: `frames`
 //! (one row per frame) and, with `detp.write_points`, `points` (the irradiance at one frame).
 //! A point's run leaves a typed measurement ([`QsMeasured`], `measure.rs`), its frames and points
@@ -73,6 +74,8 @@ pub fn params(cfg: &QuasiStaticConfig, n_dynamic_points: f64, replica: u64) -> P
         order: d.order,
         index: d.index,
         feed: cfg.feed,
+        // dynamic_traversal_s (eq. 8 in seconds).
+        time_traversal: true,
     }
 }
 
