@@ -124,7 +124,7 @@ fn hybrid_picks_by_ratio() {
 #[test]
 fn the_predictor_picks_a_measured_engine_and_stays_exact() {
     let (mut qs, _) = QuasiStatic::start(scene(), params(Engine::Hybrid, 3000, 10));
-    let preds = qs.predict_and_pick(0.25, true);
+    let preds = qs.predict_and_pick(0.25, Predictor::Subsample, true);
     assert_eq!(preds.len(), qs.scene.movers.len());
     for p in &preds {
         assert!(p

@@ -6,7 +6,7 @@
 //! anything is written: the scene must have a dynamic object; once scaled, no object may be as large
 //! as the scene, leave the scene's box at any frame, or overlap another object.
 
-use crate::detp::quasi_static::Feed;
+use crate::detp::quasi_static::{Feed, Predictor};
 use crate::experiment::detp::{DetpConfig, DynamicEngine, EngineChoice, Points, RawDetp, Rays};
 use crate::experiment::inputs::{Inputs, SceneFile};
 use crate::experiment::kind::{refuse, ConfigError};
@@ -50,6 +50,12 @@ crate::spec_table! {
         /// cost at frame 0.
         predict: Option<f64> = {absent "0.05 with `detp.engine = \"predicted\"`, else none"}
             read opt_fraction, "number", "", "(0, 1]";
+        /// Which §4.1 predictor: `"subsample"` times both engines on the fraction and scales by
+        /// 1/fraction; `"paper"` predicts the sphere cache's tests level by level (the upper
+        /// levels simulated on the fraction, the lower ones from theory: n_R·Q^(2i) rays per
+        /// level) and scales the fraction's seconds by them (`docs/detp-costs.md`).
+        predictor: PredictorChoice = {default PredictorChoice::Subsample}, "string", "",
+            "`\"subsample\"`, `\"paper\"` (needs the predictor)";
         /// With the predictor: each replica also times both engines warm on every segment this
         /// many times, interleaved (`warm_sphere_cache_s`, `warm_disc_index_s`: the faster engine
         /// the pick is judged against); 0: only the predictor's one measured pass.
@@ -61,6 +67,11 @@ crate::spec_table! {
             "`\"paper\"`, `\"segment-index\"`, `\"all\"`";
     }
 }
+
+crate::choice!(
+    /// `dynamic.predictor`.
+    PredictorChoice { Subsample => "subsample", Paper => "paper" } default Subsample
+);
 
 crate::choice!(
     /// `dynamic.feed`.
@@ -117,6 +128,8 @@ pub struct QuasiStaticConfig {
     pub reference_photons: Option<u64>,
     /// The predictor's fraction of photons (set, or 0.05 when the engine is "predicted").
     pub predict: Option<f64>,
+    /// Which predictor (with `predict`).
+    pub predictor: Predictor,
     /// Warm timings of both engines per replica, with the predictor.
     pub warm_repeats: u64,
     /// Which segments the dynamic points' engines get.
@@ -182,6 +195,12 @@ impl QuasiStaticConfig {
                 "times the engines beside the predictor: set dynamic.predict or detp.engine = \"predicted\"",
             );
         }
+        if dy.predictor == PredictorChoice::Paper && predict.is_none() {
+            return refuse(
+                "dynamic.predictor",
+                "chooses the §4.1 predictor: set dynamic.predict or detp.engine = \"predicted\"",
+            );
+        }
         if dy.warm_repeats > 1000 {
             return refuse(
                 "dynamic.warm_repeats",
@@ -205,6 +224,10 @@ impl QuasiStaticConfig {
                 FeedChoice::All => Feed::All,
             },
             predict,
+            predictor: match dy.predictor {
+                PredictorChoice::Subsample => Predictor::Subsample,
+                PredictorChoice::Paper => Predictor::Paper,
+            },
             warm_repeats: dy.warm_repeats,
             warnings,
         })
