@@ -257,7 +257,16 @@ pub fn run_to_level(
     acc: &mut [Acc],
     max_level: usize,
 ) -> CacheStats {
-    run_capped(store, discs, perm, root, params, acc, FilterPath::detect(), max_level)
+    run_capped(
+        store,
+        discs,
+        perm,
+        root,
+        params,
+        acc,
+        FilterPath::detect(),
+        max_level,
+    )
 }
 
 /// [`run`] with a chosen filter path (every path gives the same lists; tests force each).

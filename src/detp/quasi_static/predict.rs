@@ -283,6 +283,18 @@ impl QuasiStatic {
                 .count();
             split_level(n0 as u64, self.params.cache.q, self.params.cache.threshold)
         });
-        paper_cache_count(part, &discs, &perm, root, &self.params.cache, fraction, split)
+        paper_cache_count(
+            part,
+            &discs,
+            &perm,
+            root,
+            &self.params.cache,
+            fraction,
+            split,
+        )
     }
 }
+
+#[cfg(test)]
+#[path = "predict_tests.rs"]
+mod tests;

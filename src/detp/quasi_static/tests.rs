@@ -3,7 +3,7 @@
 use super::*;
 use crate::lt::Scene;
 
-fn scene() -> Scene {
+pub(super) fn scene() -> Scene {
     let p = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/experiments/scenes/cornell-dynamic.toml"
@@ -11,7 +11,7 @@ fn scene() -> Scene {
     Scene::load(std::path::Path::new(p)).expect("the dynamic Cornell box loads")
 }
 
-fn params(engine: Engine, photons: u64, frames: u32) -> Params {
+pub(super) fn params(engine: Engine, photons: u64, frames: u32) -> Params {
     Params {
         photons,
         seed: 11,

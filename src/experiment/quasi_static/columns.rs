@@ -299,6 +299,20 @@ pub const PREDICTED_S: Column = timing(
     "s",
     "the first object's predicted seconds per frame for the engine",
 );
+/// The paper predictor's level split.
+pub const PAPER_SPLIT_LEVEL: Column = Column::value(
+    "paper_split_level",
+    "level",
+    Class::Measured,
+    "dynamic.predictor = \"paper\": the first object's level split s (its sphere cache's levels 0 … s simulated on the fraction, the deeper ones from theory)",
+);
+/// The paper predictor's predicted tests.
+pub const PAPER_PREDICTED_TESTS: Column = Column::value(
+    "paper_predicted_sphere_cache_tests",
+    "tests",
+    Class::Measured,
+    "dynamic.predictor = \"paper\": the first object's predicted sphere-cache tests (ray–sphere + ray–disc) on all photons, the seconds' scale",
+);
 /// Measured seconds.
 pub const MEASURED_S: Column = timing(
     "measured_{}_s",
@@ -448,6 +462,12 @@ pub const MAIN: Table<QuasiStaticConfig, QsMeasured> = Table {
         }),
         col(&PREDICTED_S, |_, m| {
             per_engine(m, |p, i| p.first.predicted[i])
+        }),
+        col(&PAPER_SPLIT_LEVEL, |_, m| {
+            m.predictor.and_then(|p| p.first.paper).map(|(s, _)| s).into()
+        }),
+        col(&PAPER_PREDICTED_TESTS, |_, m| {
+            m.predictor.and_then(|p| p.first.paper).map(|(_, t)| t).into()
         }),
         col(&MEASURED_S, |_, m| {
             per_engine(m, |p, i| p.first.measured[i])

@@ -50,10 +50,13 @@ crate::spec_table! {
         /// cost at frame 0.
         predict: Option<f64> = {absent "0.05 with `detp.engine = \"predicted\"`, else none"}
             read opt_fraction, "number", "", "(0, 1]";
-        /// Which §4.1 predictor: `"subsample"` times both engines on the fraction and scales by
-        /// 1/fraction; `"paper"` predicts the sphere cache's tests level by level (the upper
-        /// levels simulated on the fraction, the lower ones from theory: n_R·Q^(2i) rays per
-        /// level) and scales the fraction's seconds by them (`docs/detp-costs.md`).
+        /// Which §4.1 predictor: `"subsample"` times both engines on the fraction and scales their
+        /// seconds by 1/fraction; `"paper"` predicts the sphere cache's tests level by level (the
+        /// upper levels simulated on the fraction down to the last level whose parent still holds
+        /// the threshold's rays there, the lower ones from theory: N_s·Q^(2(i−s)) rays per sphere,
+        /// spheres per level from the points) and scales the fraction's sphere-cache seconds by
+        /// those tests over the fraction's counted ones; the disc index's prediction is the
+        /// subsample's.
         predictor: PredictorChoice = {default PredictorChoice::Subsample}, "string", "",
             "`\"subsample\"`, `\"paper\"` (needs the predictor)";
         /// With the predictor: each replica also times both engines warm on every segment this
