@@ -285,6 +285,13 @@ ratio = 0.05
             measured_columns(&csv),
             measured_columns(&out.join("qsl/qsl.frames.csv")),
         ));
+    }
+    assert_eq!(
+        tables[0], tables[1],
+        "measured columns differ between 1 and 2 threads"
+    );
+}
+
 /// `dynamic_traversal_s` (eq. 8's traversal in seconds): with the disc index gathering the dynamic
 /// points it is positive in the main table and every frame, 0 with the sphere cache, classed
 /// timing; and the extra walk leaves the measured columns thread-independent as before.

@@ -245,6 +245,30 @@ pub fn run(
     run_with(store, discs, perm, root, params, acc, FilterPath::detect())
 }
 
+/// [`run`] with no level deeper than `max_level` built (the deepest list then serves the disc
+/// tests): the §4.1 predictor simulates the upper levels this way and takes the lower ones from
+/// theory. `max_level` ≥ the deepest level the run reaches gives exactly [`run`]'s counts.
+pub fn run_to_level(
+    store: &SegmentStore,
+    discs: &Discs,
+    perm: &[u32],
+    root: (DVec3, f64),
+    params: &SphereCacheParams,
+    acc: &mut [Acc],
+    max_level: usize,
+) -> CacheStats {
+    run_capped(
+        store,
+        discs,
+        perm,
+        root,
+        params,
+        acc,
+        FilterPath::detect(),
+        max_level,
+    )
+}
+
 /// [`run`] with a chosen filter path (every path gives the same lists; tests force each).
 ///
 /// # Panics
@@ -257,6 +281,21 @@ pub fn run_with(
     params: &SphereCacheParams,
     acc: &mut [Acc],
     path: FilterPath,
+) -> CacheStats {
+    run_capped(store, discs, perm, root, params, acc, path, MAX_LEVEL)
+}
+
+/// [`run_with`] building no level deeper than `max_level` (at most [`MAX_LEVEL`]).
+#[allow(clippy::too_many_arguments)]
+fn run_capped(
+    store: &SegmentStore,
+    discs: &Discs,
+    perm: &[u32],
+    root: (DVec3, f64),
+    params: &SphereCacheParams,
+    acc: &mut [Acc],
+    path: FilterPath,
+    max_level: usize,
 ) -> CacheStats {
     assert!(params.q > 0.0 && params.q < 1.0, "Q must lie in (0, 1)");
     assert!(params.chunk_points > 0, "chunk_points must be positive");
@@ -286,6 +325,7 @@ pub fn run_with(
         origin_bound,
         root: &root_list,
         simd: simd_for(path),
+        max_level: max_level.min(MAX_LEVEL),
     };
     // One set of level lists per worker, reused by every chunk it runs (the lists' contents never
     // carry over: each build rewrites its level's list), so a steady-state run allocates nothing.
@@ -314,6 +354,8 @@ struct Ctx<'a> {
     root: &'a RayList,
     /// The disc tests' path, matching the filter's (see [`simd_for`]).
     simd: SimdPath,
+    /// The deepest level built.
+    max_level: usize,
 }
 
 /// The disc tests' SIMD path for a filter path: the same instruction set (every path decides as
@@ -399,7 +441,7 @@ impl<'a> Ctx<'a> {
             };
             stack.truncate(keep);
             while stack.last().map_or(0, |l| l.len) >= self.params.threshold
-                && stack.len() <= MAX_LEVEL
+                && stack.len() <= self.max_level
             {
                 let i = stack.len();
                 let r = self.r0 * self.params.q.powi(i as i32);

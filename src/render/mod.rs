@@ -115,6 +115,7 @@ fn config(plan: &Plan, point: usize) -> anyhow::Result<(QuasiStaticConfig, Optio
                     points_frame: None,
                     reference_photons: None,
                     predict: None,
+                    predictor: crate::detp::quasi_static::Predictor::default(),
                     warm_repeats: 0,
                     feed: crate::detp::quasi_static::Feed::default(),
                     warnings: Vec::new(),

@@ -26,6 +26,7 @@
 //! order; dynamic points are summed afresh. [`QuasiStatic::full_recalculation`] checks it.
 
 pub mod lines;
+pub mod predict;
 pub mod segment_index;
 
 use std::ops::Range;
@@ -45,6 +46,8 @@ use super::surface_points::points_on;
 use crate::lt::motion::tau;
 use crate::lt::Scene;
 use segment_index::{SearchStats, SegmentIndex};
+
+pub use predict::{Prediction, Predictor};
 
 /// How a mover's dynamic points are recomputed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -298,20 +301,6 @@ pub struct QuasiStatic {
     picked: Vec<Used>,
 }
 
-/// The §4.1 predictor for one mover: each engine's dynamic-point cost predicted from a fraction of
-/// the photons, and measured on all of them at the same frame.
-#[derive(Clone, Copy, Debug)]
-pub struct Prediction {
-    /// Predicted seconds (sphere cache, disc index): the fraction's seconds over the fraction.
-    pub predicted: [f64; 2],
-    /// Measured seconds on every segment (sphere cache, disc index).
-    pub measured: [f64; 2],
-    /// The engine the prediction picks.
-    pub pick: Used,
-    /// The engine that was faster on every segment.
-    pub best: Used,
-}
-
 /// One mover's dynamic points recomputed: its posed discs, their sums, the engine used, its counts,
 /// and (disc index) the walk to time alone afterwards.
 type DynamicSums = (Discs, Vec<Acc>, Used, Counts, Option<IndexWalk>);
@@ -547,6 +536,16 @@ impl QuasiStatic {
             .unwrap_or_else(|| self.rule_engine(mover))
     }
 
+    /// The root of mover `m`'s sphere cache: its bounding sphere padded by d (and the segment
+    /// index's pad), so every segment crossing one of its discs meets it.
+    fn dynamic_root(&self, m: usize) -> (DVec3, f64) {
+        let (c, r) = self.spheres[m];
+        (
+            c,
+            (r + self.params.disc_radius) * (1.0 + 1e-9) + self.index.pad(),
+        )
+    }
+
     /// Every mover's points posed at the current frame and summed afresh from `store`. `indexed`:
     /// `store` is the state's own (the segment index may feed the sphere cache).
     fn dynamic_sums(&self, store: &SegmentStore, indexed: bool) -> Vec<DynamicSums> {
@@ -575,13 +574,7 @@ impl QuasiStatic {
                 if discs.is_empty() {
                     return (discs, acc, used, counts, None);
                 }
-                let (c, r) = self.spheres[dp.mover];
-                // The mover's sphere padded by d (and the index's pad): every segment crossing one
-                // of its discs meets it.
-                let root = (
-                    c,
-                    (r + self.params.disc_radius) * (1.0 + 1e-9) + self.index.pad(),
-                );
+                let root = self.dynamic_root(dp.mover);
                 let fed = indexed
                     && match used {
                         Used::SphereCache => self.params.feed != Feed::All,
@@ -812,56 +805,6 @@ impl QuasiStatic {
             self.static_discs.len(),
             self.dynamic.iter().map(|d| d.discs.len()).collect(),
         )
-    }
-
-    /// The paper's §4.1 predictor: runs each dynamic-point engine on the segments of the first
-    /// `fraction` of the photons (a fraction of the rays: both engines' costs are linear in n_R
-    /// beyond a fixed part, timed on no segments), scales the part that grows with the rays by
-    /// 1/fraction, and (with `apply`) picks the cheaper one per mover for the frames that follow.
-    /// To say whether the pick was right, both engines also run on every segment once.
-    pub fn predict_and_pick(&mut self, fraction: f64, apply: bool) -> Vec<Prediction> {
-        assert!(fraction > 0.0 && fraction <= 1.0, "fraction in (0, 1]");
-        let live = self.live_store();
-        let cut = ((self.params.photons as f64 * fraction).ceil() as u32).max(1);
-        let part = SegmentStore::new(
-            live.segments
-                .iter()
-                .filter(|s| s.photon < cut)
-                .copied()
-                .collect(),
-            live.scale,
-        );
-        let none = SegmentStore::new(Vec::new(), live.scale);
-        let time = |store: &SegmentStore, u: Used, m: usize| {
-            let t = Instant::now();
-            let _ = self.dynamic_sums_with(store, false, Some(u), Some(m));
-            t.elapsed().as_secs_f64()
-        };
-        let engines = [Used::SphereCache, Used::DiscIndex];
-        let pick_of = |c: [f64; 2]| if c[0] <= c[1] { engines[0] } else { engines[1] };
-        let out: Vec<Prediction> = self
-            .dynamic
-            .iter()
-            .map(|dp| {
-                // cost(n_R) = fixed + per-ray·n_R: the fixed part (posing the discs, building
-                // the index or the order) is timed on no segments and not scaled.
-                let predicted = engines.map(|u| {
-                    let fixed = time(&none, u, dp.mover);
-                    fixed + (time(&part, u, dp.mover) - fixed).max(0.0) / fraction
-                });
-                let measured = engines.map(|u| time(&live, u, dp.mover));
-                Prediction {
-                    predicted,
-                    measured,
-                    pick: pick_of(predicted),
-                    best: pick_of(measured),
-                }
-            })
-            .collect();
-        if apply {
-            self.picked = out.iter().map(|p| p.pick).collect();
-        }
-        out
     }
 
     /// Warm timings of both dynamic-point engines on every live segment, for mover `mover`:

@@ -3,7 +3,7 @@
 use super::*;
 use crate::lt::Scene;
 
-fn scene() -> Scene {
+pub(super) fn scene() -> Scene {
     let p = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/experiments/scenes/cornell-dynamic.toml"
@@ -11,7 +11,7 @@ fn scene() -> Scene {
     Scene::load(std::path::Path::new(p)).expect("the dynamic Cornell box loads")
 }
 
-fn params(engine: Engine, photons: u64, frames: u32) -> Params {
+pub(super) fn params(engine: Engine, photons: u64, frames: u32) -> Params {
     Params {
         photons,
         seed: 11,
@@ -125,7 +125,7 @@ fn hybrid_picks_by_ratio() {
 #[test]
 fn the_predictor_picks_a_measured_engine_and_stays_exact() {
     let (mut qs, _) = QuasiStatic::start(scene(), params(Engine::Hybrid, 3000, 10));
-    let preds = qs.predict_and_pick(0.25, true);
+    let preds = qs.predict_and_pick(0.25, Predictor::Subsample, true);
     assert_eq!(preds.len(), qs.scene.movers.len());
     for p in &preds {
         assert!(p

@@ -307,6 +307,20 @@ pub const PREDICTED_S: Column = timing(
     "s",
     "the first object's predicted seconds per frame for the engine",
 );
+/// The paper predictor's level split.
+pub const PAPER_SPLIT_LEVEL: Column = Column::value(
+    "paper_split_level",
+    "level",
+    Class::Measured,
+    "dynamic.predictor = \"paper\": the first object's level split s (its sphere cache's levels 0 … s simulated on the fraction, the deeper ones from theory); NaN for the subsample predictor",
+);
+/// The paper predictor's predicted tests.
+pub const PAPER_PREDICTED_TESTS: Column = Column::value(
+    "paper_predicted_sphere_cache_tests",
+    "tests",
+    Class::Measured,
+    "dynamic.predictor = \"paper\": the first object's predicted sphere-cache tests (ray–sphere + ray–disc) on all photons, the seconds' scale; NaN for the subsample predictor",
+);
 /// Measured seconds.
 pub const MEASURED_S: Column = timing(
     "measured_{}_s",
@@ -456,6 +470,18 @@ pub const MAIN: Table<QuasiStaticConfig, QsMeasured> = Table {
         }),
         col(&PREDICTED_S, |_, m| {
             per_engine(m, |p, i| p.first.predicted[i])
+        }),
+        // Written wherever a predictor ran (NaN for the subsample's), so a sweep over
+        // dynamic.predictor keeps one header.
+        col(&PAPER_SPLIT_LEVEL, |_, m| {
+            m.predictor
+                .map(|p| p.first.paper.map_or(Cell::from(f64::NAN), |(s, _)| Cell::from(s)))
+                .into()
+        }),
+        col(&PAPER_PREDICTED_TESTS, |_, m| {
+            m.predictor
+                .map(|p| p.first.paper.map_or(f64::NAN, |(_, t)| t))
+                .into()
         }),
         col(&MEASURED_S, |_, m| {
             per_engine(m, |p, i| p.first.measured[i])

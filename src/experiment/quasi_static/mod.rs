@@ -144,7 +144,11 @@ fn trace_replica(
         let rule: Vec<Used> = (0..qs.scene.movers.len())
             .map(|m| qs.rule_engine(m))
             .collect();
-        let p = qs.predict_and_pick(fraction, cfg.engine == DynamicEngine::Predicted);
+        let p = qs.predict_and_pick(
+            fraction,
+            cfg.predictor,
+            cfg.engine == DynamicEngine::Predicted,
+        );
         (fraction, p, rule)
     });
     let warm = if predictions.is_some() && !qs.scene.movers.is_empty() {

@@ -6,7 +6,7 @@
 //! anything is written: the scene must have a dynamic object; once scaled, no object may be as large
 //! as the scene, leave the scene's box at any frame, or overlap another object.
 
-use crate::detp::quasi_static::Feed;
+use crate::detp::quasi_static::{Feed, Predictor};
 use crate::experiment::detp::{
     DetpConfig, DynamicEngine, EngineChoice, Points, RawDetp, Rays, SurfacePoints,
 };
@@ -52,6 +52,15 @@ crate::spec_table! {
         /// cost at frame 0.
         predict: Option<f64> = {absent "0.05 with `detp.engine = \"predicted\"`, else none"}
             read opt_fraction, "number", "", "(0, 1]";
+        /// Which §4.1 predictor: `"subsample"` times both engines on the fraction and scales their
+        /// seconds by 1/fraction; `"paper"` predicts the sphere cache's tests level by level (the
+        /// upper levels simulated on the fraction down to the last level whose parent still holds
+        /// the threshold's rays there, the lower ones from theory: N_s·Q^(2(i−s)) rays per sphere,
+        /// spheres per level from the points) and scales the fraction's sphere-cache seconds by
+        /// those tests over the fraction's counted ones; the disc index's prediction is the
+        /// subsample's.
+        predictor: PredictorChoice = {default PredictorChoice::Subsample}, "string", "",
+            "`\"subsample\"`, `\"paper\"` (needs the predictor)";
         /// With the predictor: each replica also times both engines warm on every segment this
         /// many times, interleaved (`warm_sphere_cache_s`, `warm_disc_index_s`: the faster engine
         /// the pick is judged against); 0: only the predictor's one measured pass.
@@ -63,6 +72,11 @@ crate::spec_table! {
             "`\"paper\"`, `\"segment-index\"`, `\"all\"`";
     }
 }
+
+crate::choice!(
+    /// `dynamic.predictor`.
+    PredictorChoice { Subsample => "subsample", Paper => "paper" } default Subsample
+);
 
 crate::choice!(
     /// `dynamic.feed`.
@@ -119,6 +133,8 @@ pub struct QuasiStaticConfig {
     pub reference_photons: Option<u64>,
     /// The predictor's fraction of photons (set, or 0.05 when the engine is "predicted").
     pub predict: Option<f64>,
+    /// Which predictor (with `predict`).
+    pub predictor: Predictor,
     /// Warm timings of both engines per replica, with the predictor.
     pub warm_repeats: u64,
     /// Which segments the dynamic points' engines get.
@@ -181,21 +197,7 @@ impl QuasiStaticConfig {
         let mut warnings = check_motion(&scene, dy.frames as u32, blame)?;
         warnings.extend(scene.warnings.iter().cloned());
         check_lights(&scene)?;
-        let predict = dy
-            .predict
-            .or((d.engine == Some(DynamicEngine::Predicted)).then_some(0.05));
-        if dy.warm_repeats > 0 && predict.is_none() {
-            return refuse(
-                "dynamic.warm_repeats",
-                "times the engines beside the predictor: set dynamic.predict or detp.engine = \"predicted\"",
-            );
-        }
-        if dy.warm_repeats > 1000 {
-            return refuse(
-                "dynamic.warm_repeats",
-                format!("got {}, at most 1000", dy.warm_repeats),
-            );
-        }
+        let (predict, predictor, feed) = dy.choices(d.engine)?;
         Ok(Self {
             detp,
             scene,
@@ -207,12 +209,9 @@ impl QuasiStaticConfig {
             engine: d.engine.unwrap_or_default(),
             points_frame: dy.points_frame.map(|f| f as u32),
             reference_photons: dy.reference_photons,
-            feed: match dy.feed {
-                FeedChoice::Paper => Feed::Paper,
-                FeedChoice::SegmentIndex => Feed::SegmentIndex,
-                FeedChoice::All => Feed::All,
-            },
+            feed,
             predict,
+            predictor,
             warm_repeats: dy.warm_repeats,
             warnings,
             lines: false,
@@ -261,9 +260,7 @@ fn lines_config(
     }
     dy.check()?;
     let d = &raw.detp;
-    let predict = dy
-        .predict
-        .or((d.engine == Some(DynamicEngine::Predicted)).then_some(0.05));
+    let (predict, predictor, feed) = dy.choices(d.engine)?;
     Ok(QuasiStaticConfig {
         scene: crate::detp::quasi_static::lines::lines_scene(ratio),
         spacing: crate::theory::detp::ball_spacing(1.0, n as f64),
@@ -275,12 +272,9 @@ fn lines_config(
         engine: d.engine.unwrap_or_default(),
         points_frame: dy.points_frame.map(|f| f as u32),
         reference_photons: None,
-        feed: match dy.feed {
-            FeedChoice::Paper => Feed::Paper,
-            FeedChoice::SegmentIndex => Feed::SegmentIndex,
-            FeedChoice::All => Feed::All,
-        },
+        feed,
         predict,
+        predictor,
         warm_repeats: dy.warm_repeats,
         warnings: Vec::new(),
         lines: true,
@@ -288,6 +282,46 @@ fn lines_config(
 }
 
 impl RawDynamicSpec {
+    /// The engine choices of `[dynamic]`, shared by scenes and lines: the predictor's fraction (set,
+    /// or 0.05 when the engine is "predicted"), which predictor, the feed; warm timings and the
+    /// paper's predictor need the predictor to run.
+    fn choices(
+        &self,
+        engine: Option<DynamicEngine>,
+    ) -> Result<(Option<f64>, Predictor, Feed), ConfigError> {
+        let predict = self
+            .predict
+            .or((engine == Some(DynamicEngine::Predicted)).then_some(0.05));
+        if self.warm_repeats > 0 && predict.is_none() {
+            return refuse(
+                "dynamic.warm_repeats",
+                "times the engines beside the predictor: set dynamic.predict or detp.engine = \"predicted\"",
+            );
+        }
+        if self.predictor == PredictorChoice::Paper && predict.is_none() {
+            return refuse(
+                "dynamic.predictor",
+                "chooses the §4.1 predictor: set dynamic.predict or detp.engine = \"predicted\"",
+            );
+        }
+        if self.warm_repeats > 1000 {
+            return refuse(
+                "dynamic.warm_repeats",
+                format!("got {}, at most 1000", self.warm_repeats),
+            );
+        }
+        let predictor = match self.predictor {
+            PredictorChoice::Subsample => Predictor::Subsample,
+            PredictorChoice::Paper => Predictor::Paper,
+        };
+        let feed = match self.feed {
+            FeedChoice::Paper => Feed::Paper,
+            FeedChoice::SegmentIndex => Feed::SegmentIndex,
+            FeedChoice::All => Feed::All,
+        };
+        Ok((predict, predictor, feed))
+    }
+
     /// The rules within `[dynamic]`: at most 2²⁰ frames, a points frame among them, at most 2³¹
     /// reference photons.
     fn check(&self) -> Result<(), ConfigError> {
