@@ -252,7 +252,11 @@ def requirement_needs(req, tables, sources, select):
         except Missing as e:
             needs.append(str(e))
     for col, want in (req.get("values") or {}).items():
-        have = {show(r.get(col)) for r in rows}
+        # A required value of a column the rule also selects on (detp-unbiased selects the paper's
+        # edge and requires the clamp beside it) is looked for with that column's own selection
+        # left out: the requirement is about what the tables hold.
+        mine = rows if col not in (select or {}) else values_rows(tables, sources, select, col)
+        have = {show(r.get(col)) for r in mine}
         lack = [show(v) for v in want if show(v) not in have]
         if lack:
             needs.append("%s = %s" % (col, ", ".join(lack)))
@@ -267,6 +271,18 @@ def requirement_needs(req, tables, sources, select):
         for s in sources:
             needs += column_needs(tables, s, side, cols)
     return needs
+
+
+def values_rows(tables, sources, select, col):
+    """The sources' rows matching `select` without its condition on `col`."""
+    rest = {k: v for k, v in select.items() if k != col}
+    out = []
+    for s in sources:
+        try:
+            out += [r for r in tables.rows(s) if matches(r, rest)]
+        except Missing:
+            pass
+    return out
 
 
 def optional_missing(req, tables, sources, select):

@@ -176,6 +176,9 @@ def region_bias(points, replicas, keep):
     if not pts:
         return math.nan, math.nan, math.nan, 0
     ref = sum(p["reference_e"] for p in pts)
+    if not ref > 0:
+        # No light reaches these points by the reference: a relative bias does not exist.
+        return math.nan, math.nan, math.nan, len(pts)
     per = [sum(p["irradiance_replica_%d" % k] - p["reference_e"] for p in pts) / ref for k in range(replicas)]
     m = sum(per) / replicas
     v_rep = sum((x - m) ** 2 for x in per) / (replicas - 1) / replicas
@@ -207,10 +210,14 @@ def kind_bias(v, ctx):
             reps = int(r["detp.replicas"])
             d = r["detp.disc_radius"]
             m, se, dof, n = region_bias(mine, reps, lambda p: p[col] >= d)
+            m2, se2, dof2, n2 = region_bias(mine, reps, lambda p: p[col] < d)
+            if math.isnan(m):
+                text = "s ≥ d (%d points): the reference irradiance sums to 0 there, no relative bias" % n
+                units.append(R.Unit(label(r, v["units"]), text, R.UNDECIDED, "no lit point with s ≥ d"))
+                continue
             lo, hi = m - S.t_for_level(ctx.level, dof) * se, m + S.t_for_level(ctx.level, dof) * se
             j, why = R.interval_judgement(lo, hi, band)
-            m2, se2, dof2, n2 = region_bias(mine, reps, lambda p: p[col] < d)
-            h2 = S.t_for_level(ctx.level, dof2) * se2
+            h2 = S.t_for_level(ctx.level, dof2) * se2 if n2 and not math.isnan(m2) else math.nan
             text = "s ≥ d (%d points): %+.1f %% [%+.1f, %+.1f]; s < d (%d points): %+.1f ± %.1f %%" % (
                 n, 100 * m, 100 * lo, 100 * hi, n2, 100 * m2, 100 * h2)
             units.append(R.Unit(label(r, v["units"]), text, j, why))
