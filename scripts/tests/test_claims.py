@@ -253,6 +253,33 @@ class WholeClaims(unittest.TestCase):
         self.assertNotIn("needs ≥ 3 separate runs", self.judge(runs=3)["measured"])
 
 
+class EngineEdges(unittest.TestCase):
+    """Two edge cases met by the session-3 reruns (speed-vs-error with the robots)."""
+
+    def test_a_required_value_of_a_selected_column_is_looked_for_without_that_selection(self):
+        import claims_data
+        with tempfile.TemporaryDirectory() as d:
+            write(os.path.join(d, "t", "t.csv"), ["point", "detp.edge"],
+                  [[0, "paper"], [1, "clamp-first-hit"]])
+            tables = claims_data.Tables(d)
+            req = {"values": {"detp.edge": ["paper", "clamp-first-hit"]}}
+            self.assertEqual(claims_data.requirement_needs(req, tables, ["t"], {"detp.edge": "paper"}), [])
+            write(os.path.join(d, "u", "u.csv"), ["point", "detp.edge"], [[0, "paper"]])
+            needs = claims_data.requirement_needs(req, claims_data.Tables(d), ["u"], {"detp.edge": "paper"})
+            self.assertEqual(needs, ["detp.edge = clamp-first-hit"])
+
+    def test_an_unlit_region_has_no_relative_bias(self):
+        import claims_engines
+        pts = [{"reference_e": 0.0, "reference_se": 0.0, "irradiance_replica_0": 1.0,
+                "irradiance_replica_1": 2.0}]
+        m, se, dof, n = claims_engines.region_bias(pts, 2, lambda p: True)
+        self.assertTrue(math.isnan(m) and math.isnan(se))
+        self.assertEqual(n, 1)
+        pts[0]["reference_e"] = 1.0
+        m, se, dof, n = claims_engines.region_bias(pts, 2, lambda p: True)
+        self.assertAlmostEqual(m, 0.5)
+
+
 class CommittedTables(unittest.TestCase):
     def test_every_claim_is_judged_on_the_committed_tables(self):
         results = os.path.join(SCRIPTS, "..", "results")
