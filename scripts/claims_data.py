@@ -11,6 +11,7 @@ one run.
 
 import csv
 import glob
+import gzip
 import math
 import os
 
@@ -30,8 +31,17 @@ def num(v):
         return v
 
 
+def table_file(path):
+    """PATH, or PATH.gz when only the compressed table is committed (a points table over 5 MiB)."""
+    if not os.path.exists(path) and os.path.exists(path + ".gz"):
+        return path + ".gz"
+    return path
+
+
 def read_csv(path):
-    with open(path, newline="") as f:
+    path = table_file(path)
+    opener = gzip.open(path, "rt", newline="") if path.endswith(".gz") else open(path, newline="")
+    with opener as f:
         return [{k: num(v) for k, v in r.items()} for r in csv.DictReader(f)]
 
 
@@ -69,7 +79,7 @@ class Tables:
         return os.path.join(self.results, name, "runs", run, file)
 
     def exists(self, name, side=None):
-        return os.path.exists(self.path(name, side))
+        return os.path.exists(table_file(self.path(name, side)))
 
     def run_ids(self, name):
         """The separate runs of NAME: the folders results/NAME/runs/RUN holding NAME.csv."""
@@ -88,7 +98,7 @@ class Tables:
         return self._cache[key]
 
     def _read(self, name, side):
-        p = self.path(name, side)
+        p = table_file(self.path(name, side))
         if not os.path.exists(p):
             raise Missing("table %s" % os.path.relpath(p, self.results))
         return read_csv(p)
