@@ -159,6 +159,7 @@ impl QuasiStaticConfig {
         };
         let d = &raw.detp;
         let detp = DetpConfig::from_raw(raw.experiment.stream_seed(), d, inputs)?;
+        paper_method_only(&detp)?;
         let Rays::Scene(file) = &detp.rays else {
             return lines_config(raw, dy, detp);
         };
@@ -172,18 +173,6 @@ impl QuasiStaticConfig {
             return refuse(
                 "detp.points",
                 "kind quasi-static keeps every lattice point of its surfaces (static and dynamic ones move apart): give point_spacing instead of a count",
-            );
-        }
-        if detp.edge != crate::detp::edge::EdgeMode::Paper {
-            return refuse(
-                "detp.edge",
-                "kind quasi-static runs the paper's method only (its incremental updates keep the stored segments and d); the remedies are measured by kind \"detp\"",
-            );
-        }
-        if detp.engines != [EngineChoice::SphereCache] {
-            return refuse(
-                "detp.engines",
-                "kind quasi-static chooses its engine per object with detp.engine (hybrid, sphere-cache, disc-index, predicted)",
             );
         }
         dy.check()?;
@@ -246,18 +235,6 @@ fn lines_config(
             "a reference run traces a scene's lights: with detp.source = \"lines\" there is none",
         );
     }
-    if detp.edge != crate::detp::edge::EdgeMode::Paper {
-        return refuse(
-            "detp.edge",
-            "kind quasi-static runs the paper's method only (its incremental updates keep the stored segments and d); the remedies are measured by kind \"detp\"",
-        );
-    }
-    if detp.engines != [EngineChoice::SphereCache] {
-        return refuse(
-            "detp.engines",
-            "kind quasi-static chooses its engine per object with detp.engine (hybrid, sphere-cache, disc-index, predicted)",
-        );
-    }
     dy.check()?;
     let d = &raw.detp;
     let (predict, predictor, feed) = dy.choices(d.engine)?;
@@ -279,6 +256,24 @@ fn lines_config(
         warnings: Vec::new(),
         lines: true,
     })
+}
+
+/// Kind quasi-static runs the paper's method with its own per-object engine choice, for scenes and
+/// lines alike: the edge remedies and `detp.engines` belong to kind detp.
+fn paper_method_only(detp: &DetpConfig) -> Result<(), ConfigError> {
+    if detp.edge != crate::detp::edge::EdgeMode::Paper {
+        return refuse(
+            "detp.edge",
+            "kind quasi-static runs the paper's method only (its incremental updates keep the stored segments and d); the remedies are measured by kind \"detp\"",
+        );
+    }
+    if detp.engines != [EngineChoice::SphereCache] {
+        return refuse(
+            "detp.engines",
+            "kind quasi-static chooses its engine per object with detp.engine (hybrid, sphere-cache, disc-index, predicted)",
+        );
+    }
+    Ok(())
 }
 
 impl RawDynamicSpec {
