@@ -156,6 +156,12 @@ impl QuasiStaticConfig {
                 "kind quasi-static runs the paper's method only (its incremental updates keep the stored segments and d); the remedies are measured by kind \"detp\"",
             );
         }
+        if detp.direct != crate::experiment::detp::config::Direct::Photons {
+            return refuse(
+                "detp.direct",
+                "kind quasi-static traces all light in its photons (\"photons\"); \"nee\" is measured by kind \"detp\"",
+            );
+        }
         if detp.engines != [EngineChoice::SphereCache] {
             return refuse(
                 "detp.engines",
