@@ -190,14 +190,25 @@ direct_samples = 4
 photon_map_k_photons = 5000
 replicas = 4
 write_points = true
+
+[sweep]
+"detp.direct" = ["photons", "nee"]
 "#,
             scene.display()
         ),
     );
     // A mismatch between the engines or against brute force fails the run (exit 1).
     run_quiet(&spec, dir.path()).assert().success();
+    // Both modes write the same columns (a CSV with ragged rows does not read).
     let (h, rows) = read_csv(&dir.path().join("nee/nee.csv"));
-    let r = &rows[0];
+    assert_eq!(rows.len(), 2);
+    let r = &rows[1];
+    assert_eq!(r[at(&h, "detp.direct")], "nee");
+    assert_eq!(num(&rows[0][at(&h, "direct_s")]), 0.0);
+    assert_eq!(
+        rows[0][at(&h, "segments_indirect")],
+        rows[0][at(&h, "segments")]
+    );
     let get = |c: &str| num(&r[at(&h, c)]);
     assert_eq!(get("mismatches"), 0.0);
     assert!(get("bf_checked") > 0.0);
@@ -222,7 +233,11 @@ write_points = true
     // k(N) = 64·(20000/5000)^⅔ = 161.3 → 161.
     assert_eq!(get("photon_map_growing_k"), 161.0);
     let (hp, points) = read_csv(&dir.path().join("nee/nee.points.csv"));
-    for p in &points {
+    let n = points.len() / 2;
+    assert!(points[..n]
+        .iter()
+        .all(|p| num(&p[at(&hp, "direct_e")]) == 0.0));
+    for p in &points[n..] {
         let d = num(&p[at(&hp, "direct_e")]);
         assert!((d - std::f64::consts::PI).abs() < 1e-9, "direct {d}");
     }

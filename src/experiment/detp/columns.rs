@@ -29,21 +29,21 @@ pub const SEGMENTS_INDIRECT: Column = Column::value(
     "segments_indirect",
     "segments",
     Class::Measured,
-    "detp.direct = \"nee\": the segments the engines read (those after the first bounce: indirect light), summed over replicas",
+    "the segments the engines read, summed over replicas: with detp.direct = \"nee\" those after the first bounce (indirect light), else every segment traced",
 );
 /// Seconds of the NEE direct part.
 pub const DIRECT_S: Column = Column::value(
     "direct_s",
     "s",
     Class::Timing,
-    "detp.direct = \"nee\": seconds of next-event estimation of the direct light at every point, summed over replicas (a per-point cost of every engine in that mode; computed once per point set and replica in a run)",
+    "detp.direct = \"nee\": seconds of next-event estimation of the direct light at every point, summed over replicas (a per-point cost of every engine in that mode; computed once per point set and replica in a run); 0 otherwise",
 );
 /// Its shadow rays.
 pub const DIRECT_RAYS_SHADOW: Column = Column::value(
     "direct_rays_shadow",
     "rays",
     Class::Measured,
-    "detp.direct = \"nee\": shadow rays of the direct part, summed over replicas",
+    "detp.direct = \"nee\": shadow rays of the direct part, summed over replicas; 0 otherwise",
 );
 /// Sample points.
 pub const POINTS: Column =
@@ -786,8 +786,8 @@ pub const POINTS_TABLE: Table<DetpConfig, PointRow> = Table::of(&[
     col(&POINT_PATH_TRACING_VAR, |_, r| {
         r.path_tracing.as_ref().map(|p| p.1).into()
     }),
-    col(&POINT_DIRECT_E, |_, r| r.direct.map(|d| d.0).into()),
-    col(&POINT_DIRECT_SE, |_, r| r.direct.map(|d| d.1).into()),
+    col(&POINT_DIRECT_E, |_, r| r.direct.0.into()),
+    col(&POINT_DIRECT_SE, |_, r| r.direct.1.into()),
 ]);
 
 /// Path tracing's running mean at a point.
@@ -809,7 +809,7 @@ pub const POINT_DIRECT_E: Column = Column::value(
     "direct_e",
     "W/m²",
     Class::Measured,
-    "detp.direct = \"nee\": the direct irradiance at the point by next-event estimation (included in irradiance_mean and every baseline but the reference and path tracing), mean over replicas",
+    "detp.direct = \"nee\": the direct irradiance at the point by next-event estimation (included in irradiance_mean and every baseline but the reference and path tracing), mean over replicas; 0 otherwise",
 );
 /// Its SE.
 pub const POINT_DIRECT_SE: Column = Column::value(

@@ -24,12 +24,12 @@ use crate::stats::Estimate;
 pub struct DetpMeasured {
     /// Segments traced, summed over replicas.
     pub segments: u64,
-    /// `detp.direct = "nee"`: the segments the engines read (after the first bounce).
-    pub segments_indirect: Option<u64>,
-    /// `detp.direct = "nee"`: the direct part's seconds, summed over replicas.
-    pub direct_s: Option<f64>,
-    /// `detp.direct = "nee"`: its shadow rays, summed over replicas.
-    pub direct_rays_shadow: Option<u64>,
+    /// The segments the engines read (`detp.direct = "nee"`: those after the first bounce).
+    pub segments_indirect: u64,
+    /// `detp.direct = "nee"`: the direct part's seconds, summed over replicas (else 0).
+    pub direct_s: f64,
+    /// `detp.direct = "nee"`: its shadow rays, summed over replicas (else 0).
+    pub direct_rays_shadow: u64,
     /// Sample points.
     pub points: usize,
     /// Seconds making the rays, summed over replicas.
@@ -100,8 +100,9 @@ pub struct PointRow {
     pub baselines: Vec<(&'static str, f64, f64)>,
     /// Engine `path-tracing` at this point (None where it did not run).
     pub path_tracing: Option<PathAtPoint>,
-    /// `detp.direct = "nee"`: the direct part and its SE (mean over replicas).
-    pub direct: Option<(f64, f64)>,
+    /// `detp.direct = "nee"`: the direct part and its SE, mean over replicas (else 0, 0: the
+    /// columns stay when a sweep varies `detp.direct`).
+    pub direct: (f64, f64),
 }
 
 /// Engine `path-tracing` at a point: its running mean at each checkpoint (member name: the
@@ -400,12 +401,11 @@ pub(super) fn measure(
             cfg.photons
         ));
     }
-    let nee = !r.direct.is_empty();
     let measured = DetpMeasured {
         segments: r.segments + r.segments_direct,
-        segments_indirect: nee.then_some(r.segments),
-        direct_s: nee.then(|| r.direct.iter().map(|d| d.seconds).sum()),
-        direct_rays_shadow: nee.then(|| r.direct.iter().map(|d| d.rays.shadow).sum()),
+        segments_indirect: r.segments,
+        direct_s: r.direct.iter().map(|d| d.seconds).sum(),
+        direct_rays_shadow: r.direct.iter().map(|d| d.rays.shadow).sum(),
         points: discs.len(),
         trace_s: r.trace_s,
         edge_s: r.edge_s,
@@ -573,10 +573,10 @@ fn point_rows(
                 .map(|(c, v)| (c.column(), v[i].0, v[i].1))
                 .collect(),
             path_tracing: path.as_ref().map(|p| p[i].clone()),
-            direct: (!r.direct.is_empty()).then(|| {
+            direct: {
                 let (mean, var) = r.direct_at(i);
                 (mean, var.sqrt())
-            }),
+            },
         })
         .collect()
 }
