@@ -204,7 +204,7 @@ write_points = true
     assert_eq!(rows.len(), 2);
     let r = &rows[1];
     assert_eq!(r[at(&h, "detp.direct")], "nee");
-    assert_eq!(num(&rows[0][at(&h, "direct_s")]), 0.0);
+    assert_eq!(rows[0][at(&h, "direct_s")], "0.0");
     assert_eq!(
         rows[0][at(&h, "segments_indirect")],
         rows[0][at(&h, "segments")]

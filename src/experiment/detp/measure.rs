@@ -404,7 +404,8 @@ pub(super) fn measure(
     let measured = DetpMeasured {
         segments: r.segments + r.segments_direct,
         segments_indirect: r.segments,
-        direct_s: r.direct.iter().map(|d| d.seconds).sum(),
+        // A fold from +0: an empty f64 sum is −0, which would be written as such.
+        direct_s: r.direct.iter().fold(0.0, |a, d| a + d.seconds),
         direct_rays_shadow: r.direct.iter().map(|d| d.rays.shadow).sum(),
         points: discs.len(),
         trace_s: r.trace_s,
