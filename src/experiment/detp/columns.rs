@@ -1,7 +1,8 @@
 //! Every column kind `detp` writes, declared once, and the tables that read them from a point's
 //! typed measurement: [`MAIN`] (the point's own columns around one group per engine, in the
 //! point's engine order, each engine's group from its own table: [`SPHERE_CACHE`],
-//! [`DISC_INDEX`], [`BRUTE_FORCE`], [`PHOTON_MAP`], [`REFERENCE`]), [`LEVELS`] and [`POINTS_TABLE`].
+//! [`DISC_INDEX`], [`BRUTE_FORCE`], [`PHOTON_MAP`], [`PHOTON_MAP_GROWING`], [`PATH_TRACING`],
+//! [`REFERENCE`]), [`LEVELS`], [`POINTS_TABLE`] and [`PATH_TRACING_TABLE`].
 //! Engine columns are families, one member per engine (`tests_{}` → `tests_sphere_cache`).
 
 use super::config::DetpConfig;
@@ -9,10 +10,11 @@ use super::engines::{
     BruteMeasured, CacheMeasured, EngineMeasured, IndexMeasured, LevelRow, MapMeasured, Sizes,
 };
 use super::measure::{DetpMeasured, PointRow};
+use super::path_tracing::{PathMeasured, PathRow};
 use super::spec::EngineChoice;
 use crate::output::column::{Class, Column};
 use crate::output::table::{cells, col, Against, Cell, Cells, Entry, Line, Table};
-use crate::stats::Theory;
+use crate::stats::{Estimate, Theory};
 use crate::theory::detp as th;
 
 /// Segments in the store.
@@ -20,7 +22,28 @@ pub const SEGMENTS: Column = Column::value(
     "segments",
     "segments",
     Class::Measured,
-    "photon segments (or lines) in the ray store, summed over replicas",
+    "photon segments (or lines) traced, summed over replicas",
+);
+/// Segments the engines read with `direct = "nee"`.
+pub const SEGMENTS_INDIRECT: Column = Column::value(
+    "segments_indirect",
+    "segments",
+    Class::Measured,
+    "the segments the engines read, summed over replicas: with detp.direct = \"nee\" those after the first bounce (indirect light), else every segment traced",
+);
+/// Seconds of the NEE direct part.
+pub const DIRECT_S: Column = Column::value(
+    "direct_s",
+    "s",
+    Class::Timing,
+    "detp.direct = \"nee\": seconds of next-event estimation of the direct light at every point, summed over replicas (a per-point cost of every engine in that mode; computed once per point set and replica in a run); 0 otherwise",
+);
+/// Its shadow rays.
+pub const DIRECT_RAYS_SHADOW: Column = Column::value(
+    "direct_rays_shadow",
+    "rays",
+    Class::Measured,
+    "detp.direct = \"nee\": shadow rays of the direct part, summed over replicas; 0 otherwise",
 );
 /// Sample points.
 pub const POINTS: Column =
@@ -139,7 +162,7 @@ pub const COST_S: Column = Column::value(
     "cost_{}_s",
     "s",
     Class::Timing,
-    "seconds the engine took (after the rays exist), summed over replicas",
+    "seconds of the engine's work on the points (after the rays exist and build_{}_s is paid), summed over replicas; path tracing: all detp.path_samples paths on its path_tracing_points points",
 );
 /// Ordering time.
 pub const ORDER_S: Column = Column::value(
@@ -169,12 +192,12 @@ pub const DDA_STEPS: Column = Column::value(
     Class::Measured,
     "disc index: 3D-DDA steps through grid cells (0 for an octree, whose steps are its box tests), summed over replicas",
 );
-/// Index build time.
+/// What an engine pays once per photon set.
 pub const BUILD_S: Column = Column::value(
     "build_{}_s",
     "s",
     Class::Timing,
-    "disc index: seconds to build it, summed over replicas",
+    "seconds the engine pays once per photon set before any point's work, summed over replicas (disc index: building it; sphere cache: sorting the points, = order_s; photon maps: the kd-tree; path tracing: 0): with trace_s the part paid once, cost_{}_s/points the part per point",
 );
 /// Index size.
 pub const BYTES: Column = Column::value(
@@ -182,6 +205,55 @@ pub const BYTES: Column = Column::value(
     "bytes",
     Class::Measured,
     "disc index: bytes of the largest replica's index",
+);
+/// The growing photon map's k.
+pub const PHOTON_MAP_GROWING_K: Column = Column::value(
+    "photon_map_growing_k",
+    "photons",
+    Class::Measured,
+    "photon-map-growing: the k it used at this photon count, photon_map_k·(photons/photon_map_k_photons)^photon_map_k_growth rounded (at least 1)",
+);
+/// Path tracing: points it ran on.
+pub const PATH_TRACING_POINTS: Column = Column::value(
+    "path_tracing_points",
+    "points",
+    Class::Measured,
+    "path-tracing: the points it ran on (detp.path_points of them, or all); its cost for n points is cost_path_tracing_s·n/path_tracing_points",
+);
+/// Path tracing: per-path relative spread.
+pub const PATH_TRACING_CV: Column = Column::value(
+    "path_tracing_cv",
+    "1",
+    Class::Measured,
+    "path-tracing: √(mean σ_i²)/mean E_i over its points and replicas, σ_i² the per-path variance at point i: the relative RMSE of one path per point",
+);
+/// Path tracing: cv from its prefix errors.
+pub const PATH_TRACING_CV_PREFIX: Column = Column::value(
+    "path_tracing_cv_prefix",
+    "1",
+    Class::Measured,
+    "path-tracing: √(mean_k n_k·mse_k)/mean R over its checkpoints n_k, mse_k its mean squared error against engine reference (the reference's variance subtracted, mean over replicas), R the reference at its points: cv as its errors show it, robust to heavy tails; NaN without reference",
+);
+/// Path tracing: continuation rays.
+pub const PATH_TRACING_RAYS_PATH: Column = Column::value(
+    "path_tracing_rays_path",
+    "rays",
+    Class::Measured,
+    "path-tracing: continuation rays of all its paths, summed over replicas",
+);
+/// Path tracing: shadow rays.
+pub const PATH_TRACING_RAYS_SHADOW: Column = Column::value(
+    "path_tracing_rays_shadow",
+    "rays",
+    Class::Measured,
+    "path-tracing: shadow rays of all its paths, summed over replicas",
+);
+/// Path tracing: seconds per path.
+pub const PATH_TRACING_S_PER_PATH: Column = Column::value(
+    "path_tracing_s_per_path",
+    "s",
+    Class::Timing,
+    "path-tracing: wall seconds per path (its seconds over path_tracing_points·detp.path_samples·replicas)",
 );
 /// Photon-map RMSE.
 pub const PHOTON_MAP_RMSE: Column = Column::estimate(
@@ -252,17 +324,17 @@ pub const IRRADIANCE_REF_RMSE: Column = Column::estimate(
     "W/m²",
     "DETP's root-mean-square error against the true irradiance, estimated against engine reference with the reference's variance subtracted: √max(0, Σ((E_i − R_i)² − se_R,i²)/n); SE by the delta method from Var((E_i − R_i)²) ≈ 4b_i²s_i² + 2s_i⁴",
 );
-/// Photon map against the reference: mean error.
-pub const PHOTON_MAP_REF_BIAS: Column = Column::estimate(
-    "photon_map_ref_bias",
+/// A baseline against the reference: mean error.
+pub const BASELINE_REF_BIAS: Column = Column::estimate(
+    "{}_ref_bias",
     "W/m²",
-    "photon map: mean error against engine reference, as irradiance_ref_bias (with one replica its per-point SE is E/√k)",
+    "a baseline (photon_map, photon_map_growing, path_tracing): mean error against engine reference, as irradiance_ref_bias, over the points it ran on (photon maps: with one replica its per-point SE is E/√k; path tracing: at detp.path_samples paths, with one replica its per-point SE is σ_i/√K)",
 );
-/// Photon map against the reference: RMSE.
-pub const PHOTON_MAP_REF_RMSE: Column = Column::estimate(
-    "photon_map_ref_rmse",
+/// A baseline against the reference: RMSE.
+pub const BASELINE_REF_RMSE: Column = Column::estimate(
+    "{}_ref_rmse",
     "W/m²",
-    "photon map: root-mean-square error against the true irradiance, estimated against engine reference as irradiance_ref_rmse",
+    "a baseline: root-mean-square error against the true irradiance, estimated against engine reference as irradiance_ref_rmse, over the points it ran on",
 );
 /// Surface points skipped as covered.
 pub const POINTS_COVERED: Column = Column::value(
@@ -304,6 +376,7 @@ pub const SPHERE_CACHE: Table<DetpConfig, CacheMeasured> = Table::of(&[
     col(&POP_REPAIRS, |_, e| e.pop_repairs.into()),
     col(&COUNTED_COST, |_, e| (e.sphere_tests + e.disc_tests).into()),
     col(&COST_S, |_, e| e.seconds.into()),
+    col(&BUILD_S, |_, e| e.order_s.into()),
     col(&ORDER_S, |_, e| e.order_s.into()),
     col(&TESTS_PER_REPLICA, |_, e| e.tests_per_replica.into()),
     col(&COST_PER_REPLICA_S, |_, e| e.seconds_per_replica.into()),
@@ -346,10 +419,46 @@ pub const PHOTON_MAP: Table<DetpConfig, MapMeasured> = Table::of(&[
     col(&PHOTON_MAP_RMSE, |_, e| e.rmse.into()),
     col(&PHOTON_MAP_BIAS, |_, e| e.bias.into()),
     col(&COST_S, |_, e| e.seconds.into()),
+    col(&BUILD_S, |_, e| e.build_s.into()),
+]);
+
+/// The growing photon map's columns (its errors: `photon_map_growing_ref_*`).
+pub const PHOTON_MAP_GROWING: Table<DetpConfig, MapMeasured> = Table::of(&[
+    col(&PHOTON_MAP_GROWING_K, |_, e| e.k.into()),
+    col(&COST_S, |_, e| e.seconds.into()),
+    col(&BUILD_S, |_, e| e.build_s.into()),
+]);
+
+/// The path-tracing competitor's columns (its errors: `path_tracing_ref_*`).
+pub const PATH_TRACING: Table<DetpConfig, PathMeasured> = Table::of(&[
+    col(&COST_S, |_, e| e.seconds.into()),
+    col(&BUILD_S, |_, _| 0.0.into()),
+    col(&PATH_TRACING_POINTS, |_, e| e.points.into()),
+    col(&PATH_TRACING_CV, |_, e| e.cv.into()),
+    col(&PATH_TRACING_CV_PREFIX, |_, e| e.cv_prefix.into()),
+    col(&PATH_TRACING_RAYS_PATH, |_, e| e.rays_path.into()),
+    col(&PATH_TRACING_RAYS_SHADOW, |_, e| e.rays_shadow.into()),
+    col(&PATH_TRACING_S_PER_PATH, |_, e| e.s_per_path.into()),
 ]);
 
 /// The reference's column: its seconds.
 pub const REFERENCE: Table<DetpConfig, f64> = Table::of(&[col(&COST_S, |_, s| (*s).into())]);
+
+/// A baseline's errors against the reference.
+pub const BASELINE_REF: Table<DetpConfig, (Estimate, Estimate)> = Table::of(&[
+    col(&BASELINE_REF_BIAS, |_, e| e.0.into()),
+    col(&BASELINE_REF_RMSE, |_, e| e.1.into()),
+]);
+
+/// Each baseline's errors against the reference, in the point's engine order.
+fn baseline_ref_cells(p: &DetpConfig, m: &DetpMeasured) -> Vec<(&'static str, Cells)> {
+    m.reference.as_ref().map_or_else(Vec::new, |r| {
+        r.baselines
+            .iter()
+            .map(|(stem, e)| (*stem, cells(BASELINE_REF.entries, p, e)))
+            .collect()
+    })
+}
 
 /// One group of cells per engine, in the point's engine order.
 fn engine_cells(p: &DetpConfig, m: &DetpMeasured) -> Vec<(&'static str, Cells)> {
@@ -372,6 +481,14 @@ fn engine_cells(p: &DetpConfig, m: &DetpMeasured) -> Vec<(&'static str, Cells)> 
                 EngineChoice::PhotonMap.column(),
                 cells(PHOTON_MAP.entries, p, x),
             ),
+            EngineMeasured::PhotonMapGrowing(x) => (
+                EngineChoice::PhotonMapGrowing.column(),
+                cells(PHOTON_MAP_GROWING.entries, p, x),
+            ),
+            EngineMeasured::PathTracing(x) => (
+                EngineChoice::PathTracing.column(),
+                cells(PATH_TRACING.entries, p, x),
+            ),
             EngineMeasured::Reference(x) => (
                 EngineChoice::Reference.column(),
                 cells(REFERENCE.entries, p, x),
@@ -387,6 +504,8 @@ fn engine_columns() -> Vec<&'static Column> {
         DISC_INDEX.columns(),
         BRUTE_FORCE.columns(),
         PHOTON_MAP.columns(),
+        PHOTON_MAP_GROWING.columns(),
+        PATH_TRACING.columns(),
         REFERENCE.columns(),
     ]
     .concat()
@@ -396,10 +515,13 @@ fn engine_columns() -> Vec<&'static Column> {
 /// reference and against the exact irradiance, the speed.
 pub const MAIN: Table<DetpConfig, DetpMeasured> = Table::of(&[
     col(&SEGMENTS, |_, m| m.segments.into()),
+    col(&SEGMENTS_INDIRECT, |_, m| m.segments_indirect.into()),
     col(&POINTS, |_, m| m.points.into()),
     col(&TRACE_S, |_, m| m.trace_s.into()),
     col(&EDGE_S, |_, m| m.edge_s.into()),
     col(&EDGE_RADIUS, |_, m| m.edge_radius.into()),
+    col(&DIRECT_S, |_, m| m.direct_s.into()),
+    col(&DIRECT_RAYS_SHADOW, |_, m| m.direct_rays_shadow.into()),
     Entry::Parts(engine_cells, engine_columns),
     col(&MISMATCHES, |_, m| m.mismatches.into()),
     col(&BF_CHECKED, |_, m| m.bf_checked.into()),
@@ -416,20 +538,7 @@ pub const MAIN: Table<DetpConfig, DetpMeasured> = Table::of(&[
     col(&IRRADIANCE_REF_RMSE, |_, m| {
         m.reference.as_ref().map(|r| r.detp.1).into()
     }),
-    col(&PHOTON_MAP_REF_BIAS, |_, m| {
-        m.reference
-            .as_ref()
-            .and_then(|r| r.photon_map)
-            .map(|x| x.0)
-            .into()
-    }),
-    col(&PHOTON_MAP_REF_RMSE, |_, m| {
-        m.reference
-            .as_ref()
-            .and_then(|r| r.photon_map)
-            .map(|x| x.1)
-            .into()
-    }),
+    Entry::Parts(baseline_ref_cells, || BASELINE_REF.columns()),
     col(&IRRADIANCE, |_, m| {
         Cell::Judged(m.irradiance, Theory::Prediction(m.exact_mean))
     }),
@@ -623,7 +732,7 @@ pub const POINT_EDGE_DISTANCE: Column = Column::value(
     "edge_distance",
     "length",
     Class::Measured,
-    "s: the distance from the point to the nearest edge or other surface (not its own plane), capped at 2·d (2·d: none nearer); the paper's open-surface case is s ≥ d. NaN without a scene",
+    "s: the distance from the point to the nearest edge or other surface (not its own plane), capped at detp.edge_distance_reach·d (the cap: none nearer); the paper's open-surface case is s ≥ d. NaN without a scene",
 );
 /// A baseline's estimate at the point.
 pub const POINT_BASELINE_E: Column = Column::value(
@@ -677,4 +786,118 @@ pub const POINTS_TABLE: Table<DetpConfig, PointRow> = Table::of(&[
     }),
     col(&POINT_IRRADIANCE_EXACT, |_, r| r.exact.into()),
     Entry::Parts(baseline_cells, || BASELINE.columns()),
+    col(&POINT_PATH_TRACING_E, |_, r| {
+        r.path_tracing
+            .as_ref()
+            .map(|(m, _)| Cell::members(m.iter().cloned()))
+            .into()
+    }),
+    col(&POINT_PATH_TRACING_VAR, |_, r| {
+        r.path_tracing.as_ref().map(|p| p.1).into()
+    }),
+    col(&POINT_DIRECT_E, |_, r| r.direct.0.into()),
+    col(&POINT_DIRECT_SE, |_, r| r.direct.1.into()),
+]);
+
+/// Path tracing's running mean at a point.
+pub const POINT_PATH_TRACING_E: Column = Column::value(
+    "path_tracing_e_{}",
+    "W/m²",
+    Class::Measured,
+    "path-tracing: its running mean at the point after {} paths (each checkpoint 1, 2, 4, …, detp.path_samples), mean over replicas; NaN at points outside path_tracing_points",
+);
+/// Path tracing's per-path variance at a point.
+pub const POINT_PATH_TRACING_VAR: Column = Column::value(
+    "path_tracing_var",
+    "W²/m⁴",
+    Class::Measured,
+    "path-tracing: its per-path variance at the point (over detp.path_samples paths), mean over replicas; NaN outside path_tracing_points",
+);
+/// The NEE direct part at a point.
+pub const POINT_DIRECT_E: Column = Column::value(
+    "direct_e",
+    "W/m²",
+    Class::Measured,
+    "detp.direct = \"nee\": the direct irradiance at the point by next-event estimation (included in irradiance_mean and every baseline but the reference and path tracing), mean over replicas; 0 otherwise",
+);
+/// Its SE.
+pub const POINT_DIRECT_SE: Column = Column::value(
+    "direct_se",
+    "W/m²",
+    Class::Measured,
+    "its standard error (mean over replicas: √Σse_r²/R)",
+);
+
+/// Replica.
+pub const PT_REPLICA: Column =
+    Column::value("replica", "1", Class::Measured, "the replica");
+/// Checkpoint.
+pub const PT_PATHS: Column = Column::value(
+    "paths",
+    "paths",
+    Class::Measured,
+    "checkpoint: paths per point (1, 2, 4, …, detp.path_samples)",
+);
+/// Continuation rays.
+pub const PT_RAYS_PATH: Column = Column::value(
+    "rays_path",
+    "rays",
+    Class::Measured,
+    "continuation rays of the first `paths` paths of every point",
+);
+/// Shadow rays.
+pub const PT_RAYS_SHADOW: Column = Column::value(
+    "rays_shadow",
+    "rays",
+    Class::Measured,
+    "shadow rays of the first `paths` paths of every point",
+);
+/// Seconds to the checkpoint.
+pub const PT_SECONDS: Column = Column::value(
+    "seconds_s",
+    "s",
+    Class::Timing,
+    "wall-clock seconds to this checkpoint: the points' thread seconds rescaled so that the last checkpoint's equal the run's wall time",
+);
+/// Thread seconds.
+pub const PT_THREAD_S: Column = Column::value(
+    "thread_s",
+    "s",
+    Class::Timing,
+    "the points' thread seconds to this checkpoint, summed",
+);
+/// MSE against the reference.
+pub const PT_REF_MSE: Column = Column::value(
+    "ref_mse",
+    "W²/m⁴",
+    Class::Measured,
+    "this replica's mean over its points of (E_i − R_i)² − se_R,i² against engine reference at this checkpoint (its own mean squared error, the reference's variance subtracted); NaN without reference",
+);
+/// Mean error against the reference.
+pub const PT_REF_BIAS: Column = Column::value(
+    "ref_bias",
+    "W/m²",
+    Class::Measured,
+    "this replica's mean over its points of E_i − R_i at this checkpoint; NaN without reference",
+);
+/// Mean per-path variance.
+pub const PT_VARIANCE_MEAN: Column = Column::value(
+    "variance_mean",
+    "W²/m⁴",
+    Class::Measured,
+    "this replica's per-path variance at K paths, mean over its points (the same on every row of the replica)",
+);
+
+/// `NAME.path_tracing.csv`: engine `path-tracing`, one row per replica and checkpoint (per replica,
+/// so that an analysis can bootstrap over replicas).
+pub const PATH_TRACING_TABLE: Table<DetpConfig, PathRow> = Table::of(&[
+    col(&PT_REPLICA, |_, r| r.replica.into()),
+    col(&PT_PATHS, |_, r| r.paths.into()),
+    col(&PT_RAYS_PATH, |_, r| r.rays_path.into()),
+    col(&PT_RAYS_SHADOW, |_, r| r.rays_shadow.into()),
+    col(&PT_SECONDS, |_, r| r.seconds_s.into()),
+    col(&PT_THREAD_S, |_, r| r.thread_s.into()),
+    col(&PT_REF_MSE, |_, r| r.ref_mse.into()),
+    col(&PT_REF_BIAS, |_, r| r.ref_bias.into()),
+    col(&PT_VARIANCE_MEAN, |_, r| r.variance_mean.into()),
 ]);

@@ -11,12 +11,13 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use super::spec::{
-    DiscRadius, LengthUnit, EdgeChoice, EngineChoice, FilterChoice, IndexChoice, ListModeChoice, OrderChoice,
+    DirectChoice, DiscRadius, LengthUnit, EdgeChoice, EngineChoice, FilterChoice, IndexChoice, ListModeChoice, OrderChoice,
     PointSourceKind, PopRuleChoice, RawDetp, RaySource, EDGE_GAP, EDGE_MIN_RADIUS,
 };
 use crate::detp::disc_index::IndexKind;
 use crate::detp::edge::EdgeMode;
 use crate::detp::order::Order;
+use crate::detp::photon_map::KGrowth;
 use crate::detp::sphere_cache::{ListMode, PopRule, SphereCacheParams};
 use crate::experiment::inputs::{Inputs, PointsFile, SceneFile};
 use crate::experiment::kind::{refuse, ConfigError};
@@ -87,6 +88,16 @@ pub struct DetpConfig {
     pub photon_map_filter: FilterChoice,
     /// Paths per sample point of the reference.
     pub reference_samples: u64,
+    /// Engine `photon-map-growing`'s k(N).
+    pub k_growth: KGrowth,
+    /// K: paths per point of engine `path-tracing`.
+    pub path_samples: u64,
+    /// Points engine `path-tracing` runs on (None: all).
+    pub path_points: Option<u64>,
+    /// Direct light: DETP's photons, or next-event estimation with S samples per area light.
+    pub direct: Direct,
+    /// How far the points table's `edge_distance` looks, in d.
+    pub edge_distance_reach: f64,
     /// Realisations.
     pub replicas: u64,
     /// Write NAME.points.csv.
@@ -97,6 +108,16 @@ pub struct DetpConfig {
     pub spacing_given: bool,
     /// `detp.edge` with its parameter.
     pub edge: EdgeMode,
+}
+
+/// `detp.direct`, with its sample count.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Direct {
+    /// The paper's DETP of all light.
+    Photons,
+    /// Next-event estimation at each point with this many samples per area light; DETP (and the
+    /// photon maps) of the segments after the first bounce.
+    Nee(u64),
 }
 
 impl DetpConfig {
@@ -265,6 +286,18 @@ impl DetpConfig {
             photon_map_k: d.photon_map_k,
             photon_map_filter: d.photon_map_filter,
             reference_samples: d.reference_samples,
+            k_growth: KGrowth {
+                k0: d.photon_map_k as f64,
+                n0: d.photon_map_k_photons as f64,
+                beta: d.photon_map_k_growth,
+            },
+            path_samples: d.path_samples,
+            path_points: d.path_points,
+            direct: match d.direct {
+                DirectChoice::Photons => Direct::Photons,
+                DirectChoice::Nee => Direct::Nee(d.direct_samples),
+            },
+            edge_distance_reach: d.edge_distance_reach,
             replicas: d.replicas,
             write_points: d.write_points,
             memory_budget_gib: d.memory_budget_gib,
@@ -272,7 +305,24 @@ impl DetpConfig {
             edge,
         };
         cfg.check_grid_cells(d)?;
+        cfg.check_path_points()?;
         Ok(cfg)
+    }
+
+    /// `detp.path_points` at most the points, where their count is known before they are made
+    /// (surface points: the competitor runs on all of them when they are fewer).
+    fn check_path_points(&self) -> Result<(), ConfigError> {
+        let (Some(m), false) = (self.path_points, matches!(self.points, Points::Surface(_))) else {
+            return Ok(());
+        };
+        let n = self.point_count();
+        if m > n {
+            return refuse(
+                "detp.path_points",
+                format!("got {m}, more than the {n} sample points"),
+            );
+        }
+        Ok(())
     }
 
     /// A disc grid (`detp.index = "grid"`) of at most 2³¹ cells over the points' bounds.
@@ -453,10 +503,31 @@ fn check_engines(d: &RawDetp, rays: &Rays) -> Result<(), ConfigError> {
             );
         }
     }
-    if d.engines.contains(&EngineChoice::PhotonMap) && lines {
+    if let (Some(e), true) = (d.engines.iter().find(|e| e.is_photon_map()), lines) {
         return refuse(
             "detp.engines",
-            "the photon map needs photon impacts on surfaces: use detp.source = \"scene\"",
+            format!(
+                "the photon map needs photon impacts on surfaces (\"{}\"): use detp.source = \"scene\"",
+                e.as_str()
+            ),
+        );
+    }
+    if d.engines.contains(&EngineChoice::PathTracing) && lines {
+        return refuse(
+            "detp.engines",
+            "\"path-tracing\" path-traces a scene's lights and surfaces: it needs detp.source = \"scene\"",
+        );
+    }
+    if d.direct == DirectChoice::Nee && lines {
+        return refuse(
+            "detp.direct",
+            "\"nee\" samples a scene's lights at each point: it needs detp.source = \"scene\" (lines have no lights)",
+        );
+    }
+    if d.direct_samples < 2 {
+        return refuse(
+            "detp.direct_samples",
+            "got 1, at least 2 (the direct part's standard error comes from its samples' variance)",
         );
     }
     if d.engines.contains(&EngineChoice::Reference) && lines {

@@ -17,6 +17,7 @@ use crate::detp::disc_index::{DiscIndex, IndexKind, IndexStats};
 use crate::detp::fixed::Acc;
 use crate::detp::photon_map::{self, Filter};
 use crate::detp::{brute, disc_index, order, sphere_cache};
+use super::path_tracing::{PathMeasured, PathTracing};
 use crate::lt::reference::{self, Irradiance};
 use crate::sample::rng::{domain, hash_key, mix64};
 use crate::stats::{ClusteredMean, Estimate};
@@ -59,6 +60,8 @@ pub enum EnginePart {
     },
     /// The reference: photon-independent, computed where the shards are merged.
     Reference,
+    /// The path-tracing competitor: photon-independent, computed where the shards are merged.
+    PathTracing,
 }
 
 impl EnginePart {
@@ -98,6 +101,7 @@ impl EnginePart {
                 seconds: seconds + s,
             },
             (Self::Reference, Self::Reference) => Self::Reference,
+            (Self::PathTracing, Self::PathTracing) => Self::PathTracing,
             _ => return None,
         })
     }
@@ -111,6 +115,8 @@ pub(super) struct Pooled<'a> {
     pub sizes: Sizes,
     /// The exact irradiance per disc (NaN where unknown).
     pub exact: &'a [f64],
+    /// Engine `reference`'s estimate and SE per disc, where it runs.
+    pub reference: Option<&'a [(f64, f64)]>,
 }
 
 /// The sizes of a point that Theorem 1's counts take.
@@ -151,6 +157,10 @@ pub(super) trait Engine: Send {
     fn replica_points(&self) -> Vec<Vec<f64>> {
         Vec::new()
     }
+    /// The path-tracing competitor, for its side table and points columns (None for the others).
+    fn as_path_tracing(&self) -> Option<&PathTracing> {
+        None
+    }
     /// The levels table (the sphere cache only).
     fn levels(&self, _p: &Pooled, _law: &Law) -> Vec<LevelRow> {
         Vec::new()
@@ -178,6 +188,10 @@ pub enum EngineMeasured {
     BruteForce(BruteMeasured),
     /// The photon map (a baseline).
     PhotonMap(MapMeasured),
+    /// The photon map with a k growing with the photons (a baseline).
+    PhotonMapGrowing(MapMeasured),
+    /// Per-point path tracing (the competitor, a baseline).
+    PathTracing(PathMeasured),
     /// The path-traced reference (a baseline): its seconds.
     Reference(f64),
 }
@@ -199,7 +213,7 @@ pub struct CacheMeasured {
     pub pop_repairs: u64,
     /// Engine seconds.
     pub seconds: f64,
-    /// Seconds sorting the points.
+    /// Seconds sorting the points (what it pays before any point's work).
     pub order_s: f64,
     /// Tests per replica, with their spread.
     pub tests_per_replica: Estimate,
@@ -251,8 +265,12 @@ pub struct MapMeasured {
     pub rmse: Estimate,
     /// Mean error.
     pub bias: Estimate,
-    /// Its seconds.
+    /// Seconds of the queries (per point), summed over replicas.
     pub seconds: f64,
+    /// Seconds building the kd-tree (once per photon set), summed over replicas.
+    pub build_s: f64,
+    /// The k it used.
+    pub k: u64,
 }
 
 /// One row of `NAME.levels.csv`: one sphere-cache level over the point's replicas.
@@ -292,6 +310,11 @@ pub(super) fn engine(e: EngineChoice, cache: &ReferenceCache) -> Box<dyn Engine>
         EngineChoice::DiscIndex => Box::new(Index::default()),
         EngineChoice::BruteForce => Box::new(BruteForce::default()),
         EngineChoice::PhotonMap => Box::new(PhotonMap::default()),
+        EngineChoice::PhotonMapGrowing => Box::new(PhotonMap {
+            growing: true,
+            ..PhotonMap::default()
+        }),
+        EngineChoice::PathTracing => Box::new(PathTracing::new(cache.clone())),
         EngineChoice::Reference => Box::new(Reference {
             cache: cache.clone(),
             result: None,
@@ -299,7 +322,7 @@ pub(super) fn engine(e: EngineChoice, cache: &ReferenceCache) -> Box<dyn Engine>
     }
 }
 
-fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
+pub(super) fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
     let s = Instant::now();
     let v = f();
     (v, s.elapsed().as_secs_f64())
@@ -589,10 +612,27 @@ impl Engine for BruteForce {
     }
 }
 
-/// Jensen's photon map over the same photons' impacts (a baseline).
+/// Jensen's photon map over the same photons' impacts (a baseline): with a fixed k
+/// (`photon-map`), or k(N) = k₀·(N/N₀)^β growing with the photons so that its error keeps falling
+/// (`photon-map-growing`). With `detp.direct = "nee"` the store holds the indirect segments only
+/// and the NEE direct part is added at each point, as for DETP.
 #[derive(Default)]
 struct PhotonMap {
-    runs: Vec<(Vec<f64>, f64)>,
+    /// k grows with the photons.
+    growing: bool,
+    /// Per replica: estimates, query seconds, build seconds.
+    runs: Vec<(Vec<f64>, f64, f64)>,
+}
+
+impl PhotonMap {
+    /// The k at this point's photon count.
+    fn k(&self, cfg: &DetpConfig) -> usize {
+        if self.growing {
+            cfg.k_growth.k(cfg.photons)
+        } else {
+            cfg.photon_map_k as usize
+        }
+    }
 }
 
 impl Engine for PhotonMap {
@@ -601,16 +641,16 @@ impl Engine for PhotonMap {
             FilterChoice::Cone => Filter::Cone,
             FilterChoice::Disc => Filter::Disc,
         };
-        let (e, s) = timed(|| {
-            photon_map::estimate(
-                &rays.store,
-                &pts.discs.centers,
-                &pts.discs.normals,
-                cfg.photon_map_k as usize,
-                filter,
-            )
+        let (map, build_s) = timed(|| photon_map::PhotonMap::build(&rays.store));
+        let (mut e, s) = timed(|| {
+            map.estimate(&pts.discs.centers, &pts.discs.normals, self.k(cfg), filter)
         });
-        self.runs.push((e, s));
+        if let Some(direct) = &rays.direct {
+            for (e, d) in e.iter_mut().zip(&direct.values) {
+                *e += d.mean;
+            }
+        }
+        self.runs.push((e, s, build_s));
         Output::Baseline
     }
     fn seconds(&self) -> f64 {
@@ -622,7 +662,7 @@ impl Engine for PhotonMap {
     }
     fn per_point(&self, p: &Pooled) -> Option<Vec<(f64, f64)>> {
         let n = self.runs.first().map_or(0, |r| r.0.len());
-        let k = p.cfg.photon_map_k as f64;
+        let k = self.k(p.cfg) as f64;
         Some(
             (0..n)
                 .map(|i| {
@@ -641,22 +681,129 @@ impl Engine for PhotonMap {
     }
     fn measured(&self, p: &Pooled) -> EngineMeasured {
         let errs: Vec<(f64, f64)> = self.runs.iter().map(|r| errors(&r.0, p.exact)).collect();
-        EngineMeasured::PhotonMap(MapMeasured {
+        let m = MapMeasured {
             rmse: per_replica(&errs.iter().map(|e| e.0).collect::<Vec<_>>()),
             bias: per_replica(&errs.iter().map(|e| e.1).collect::<Vec<_>>()),
             seconds: self.runs.iter().map(|r| r.1).sum(),
+            build_s: self.runs.iter().map(|r| r.2).sum(),
+            k: self.k(p.cfg) as u64,
+        };
+        if self.growing {
+            EngineMeasured::PhotonMapGrowing(m)
+        } else {
+            EngineMeasured::PhotonMap(m)
+        }
+    }
+}
+
+/// What a run computes once per point set and shares across its sweep points (other photon
+/// counts, d, k, engines): the path-traced reference, keyed by (scene, points, samples, seed); the
+/// path-tracing competitor and the NEE direct part, keyed by those and the replica. Values are a
+/// pure function of the key, so sharing them changes no measured column.
+#[derive(Clone, Default)]
+pub struct ReferenceCache {
+    /// The reference per disc and its seconds.
+    reference: Memo<(Vec<Irradiance>, f64)>,
+    /// The competitor of one replica.
+    pub(super) path_tracing: Memo<super::path_tracing::PathTraced>,
+    /// The NEE direct part of one replica.
+    pub(super) direct: Memo<DirectPart>,
+}
+
+/// Values by key, each computed once (outside the lock: two threads may both compute a missing
+/// value, and then store the same).
+pub(super) struct Memo<T>(Arc<Mutex<HashMap<u64, Arc<T>>>>);
+
+impl<T> Default for Memo<T> {
+    fn default() -> Self {
+        Self(Arc::default())
+    }
+}
+
+impl<T> Clone for Memo<T> {
+    fn clone(&self) -> Self {
+        Self(self.0.clone())
+    }
+}
+
+impl<T> Memo<T> {
+    /// The value at `key`, computed by `f` the first time.
+    pub(super) fn get_or(&self, key: u64, f: impl FnOnce() -> T) -> Arc<T> {
+        let cached = self.0.lock().expect("no panic holds it").get(&key).cloned();
+        cached.unwrap_or_else(|| {
+            let v = Arc::new(f());
+            self.0
+                .lock()
+                .expect("no panic holds it")
+                .insert(key, v.clone());
+            v
         })
     }
 }
 
-/// References computed in one run, by (scene, points, samples, seed): sweep points that share their
-/// sample points (other photon counts, d, k) compute the reference once. Values are a pure function
-/// of the key, so sharing them changes no measured column.
-#[derive(Clone, Default)]
-pub struct ReferenceCache(Arc<Mutex<References>>);
+/// A key for values computed on a point set: `parts` (a domain, the seed, sizes) with the scene's
+/// path and every disc's centre and normal.
+pub(super) fn point_set_key(cfg: &DetpConfig, pts: &PointSet, parts: &[u64]) -> u64 {
+    let mut key = hash_key(parts);
+    if let Some(scene) = cfg.scene() {
+        for b in scene.path.to_string_lossy().bytes() {
+            key = mix64(key ^ u64::from(b));
+        }
+    }
+    let discs = &pts.discs;
+    for (c, n) in discs.centers.iter().zip(&discs.normals) {
+        for x in c.to_array().into_iter().chain(n.to_array()) {
+            key = mix64(key ^ x.to_bits());
+        }
+    }
+    key
+}
 
-/// Per key: the reference per disc and its seconds.
-type References = HashMap<u64, Arc<(Vec<Irradiance>, f64)>>;
+/// `detp.direct = "nee"`: the direct irradiance of one replica at every disc, by next-event
+/// estimation ([`crate::lt::direct`], streams `[DIRECT, seed, replica, disc]`), with its rays and
+/// seconds. One number per disc added to every engine's indirect estimate, so the DETP engines
+/// still agree bit for bit.
+pub struct DirectPart {
+    /// Per disc: the direct irradiance and its SE.
+    pub values: Vec<Irradiance>,
+    /// Rays cast (shadow rays).
+    pub rays: reference::RayTally,
+    /// Seconds.
+    pub seconds: f64,
+}
+
+/// The direct part of replica `replica` at the point set's discs, through the run's cache (None
+/// unless `detp.direct = "nee"`).
+pub(super) fn direct_part(
+    cfg: &DetpConfig,
+    pts: &PointSet,
+    replica: u64,
+    cache: &ReferenceCache,
+) -> Option<Arc<DirectPart>> {
+    let super::config::Direct::Nee(samples) = cfg.direct else {
+        return None;
+    };
+    let scene = cfg.scene()?;
+    let key = point_set_key(cfg, pts, &[domain::DIRECT, cfg.seed, samples, replica]);
+    Some(cache.direct.get_or(key, || {
+        let discs = &pts.discs;
+        let ((values, rays), seconds) = timed(|| {
+            crate::lt::direct::direct_irradiance(
+                &scene.scene,
+                &discs.centers,
+                &discs.normals,
+                samples,
+                cfg.seed,
+                replica,
+            )
+        });
+        DirectPart {
+            values,
+            rays,
+            seconds,
+        }
+    }))
+}
 
 /// The path-traced reference irradiance per disc (a baseline: never part of DETP's sums or speed).
 struct Reference {
@@ -676,24 +823,9 @@ impl Reference {
             unreachable!("configure refuses the reference without a scene")
         };
         let discs = &pts.discs;
-        let mut key = hash_key(&[domain::REFERENCE, cfg.seed, cfg.reference_samples]);
-        for b in scene.path.to_string_lossy().bytes() {
-            key = mix64(key ^ u64::from(b));
-        }
-        for (c, n) in discs.centers.iter().zip(&discs.normals) {
-            for x in c.to_array().into_iter().chain(n.to_array()) {
-                key = mix64(key ^ x.to_bits());
-            }
-        }
-        let cached = self
-            .cache
-            .0
-            .lock()
-            .expect("no panic holds it")
-            .get(&key)
-            .cloned();
-        let r = cached.unwrap_or_else(|| {
-            let (v, s) = timed(|| {
+        let key = point_set_key(cfg, pts, &[domain::REFERENCE, cfg.seed, cfg.reference_samples]);
+        let r = self.cache.reference.get_or(key, || {
+            timed(|| {
                 reference::irradiance(
                     &scene.scene,
                     &discs.centers,
@@ -701,14 +833,7 @@ impl Reference {
                     cfg.reference_samples,
                     hash_key(&[cfg.seed]),
                 )
-            });
-            let r = Arc::new((v, s));
-            self.cache
-                .0
-                .lock()
-                .expect("no panic holds it")
-                .insert(key, r.clone());
-            r
+            })
         });
         self.result = Some(r);
     }

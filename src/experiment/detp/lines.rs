@@ -54,6 +54,8 @@ pub(super) fn lines(cfg: &DetpConfig, point: u64, replica: u64, ids: Range<u64>)
         rays_in_root: n,
         trace_s: start.elapsed().as_secs_f64(),
         edge_s: 0.0,
+        segments_direct: 0,
+        direct: None,
     }
 }
 

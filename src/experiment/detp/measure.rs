@@ -5,11 +5,14 @@
 //! `columns.rs` declares how each value becomes a column.
 
 use std::ops::Range;
+use std::sync::Arc;
 
 use glam::DVec3;
 
 use super::config::DetpConfig;
-use super::engines::{self, EngineMeasured, Law, LevelRow, Output, Pooled, ReferenceCache, Sizes};
+use super::engines::{
+    self, DirectPart, EngineMeasured, Law, LevelRow, Output, Pooled, ReferenceCache, Sizes,
+};
 use super::spec::EngineChoice;
 use super::shards::ReplicaPart;
 use super::{agree, check_sums, points, rays, PointSet};
@@ -19,8 +22,14 @@ use crate::stats::Estimate;
 /// What one DETP point measured.
 #[derive(Clone, Debug)]
 pub struct DetpMeasured {
-    /// Segments in the stores, summed over replicas.
+    /// Segments traced, summed over replicas.
     pub segments: u64,
+    /// The segments the engines read (`detp.direct = "nee"`: those after the first bounce).
+    pub segments_indirect: u64,
+    /// `detp.direct = "nee"`: the direct part's seconds, summed over replicas (else 0).
+    pub direct_s: f64,
+    /// `detp.direct = "nee"`: its shadow rays, summed over replicas (else 0).
+    pub direct_rays_shadow: u64,
     /// Sample points.
     pub points: usize,
     /// Seconds making the rays, summed over replicas.
@@ -52,7 +61,7 @@ pub struct DetpMeasured {
 }
 
 /// The engines against the path-traced reference.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct AgainstReference {
     /// The reference's irradiance averaged over the points.
     pub irradiance: Estimate,
@@ -60,8 +69,9 @@ pub struct AgainstReference {
     pub mean_se: f64,
     /// DETP's bias and RMSE against it.
     pub detp: (Estimate, Estimate),
-    /// The photon map's, where it ran.
-    pub photon_map: Option<(Estimate, Estimate)>,
+    /// Each other baseline's (column stem, bias, RMSE), in engine order: the photon maps' and
+    /// path tracing's (over the points it ran on).
+    pub baselines: Vec<(&'static str, (Estimate, Estimate))>,
 }
 
 /// One row of `NAME.points.csv`.
@@ -75,8 +85,8 @@ pub struct PointRow {
     pub normal: DVec3,
     /// Its disc radius.
     pub disc_radius: f64,
-    /// Distance to the nearest edge or other surface, capped at [`EDGE_REACH`]·d (NaN without a
-    /// scene).
+    /// Distance to the nearest edge or other surface, capped at `detp.edge_distance_reach`·d (NaN
+    /// without a scene).
     pub edge_distance: f64,
     /// DETP's irradiance (mean over replicas).
     pub mean: f64,
@@ -88,11 +98,24 @@ pub struct PointRow {
     pub exact: f64,
     /// Each baseline's (column stem, estimate, SE).
     pub baselines: Vec<(&'static str, f64, f64)>,
+    /// Engine `path-tracing` at this point (None where it did not run).
+    pub path_tracing: Option<PathAtPoint>,
+    /// `detp.direct = "nee"`: the direct part and its SE, mean over replicas (else 0, 0: the
+    /// columns stay when a sweep varies `detp.direct`).
+    pub direct: (f64, f64),
 }
+
+/// Engine `path-tracing` at a point: its running mean at each checkpoint (member name: the
+/// paths) and its per-path variance, means over replicas.
+pub type PathAtPoint = (Vec<(String, f64)>, f64);
 
 /// What the replicas of one point leave.
 pub(super) struct Replicated {
     pts: PointSet,
+    refs: ReferenceCache,
+    /// `detp.direct = "nee"`: the direct part per replica.
+    direct: Vec<Arc<DirectPart>>,
+    segments_direct: u64,
     engines: Vec<Box<dyn engines::Engine>>,
     /// DETP's irradiance per disc, per replica.
     irr: Vec<Vec<f64>>,
@@ -127,6 +150,9 @@ impl Replicated {
             mismatches: 0,
             bf_checked: 0,
             pts: points(cfg, point)?,
+            refs: refs.clone(),
+            direct: Vec::new(),
+            segments_direct: 0,
         })
         .map(|mut r| {
             r.edge_s = r.pts.edge_s;
@@ -142,6 +168,7 @@ impl Replicated {
         self.law_radius = f64::from_bits(part.law_radius);
         self.root_radius = f64::from_bits(part.root_radius);
         self.segments += part.segments;
+        self.segments_direct += part.segments_direct;
         self.rays_in_root += part.rays_in_root;
         self.trace_s += part.trace_s;
         self.edge_s += part.edge_s;
@@ -155,19 +182,48 @@ impl Replicated {
         self.mismatches += a.mismatches;
         self.bf_checked += a.bf_checked;
         let discs = &self.pts.discs;
+        let direct = engines::direct_part(cfg, &self.pts, replica, &self.refs);
         self.irr.push(
             a.sums
                 .iter()
                 .enumerate()
-                .map(|(i, &s)| discs.irradiance(i, scale.watts(s)))
+                .map(|(i, &s)| {
+                    let e = discs.irradiance(i, scale.watts(s));
+                    direct.as_ref().map_or(e, |d| e + d.values[i].mean)
+                })
                 .collect(),
         );
+        self.direct.extend(direct);
+    }
+
+    /// The mean over replicas of the direct part at disc `i` and its variance (0, 0 without one).
+    fn direct_at(&self, i: usize) -> (f64, f64) {
+        if self.direct.is_empty() {
+            return (0.0, 0.0);
+        }
+        let r = self.direct.len() as f64;
+        let mean = self.direct.iter().map(|d| d.values[i].mean).sum::<f64>() / r;
+        let var = self
+            .direct
+            .iter()
+            .map(|d| d.values[i].se * d.values[i].se)
+            .sum::<f64>()
+            / (r * r);
+        (mean, var)
     }
 }
 
-/// The photons `ids` of one replica through every engine (the reference skipped where `shard`:
-/// it needs no photons and is computed once by the merge): their sums, the check subset's
-/// brute-force sums and the counts, as a [`ReplicaPart`].
+/// How a replica's photons are traced.
+pub(super) enum Tracing {
+    /// A photon shard: the reference and path tracing are skipped (they need no photons and are
+    /// computed once by the merge).
+    Shard,
+    /// All of them, with the NEE direct part the photon maps add (`detp.direct = "nee"`).
+    Whole(Option<Arc<DirectPart>>),
+}
+
+/// The photons `ids` of one replica through every engine (see [`Tracing`]): their sums, the check
+/// subset's brute-force sums and the counts, as a [`ReplicaPart`].
 pub(super) fn trace_replica(
     cfg: &DetpConfig,
     point: u64,
@@ -175,14 +231,18 @@ pub(super) fn trace_replica(
     ids: Range<u64>,
     engines: &mut [Box<dyn engines::Engine>],
     pts: &PointSet,
-    shard: bool,
+    tracing: Tracing,
 ) -> ReplicaPart {
     let span = (ids.start, ids.end);
-    let rays = rays(cfg, point, replica, pts, ids);
+    let mut rays = rays(cfg, point, replica, pts, ids);
+    let shard = matches!(tracing, Tracing::Shard);
+    if let Tracing::Whole(direct) = tracing {
+        rays.direct = direct;
+    }
     let sums: Vec<Vec<_>> = engines
         .iter_mut()
         .zip(&cfg.engines)
-        .filter(|(_, &c)| !(shard && c == EngineChoice::Reference))
+        .filter(|(_, &c)| !shard || c.reads_photons())
         .filter_map(|(e, _)| match e.run(cfg, &rays, pts) {
             Output::Sums(s) => Some(s),
             Output::Baseline => None,
@@ -205,6 +265,7 @@ pub(super) fn replicate(
 ) -> Result<Replicated, Error> {
     let mut r = Replicated::new(cfg, point, refs)?;
     for replica in 0..cfg.replicas {
+        let direct = engines::direct_part(cfg, &r.pts, replica, refs);
         let part = trace_replica(
             cfg,
             point,
@@ -212,7 +273,7 @@ pub(super) fn replicate(
             0..cfg.photons,
             &mut r.engines,
             &r.pts,
-            false,
+            Tracing::Whole(direct),
         );
         r.absorb(cfg, point, replica, &part);
         progress(cfg.photons);
@@ -243,7 +304,7 @@ pub(super) fn replicate_part(
             ids.clone(),
             &mut engines,
             &pts,
-            true,
+            Tracing::Shard,
         );
         part.engines = engines
             .iter()
@@ -287,7 +348,7 @@ pub(super) fn measure(
 ) -> (DetpMeasured, Vec<LevelRow>, Vec<PointRow>, Vec<String>) {
     let discs = &r.pts.discs;
     let reps = cfg.replicas as f64;
-    let pooled = Pooled {
+    let mut pooled = Pooled {
         cfg,
         sizes: Sizes {
             reps,
@@ -295,6 +356,7 @@ pub(super) fn measure(
             n_p: discs.len() as f64,
         },
         exact: &r.pts.exact,
+        reference: None,
     };
     let detp_points = per_disc(r);
     // Baselines' estimates per disc, and every engine against the reference where it runs.
@@ -304,6 +366,10 @@ pub(super) fn measure(
         .zip(&r.engines)
         .filter_map(|(&c, e)| e.per_point(&pooled).map(|v| (c, v)))
         .collect();
+    pooled.reference = baselines
+        .iter()
+        .find(|(c, _)| *c == EngineChoice::Reference)
+        .map(|(_, v)| v.as_slice());
     let reference = against_reference(cfg, r, &detp_points, &baselines);
     let (irradiance, exact_mean) = mean_irradiance(r);
     let errs: Vec<(f64, f64)> = r
@@ -336,7 +402,11 @@ pub(super) fn measure(
         ));
     }
     let measured = DetpMeasured {
-        segments: r.segments,
+        segments: r.segments + r.segments_direct,
+        segments_indirect: r.segments,
+        // A fold from +0: an empty f64 sum is −0, which would be written as such.
+        direct_s: r.direct.iter().fold(0.0, |a, d| a + d.seconds),
+        direct_rays_shadow: r.direct.iter().map(|d| d.rays.shadow).sum(),
         points: discs.len(),
         trace_s: r.trace_s,
         edge_s: r.edge_s,
@@ -367,7 +437,10 @@ fn per_disc(r: &Replicated) -> Vec<(f64, f64)> {
             let v: Vec<f64> = r.irr.iter().map(|e| e[i]).collect();
             let mut est = engines::per_replica(&v);
             if r.irr.len() == 1 {
-                est.se = (est.mean.max(0.0) * r.mean_segment_watts / discs.area(i)).sqrt();
+                // The Poisson SE of DETP's part; with `nee` plus the direct part's own variance.
+                let (direct, var) = r.direct_at(i);
+                let detp = (est.mean - direct).max(0.0);
+                est.se = (detp * r.mean_segment_watts / discs.area(i) + var).sqrt();
             }
             (est.mean, est.se)
         })
@@ -386,18 +459,28 @@ fn against_reference(
         .find(|(c, _)| *c == EngineChoice::Reference)?;
     let n = refr.len().max(1) as f64;
     let se2: f64 = refr.iter().map(|r| r.1 * r.1).sum();
-    let photon_map = baselines
+    // Every other baseline over the points where it has an estimate (path tracing may run on a
+    // subset of them).
+    let others = baselines
         .iter()
-        .find(|(c, _)| *c == EngineChoice::PhotonMap)
-        .map(|(_, pm)| {
-            let pm_replicas = cfg
+        .filter(|(c, _)| *c != EngineChoice::Reference)
+        .map(|(c, est)| {
+            let replicas = cfg
                 .engines
                 .iter()
                 .zip(&r.engines)
-                .find(|(&c, _)| c == EngineChoice::PhotonMap)
+                .find(|(&e, _)| e == *c)
                 .map_or_else(Vec::new, |(_, e)| e.replica_points());
-            engines::against_reference(pm, &pm_replicas, refr)
-        });
+            let on: Vec<usize> = (0..est.len()).filter(|&i| est[i].0.is_finite()).collect();
+            let pick = |v: &[(f64, f64)]| on.iter().map(|&i| v[i]).collect::<Vec<_>>();
+            let replicas: Vec<Vec<f64>> = replicas
+                .iter()
+                .map(|v| on.iter().map(|&i| v[i]).collect())
+                .collect();
+            let errs = engines::against_reference(&pick(est), &replicas, &pick(refr));
+            (c.column(), errs)
+        })
+        .collect();
     Some(AgainstReference {
         irradiance: Estimate {
             mean: refr.iter().map(|r| r.0).sum::<f64>() / n,
@@ -407,7 +490,7 @@ fn against_reference(
         },
         mean_se: refr.iter().map(|r| r.1).sum::<f64>() / n,
         detp: engines::against_reference(detp_points, &r.irr, refr),
-        photon_map,
+        baselines: others,
     })
 }
 
@@ -437,20 +520,20 @@ fn mean_irradiance(r: &Replicated) -> (Estimate, f64) {
         // counted as independent (as the points table does per point): √(Σ Ē·w̄/(π·d_i²))/n, which
         // is √(Ē·w̄/(πd²·n)) when every disc has radius d. With it the mean is judged against an
         // exact value instead of "n/a".
+        // With `nee` DETP's part is the mean less the direct part's, whose variance adds.
         let n = judged.len() as f64;
+        let direct: Vec<(f64, f64)> = judged.iter().map(|&i| r.direct_at(i)).collect();
+        let detp = (mean_irr.mean - direct.iter().map(|d| d.0).sum::<f64>() / n).max(0.0);
         let var: f64 = judged
             .iter()
-            .map(|&i| mean_irr.mean.max(0.0) * r.mean_segment_watts / discs.area(i))
+            .zip(&direct)
+            .map(|(&i, d)| detp * r.mean_segment_watts / discs.area(i) + d.1)
             .sum();
         mean_irr.se = var.sqrt() / n;
         mean_irr.clusters = judged.len() as u64;
     }
     (mean_irr, exact_mean)
 }
-
-/// How far the points table looks for an edge, in d: the open-surface rule needs s ≥ d, and a
-/// little beyond shows how near the others are.
-pub const EDGE_REACH: f64 = 2.0;
 
 /// The points table: DETP's estimate and SE per disc, its value in each replica, then each
 /// baseline's.
@@ -461,10 +544,11 @@ fn point_rows(
     baselines: &[(EngineChoice, Vec<(f64, f64)>)],
 ) -> Vec<PointRow> {
     let discs = &r.pts.discs;
+    let path = path_tracing_points(r, discs.len());
     let edge = cfg.scene().map_or_else(
         || vec![f64::NAN; discs.len()],
         |s| {
-            let reach = EDGE_REACH * cfg.disc_radius;
+            let reach = cfg.edge_distance_reach * cfg.disc_radius;
             crate::detp::edge::edge_distances(&s.scene, &discs.centers, &discs.normals, reach)
         },
     );
@@ -489,6 +573,33 @@ fn point_rows(
                 .iter()
                 .map(|(c, v)| (c.column(), v[i].0, v[i].1))
                 .collect(),
+            path_tracing: path.as_ref().map(|p| p[i].clone()),
+            direct: {
+                let (mean, var) = r.direct_at(i);
+                (mean, var.sqrt())
+            },
         })
         .collect()
+}
+
+/// Engine `path-tracing`'s running means (members named by their paths) and per-path variance at
+/// every disc, NaN outside the points it ran on (None where it did not run).
+fn path_tracing_points(r: &Replicated, n: usize) -> Option<Vec<PathAtPoint>> {
+    let pt = r.engines.iter().find_map(|e| e.as_path_tracing())?;
+    let first = pt.runs().first()?;
+    let cps = &first.run.checkpoints;
+    let mut out = vec![
+        (
+            cps.iter().map(|c| (c.to_string(), f64::NAN)).collect(),
+            f64::NAN
+        );
+        n
+    ];
+    for (&i, (means, var)) in first.subset.iter().zip(pt.point_means()) {
+        out[i] = (
+            cps.iter().map(|c| c.to_string()).zip(means).collect(),
+            var,
+        );
+    }
+    Some(out)
 }

@@ -8,7 +8,10 @@
 //! - `disc-index`: the discs in an octree or a grid that every segment traverses, against Theorem 1;
 //!   its walk alone (no disc tests) is timed apart after its pass, for eq. 8's traversal share;
 //! - `brute-force`: every segment against every disc;
-//! - `photon-map`: Jensen's k-nearest-neighbour estimate over the same photons (scenes only);
+//! - `photon-map`: Jensen's k-nearest-neighbour estimate over the same photons (scenes only), and
+//!   `photon-map-growing` with k(N) = k₀·(N/N₀)^β so that its error keeps falling;
+//! - `path-tracing`: per-point path tracing with next-event estimation, DETP's competitor at a
+//!   target error (`path_tracing.rs`; scenes only, once per point set and replica in a run);
 //! - `reference`: the path-traced irradiance at every point ([`crate::lt::reference`]), the ground
 //!   truth DETP and the photon map are measured against (scenes only; computed once per point set
 //!   in a run, not per replica).
@@ -41,6 +44,7 @@ pub mod config;
 pub mod engines;
 mod lines;
 pub mod measure;
+pub mod path_tracing;
 mod scene;
 pub mod shards;
 pub mod spec;
@@ -54,6 +58,7 @@ pub use self::spec::{DynamicEngine, EngineChoice, RawDetp, EDGE_GAP, EDGE_MIN_RA
 use self::columns as col;
 use self::engines::{LevelRow, ReferenceCache};
 use self::measure::{DetpMeasured, PointRow};
+use self::path_tracing::PathRow;
 use self::spec::DetpSpec;
 use super::inputs::Inputs;
 use super::kind::{
@@ -87,6 +92,10 @@ pub(crate) struct RaySet {
     pub(crate) trace_s: f64,
     /// Seconds spent applying `detp.edge` to them (first-hit).
     pub(crate) edge_s: f64,
+    /// `detp.direct = "nee"`: the direct (bounce-0) segments traced and left out of `store`.
+    pub(crate) segments_direct: u64,
+    /// `detp.direct = "nee"`: the NEE direct part the photon maps add to their indirect estimate.
+    pub(crate) direct: Option<std::sync::Arc<engines::DirectPart>>,
 }
 
 /// The sample points of a point (shared by its replicas) with their exact irradiance where known.
@@ -259,6 +268,7 @@ crate::side_tables!(
     DetpTables for DetpConfig {
         levels: LevelRow = col::LEVELS,
         points: PointRow = col::POINTS_TABLE,
+        path_tracing: PathRow = col::PATH_TRACING_TABLE,
     }
 );
 
@@ -343,7 +353,7 @@ pub fn memory(cfg: &DetpConfig, threads: usize) -> Memory {
             what: "sphere-cache ray lists (n_R/(1 − Q²) per thread)".into(),
         });
     }
-    if cfg.engines.contains(&EngineChoice::PhotonMap) {
+    if cfg.engines.iter().any(|e| e.is_photon_map()) {
         needs.push(Need {
             bytes: segs * 48.0,
             key: "detp.photons",
@@ -375,7 +385,7 @@ impl Kind for DetpKind {
         "detp.engines",
         "the engines decide the table's columns, which must be the same for every point",
     )];
-    const ABOUT: &'static str = "Density estimation on the tangent plane: photon segments (μ-random lines through the unit ball, or photons traced from a scene) crossing discs of radius d on sample points, gathered by the sphere cache (radius ratio Q, threshold, Morton/Hilbert order), a disc index (octree or grid), brute force and, as baselines, Jensen's photon map and a path-traced reference (engine reference: unbiased irradiance per point with its SE, and every engine's bias and RMSE against it). Engines agree bit for bit (integer fixed point) and with brute force on a keyed subset; tests per engine against Theorem 1, rays per level against n_R·Q^(2i), irradiance against the exact value where the source has one.";
+    const ABOUT: &'static str = "Density estimation on the tangent plane: photon segments (μ-random lines through the unit ball, or photons traced from a scene) crossing discs of radius d on sample points, gathered by the sphere cache (radius ratio Q, threshold, Morton/Hilbert order), a disc index (octree or grid), brute force and, as baselines, Jensen's photon map (fixed k, or k growing with the photons: photon-map-growing), per-point path tracing as the competitor at a target error (path-tracing: its own streams, running means at 1, 2, 4, … paths, NAME.path_tracing.csv) and a path-traced reference (engine reference: unbiased irradiance per point with its SE, and every engine's bias and RMSE against it). With detp.direct = \"nee\" direct light is next-event estimation at each point and DETP (and the photon maps) estimate the indirect light from the segments after the first bounce. Engines agree bit for bit (integer fixed point) and with brute force on a keyed subset; tests per engine against Theorem 1, rays per level against n_R·Q^(2i), irradiance against the exact value where the source has one.";
     type Raw = DetpSpec;
     type Point = DetpConfig;
     type Measured = DetpMeasured;
@@ -433,6 +443,14 @@ impl Kind for DetpKind {
             }
         };
         let (measured, levels, points, warnings) = measure::measure(p, &replicated);
+        let path_tracing = measured
+            .engines
+            .iter()
+            .find_map(|e| match e {
+                engines::EngineMeasured::PathTracing(m) => Some(m.rows.clone()),
+                _ => None,
+            })
+            .unwrap_or_default();
         let checks = vec![Check {
             name: col::MISMATCHES.name,
             what: "discs where the DETP engines or brute force disagree",
@@ -445,7 +463,11 @@ impl Kind for DetpKind {
         };
         Ok(Output {
             measured,
-            tables: DetpTables { levels, points },
+            tables: DetpTables {
+                levels,
+                points,
+                path_tracing,
+            },
             checks,
             rate,
             warnings,

@@ -5,9 +5,10 @@
 use std::ops::Range;
 use std::time::Instant;
 
-use super::config::{DetpConfig, Points};
+use super::config::{DetpConfig, Direct, Points};
 use super::{PointSet, RaySet};
 use crate::detp::disc::Discs;
+use crate::detp::indirect::indirect_store;
 use crate::detp::edge::{clamped_radii, clip_to_first_hit};
 use crate::detp::photon::trace_photon_range;
 use crate::detp::sphere_cache::root_sphere;
@@ -128,6 +129,14 @@ pub(super) fn photons(
         clip_to_first_hit(&mut store, gap * cfg.disc_radius);
     }
     let edge_s = start.elapsed().as_secs_f64();
+    // `detp.direct = "nee"`: the engines read the segments after the first bounce only (timed as
+    // part of making the rays).
+    let start = Instant::now();
+    let traced = store.len() as u64;
+    if let Direct::Nee(_) = cfg.direct {
+        store = indirect_store(&store);
+    }
+    let trace_s = trace_s + start.elapsed().as_secs_f64();
     let (b, d) = (scene.bounds(), discs.bounds_all());
     let root = root_sphere(&Aabb::new(b.lo.min(d.lo), b.hi.max(d.hi)));
     let n = store.len() as u64;
@@ -139,5 +148,7 @@ pub(super) fn photons(
         rays_in_root: n,
         trace_s,
         edge_s,
+        segments_direct: traced - n,
+        direct: None,
     }
 }

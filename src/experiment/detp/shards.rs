@@ -29,8 +29,11 @@ use crate::detp::fixed::{Acc, PowerScale};
 pub struct ReplicaPart {
     /// The photon ids traced, `[lo, hi)`.
     pub ids: (u64, u64),
-    /// Segments stored.
+    /// Segments stored (what the engines read).
     pub segments: u64,
+    /// `detp.direct = "nee"`: direct segments traced and left out of the store.
+    #[serde(default)]
+    pub segments_direct: u64,
     /// Segments meeting the law's ball.
     pub rays_in_root: u64,
     /// Σ of the segments' power units, in decimal (it may exceed 64 bits).
@@ -65,6 +68,7 @@ impl ReplicaPart {
         Self {
             ids,
             segments: rays.store.len() as u64,
+            segments_direct: rays.segments_direct,
             rays_in_root: rays.rays_in_root,
             power_units: power.to_string(),
             scale: rays.store.scale.watts_per_unit.to_bits(),
@@ -120,6 +124,7 @@ impl RangePart for ReplicaPart {
         Ok(Self {
             ids: (self.ids.0, o.ids.1),
             segments: self.segments + o.segments,
+            segments_direct: self.segments_direct + o.segments_direct,
             rays_in_root: self.rays_in_root + o.rays_in_root,
             power_units: (self.power_units() + o.power_units()).to_string(),
             scale: self.scale,
@@ -155,12 +160,12 @@ pub fn refusal(cfg: &DetpConfig) -> Option<String> {
     let bad: Vec<&str> = cfg
         .engines
         .iter()
-        .filter(|e| matches!(e, EngineChoice::SphereCache | EngineChoice::PhotonMap))
+        .filter(|e| matches!(e, EngineChoice::SphereCache) || e.is_photon_map())
         .map(|e| e.as_str())
         .collect();
     (!bad.is_empty()).then(|| {
         format!(
-            "detp.engines has {}: its counts do not add across photon shards (the sphere cache subdivides a sphere by how many rays it holds, the photon map gathers each point's nearest photons among all of them); --photon-shard needs engines among disc-index, brute-force and reference",
+            "detp.engines has {}: its counts do not add across photon shards (the sphere cache subdivides a sphere by how many rays it holds, the photon map gathers each point's nearest photons among all of them); --photon-shard needs engines among disc-index, brute-force, path-tracing and reference",
             bad.join(" and ")
         )
     })

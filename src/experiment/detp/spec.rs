@@ -85,7 +85,7 @@ crate::spec_table! {
         /// Kind `detp`: the engines run on every point (columns per engine).
         engines: Vec<EngineChoice> = {default vec![EngineChoice::SphereCache]},
             "array of strings", "",
-            "`\"sphere-cache\"`, `\"disc-index\"`, `\"brute-force\"`, `\"photon-map\"`, `\"reference\"`";
+            "`\"sphere-cache\"`, `\"disc-index\"`, `\"brute-force\"`, `\"photon-map\"`, `\"photon-map-growing\"`, `\"path-tracing\"`, `\"reference\"`";
         /// The disc index's structure.
         index: IndexChoice = {default IndexChoice::Octree}, "string", "",
             "`\"octree\"`, `\"grid\"`";
@@ -105,6 +105,31 @@ crate::spec_table! {
         /// Paths per point of engine `reference` (path tracing with next-event estimation: the
         /// ground truth, with its SE).
         reference_samples: u64 = {default 1024} read count, "integer", "paths", "≥ 2";
+        /// k₀ of engine `photon-map-growing`'s k(N) = k₀·(N/N₀)^β: this is `photon_map_k`; β here.
+        /// 2/3 minimises the error where irradiance is smooth, ½ where edges dominate, 0 is a
+        /// fixed k.
+        photon_map_k_growth: f64 = {default 2.0 / 3.0} read growth_exponent, "number", "",
+            "[0, 1)";
+        /// N₀ of engine `photon-map-growing`: the photons per replica at which its k equals
+        /// `photon_map_k`.
+        photon_map_k_photons: u64 = {default 50_000} read count, "integer", "photons", "≥ 1";
+        /// K: paths per point of engine `path-tracing` (the competitor, on its own streams); its
+        /// checkpoints are 1, 2, 4, … and K.
+        path_samples: u64 = {default 1024} read count, "integer", "paths", "≥ 1";
+        /// Engine `path-tracing` runs on this many of the points (the first of a keyed
+        /// permutation, the same for every sweep point with these points): its cost and errors
+        /// are per point, so a subset measures them.
+        path_points: Option<u64> = {absent "all points"} read opt_count, "integer", "points",
+            "≥ 1";
+        /// Direct light: in DETP's photons (the paper), or by next-event estimation at each point
+        /// with DETP and the photon maps estimating the indirect light from the segments after the
+        /// first bounce (`"nee"`, scenes only).
+        direct: DirectChoice = {default DirectChoice::Photons}, "string", "",
+            "`\"photons\"`, `\"nee\"`";
+        /// S: samples per area light of `direct = "nee"` (point and spot lights are exact).
+        direct_samples: u64 = {default 16} read count, "integer", "samples", "≥ 2";
+        /// The points table's `edge_distance` looks this far for another surface.
+        edge_distance_reach: f64 = {default 2.0} read positive, "number", "× d", "> 0";
         /// Independent realisations (new rays and points each): with one, standard errors are
         /// Poisson estimates; with several, the spread across replicas.
         replicas: u64 = {default 1} read count, "integer", "", "≥ 1";
@@ -169,8 +194,14 @@ choice!(
         DiscIndex => "disc-index",
         BruteForce => "brute-force",
         PhotonMap => "photon-map",
+        PhotonMapGrowing => "photon-map-growing",
+        PathTracing => "path-tracing",
         Reference => "reference",
     } default SphereCache
+);
+choice!(
+    /// `detp.direct`: direct light in DETP's photons, or by next-event estimation.
+    DirectChoice { Photons => "photons", Nee => "nee" } default Photons
 );
 choice!(
     /// Disc index kind.
@@ -209,13 +240,32 @@ impl EngineChoice {
             EngineChoice::DiscIndex => "disc_index",
             EngineChoice::BruteForce => "brute_force",
             EngineChoice::PhotonMap => "photon_map",
+            EngineChoice::PhotonMapGrowing => "photon_map_growing",
+            EngineChoice::PathTracing => "path_tracing",
             EngineChoice::Reference => "reference",
         }
     }
 
     /// A baseline beside the DETP engines (its own estimates, not DETP's integer sums)?
     pub fn is_baseline(self) -> bool {
-        matches!(self, EngineChoice::PhotonMap | EngineChoice::Reference)
+        matches!(
+            self,
+            EngineChoice::PhotonMap
+                | EngineChoice::PhotonMapGrowing
+                | EngineChoice::PathTracing
+                | EngineChoice::Reference
+        )
+    }
+
+    /// A photon map (fixed or growing k)?
+    pub fn is_photon_map(self) -> bool {
+        matches!(self, EngineChoice::PhotonMap | EngineChoice::PhotonMapGrowing)
+    }
+
+    /// Does it read the photons? The reference and the path-tracing competitor do not: a photon
+    /// shard skips them and the merge computes them once.
+    pub fn reads_photons(self) -> bool {
+        !matches!(self, EngineChoice::Reference | EngineChoice::PathTracing)
     }
 }
 
@@ -263,6 +313,18 @@ fn point_count<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error>
             "got \"{s}\", a count of points uniform in the ball; to read points from a CSV write point_source = \"file\" and points_file = \"{s}\""
         ))),
         v => opt_count(v).map_err(D::Error::custom),
+    }
+}
+
+/// `detp.photon_map_k_growth`: β in [0, 1).
+fn growth_exponent<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    let b = crate::toml_text::de::number(d)?;
+    if (0.0..1.0).contains(&b) {
+        Ok(b)
+    } else {
+        Err(D::Error::custom(format!(
+            "got {b}, expected an exponent in [0, 1) (1 or more: k grows as fast as the photons, and the photon map's variance no longer falls)"
+        )))
     }
 }
 

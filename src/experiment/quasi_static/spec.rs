@@ -261,6 +261,12 @@ fn lines_config(
 /// Kind quasi-static runs the paper's method with its own per-object engine choice, for scenes and
 /// lines alike: the edge remedies and `detp.engines` belong to kind detp.
 fn paper_method_only(detp: &DetpConfig) -> Result<(), ConfigError> {
+    if detp.direct != crate::experiment::detp::config::Direct::Photons {
+        return refuse(
+            "detp.direct",
+            "kind quasi-static traces all light in its photons (\"photons\"); \"nee\" is measured by kind \"detp\"",
+        );
+    }
     if detp.edge != crate::detp::edge::EdgeMode::Paper {
         return refuse(
             "detp.edge",

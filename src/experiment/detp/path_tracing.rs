@@ -1,0 +1,332 @@
+//! Engine `path-tracing`: per-point path tracing with next-event estimation as DETP's competitor
+//! (issue 27), [`crate::lt::pathtrace`] run on its own streams (`[PATH_TRACE, seed, replica, i]`,
+//! i the point's place in the subset it runs on), so it shares no random number with the
+//! reference it is judged against.
+//!
+//! One run of K = `detp.path_samples` paths per point gives the running mean at every checkpoint
+//! 1, 2, 4, …, K: the whole error-against-seconds front of the competitor from one run. It runs on
+//! `detp.path_points` of the points (the first of a keyed permutation of the point set, so a
+//! larger subset holds a smaller one), since its cost and error are per point; and, like the
+//! reference, once per (point set, replica) in a run, through the run's cache: every sweep point
+//! with these points shares its samples (common random numbers) and its seconds.
+//!
+//! What it writes: the main table's group (seconds, rays, cv, the points it ran on), its errors
+//! against the reference as every baseline's (`path_tracing_ref_*`), one row per replica and
+//! checkpoint in `NAME.path_tracing.csv` ([`PathRow`], per replica so that an analysis can
+//! bootstrap over replicas), and in the points table its running means and per-path variance.
+
+use std::sync::Arc;
+
+use glam::DVec3;
+use rand::seq::SliceRandom;
+
+use super::config::DetpConfig;
+use super::engines::{
+    per_replica, point_set_key, Engine, EngineMeasured, EnginePart, Output, Pooled,
+    ReferenceCache,
+};
+use super::{PointSet, RaySet};
+use crate::lt::pathtrace::{path_trace, powers_of_two, PathTraceRun};
+use crate::sample::rng::{domain, stream};
+use crate::stats::crossover::PathTracingCost;
+
+/// Tag of the stream that permutes the points for `detp.path_points` (`[POINTS, seed, tag, n]`:
+/// no sweep point has this index, so it draws no other stream's numbers).
+const SUBSET_TAG: u64 = 0x7061_7468_5f70_7473;
+
+/// The points the competitor runs on: all `n` (in order), or the first `m` of a keyed permutation
+/// of `0..n`, sorted. The permutation does not depend on `m`, so the subsets are nested.
+pub fn subset(seed: u64, n: usize, m: Option<u64>) -> Vec<usize> {
+    let mut all: Vec<usize> = (0..n).collect();
+    match m {
+        Some(m) if (m as usize) < n => {
+            all.shuffle(&mut stream(&[domain::POINTS, seed, SUBSET_TAG, n as u64]));
+            let mut s = all[..m as usize].to_vec();
+            s.sort_unstable();
+            s
+        }
+        _ => all,
+    }
+}
+
+/// One replica's competitor run.
+pub struct PathTraced {
+    /// The points (indices into the point set) it ran on, increasing.
+    pub subset: Vec<usize>,
+    /// What it measured on them, in subset order.
+    pub run: PathTraceRun,
+}
+
+/// The competitor over a point's replicas.
+pub(super) struct PathTracing {
+    cache: ReferenceCache,
+    /// One run per replica, in replica order.
+    runs: Vec<Arc<PathTraced>>,
+}
+
+impl PathTracing {
+    /// A competitor that reads and fills the run's `cache`.
+    pub(super) fn new(cache: ReferenceCache) -> Self {
+        Self {
+            cache,
+            runs: Vec::new(),
+        }
+    }
+
+    /// The next replica's run (replicas come in order), through the cache.
+    fn compute(&mut self, cfg: &DetpConfig, pts: &PointSet) {
+        let replica = self.runs.len() as u64;
+        let Some(scene) = cfg.scene() else {
+            unreachable!("configure refuses path-tracing without a scene")
+        };
+        let key = point_set_key(
+            cfg,
+            pts,
+            &[
+                domain::PATH_TRACE,
+                cfg.seed,
+                cfg.path_samples,
+                cfg.path_points.unwrap_or(0),
+                replica,
+            ],
+        );
+        let r = self.cache.path_tracing.get_or(key, || {
+            let discs = &pts.discs;
+            let subset = subset(cfg.seed, discs.len(), cfg.path_points);
+            let at = |v: &[DVec3]| subset.iter().map(|&i| v[i]).collect::<Vec<_>>();
+            let run = path_trace(
+                &scene.scene,
+                &at(&discs.centers),
+                &at(&discs.normals),
+                &powers_of_two(cfg.path_samples),
+                cfg.seed,
+                replica,
+            );
+            PathTraced { subset, run }
+        });
+        self.runs.push(r);
+    }
+
+    /// The runs, one per replica.
+    pub(super) fn runs(&self) -> &[Arc<PathTraced>] {
+        &self.runs
+    }
+
+    /// Per point of the subset (in its order): the running mean at each checkpoint and the per-path
+    /// variance, each the mean over replicas.
+    pub(super) fn point_means(&self) -> Vec<(Vec<f64>, f64)> {
+        let Some(first) = self.runs.first() else {
+            return Vec::new();
+        };
+        let reps = self.runs.len() as f64;
+        let nc = first.run.checkpoints.len();
+        (0..first.subset.len())
+            .map(|j| {
+                let means = (0..nc)
+                    .map(|c| self.runs.iter().map(|r| r.run.mean(j, c)).sum::<f64>() / reps)
+                    .collect();
+                let var = self.runs.iter().map(|r| r.run.variance[j]).sum::<f64>() / reps;
+                (means, var)
+            })
+            .collect()
+    }
+
+    /// The side table's rows: per replica and checkpoint, rays, seconds and errors against the
+    /// reference (NaN without one).
+    fn rows(&self, refr: Option<&[(f64, f64)]>) -> Vec<PathRow> {
+        let mut rows = Vec::new();
+        for (replica, r) in self.runs.iter().enumerate() {
+            let run = &r.run;
+            let m = r.subset.len().max(1) as f64;
+            let variance_mean = run.variance.iter().sum::<f64>() / m;
+            for (c, &paths) in run.checkpoints.iter().enumerate() {
+                let (ref_mse, ref_bias) = refr.map_or((f64::NAN, f64::NAN), |refr| {
+                    let (mut se, mut b) = (0.0, 0.0);
+                    for (j, &i) in r.subset.iter().enumerate() {
+                        let d = run.mean(j, c) - refr[i].0;
+                        se += d * d - refr[i].1 * refr[i].1;
+                        b += d;
+                    }
+                    (se / m, b / m)
+                });
+                rows.push(PathRow {
+                    replica: replica as u64,
+                    paths,
+                    rays_path: run.rays[c].path,
+                    rays_shadow: run.rays[c].shadow,
+                    seconds_s: run.seconds[c],
+                    thread_s: run.thread_s[c],
+                    ref_mse,
+                    ref_bias,
+                    variance_mean,
+                });
+            }
+        }
+        rows
+    }
+}
+
+/// One row of `NAME.path_tracing.csv`: one replica at one checkpoint.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PathRow {
+    /// Replica.
+    pub replica: u64,
+    /// Paths per point.
+    pub paths: u64,
+    /// Continuation rays of the first `paths` paths of every point.
+    pub rays_path: u64,
+    /// Their shadow rays.
+    pub rays_shadow: u64,
+    /// Wall-rescaled seconds to this checkpoint.
+    pub seconds_s: f64,
+    /// Summed per-point thread seconds.
+    pub thread_s: f64,
+    /// Mean squared error against the reference, its variance subtracted.
+    pub ref_mse: f64,
+    /// Mean error against the reference.
+    pub ref_bias: f64,
+    /// Mean per-path variance over the points (at K).
+    pub variance_mean: f64,
+}
+
+/// What the competitor measured over a point's replicas.
+#[derive(Clone, Debug)]
+pub struct PathMeasured {
+    /// Points it ran on.
+    pub points: u64,
+    /// Wall seconds of all K paths on them, summed over replicas.
+    pub seconds: f64,
+    /// Continuation rays at K, summed over replicas.
+    pub rays_path: u64,
+    /// Shadow rays at K, summed over replicas.
+    pub rays_shadow: u64,
+    /// Wall seconds per path.
+    pub s_per_path: f64,
+    /// √(mean σ_i²) / mean E_i over its points and replicas.
+    pub cv: f64,
+    /// cv from its errors against the reference at the checkpoints (NaN without a reference).
+    pub cv_prefix: f64,
+    /// Its rows of `NAME.path_tracing.csv`.
+    pub rows: Vec<PathRow>,
+}
+
+impl Engine for PathTracing {
+    fn run(&mut self, cfg: &DetpConfig, _rays: &RaySet, pts: &PointSet) -> Output {
+        self.compute(cfg, pts);
+        Output::Baseline
+    }
+    fn part(&self) -> Option<EnginePart> {
+        Some(EnginePart::PathTracing)
+    }
+    /// Photon shards skip the competitor (it needs no photons); the merge computes it, once.
+    fn absorb(&mut self, cfg: &DetpConfig, pts: &PointSet, _part: &EnginePart) {
+        self.compute(cfg, pts);
+    }
+    fn seconds(&self) -> f64 {
+        // A baseline: not part of the DETP engines' speed.
+        0.0
+    }
+    fn as_path_tracing(&self) -> Option<&PathTracing> {
+        Some(self)
+    }
+    /// At K paths: the mean over replicas and its SE (across replicas, or with one replica
+    /// √(σ²/K)); NaN at points outside the subset.
+    fn per_point(&self, p: &Pooled) -> Option<Vec<(f64, f64)>> {
+        let mut out = vec![(f64::NAN, f64::NAN); p.sizes.n_p as usize];
+        let Some(first) = self.runs.first() else {
+            return Some(out);
+        };
+        let k = *first.run.checkpoints.last().unwrap_or(&1) as f64;
+        let last = first.run.checkpoints.len() - 1;
+        for (j, &i) in first.subset.iter().enumerate() {
+            let v: Vec<f64> = self.runs.iter().map(|r| r.run.mean(j, last)).collect();
+            let e = per_replica(&v);
+            let se = if v.len() == 1 {
+                (first.run.variance[j] / k).sqrt()
+            } else {
+                e.se
+            };
+            out[i] = (e.mean, se);
+        }
+        Some(out)
+    }
+    fn replica_points(&self) -> Vec<Vec<f64>> {
+        self.runs
+            .iter()
+            .map(|r| {
+                let n = r.subset.last().map_or(0, |&i| i + 1);
+                let last = r.run.checkpoints.len() - 1;
+                let mut v = vec![f64::NAN; n];
+                for (j, &i) in r.subset.iter().enumerate() {
+                    v[i] = r.run.mean(j, last);
+                }
+                v
+            })
+            .collect()
+    }
+    fn measured(&self, p: &Pooled) -> EngineMeasured {
+        let rows = self.rows(p.reference);
+        let points = self.runs.first().map_or(0, |r| r.subset.len()) as u64;
+        let at_k = |f: fn(&crate::lt::reference::RayTally) -> u64| -> u64 {
+            self.runs
+                .iter()
+                .map(|r| r.run.rays.last().map_or(0, f))
+                .sum()
+        };
+        let seconds: f64 = self.runs.iter().map(|r| r.run.wall_s).sum();
+        let paths: f64 = self
+            .runs
+            .iter()
+            .map(|r| r.subset.len() as f64 * *r.run.checkpoints.last().unwrap_or(&0) as f64)
+            .sum();
+        let (mut var, mut mean, mut n) = (0.0, 0.0, 0.0);
+        for r in &self.runs {
+            let last = r.run.checkpoints.len() - 1;
+            for j in 0..r.subset.len() {
+                var += r.run.variance[j];
+                mean += r.run.mean(j, last);
+                n += 1.0;
+            }
+        }
+        EngineMeasured::PathTracing(PathMeasured {
+            points,
+            seconds,
+            rays_path: at_k(|t| t.path),
+            rays_shadow: at_k(|t| t.shadow),
+            s_per_path: seconds / paths,
+            cv: (var / n).sqrt() / (mean / n),
+            cv_prefix: self.cv_prefix(p.reference, &rows),
+            rows,
+        })
+    }
+}
+
+impl PathTracing {
+    /// cv from the prefix errors: the checkpoints' MSE (mean over replicas) relative to the
+    /// reference's mean over the subset squared, through
+    /// [`PathTracingCost::cv2_from_prefix_errors`] (NaN without a reference).
+    fn cv_prefix(&self, refr: Option<&[(f64, f64)]>, rows: &[PathRow]) -> f64 {
+        let (Some(refr), Some(first)) = (refr, self.runs.first()) else {
+            return f64::NAN;
+        };
+        let m = first.subset.len().max(1) as f64;
+        let truth = first.subset.iter().map(|&i| refr[i].0).sum::<f64>() / m;
+        let cps = &first.run.checkpoints;
+        let reps = self.runs.len() as f64;
+        let rel_mse: Vec<f64> = (0..cps.len())
+            .map(|c| {
+                rows.iter()
+                    .skip(c)
+                    .step_by(cps.len())
+                    .map(|r| r.ref_mse)
+                    .sum::<f64>()
+                    / reps
+                    / (truth * truth)
+            })
+            .collect();
+        let paths: Vec<f64> = cps.iter().map(|&c| c as f64).collect();
+        PathTracingCost::cv2_from_prefix_errors(&paths, &rel_mse)
+            .max(0.0)
+            .sqrt()
+    }
+}
