@@ -97,7 +97,9 @@ fn a_frame_is_path_traced_in_its_own_pose() {
             let mean_e = run.means_at(last).iter().sum::<f64>() / 4.0;
             let cv = mean_var.sqrt() / mean_e;
             assert!(cv.is_finite() && cv > 0.0, "frame {f}: cv {cv}");
-            let t = row.path_tracing.expect("frame 0 and the checked frames are traced");
+            let t = row
+                .path_tracing
+                .expect("frame 0 and the checked frames are traced");
             assert_eq!(t.frame, f);
             assert_eq!(t.points, 4);
             assert_eq!(t.cv, cv, "replica {replica} frame {f}");
@@ -151,7 +153,11 @@ fn path_tracing_is_thread_independent_and_changes_no_other_column() {
         let (h_off, rows_off) = read_csv(without);
         assert!(!h_off.iter().any(|c| path_tracing(c)), "off: {h_off:?}");
         let kept: Vec<&String> = h_on.iter().filter(|c| !path_tracing(c)).collect();
-        assert_eq!(kept, h_off.iter().collect::<Vec<_>>(), "the header without it");
+        assert_eq!(
+            kept,
+            h_off.iter().collect::<Vec<_>>(),
+            "the header without it"
+        );
         assert_eq!(h_on.len(), h_off.len() + added);
         assert_eq!(rows_on.len(), rows_off.len());
         // Every measured column identical (timings differ by the clock alone).
@@ -165,7 +171,12 @@ fn path_tracing_is_thread_independent_and_changes_no_other_column() {
                 })
                 .collect()
         };
-        assert_eq!(reproducible(with), reproducible(without), "{}", with.display());
+        assert_eq!(
+            reproducible(with),
+            reproducible(without),
+            "{}",
+            with.display()
+        );
     }
     // Traced frames (0, 2 and the last) carry numbers, frame 1 NaN.
     let (h, rows) = read_csv(&on1.1);

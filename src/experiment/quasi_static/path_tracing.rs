@@ -26,7 +26,7 @@ use crate::stats::crossover::PathTracingCost;
 use crate::stats::{ClusteredMean, Estimate};
 
 /// Tag of the per-frame path-tracing seed (`[seed, tag, frame]`).
-const FRAME_TAG: u64 = 0x7174_5f70_6174_68; // "qt_path"
+const FRAME_TAG: u64 = 0x0071_745f_7061_7468; // "qt_path"
 
 /// The seed path tracing passes to [`path_trace`] at `frame`: its streams are
 /// `[PATH_TRACE, frame_seed(seed, frame), replica, i]`.
