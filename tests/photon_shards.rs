@@ -355,6 +355,14 @@ fn kinds_and_engines_whose_counts_do_not_add_are_refused() {
         let qs = quasi_static_spec(tmp.path(), "ps-qs", engine, extra);
         shard_refused(&qs, what);
     }
+    // Path tracing runs in each replica's posed scene, which no merge holds.
+    let qs = quasi_static_spec(tmp.path(), "ps-qs", "disc-index", "");
+    let text = fs::read_to_string(&qs).unwrap().replace(
+        "engine = \"disc-index\"",
+        "engine = \"disc-index\"\nengines = [\"sphere-cache\", \"path-tracing\"]",
+    );
+    fs::write(&qs, text).unwrap();
+    shard_refused(&qs, r#"detp.engines has "path-tracing""#);
     let qs = quasi_static_spec(tmp.path(), "ps-qs", "hybrid", "");
     // With --shard: clap refuses the pair (usage, exit 2).
     let out = run_quiet(&qs, tmp.path())

@@ -18,6 +18,7 @@ mod oracle;
 mod photon_shards;
 mod protocol;
 mod quasi_static;
+mod quasi_static_path_tracing;
 mod reference;
 mod render;
 mod report;

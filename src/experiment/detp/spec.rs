@@ -82,7 +82,9 @@ crate::spec_table! {
         /// Points per independent sphere-cache run (chunks run in parallel; a spec value, never
         /// the thread count, so counts do not depend on threads).
         chunk_points: u64 = {default 16_384} read count, "integer", "points", "≥ 1";
-        /// Kind `detp`: the engines run on every point (columns per engine).
+        /// Kind `detp`: the engines run on every point (columns per engine). Kind
+        /// `quasi-static` picks its engine with `detp.engine`; here it takes `"sphere-cache"` and
+        /// `"path-tracing"` (path tracing in the posed scene at frame 0 and the checked frames).
         engines: Vec<EngineChoice> = {default vec![EngineChoice::SphereCache]},
             "array of strings", "",
             "`\"sphere-cache\"`, `\"disc-index\"`, `\"brute-force\"`, `\"photon-map\"`, `\"photon-map-growing\"`, `\"path-tracing\"`, `\"reference\"`";

@@ -380,6 +380,36 @@ pub const REFERENCE_PHOTONS: Column = parameter(
 );
 /// Reference seconds.
 pub const REFERENCE_S: Column = timing("reference_s", "s", "seconds of the reference run");
+/// Path tracing's points.
+pub const PATH_TRACING_POINTS: Column = measured(
+    "path_tracing_points",
+    "points",
+    "\"path-tracing\" in detp.engines: the points path-traced at frame 0 and at each checked frame (detp.path_points of the frame's points, a keyed subset, or all)",
+);
+/// Path tracing's seconds per path.
+pub const PATH_TRACING_S_PER_PATH: Column = Column::timed_estimate(
+    "path_tracing_s_per_path",
+    "s",
+    "path tracing in the scene posed at frame 0 and each checked frame: wall seconds per path (detp.path_samples paths at each of path_tracing_points points), over those frames of every replica (one cluster per replica); in no other timing",
+);
+/// Path tracing's cv.
+pub const PATH_TRACING_CV: Column = Column::estimate(
+    "path_tracing_cv",
+    "1",
+    "path tracing at frame 0 and each checked frame: √(mean_i σ_i²)/mean_i Ê_i over its points (σ_i² the per-path variance, Ê_i the mean of the detp.path_samples paths), the relative RMSE of one path per point; over those frames of every replica (one cluster per replica)",
+);
+/// Path tracing's continuation rays.
+pub const PATH_TRACING_RAYS_PATH: Column = measured(
+    "path_tracing_rays_path",
+    "rays",
+    "path tracing: continuation rays per path, mean over frame 0 and the checked frames of every replica",
+);
+/// Path tracing's shadow rays.
+pub const PATH_TRACING_RAYS_SHADOW: Column = measured(
+    "path_tracing_rays_shadow",
+    "rays",
+    "path tracing: shadow rays per path, mean over frame 0 and the checked frames of every replica",
+);
 /// Theorem 2, static points.
 pub const STATIC_TESTS_THEORY: Column = theory(
     "static_tests_theory_{}",
@@ -519,6 +549,19 @@ pub const MAIN: Table<QuasiStaticConfig, QsMeasured> = Table {
         col(&IRRADIANCE_RMSE, |_, m| m.reference.map(|r| r.0).into()),
         col(&REFERENCE_PHOTONS, |_, m| m.reference.map(|r| r.2).into()),
         col(&REFERENCE_S, |_, m| m.reference.map(|r| r.1).into()),
+        col(&PATH_TRACING_POINTS, |_, m| {
+            m.path_tracing.map(|t| t.points).into()
+        }),
+        col(&PATH_TRACING_S_PER_PATH, |_, m| {
+            m.path_tracing.map(|t| t.s_per_path).into()
+        }),
+        col(&PATH_TRACING_CV, |_, m| m.path_tracing.map(|t| t.cv).into()),
+        col(&PATH_TRACING_RAYS_PATH, |_, m| {
+            m.path_tracing.map(|t| t.rays_path).into()
+        }),
+        col(&PATH_TRACING_RAYS_SHADOW, |_, m| {
+            m.path_tracing.map(|t| t.rays_shadow).into()
+        }),
         col(&STATIC_TESTS_THEORY, |p, m| {
             engines(th::static_points_cost(
                 m.f_r(),
@@ -724,6 +767,18 @@ pub mod frame {
         Class::Check,
         "points differing from the full recalculation (empty if not checked)",
     );
+    /// Path tracing's seconds per path at this frame.
+    pub const PATH_TRACING_S_PER_PATH: Column = timing(
+        "path_tracing_s_per_path",
+        "s",
+        "\"path-tracing\" in detp.engines: wall seconds per path in the scene posed at this frame (frame 0 and the checked frames; NaN on the others)",
+    );
+    /// Path tracing's cv at this frame.
+    pub const PATH_TRACING_CV: Column = measured(
+        "path_tracing_cv",
+        "1",
+        "path tracing at this frame: √(mean_i σ_i²)/mean_i Ê_i over its points (frame 0 and the checked frames; NaN on the others)",
+    );
 }
 
 /// `NAME.frames.csv`: one row per frame of every replica.
@@ -799,6 +854,18 @@ pub const FRAMES_TABLE: Table<QuasiStaticConfig, FrameRow> = Table::of(&[
     }),
     col(&frame::FULL_MISMATCH, |_, r| {
         r.full.map_or(Value::missing(), |f| Value::U(f.1)).into()
+    }),
+    // Written only where path tracing runs (the header is unchanged without it), NaN on the
+    // frames it skips.
+    col(&frame::PATH_TRACING_S_PER_PATH, |p, r| {
+        p.path_tracing()
+            .then(|| r.path_tracing.map_or(f64::NAN, |t| t.s_per_path))
+            .into()
+    }),
+    col(&frame::PATH_TRACING_CV, |p, r| {
+        p.path_tracing()
+            .then(|| r.path_tracing.map_or(f64::NAN, |t| t.cv))
+            .into()
     }),
 ]);
 

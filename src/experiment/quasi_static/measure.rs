@@ -6,6 +6,7 @@
 
 use super::columns as col;
 use super::shards::{Facts, PointsAt, ReplicaPart};
+use super::path_tracing::{self as pt, PathTracingMeasured, TracedFrame};
 use super::spec::QuasiStaticConfig;
 use super::Predictions;
 use crate::detp::fixed::PowerScale;
@@ -23,6 +24,8 @@ pub(super) struct Extras {
     pub(super) warm: Vec<[f64; 2]>,
     /// The relative RMSE of the last frame against a high-photon reference and its seconds.
     pub(super) reference: Option<(f64, f64)>,
+    /// Path tracing at frame 0 and the checked frames, in frame order (empty when off).
+    pub(super) path_tracing: Vec<TracedFrame>,
 }
 
 /// IEEE bits of three numbers (exact through JSON).
@@ -92,6 +95,7 @@ fn per_frame(cfg: &QuasiStaticConfig, parts: &[ReplicaPart]) -> PerFrame {
                 stats: fp.stats.clone(),
                 static_index_build_s: (f == 0).then_some(part.static_index_build_s),
                 full,
+                path_tracing: None,
             });
         }
     }
@@ -138,6 +142,8 @@ pub struct QsMeasured {
     pub warm: Option<[Estimate; 2]>,
     /// Against a reference run: (relative RMSE, seconds, photons), means over replicas.
     pub reference: Option<(f64, f64, u64)>,
+    /// Per-point path tracing over the traced frames, where it ran.
+    pub path_tracing: Option<PathTracingMeasured>,
 }
 
 /// The §4.1 predictor's figures for the first object, its picks counted over all objects.
@@ -188,6 +194,8 @@ pub struct FrameRow {
     pub static_index_build_s: Option<f64>,
     /// A checked frame: (seconds of the full recalculation, points differing).
     pub full: Option<(f64, u64)>,
+    /// Path tracing at this frame, where it ran.
+    pub path_tracing: Option<TracedFrame>,
 }
 
 /// One row of the quasi-static `NAME.points.csv`: the irradiance at one point at one frame.
@@ -215,7 +223,13 @@ pub(super) fn measure(
     parts: &[ReplicaPart],
     extras: &[Extras],
 ) -> (QsMeasured, Vec<FrameRow>) {
-    let acc = per_frame(cfg, parts);
+    let mut acc = per_frame(cfg, parts);
+    for row in &mut acc.rows {
+        row.path_tracing = extras
+            .get(row.replica as usize)
+            .and_then(|e| e.path_tracing.iter().find(|t| t.frame == row.stats.frame))
+            .copied();
+    }
     let mean_of =
         |f: &dyn Fn(&ReplicaPart) -> f64| parts.iter().map(f).sum::<f64>() / parts.len() as f64;
     let first = &parts[0];
@@ -263,6 +277,7 @@ pub(super) fn measure(
             };
             (of(0), of(1), cfg.reference_photons.unwrap_or(0))
         }),
+        path_tracing: pt::pool(extras),
     };
     (m, acc.rows)
 }

@@ -16,6 +16,9 @@
 //! timed apart), `frame_s` and `full_frame_s`; the theory of Theorem 2 for the same n: the static points' costs
 //! (2 vs 8.08·t·f_R·∛n_S) and the dynamic points' (sphere cache vs disc index). Side tables: `frames`
 //! (one row per frame) and, with `detp.write_points`, `points` (the irradiance at one frame).
+//! With `"path-tracing"` in `detp.engines`, per-point path tracing runs in the posed scene at
+//! frame 0 and at every checked frame (`path_tracing_*` in both tables, `path_tracing.rs`): the
+//! third cost of F frames beside the incremental and the full recalculation.
 //! A point's run leaves a typed measurement ([`QsMeasured`], `measure.rs`), its frames and points
 //! rows; `columns.rs` declares every column with the accessor that reads it.
 //!
@@ -33,6 +36,7 @@
 
 pub mod columns;
 pub mod measure;
+pub mod path_tracing;
 pub mod shards;
 pub mod spec;
 
@@ -164,12 +168,15 @@ fn trace_replica(
         stats: f0,
         full: None,
     }];
+    // After frame 0's own timings, and the predictor's: it reads the run's state only.
+    let mut traced: Vec<path_tracing::TracedFrame> = path_tracing::traces(cfg, 0)
+        .then(|| path_tracing::trace_frame(cfg, &qs, replica))
+        .into_iter()
+        .collect();
     for f in 1..cfg.frames {
         let stats = qs.step(f);
         progress(photons);
-        let check =
-            cfg.check_every > 0 && (u64::from(f) % cfg.check_every == 0 || f == cfg.frames - 1);
-        let full = check.then(|| {
+        let full = checked(cfg, f).then(|| {
             let (sums, _, seconds) = qs.full_recalculation();
             let diffs = qs
                 .sums()
@@ -182,6 +189,9 @@ fn trace_replica(
             FullCheck { seconds, diffs }
         });
         frames.push(FramePart { stats, full });
+        if path_tracing::traces(cfg, f) {
+            traced.push(path_tracing::trace_frame(cfg, &qs, replica));
+        }
         if f == points_frame && write_points {
             points_at = Some(PointsAt::of(&qs));
         }
@@ -201,8 +211,15 @@ fn trace_replica(
             predictions,
             warm,
             reference,
+            path_tracing: traced,
         },
     )
+}
+
+/// Is frame `f` (≥ 1) checked against a full recalculation: every `dynamic.check_every`-th frame
+/// and the last (none with 0)?
+fn checked(cfg: &QuasiStaticConfig, f: u32) -> bool {
+    cfg.check_every > 0 && (u64::from(f) % cfg.check_every == 0 || f == cfg.frames - 1)
 }
 
 /// Error of the last frame against a high-photon reference (relative RMSE over the points; the

@@ -245,6 +245,8 @@ pub fn refusal(cfg: &QuasiStaticConfig) -> Option<String> {
         "dynamic.predict times the engines on a fraction of all the photons, which no photon shard holds".into()
     } else if cfg.reference_photons.is_some() {
         "dynamic.reference_photons: irradiance_rmse compares the whole run's irradiance with a reference, which is not a sum over photon shards; run the reference unsplit".into()
+    } else if cfg.path_tracing() {
+        "detp.engines has \"path-tracing\": it path-traces each replica's checked frames in the posed scene, which a merge of photon shards does not hold; run it unsplit".into()
     } else {
         return None;
     };

@@ -148,6 +148,12 @@ pub struct QuasiStaticConfig {
 }
 
 impl QuasiStaticConfig {
+    /// Per-point path tracing at frame 0 and the checked frames (`"path-tracing"` in
+    /// `detp.engines`; [`super::path_tracing`]).
+    pub fn path_tracing(&self) -> bool {
+        self.detp.engines.contains(&EngineChoice::PathTracing)
+    }
+
     /// Validates `[detp]` and `[dynamic]` together, loading the scene (once per run, through
     /// `inputs`) and checking its motion at this point's scale.
     pub fn from_raw(raw: &QuasiStaticSpec, inputs: &mut Inputs) -> Result<Self, ConfigError> {
@@ -259,7 +265,8 @@ fn lines_config(
 }
 
 /// Kind quasi-static runs the paper's method with its own per-object engine choice, for scenes and
-/// lines alike: the edge remedies and `detp.engines` belong to kind detp.
+/// lines alike: the edge remedies and the other engines of `detp.engines` belong to kind detp; of
+/// its baselines only `"path-tracing"` runs here (per frame, [`super::path_tracing`]).
 fn paper_method_only(detp: &DetpConfig) -> Result<(), ConfigError> {
     if detp.direct != crate::experiment::detp::config::Direct::Photons {
         return refuse(
@@ -273,10 +280,15 @@ fn paper_method_only(detp: &DetpConfig) -> Result<(), ConfigError> {
             "kind quasi-static runs the paper's method only (its incremental updates keep the stored segments and d); the remedies are measured by kind \"detp\"",
         );
     }
-    if detp.engines != [EngineChoice::SphereCache] {
+    // `check_engines` already refused duplicates and a list of baselines alone.
+    if detp
+        .engines
+        .iter()
+        .any(|e| !matches!(e, EngineChoice::SphereCache | EngineChoice::PathTracing))
+    {
         return refuse(
             "detp.engines",
-            "kind quasi-static chooses its engine per object with detp.engine (hybrid, sphere-cache, disc-index, predicted)",
+            "kind quasi-static chooses its engine per object with detp.engine (hybrid, sphere-cache, disc-index, predicted); detp.engines takes \"sphere-cache\" and, to path-trace frame 0 and the checked frames, \"path-tracing\"",
         );
     }
     Ok(())
