@@ -37,6 +37,7 @@
 pub mod app;
 pub mod bench;
 pub mod cli;
+pub mod crossover;
 pub mod detp;
 #[cfg(feature = "embree")]
 pub mod embree;
