@@ -73,22 +73,19 @@ impl Config {
             && d
     }
 
-    /// `sphere-cache (direct photons, edge paper, d 15)`: one label for `best.csv`.
+    /// `sphere-cache direct=photons edge=paper d=15`: one label for `best.csv` (no comma, so the
+    /// CSV cell needs no quotes).
     pub fn describe(&self) -> String {
-        let mut parts = Vec::new();
+        let mut s = self.method.label().to_string();
         if let Some(x) = &self.direct {
-            parts.push(format!("direct {x}"));
+            s.push_str(&format!(" direct={x}"));
         }
         if let Some(x) = &self.edge {
-            parts.push(format!("edge {x}"));
+            s.push_str(&format!(" edge={x}"));
         }
         if let Some(x) = self.disc_radius {
-            parts.push(format!("d {x}"));
+            s.push_str(&format!(" d={x}"));
         }
-        if parts.is_empty() {
-            self.method.label().to_string()
-        } else {
-            format!("{} ({})", self.method.label(), parts.join(", "))
-        }
+        s
     }
 }
