@@ -165,6 +165,33 @@ fn crossover_writes_its_tables_and_refuses_what_it_must() {
         assert_eq!(a[..9], b[..9]);
     }
 
+    // A frames folder (a synthetic quasi-static table: its path-tracing columns are new): one row
+    // per target and frames row, N_ε from the fronts' configuration at the frames' d.
+    let frames = dir.path().join("frames");
+    std::fs::create_dir_all(&frames).expect("mkdir");
+    std::fs::copy(fronts.join("fronts.meta.toml"), frames.join("f.meta.toml")).expect("meta");
+    std::fs::write(
+        frames.join("f.csv"),
+        "point,detp.photons,detp.disc_radius,points_static,points_dynamic,frame0_s,frame_s_mean,full_frame_s_mean,path_tracing_s_per_path_mean,path_tracing_cv_mean\n\
+         0,1000,40.0,900,100,1.1,0.11,1.0,1e-6,3\n\
+         1,2000,40.0,900,100,2.1,0.21,2.0,1e-6,3\n",
+    )
+    .expect("frames table");
+    let z = dir.path().join("z");
+    crossover(&fronts, &points, &z)
+        .arg(&frames)
+        .assert()
+        .success();
+    let (fh, fr) = read_csv(&z.join("frames.csv"));
+    assert_eq!(fr.len(), 2 * 2, "{fr:?}");
+    let at = |name: &str| fh.iter().position(|h| h == name).expect(name);
+    assert!(
+        fr.iter().all(|r| r[at("fronts_disc_radius")] == "40.0"),
+        "{fr:?}"
+    );
+    let paths: f64 = fr[0][at("path_tracing_paths")].parse().expect("paths");
+    assert_eq!(paths, 36.0, "(3/0.5)²");
+
     // Refusals write nothing: a missing folder, a fronts folder without a points table, a frames
     // folder without the frames columns.
     let fresh = dir.path().join("y");

@@ -167,15 +167,7 @@ mod tests {
                 k += 1;
             }
         }
-        let mut r = ::csv::Reader::from_reader(text.as_bytes());
-        let main = Csv {
-            path: "t.csv".into(),
-            columns: r.headers().expect("h").iter().map(str::to_string).collect(),
-            rows: r
-                .records()
-                .map(|x| x.expect("r").iter().map(str::to_string).collect())
-                .collect(),
-        };
+        let main = Csv::from_text(&text);
         let s = cost_samples(&main).expect("samples");
         assert_eq!(s.len(), 2, "{s:?}");
         assert_eq!(s[0].config.method, Method::SphereCache);

@@ -239,20 +239,7 @@ mod tests {
         let csv_text = "point,detp.photons,detp.disc_radius,points_static,points_dynamic,frame0_s,frame_s_mean,full_frame_s_mean,path_tracing_s_per_path_mean,path_tracing_cv_mean\n\
                         0,1000,5,900,100,1.1,0.11,1.0,1e-6,3\n\
                         1,2000,5,900,100,2.1,0.21,2.0,1e-6,3\n";
-        let mut rd = ::csv::Reader::from_reader(csv_text.as_bytes());
-        let main = Csv {
-            path: "f.csv".into(),
-            columns: rd
-                .headers()
-                .expect("h")
-                .iter()
-                .map(str::to_string)
-                .collect(),
-            rows: rd
-                .records()
-                .map(|x| x.expect("r").iter().map(str::to_string).collect())
-                .collect(),
-        };
+        let main = Csv::from_text(csv_text);
         let rows = read_frames(&main).expect("frames");
         let photons = vec![1e3, 1e4, 1e5];
         let detp = vec![DetpErrors {

@@ -220,15 +220,7 @@ mod tests {
     use super::*;
 
     fn csv(text: &str) -> Csv {
-        let mut r = ::csv::Reader::from_reader(text.as_bytes());
-        Csv {
-            path: "t.csv".into(),
-            columns: r.headers().expect("h").iter().map(str::to_string).collect(),
-            rows: r
-                .records()
-                .map(|x| x.expect("r").iter().map(str::to_string).collect())
-                .collect(),
-        }
+        Csv::from_text(text)
     }
 
     /// Two points with truth 2 ± 0 and 4 ± 0.5: a replica off by +1 and −1 has squared errors

@@ -134,6 +134,12 @@ impl Csv {
         })
     }
 
+    /// A table from CSV text in memory (the pure steps' tests).
+    #[cfg(test)]
+    pub fn from_text(text: &str) -> Csv {
+        Self::parse(Path::new("t.csv"), text.as_bytes()).expect("valid CSV")
+    }
+
     /// Index of column `name`, or an error naming the table and what needs it.
     pub fn column(&self, name: &str, why: &str) -> Result<usize, OutputError> {
         self.columns.iter().position(|c| c == name).ok_or_else(|| {
