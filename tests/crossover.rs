@@ -206,5 +206,14 @@ fn crossover_writes_its_tables_and_refuses_what_it_must() {
         .code(2);
     let err = String::from_utf8_lossy(&e.get_output().stderr).into_owned();
     assert!(err.contains("the frames analysis"), "{err}");
+    raycost()
+        .arg("crossover")
+        .arg(&fronts)
+        .arg(&points)
+        .args(["--targets", "0.1,0"])
+        .arg("--out")
+        .arg(&fresh)
+        .assert()
+        .code(2);
     assert!(!fresh.exists(), "nothing written");
 }
