@@ -84,6 +84,21 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             print_run(m.quiet, &summary, &written)
         }
         Command::Render(r) => render(r),
+        Command::Crossover(c) => {
+            let written = crate::crossover::run(&crate::crossover::Options {
+                fronts: c.fronts,
+                points: c.points,
+                frames: c.frames,
+                targets: c.targets,
+                out: c.out,
+                force: c.force,
+            })?;
+            let mut out = std::io::stdout().lock();
+            for p in written {
+                writeln!(out, "wrote {}", p.display())?;
+            }
+            Ok(())
+        }
     }
 }
 

@@ -79,6 +79,16 @@ Examples:
   raycost merge results/detp-big            # its NAME.photon-shard-*-of-N.json: sums added
   raycost merge a/x.shard-0-of-2.csv b/x.shard-1-of-2.csv --out x.csv")]
     Merge(MergeArgs),
+    /// Which method when (issue 27): from a fronts run, an n_P sweep and optionally a frames run of
+    /// one scene, the photons or paths each method needs per target error, N* (points beyond which
+    /// DETP beats path tracing, with a bootstrap CI) and F* (frames), in DIR/crossover.csv,
+    /// DIR/best.csv and DIR/frames.csv.
+    #[command(after_help = "\
+Examples:
+  raycost crossover results/issue27-fronts-cornell results/issue27-points-cornell \\
+      --targets 0.1,0.05,0.02 --out results/issue27-crossover-cornell
+  raycost crossover fronts points frames --targets 0.05 --out /tmp/x --force")]
+    Crossover(CrossoverArgs),
     /// Render the DETP radiosity (B = albedo·E/π) of a quasi-static spec's frame(s), seen from the
     /// scene's camera.
     #[command(after_help = "\
@@ -123,6 +133,26 @@ pub struct ReportArgs {
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
     /// Replace an existing DIR/index.html.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// `raycost crossover`.
+#[derive(Debug, Args)]
+pub struct CrossoverArgs {
+    /// The fronts' results folder (kind detp with engine reference, ≥ 2 replicas, write_points).
+    pub fronts: PathBuf,
+    /// The n_P sweep's results folder (kind detp over detp.points × detp.photons).
+    pub points: PathBuf,
+    /// A frames run's results folder (kind quasi-static with path-tracing columns), optional.
+    pub frames: Option<PathBuf>,
+    /// Target relative RMSEs, comma-separated.
+    #[arg(long, value_delimiter = ',', required = true, value_name = "EPS,...")]
+    pub targets: Vec<f64>,
+    /// The output folder (crossover.csv, best.csv, frames.csv, crossover.meta.toml).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Replace existing outputs.
     #[arg(long)]
     pub force: bool,
 }

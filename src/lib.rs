@@ -28,8 +28,9 @@
 //! 12. `experiment`: the kinds, their registry, plans and the one runner (its `reference` module
 //!     writes the docs from the declarations; the runner does not import it)
 //! 13. `bench`: `raycost bench`
-//! 14. `render`, `report`: `raycost render` (images of a quasi-static run), `raycost report` (the
-//!     HTML page of a results folder)
+//! 14. `render`, `report`, `crossover`: `raycost render` (images of a quasi-static run), `raycost
+//!     report` (the HTML page of a results folder), `raycost crossover` (which method when, from the
+//!     tables of three runs; it reads the `detp` kind's error sum)
 //! 15. `cli`: clap definitions
 //! 16. `app`: subcommand glue (`main.rs` sits on top)
 #![warn(missing_docs)]
@@ -37,6 +38,7 @@
 pub mod app;
 pub mod bench;
 pub mod cli;
+pub mod crossover;
 pub mod detp;
 #[cfg(feature = "embree")]
 pub mod embree;

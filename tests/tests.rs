@@ -5,6 +5,7 @@ mod bench;
 mod cli;
 mod common;
 mod conventions;
+mod crossover;
 mod detp_competitors;
 mod detp_edge;
 mod detp_engines;

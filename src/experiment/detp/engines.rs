@@ -864,6 +864,16 @@ impl Engine for Reference {
     }
 }
 
+/// Σ_i ((E_i − R_i)² − se_R,i²) over the points of `est` and `refr` (R_i, se_R,i): n times the
+/// engine's mean squared error against the true irradiance, the reference's variance subtracted
+/// (see [`against_reference`]). Public so that `raycost crossover` judges one replica's values
+/// exactly as the kind judges their mean.
+pub fn squared_error_sum(est: impl IntoIterator<Item = f64>, refr: &[(f64, f64)]) -> f64 {
+    est.into_iter()
+        .zip(refr)
+        .fold(0.0, |acc, (e, &(r, sr))| acc + ((e - r) * (e - r) - sr * sr))
+}
+
 /// An engine's estimates `est` against the reference `refr`, both (value, SE) per disc: the mean
 /// error (bias) and the root-mean-square error against the *true* irradiance, each with a standard
 /// error from the Monte Carlo noise of both (the point set is fixed).
@@ -887,16 +897,16 @@ pub(super) fn against_reference(
     refr: &[(f64, f64)],
 ) -> (Estimate, Estimate) {
     let n = est.len().min(refr.len());
-    let (mut sum_d, mut var_d, mut mse, mut var_mse) = (0.0, 0.0, 0.0, 0.0);
+    let (mut sum_d, mut var_d, mut var_mse) = (0.0, 0.0, 0.0);
     for (&(e, se), &(r, sr)) in est.iter().zip(refr) {
         let d = e - r;
         let s2 = se * se + sr * sr;
         sum_d += d;
         var_d += s2;
-        mse += d * d - sr * sr;
         let mu2 = (d * d - s2).max(0.0);
         var_mse += 4.0 * mu2 * s2 + 2.0 * s2 * s2;
     }
+    let mse = squared_error_sum(est.iter().map(|e| e.0), refr);
     let nf = n as f64;
     let est_of = |mean: f64, se: f64| Estimate {
         mean: if n == 0 { f64::NAN } else { mean },

@@ -1,0 +1,440 @@
+//! The analysis of issue 27 (docs/plans/issue27-wiring.md §4), pure: per target and method
+//! configuration the photons (or paths) it needs, its seconds once and per point, and N* — the
+//! points beyond which it beats per-point path tracing — with a percentile bootstrap over the
+//! fronts' replicas ([`points_crossover_interval`]); and per target and n_P the fastest
+//! configuration.
+
+use super::costs::{CostSamples, FittedCost, PathTiming};
+use super::fronts::{DetpErrors, MapErrors};
+use super::method::{Config, Method};
+use crate::stats::crossover::{
+    points_crossover, points_crossover_interval, Crossover, Never, PathTracingCost, ReplicaErrors,
+};
+use crate::stats::fit::ErrorFit;
+
+/// Bootstrap resamples.
+pub const DRAWS: usize = 2000;
+/// Two-sided level of the interval.
+pub const LEVEL: f64 = 0.95;
+/// `seconds_per_point` is the seconds per added point at this many points.
+pub const POINTS_PER_POINT: f64 = 1e4;
+/// The n_P of `best.csv`.
+pub const BEST_POINTS: [f64; 5] = [1e2, 1e3, 1e4, 1e5, 1e6];
+
+/// Everything the analysis reads, already extracted from the tables.
+#[derive(Clone, Debug)]
+pub struct Inputs {
+    /// The scene's name.
+    pub scene: String,
+    /// The fronts' experiment.seed (the bootstrap's stream).
+    pub seed: u64,
+    /// DETP's errors per configuration.
+    pub detp: Vec<DetpErrors>,
+    /// The photon maps' errors.
+    pub maps: Vec<MapErrors>,
+    /// Path tracing's cv² per replica, and the fronts' sweep point it was read at.
+    pub pt_cv2: Vec<f64>,
+    /// That sweep point.
+    pub pt_point: u64,
+    /// Path tracing's seconds per path (n_P sweep).
+    pub timing: PathTiming,
+    /// Seconds per configuration (n_P sweep).
+    pub costs: Vec<CostSamples>,
+}
+
+/// One row of `crossover.csv`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CrossRow {
+    /// Scene.
+    pub scene: String,
+    /// Target relative RMSE.
+    pub target: f64,
+    /// Method configuration.
+    pub config: Config,
+    /// N_ε (photons of one estimate), or paths per point for path tracing; NaN if unreachable.
+    pub photons: f64,
+    /// √B.
+    pub error_floor: f64,
+    /// c of B + c/N (path tracing: cv²).
+    pub error_fit_c: f64,
+    /// Seconds paid once at N_ε.
+    pub seconds_once: f64,
+    /// Seconds per added point at [`POINTS_PER_POINT`] points.
+    pub seconds_per_point: f64,
+    /// The cost model, if the n_P sweep timed this configuration.
+    pub cost: Option<FittedCost>,
+    /// N*, or NaN ("never": see `reason`).
+    pub n_star: f64,
+    /// Bootstrap bounds (+∞: unbounded; NaN: no bootstrap).
+    pub n_star_lo: f64,
+    /// Upper bound.
+    pub n_star_hi: f64,
+    /// Fraction of resamples that said "never".
+    pub never_fraction: f64,
+    /// Empty, or why something is missing or never.
+    pub reason: String,
+}
+
+impl CrossRow {
+    /// Seconds for `points` points at the target, if known.
+    pub fn seconds(&self, points: f64) -> Option<f64> {
+        if !self.photons.is_finite() {
+            return None;
+        }
+        if self.config.method == Method::PathTracing {
+            return Some(points * self.seconds_per_point);
+        }
+        self.cost.map(|c| c.model.seconds(self.photons, points))
+    }
+}
+
+/// Why "never", in words.
+fn never_reason(n: &Never) -> String {
+    match n {
+        Never::BiasFloor { floor, target } => {
+            format!("bias floor √B = {floor:.4} ≥ target {target}")
+        }
+        Never::PerPointCost { detp, path_tracing } => format!(
+            "per-point cost {detp:.3e} s ≥ path tracing's {path_tracing:.3e} s at this target"
+        ),
+        Never::PerFrameCost { detp, path_tracing } => {
+            format!("per-frame cost {detp:.3e} s ≥ path tracing's {path_tracing:.3e} s per frame")
+        }
+    }
+}
+
+/// The path tracer over all replicas.
+pub fn path_tracer(cv2: &[f64], seconds_per_path: f64) -> PathTracingCost {
+    let mean = cv2.iter().sum::<f64>() / cv2.len().max(1) as f64;
+    PathTracingCost {
+        cv: mean.max(0.0).sqrt(),
+        seconds_per_path,
+    }
+}
+
+/// A row's fields that follow from the error fit and (if any) the cost model alone.
+fn base_row(inp: &Inputs, target: f64, config: Config, fit: &ErrorFit) -> CrossRow {
+    let cost = inp
+        .costs
+        .iter()
+        .find(|c| config.matches(&c.config))
+        .map(CostSamples::fit);
+    let photons = fit.photons_for(target).unwrap_or(f64::NAN);
+    let (once, per_point) = match (cost, photons.is_finite()) {
+        (Some(c), true) => {
+            let once = c.model.seconds(photons, 0.0);
+            let at = c.model.seconds(photons, POINTS_PER_POINT);
+            (once, (at - once) / POINTS_PER_POINT)
+        }
+        _ => (f64::NAN, f64::NAN),
+    };
+    let mut reason = Vec::new();
+    if cost.is_none() {
+        reason.push("no cost sweep at this d/edge/direct".to_string());
+    }
+    if !photons.is_finite() {
+        reason.push(never_reason(&Never::BiasFloor {
+            floor: fit.floor(),
+            target,
+        }));
+    }
+    CrossRow {
+        scene: inp.scene.clone(),
+        target,
+        config,
+        photons,
+        error_floor: fit.floor(),
+        error_fit_c: fit.c,
+        seconds_once: once,
+        seconds_per_point: per_point,
+        cost,
+        n_star: f64::NAN,
+        n_star_lo: f64::NAN,
+        n_star_hi: f64::NAN,
+        never_fraction: f64::NAN,
+        reason: reason.join("; "),
+    }
+}
+
+/// Adds a "never" reason (once) to a row.
+fn add_reason(row: &mut CrossRow, why: String) {
+    if !row.reason.contains(&why) {
+        if !row.reason.is_empty() {
+            row.reason.push_str("; ");
+        }
+        row.reason.push_str(&why);
+    }
+}
+
+/// A DETP configuration's rows (one per engine) at `target`, with the bootstrap CI of N*.
+fn detp_rows(inp: &Inputs, e: &DetpErrors, target: f64) -> Vec<CrossRow> {
+    let reps = e.mse.len().min(inp.pt_cv2.len());
+    let mean: Vec<f64> = (0..e.photons.len())
+        .map(|j| e.mse[..reps].iter().map(|m| m[j]).sum::<f64>() / reps as f64)
+        .collect();
+    let fit = ErrorFit::fit_relative(&e.photons, &mean);
+    let replicas: Vec<ReplicaErrors> = (0..reps)
+        .map(|r| ReplicaErrors {
+            detp_mse: e.mse[r].clone(),
+            pt_cv2: inp.pt_cv2[r],
+        })
+        .collect();
+    Method::DETP
+        .iter()
+        .map(|&method| {
+            let config = Config {
+                method,
+                ..e.config.clone()
+            };
+            let mut row = base_row(inp, target, config, &fit);
+            if let Some(c) = row.cost {
+                let (est, ci) = points_crossover_interval(
+                    &e.photons,
+                    &replicas,
+                    inp.timing.median,
+                    &c.model,
+                    target,
+                    DRAWS,
+                    LEVEL,
+                    inp.seed,
+                );
+                (row.n_star_lo, row.n_star_hi) = (ci.lo, ci.hi);
+                row.never_fraction = ci.never_fraction;
+                match est {
+                    Crossover::At(x) => row.n_star = x,
+                    Crossover::Never(n) => add_reason(&mut row, never_reason(&n)),
+                }
+            }
+            row
+        })
+        .collect()
+}
+
+/// A photon map's row at `target`: N* from the fit on the replicas' mean, no CI.
+fn map_row(inp: &Inputs, e: &MapErrors, target: f64) -> CrossRow {
+    let fit = ErrorFit::fit_relative(&e.photons, &e.mse);
+    let mut row = base_row(inp, target, e.config.clone(), &fit);
+    add_reason(
+        &mut row,
+        "errors of the mean over replicas only (fit at R·N effective photons): no bootstrap CI"
+            .into(),
+    );
+    if let Some(c) = row.cost {
+        let pt = path_tracer(&inp.pt_cv2, inp.timing.median);
+        match points_crossover(&pt, &fit, &c.model, target) {
+            Crossover::At(x) => row.n_star = x,
+            Crossover::Never(n) => add_reason(&mut row, never_reason(&n)),
+        }
+    }
+    row
+}
+
+/// Path tracing's row at `target`.
+fn path_row(inp: &Inputs, target: f64) -> CrossRow {
+    let pt = path_tracer(&inp.pt_cv2, inp.timing.median);
+    let t = &inp.timing;
+    CrossRow {
+        scene: inp.scene.clone(),
+        target,
+        config: Config {
+            method: Method::PathTracing,
+            direct: None,
+            edge: None,
+            disc_radius: None,
+        },
+        photons: pt.paths_for(target) as f64,
+        error_floor: 0.0,
+        error_fit_c: pt.cv * pt.cv,
+        seconds_once: 0.0,
+        seconds_per_point: pt.seconds_per_point(target),
+        cost: None,
+        n_star: f64::NAN,
+        n_star_lo: f64::NAN,
+        n_star_hi: f64::NAN,
+        never_fraction: f64::NAN,
+        reason: format!(
+            "cv² from its prefix errors at fronts sweep point {} ({} replicas); s per path: median {:.3e} of {} rows (min {:.3e}, max {:.3e})",
+            inp.pt_point,
+            inp.pt_cv2.len(),
+            t.median,
+            t.rows,
+            t.min,
+            t.max
+        ),
+    }
+}
+
+/// Every row of `crossover.csv`: per target, DETP's configurations (both engines), the photon
+/// maps, path tracing.
+pub fn crossover_rows(inp: &Inputs, targets: &[f64]) -> Vec<CrossRow> {
+    let mut rows = Vec::new();
+    for &target in targets {
+        for e in &inp.detp {
+            rows.extend(detp_rows(inp, e, target));
+        }
+        rows.extend(inp.maps.iter().map(|e| map_row(inp, e, target)));
+        rows.push(path_row(inp, target));
+    }
+    rows
+}
+
+/// One row of `best.csv`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BestRow {
+    /// Scene.
+    pub scene: String,
+    /// Target.
+    pub target: f64,
+    /// n_P.
+    pub points: f64,
+    /// The fastest configuration and its seconds.
+    pub best: Option<(String, f64)>,
+    /// The runner-up and its seconds.
+    pub runner_up: Option<(String, f64)>,
+}
+
+/// Per target and n_P of [`BEST_POINTS`], the two fastest configurations that reach the target.
+pub fn best_rows(rows: &[CrossRow], targets: &[f64]) -> Vec<BestRow> {
+    let mut out = Vec::new();
+    for &target in targets {
+        for points in BEST_POINTS {
+            let mut c: Vec<(String, f64)> = rows
+                .iter()
+                .filter(|r| r.target == target)
+                .filter_map(|r| Some((r.config.describe(), r.seconds(points)?)))
+                .filter(|c| c.1.is_finite())
+                .collect();
+            c.sort_by(|a, b| a.1.total_cmp(&b.1));
+            let mut it = c.into_iter();
+            out.push(BestRow {
+                scene: rows.first().map_or_else(String::new, |r| r.scene.clone()),
+                target,
+                points,
+                best: it.next(),
+                runner_up: it.next(),
+            });
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::stats::fit::CostModel;
+
+    const MODEL: CostModel = CostModel {
+        fixed: 0.5,
+        per_photon: 1e-6,
+        per_photon_point: 1e-12,
+        per_point: 1e-6,
+        gamma: 1.0,
+    };
+
+    /// Errors exactly B + c/N in every replica, seconds exactly the cost model, cv² = 1 in every
+    /// replica: N* is the closed form A/(p − b·N_ε − c), the CI collapses on it, and a target below
+    /// the floor says so.
+    fn inputs() -> Inputs {
+        let photons = vec![1e4, 4e4, 1.6e5];
+        let truth = ErrorFit {
+            floor2: 0.01f64.powi(2),
+            c: 50.0,
+        };
+        let mse: Vec<Vec<f64>> = (0..3)
+            .map(|_| photons.iter().map(|&n| truth.mse(n)).collect())
+            .collect();
+        let config = Config {
+            method: Method::SphereCache,
+            direct: Some("photons".into()),
+            edge: Some("paper".into()),
+            disc_radius: Some(5.0),
+        };
+        let mut samples = Vec::new();
+        for n in [1e4, 1e5] {
+            for p in [1e2, 1e3, 1e4, 1e5] {
+                samples.push((n, p, MODEL.seconds(n, p)));
+            }
+        }
+        let other = Config {
+            disc_radius: Some(15.0),
+            ..config.clone()
+        };
+        Inputs {
+            scene: "synthetic".into(),
+            seed: 1,
+            detp: vec![
+                DetpErrors {
+                    config: config.clone(),
+                    photons: photons.clone(),
+                    mse: mse.clone(),
+                },
+                DetpErrors {
+                    config: other,
+                    photons,
+                    mse,
+                },
+            ],
+            maps: Vec::new(),
+            pt_cv2: vec![1.0; 3],
+            pt_point: 0,
+            timing: PathTiming {
+                median: 2e-6,
+                min: 2e-6,
+                max: 2e-6,
+                rows: 1,
+            },
+            costs: vec![CostSamples { config, samples }],
+        }
+    }
+
+    #[test]
+    fn n_star_is_the_closed_form_and_unmatched_configurations_say_why() {
+        let inp = inputs();
+        let rows = crossover_rows(&inp, &[0.05, 0.005]);
+        // Per target: 2 configurations × 2 engines + path tracing.
+        assert_eq!(rows.len(), 10);
+        let sc = &rows[0];
+        assert_eq!(sc.config.method, Method::SphereCache);
+        let n_eps = 50.0 / (0.05f64.powi(2) - 1e-4);
+        assert!((sc.photons / n_eps - 1.0).abs() < 1e-6, "{}", sc.photons);
+        let p = 400.0 * 2e-6; // (1/0.05)² paths per point
+        let once = MODEL.fixed + MODEL.per_photon * n_eps;
+        let closed = once / (p - MODEL.per_photon_point * n_eps - MODEL.per_point);
+        assert!(
+            (sc.n_star / closed - 1.0).abs() < 1e-5,
+            "{} vs {closed}",
+            sc.n_star
+        );
+        assert!(
+            (sc.n_star_lo / closed - 1.0).abs() < 1e-5
+                && (sc.n_star_hi / closed - 1.0).abs() < 1e-5
+        );
+        assert_eq!(sc.never_fraction, 0.0);
+        assert!(sc.reason.is_empty(), "{}", sc.reason);
+        assert!((sc.seconds_once - once).abs() < 1e-9);
+        // The disc index has no cost sweep here; neither has d = 15.
+        assert!(rows[1].reason.contains("no cost sweep") && rows[1].n_star.is_nan());
+        assert!(rows[2].reason.contains("no cost sweep"));
+        let pt = &rows[4];
+        assert_eq!((pt.config.method, pt.photons), (Method::PathTracing, 400.0));
+        // Below the floor: never, and why.
+        assert!(
+            rows[5].photons.is_nan() && rows[5].reason.contains("bias floor"),
+            "{:?}",
+            rows[5]
+        );
+        // best.csv: path tracing at few points, DETP beyond N*.
+        let best = best_rows(&rows, &[0.05]);
+        assert_eq!(best.len(), 5);
+        assert!(best[0].best.as_ref().is_some_and(|b| b.0 == "path-tracing"));
+        assert!(best[4]
+            .best
+            .as_ref()
+            .is_some_and(|b| b.0.starts_with("sphere-cache")));
+        let (b, r) = (
+            best[4].best.clone().unwrap(),
+            best[4].runner_up.clone().unwrap(),
+        );
+        assert!(b.1 <= r.1 && (b.1 - MODEL.seconds(n_eps, 1e6)).abs() < 1e-6 * b.1);
+    }
+}

@@ -1,0 +1,257 @@
+//! Every column `raycost crossover` writes, declared once ([`crate::output::column`]), and the rows
+//! of its three tables built from them. Seconds and what is derived from them (N*, F*, the best
+//! method) are timings; the error fits are measured.
+
+use super::analysis::{BestRow, CrossRow};
+use super::frames::FramesRow;
+use crate::output::column::{Class, Column};
+use crate::output::row::Row;
+
+const fn value(name: &'static str, unit: &'static str, class: Class, doc: &'static str) -> Column {
+    Column::value(name, unit, class, doc)
+}
+
+/// A column whose +∞ is meaningful (an unbounded interval).
+const fn unbounded(name: &'static str, unit: &'static str, doc: &'static str) -> Column {
+    Column {
+        infinite_ok: true,
+        ..Column::value(name, unit, Class::Timing, doc)
+    }
+}
+
+/// Scene.
+pub const SCENE: Column = value(
+    "scene",
+    "",
+    Class::Parameter,
+    "the scene (the fronts' detp.scene file stem, else the run's name)",
+);
+/// Target.
+pub const TARGET: Column = value(
+    "target",
+    "1",
+    Class::Parameter,
+    "the target relative RMSE ε (RMSE over the points / mean irradiance)",
+);
+/// Method.
+pub const METHOD: Column = value(
+    "method",
+    "",
+    Class::Parameter,
+    "sphere-cache | disc-index | photon-map | photon-map-growing | path-tracing",
+);
+/// detp.direct.
+pub const DIRECT: Column = value(
+    "direct",
+    "",
+    Class::Parameter,
+    "detp.direct of the configuration (NaN for path tracing)",
+);
+/// detp.edge.
+pub const EDGE: Column = value(
+    "edge",
+    "",
+    Class::Parameter,
+    "detp.edge (NaN where the method does not depend on it: photon maps, path tracing)",
+);
+/// detp.disc_radius.
+pub const DISC_RADIUS: Column = value(
+    "disc_radius",
+    "length",
+    Class::Parameter,
+    "detp.disc_radius d (NaN where the method does not depend on it)",
+);
+/// N_ε or paths.
+pub const PHOTONS: Column = value("photons", "photons", Class::Measured, "N_ε = c/(ε² − B): photons of one estimate that reach the target (photon maps: effective photons R·N); path tracing: paths per point ⌈(cv/ε)²⌉; NaN if unreachable");
+/// √B.
+pub const ERROR_FLOOR: Column = value(
+    "error_floor",
+    "1",
+    Class::Measured,
+    "√B of the fit relative MSE = B + c/N (relative bias floor); 0 for path tracing",
+);
+/// c.
+pub const ERROR_FIT_C: Column = value(
+    "error_fit_c",
+    "photons",
+    Class::Measured,
+    "c of relative MSE = B + c/N (path tracing: cv², its relative MSE × paths)",
+);
+/// Seconds once.
+pub const SECONDS_ONCE: Column = value("seconds_once", "s", Class::Timing, "the cost model's seconds at N_ε and no point: fixed + a·N_ε (trace, build); 0 for path tracing");
+/// Seconds per point.
+pub const SECONDS_PER_POINT: Column = value("seconds_per_point", "s", Class::Timing, "seconds per added point at N_ε, averaged over the first 10⁴ points: (T(N_ε, 10⁴) − T(N_ε, 0))/10⁴; path tracing: paths × seconds per path");
+/// γ.
+pub const COST_GAMMA: Column = value(
+    "cost_gamma",
+    "1",
+    Class::Timing,
+    "γ of seconds = fixed + a·N + b·N·n_P^γ + c·n_P, best on a 0.05 grid over the n_P sweep",
+);
+/// Worst misfit.
+pub const COST_WORST_MISFIT: Column = value(
+    "cost_worst_misfit",
+    "1",
+    Class::Timing,
+    "largest |model/measured − 1| of the cost model over the n_P sweep's samples",
+);
+/// N*.
+pub const N_STAR: Column = value("n_star", "points", Class::Timing, "N*: beyond this many points the configuration reaches the target faster than path tracing (NaN: never, see reason)");
+/// Lower bound.
+pub const N_STAR_LO: Column = unbounded("n_star_lo", "points", "2.5 % percentile of N* over 2000 bootstrap resamples of the fronts' replicas (+inf: never in that many; NaN: no bootstrap)");
+/// Upper bound.
+pub const N_STAR_HI: Column = unbounded(
+    "n_star_hi",
+    "points",
+    "97.5 % percentile of N* (+inf: the data cannot exclude that it never wins)",
+);
+/// Never fraction.
+pub const NEVER_FRACTION: Column = value(
+    "never_fraction",
+    "1",
+    Class::Timing,
+    "fraction of bootstrap resamples in which it never beats path tracing (NaN: no bootstrap)",
+);
+/// Reason.
+pub const REASON: Column = value("reason", "", Class::Timing, "why a value is NaN or never (bias floor, per-point cost, no cost sweep at this d/edge/direct), or a note on how it was computed; NaN when there is nothing to say");
+
+/// n_P.
+pub const POINTS: Column = value(
+    "points",
+    "points",
+    Class::Parameter,
+    "n_P: points to compute",
+);
+/// Best.
+pub const BEST: Column = value("best", "", Class::Timing, "the fastest configuration reaching the target at n_P (its cost extrapolated by the fitted model)");
+/// Its seconds.
+pub const BEST_S: Column = value("best_s", "s", Class::Timing, "its seconds");
+/// Runner-up.
+pub const RUNNER_UP: Column = value(
+    "runner_up",
+    "",
+    Class::Timing,
+    "the second fastest configuration",
+);
+/// Its seconds.
+pub const RUNNER_UP_S: Column = value("runner_up_s", "s", Class::Timing, "its seconds");
+
+/// The frames table's sweep point.
+pub const FRAMES_POINT: Column = value(
+    "frames_point",
+    "1",
+    Class::Parameter,
+    "the frames table's sweep point (its `point`)",
+);
+/// The fronts' d used.
+pub const FRONTS_DISC_RADIUS: Column = value("fronts_disc_radius", "length", Class::Parameter, "the fronts' d whose error fit (direct photons, edge paper) gave N_ε: the frames' d, or the nearest");
+/// First frame.
+pub const FIRST_S: Column = value(
+    "first_s",
+    "s",
+    Class::Timing,
+    "DETP's frame 0 at N_ε (frame0_s scaled to N_ε)",
+);
+/// Incremental frame.
+pub const FRAME_S: Column = value(
+    "frame_s",
+    "s",
+    Class::Timing,
+    "DETP's incremental frame at N_ε (frame_s_mean scaled)",
+);
+/// Full frame.
+pub const FULL_S: Column = value(
+    "full_s",
+    "s",
+    Class::Timing,
+    "DETP's full recalculation at N_ε (full_frame_s_mean scaled)",
+);
+/// Paths.
+pub const PT_PATHS: Column = value(
+    "path_tracing_paths",
+    "paths",
+    Class::Measured,
+    "path tracing's paths per point ⌈(cv/ε)²⌉ with the frames run's cv",
+);
+/// Path tracing per frame.
+pub const PT_FRAME_S: Column = value(
+    "path_tracing_frame_s",
+    "s",
+    Class::Timing,
+    "path tracing's seconds per frame: n_P × paths × seconds per path",
+);
+/// F*.
+pub const FRAMES_STAR: Column = value("frames_star", "frames", Class::Timing, "F*: from this many frames on, DETP (first frame, then incremental) costs less in all than path tracing (NaN: never)");
+/// F* full.
+pub const FRAMES_STAR_FULL: Column = value("frames_star_full", "frames", Class::Timing, "F* of DETP recalculating every frame in full: 1 if a full frame is cheaper than path tracing's, else NaN (never)");
+
+fn text(x: &Option<String>) -> String {
+    x.clone().unwrap_or_default()
+}
+
+/// A row of `crossover.csv`.
+pub fn crossover_row(r: &CrossRow) -> Row {
+    let mut row = Row::default();
+    let (gamma, misfit) = r
+        .cost
+        .map_or((f64::NAN, f64::NAN), |c| (c.model.gamma, c.worst_misfit));
+    row.put(&SCENE, r.scene.as_str())
+        .put(&TARGET, r.target)
+        .put(&METHOD, r.config.method.label())
+        .put(&DIRECT, text(&r.config.direct))
+        .put(&EDGE, text(&r.config.edge))
+        .put(&DISC_RADIUS, r.config.disc_radius.unwrap_or(f64::NAN))
+        .put(&PHOTONS, r.photons)
+        .put(&ERROR_FLOOR, r.error_floor)
+        .put(&ERROR_FIT_C, r.error_fit_c)
+        .put(&SECONDS_ONCE, r.seconds_once)
+        .put(&SECONDS_PER_POINT, r.seconds_per_point)
+        .put(&COST_GAMMA, gamma)
+        .put(&COST_WORST_MISFIT, misfit)
+        .put(&N_STAR, r.n_star)
+        .put(&N_STAR_LO, r.n_star_lo)
+        .put(&N_STAR_HI, r.n_star_hi)
+        .put(&NEVER_FRACTION, r.never_fraction)
+        .put(&REASON, r.reason.as_str());
+    row
+}
+
+/// A row of `best.csv`.
+pub fn best_row(r: &BestRow) -> Row {
+    let split = |x: &Option<(String, f64)>| {
+        x.clone()
+            .map_or((String::new(), f64::NAN), |(label, s)| (label, s))
+    };
+    let (best, best_s) = split(&r.best);
+    let (runner, runner_s) = split(&r.runner_up);
+    let mut row = Row::default();
+    row.put(&SCENE, r.scene.as_str())
+        .put(&TARGET, r.target)
+        .put(&POINTS, r.points)
+        .put(&BEST, best)
+        .put(&BEST_S, best_s)
+        .put(&RUNNER_UP, runner)
+        .put(&RUNNER_UP_S, runner_s);
+    row
+}
+
+/// A row of `frames.csv`.
+pub fn frames_row(r: &FramesRow) -> Row {
+    let mut row = Row::default();
+    row.put(&SCENE, r.scene.as_str())
+        .put(&TARGET, r.target)
+        .put(&FRAMES_POINT, r.frames_point)
+        .put(&POINTS, r.points)
+        .put(&DISC_RADIUS, r.disc_radius)
+        .put(&FRONTS_DISC_RADIUS, r.fronts_disc_radius)
+        .put(&PHOTONS, r.photons)
+        .put(&FIRST_S, r.first_s)
+        .put(&FRAME_S, r.frame_s)
+        .put(&FULL_S, r.full_s)
+        .put(&PT_PATHS, r.path_tracing_paths)
+        .put(&PT_FRAME_S, r.path_tracing_frame_s)
+        .put(&FRAMES_STAR, r.frames_star)
+        .put(&FRAMES_STAR_FULL, r.frames_star_full)
+        .put(&REASON, r.reason.as_str());
+    row
+}

@@ -1,0 +1,189 @@
+//! What the n_P sweep (a kind-`detp` run over detp.points × detp.photons × detp.direct ×
+//! detp.edge at one d, no reference) says about seconds: per method configuration the samples
+//! (N, n_P, seconds of one replica) and [`CostModel::fit_best_gamma`] over them; path tracing's
+//! seconds per path.
+//!
+//! The main table's timings are summed over replicas (`trace_s`, `edge_s`, `direct_s`,
+//! `build_{}_s`, `cost_{}_s`: see their declarations), so a sample divides by `detp.replicas`:
+//! one replica is one estimate at N photons. A DETP engine pays `trace_s + edge_s + direct_s +
+//! build_{e}_s + cost_{e}_s` (the edge remedy is part of its configuration's price; 0 for the
+//! paper's method), a photon map `trace_s + direct_s + build_{e}_s + cost_{e}_s`.
+
+use super::fronts::settings;
+use super::input::Csv;
+use super::method::{Config, Method};
+use crate::error::OutputError;
+use crate::stats::fit::CostModel;
+
+/// γ's grid: 0, 0.05, …, 1.
+pub fn gammas() -> Vec<f64> {
+    (0..=20).map(|k| f64::from(k) / 20.0).collect()
+}
+
+/// One configuration's measured seconds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CostSamples {
+    /// What was timed (photon maps: d and edge `None`).
+    pub config: Config,
+    /// (N, n_P, seconds of one replica).
+    pub samples: Vec<(f64, f64, f64)>,
+}
+
+/// A fitted cost model and how well it holds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FittedCost {
+    /// The model at the best γ.
+    pub model: CostModel,
+    /// Its largest relative misfit over the samples.
+    pub worst_misfit: f64,
+}
+
+impl CostSamples {
+    /// [`CostModel::fit_best_gamma`] on the 0.05 grid.
+    pub fn fit(&self) -> FittedCost {
+        let model = CostModel::fit_best_gamma(&self.samples, &gammas());
+        FittedCost {
+            model,
+            worst_misfit: model.worst_relative_misfit(&self.samples),
+        }
+    }
+}
+
+/// The samples of every engine the table has columns for, per configuration.
+pub fn cost_samples(main: &Csv) -> Result<Vec<CostSamples>, OutputError> {
+    let why = "seconds per replica of each method";
+    let reps = main.numbers("detp.replicas", why)?;
+    let photons = main.numbers("detp.photons", why)?;
+    let points = main.numbers("points", why)?;
+    let trace = main.numbers("trace_s", why)?;
+    let edge = main.numbers("edge_s", why)?;
+    let direct = main.numbers("direct_s", why)?;
+    let settings = settings(main)?;
+    let mut out: Vec<CostSamples> = Vec::new();
+    for method in Method::DETP.into_iter().chain(Method::MAPS) {
+        let (b, c) = (
+            format!("build_{}_s", method.member()),
+            format!("cost_{}_s", method.member()),
+        );
+        if !main.has(&c) {
+            continue;
+        }
+        let (build, cost) = (main.numbers(&b, why)?, main.numbers(&c, why)?);
+        let detp = Method::DETP.contains(&method);
+        for (i, (dir, ed, d)) in settings.iter().enumerate() {
+            let once = trace[i] + direct[i] + build[i] + if detp { edge[i] } else { 0.0 };
+            let sample = (photons[i], points[i], (once + cost[i]) / reps[i]);
+            let config = Config {
+                method,
+                direct: Some(dir.clone()),
+                edge: detp.then(|| ed.clone()),
+                disc_radius: detp.then_some(*d),
+            };
+            match out.iter_mut().find(|s| s.config == config) {
+                Some(s) => s.samples.push(sample),
+                None => out.push(CostSamples {
+                    config,
+                    samples: vec![sample],
+                }),
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Path tracing's seconds per path over the table's rows: median, least, largest, rows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathTiming {
+    /// Median over the rows.
+    pub median: f64,
+    /// Smallest.
+    pub min: f64,
+    /// Largest.
+    pub max: f64,
+    /// Rows with a finite value.
+    pub rows: usize,
+}
+
+/// The median (and spread) of `path_tracing_s_per_path` over the rows.
+pub fn path_timing(main: &Csv) -> Result<PathTiming, OutputError> {
+    let mut v: Vec<f64> = main
+        .numbers("path_tracing_s_per_path", "path tracing's seconds per path")?
+        .into_iter()
+        .filter(|x| x.is_finite() && *x > 0.0)
+        .collect();
+    if v.is_empty() {
+        return Err(OutputError::new(
+            &main.path,
+            "has no finite path_tracing_s_per_path: the n_P sweep must run engine path-tracing",
+        ));
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    let median = if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    };
+    Ok(PathTiming {
+        median,
+        min: v[0],
+        max: v[n - 1],
+        rows: n,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Seconds exactly of the cost model (per replica, summed over 2 replicas in the table): the
+    /// fit recovers it, with γ = ½, and the pieces are added as documented.
+    #[test]
+    fn samples_are_per_replica_and_the_fit_recovers_the_model() {
+        let truth = CostModel {
+            fixed: 0.01,
+            per_photon: 1e-6,
+            per_photon_point: 3e-9,
+            per_point: 2e-6,
+            gamma: 0.5,
+        };
+        let mut text = String::from(
+            "point,detp.direct,detp.edge,detp.disc_radius,detp.replicas,detp.photons,points,trace_s,edge_s,direct_s,build_sphere_cache_s,cost_sphere_cache_s,build_photon_map_s,cost_photon_map_s,path_tracing_s_per_path\n",
+        );
+        let mut k = 0;
+        for n in [1e4, 4e4] {
+            for p in [1e2, 1e3, 1e4, 1e5] {
+                // Two replicas: everything doubled; split across the four parts.
+                let s = 2.0 * truth.seconds(n, p);
+                text.push_str(&format!(
+                    "{k},photons,paper,5,2,{n},{p},{},{},{},{},{},1,1,{}\n",
+                    0.25 * s,
+                    0.25 * s,
+                    0.25 * s,
+                    0.125 * s,
+                    0.125 * s,
+                    1e-6 * (k as f64 + 1.0)
+                ));
+                k += 1;
+            }
+        }
+        let main = Csv::from_text(&text);
+        let s = cost_samples(&main).expect("samples");
+        assert_eq!(s.len(), 2, "{s:?}");
+        assert_eq!(s[0].config.method, Method::SphereCache);
+        assert_eq!(s[1].config.edge, None, "a photon map ignores the edge mode");
+        for &(n, p, sec) in &s[0].samples {
+            assert!((sec / truth.seconds(n, p) - 1.0).abs() < 1e-12);
+        }
+        let fit = s[0].fit();
+        assert_eq!(fit.model.gamma, 0.5);
+        assert!(fit.worst_misfit < 1e-9, "{fit:?}");
+        // The photon map: trace and direct (half of the sum) plus its own 2 s; the edge remedy
+        // is not its cost.
+        let (n, p, sec) = s[1].samples[0];
+        assert!((sec - (0.5 * 2.0 * truth.seconds(n, p) + 2.0) / 2.0).abs() < 1e-12);
+        let t = path_timing(&main).expect("timing");
+        assert_eq!((t.min, t.max, t.rows), (1e-6, 8e-6, 8));
+        assert!((t.median - 4.5e-6).abs() < 1e-18);
+    }
+}

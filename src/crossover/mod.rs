@@ -1,0 +1,266 @@
+//! `raycost crossover FRONTS_DIR POINTS_DIR [FRAMES_DIR] --targets … --out DIR`: which method when
+//! (issue 27), from three runs of one scene — the fronts (errors of every method against a
+//! reference, ≥ 2 replicas), the n_P sweep (seconds over photons × points) and optionally a
+//! quasi-static frames run (incremental costs). Writes `DIR/crossover.csv` (per target and method
+//! configuration: photons or paths needed, seconds once and per point, N* with a bootstrap CI over
+//! the fronts' replicas, or why never), `DIR/best.csv` (per target and n_P ∈ {10², …, 10⁶} the two
+//! fastest configurations), `DIR/frames.csv` (F*, with FRAMES_DIR) and `DIR/crossover.meta.toml`
+//! (this build and machine, every input file's hash, and each input run's CPU, load and commit).
+//!
+//! The steps are pure and tested one by one: [`fronts`] (errors), [`costs`] (seconds),
+//! [`analysis`] (N*, best), [`frames`] (F*); this file reads the folders ([`input`]) and writes
+//! through the result-folder protocol ([`crate::output::folder`]): refused before anything is
+//! computed if an output exists without `--force`, then under `DIR/crossover.lock` every file is
+//! written to a temporary beside it and renamed into place, `crossover.csv` last. Bad input is an
+//! [`OutputError`] naming the file (exit 2, nothing written).
+
+pub mod analysis;
+pub mod columns;
+pub mod costs;
+pub mod frames;
+pub mod fronts;
+pub mod input;
+pub mod method;
+
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, OutputError};
+use crate::output::csv::serialize;
+use crate::output::folder::{self, Lock};
+use crate::output::meta::{InputFile, Meta};
+use crate::output::row::Row;
+use input::{Csv, Results};
+
+/// What `raycost crossover` was asked.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// The fronts' result folder.
+    pub fronts: PathBuf,
+    /// The n_P sweep's result folder.
+    pub points: PathBuf,
+    /// The frames run's result folder, if any.
+    pub frames: Option<PathBuf>,
+    /// Target relative RMSEs.
+    pub targets: Vec<f64>,
+    /// Output folder.
+    pub out: PathBuf,
+    /// Replace existing outputs.
+    pub force: bool,
+}
+
+/// The tables the analysis writes, in publication order (the main table last: the commit point).
+struct Outputs {
+    best: Vec<Row>,
+    frames: Option<Vec<Row>>,
+    meta: Meta,
+    main: Vec<Row>,
+}
+
+const FILES: [&str; 4] = [
+    "best.csv",
+    "frames.csv",
+    "crossover.meta.toml",
+    "crossover.csv",
+];
+
+/// Runs the analysis and writes its files; returns their paths.
+pub fn run(o: &Options) -> crate::error::Result<Vec<PathBuf>> {
+    if o.targets.is_empty() || o.targets.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
+        return Err(Error::usage(format!(
+            "--targets: {:?}: give relative RMSEs > 0, e.g. --targets 0.1,0.05,0.02",
+            o.targets
+        )));
+    }
+    refuse_existing(&o.out, o.force)?;
+    let t0 = std::time::Instant::now();
+    let mut outputs = compute(o)?;
+    outputs.meta.end(t0.elapsed().as_secs_f64());
+    write(&o.out, o.force, outputs)
+}
+
+/// Refuses, before anything is computed or written, an output that exists without `--force`.
+fn refuse_existing(out: &Path, force: bool) -> Result<(), OutputError> {
+    if force {
+        return Ok(());
+    }
+    for f in FILES {
+        let p = out.join(f);
+        if p.exists() {
+            return Err(OutputError::new(
+                &p,
+                "exists already; pass --force to replace it (nothing was written)",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// One input run: its tables read, and its provenance for the metadata.
+struct Source {
+    results: Results,
+    meta: Meta,
+    files: Vec<PathBuf>,
+}
+
+impl Source {
+    fn open(dir: &Path) -> Result<Source, OutputError> {
+        let results = Results::find(dir)?;
+        let meta = results.meta()?;
+        Ok(Source {
+            results,
+            meta,
+            files: Vec::new(),
+        })
+    }
+
+    fn main(&mut self) -> Result<Csv, OutputError> {
+        let t = self.results.main()?;
+        self.files.push(t.path.clone());
+        Ok(t)
+    }
+
+    fn side(&mut self, table: &str) -> Result<Csv, OutputError> {
+        let t = self.results.side(table)?;
+        self.files.push(t.path.clone());
+        Ok(t)
+    }
+
+    /// What the metadata keeps of this input: its files' hashes and its run's machine.
+    fn record(&self, role: &str, meta: &mut Meta) -> Result<(), OutputError> {
+        for f in &self.files {
+            let h = InputFile::hash(f, role)
+                .map_err(|e| OutputError::new(f, format!("cannot read: {e}")))?;
+            meta.inputs.push(h);
+        }
+        let m = &self.meta;
+        let mut t = toml::Table::new();
+        let s = |x: &str| toml::Value::String(x.to_string());
+        let list =
+            |v: &[f64]| toml::Value::Array(v.iter().map(|&x| toml::Value::Float(x)).collect());
+        t.insert("dir".into(), s(&self.results.dir.display().to_string()));
+        t.insert("name".into(), s(&self.results.name));
+        t.insert("cpu".into(), s(&m.machine.cpu));
+        t.insert("git_commit".into(), s(&m.raycost.git_commit));
+        t.insert("git_dirty".into(), s(&m.raycost.git_dirty));
+        t.insert("started".into(), s(&m.run.started));
+        t.insert("load_start".into(), list(&m.run.load_start));
+        t.insert("load_end".into(), list(&m.run.load_end));
+        if let Some(c) = m.run.other_cores {
+            t.insert("other_cores".into(), toml::Value::Float(c));
+        }
+        meta.extra.insert(role.into(), toml::Value::Table(t));
+        Ok(())
+    }
+}
+
+/// The scene's name: the fronts' `detp.scene` file stem, else the run's name.
+fn scene_name(main: &Csv, run: &str) -> String {
+    main.texts("detp.scene", "")
+        .ok()
+        .and_then(|v| v.into_iter().next())
+        .and_then(|s| {
+            Path::new(&s)
+                .file_stem()
+                .map(|x| x.to_string_lossy().into_owned())
+        })
+        .filter(|s| !s.is_empty() && s != "NaN")
+        .unwrap_or_else(|| run.to_string())
+}
+
+/// The first row's value of `column`, as a number.
+fn first_number(t: &Csv, column: &str, why: &str) -> Result<f64, OutputError> {
+    t.numbers(column, why)?
+        .into_iter()
+        .next()
+        .ok_or_else(|| OutputError::new(&t.path, "has no rows"))
+}
+
+/// Reads every input and runs the analysis.
+fn compute(o: &Options) -> Result<Outputs, OutputError> {
+    let mut fronts = Source::open(&o.fronts)?;
+    let main = fronts.main()?;
+    let points = fronts.side("points")?;
+    let pt_side = fronts.side("path_tracing")?;
+    let seed = first_number(&main, "experiment.seed", "the bootstrap's seed")? as u64;
+    let replicas = first_number(&main, "detp.replicas", "the photon maps' effective photons")?;
+    let scene = scene_name(&main, &fronts.results.name);
+    let detp = fronts::detp_errors(&main, &points)?;
+    let maps = fronts::map_errors(&main, replicas)?;
+    let (pt_point, pt_cv2) = fronts::path_tracing_cv2(&pt_side, &points)?;
+    let mut sweep = Source::open(&o.points)?;
+    let cost_table = sweep.main()?;
+    let inputs = analysis::Inputs {
+        scene: scene.clone(),
+        seed,
+        detp,
+        maps,
+        pt_cv2,
+        pt_point,
+        timing: costs::path_timing(&cost_table)?,
+        costs: costs::cost_samples(&cost_table)?,
+    };
+    let rows = analysis::crossover_rows(&inputs, &o.targets);
+    let best = analysis::best_rows(&rows, &o.targets);
+    let mut meta = Meta::begin("crossover", Default::default());
+    meta.run.seed = seed;
+    fronts.record("fronts", &mut meta)?;
+    sweep.record("points", &mut meta)?;
+    let frames = match &o.frames {
+        Some(dir) => {
+            let mut src = Source::open(dir)?;
+            let table = src.main()?;
+            let read = frames::read_frames(&table)?;
+            src.record("frames", &mut meta)?;
+            let out = frames::frames_rows(&scene, &inputs.detp, &read, &o.targets);
+            Some(out.iter().map(columns::frames_row).collect::<Vec<Row>>())
+        }
+        None => None,
+    };
+    let main_rows: Vec<Row> = rows.iter().map(columns::crossover_row).collect();
+    let best_rows: Vec<Row> = best.iter().map(columns::best_row).collect();
+    for (name, t) in [
+        ("main", Some(&main_rows)),
+        ("best", Some(&best_rows)),
+        ("frames", frames.as_ref()),
+    ] {
+        if let Some(first) = t.and_then(|t| t.first()) {
+            meta.columns.insert(name.into(), first.columns());
+        }
+    }
+    Ok(Outputs {
+        best: best_rows,
+        frames,
+        meta,
+        main: main_rows,
+    })
+}
+
+/// Writes the outputs under the lock: temporaries renamed into place, `crossover.csv` last.
+fn write(out: &Path, force: bool, o: Outputs) -> crate::error::Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(out)
+        .map_err(|e| OutputError::new(out, format!("cannot create the output folder: {e}")))?;
+    let _lock = Lock::acquire(out, "crossover")?;
+    refuse_existing(out, force)?;
+    let files: Vec<(PathBuf, Vec<u8>)> = [
+        Some(("best.csv", serialize(&o.best))),
+        o.frames.as_ref().map(|f| ("frames.csv", serialize(f))),
+        Some(("crossover.meta.toml", o.meta.render().into_bytes())),
+        Some(("crossover.csv", serialize(&o.main))),
+    ]
+    .into_iter()
+    .flatten()
+    .map(|(name, bytes)| (out.join(name), bytes))
+    .collect();
+    let targets: Vec<PathBuf> = FILES.iter().map(|f| out.join(f)).collect();
+    folder::remove_stale_temporaries(&targets)?;
+    let staged = files
+        .iter()
+        .map(|(p, bytes)| folder::stage(p, bytes))
+        .collect::<std::io::Result<Vec<_>>>()?;
+    folder::publish_staged(staged)?;
+    if o.frames.is_none() {
+        // A frames table of an earlier analysis (replaced with --force) does not belong to this one.
+        folder::remove_if_exists(&out.join("frames.csv"))?;
+    }
+    Ok(files.into_iter().map(|(p, _)| p).collect())
+}

@@ -1,0 +1,219 @@
+//! `raycost crossover` end to end on tiny tables written by `raycost run`: a fronts run (errors of
+//! every method against a reference, two replicas, two d) and an n_P sweep (seconds at one d), then
+//! the refusals: an existing output without --force, a missing folder, missing columns — each exit 2
+//! with nothing written.
+
+use std::path::{Path, PathBuf};
+
+use crate::common::{files_below, raycost, read_csv, root, run_quiet, write_spec};
+
+fn spec(dir: &Path, name: &str, body: &str, sweep: &str) -> PathBuf {
+    let scene = root().join("experiments/scenes/cornell.toml");
+    write_spec(
+        dir,
+        name,
+        &format!(
+            r#"[experiment]
+name = "{name}"
+kind = "detp"
+seed = 3
+
+[detp]
+source = "scene"
+scene = "{}"
+photons = 2000
+disc_radius = 40.0
+replicas = 2
+path_samples = 4
+{body}
+[sweep]
+{sweep}
+"#,
+            scene.display()
+        ),
+    )
+}
+
+/// The two runs, once per test binary run (they take a few seconds).
+fn runs(dir: &Path) -> (PathBuf, PathBuf) {
+    let fronts = spec(
+        dir,
+        "fronts",
+        "point_spacing = 160.0\nengines = [\"sphere-cache\", \"disc-index\", \"photon-map\", \"photon-map-growing\", \"path-tracing\", \"reference\"]\nreference_samples = 16\nwrite_points = true\n",
+        "\"detp.photons\" = [1000, 4000]\n\"detp.disc_radius\" = [40.0, 80.0]",
+    );
+    let points = spec(
+        dir,
+        "points",
+        "engines = [\"sphere-cache\", \"disc-index\", \"photon-map\", \"photon-map-growing\", \"path-tracing\"]\n",
+        "\"detp.point_spacing\" = [160.0, 80.0]\n\"detp.photons\" = [1000, 4000]",
+    );
+    let out = dir.join("results");
+    for s in [&fronts, &points] {
+        run_quiet(s, &out).assert().success();
+    }
+    (out.join("fronts"), out.join("points"))
+}
+
+fn crossover(fronts: &Path, points: &Path, out: &Path) -> assert_cmd::Command {
+    let mut c = raycost();
+    c.arg("crossover")
+        .arg(fronts)
+        .arg(points)
+        .args(["--targets", "0.5,0.2"])
+        .arg("--out")
+        .arg(out);
+    c
+}
+
+#[test]
+fn crossover_writes_its_tables_and_refuses_what_it_must() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (fronts, points) = runs(dir.path());
+    let out = dir.path().join("x");
+    crossover(&fronts, &points, &out).assert().success();
+    let (header, rows) = read_csv(&out.join("crossover.csv"));
+    assert_eq!(
+        header,
+        [
+            "scene",
+            "target",
+            "method",
+            "direct",
+            "edge",
+            "disc_radius",
+            "photons",
+            "error_floor",
+            "error_fit_c",
+            "seconds_once",
+            "seconds_per_point",
+            "cost_gamma",
+            "cost_worst_misfit",
+            "n_star",
+            "n_star_lo",
+            "n_star_hi",
+            "never_fraction",
+            "reason"
+        ]
+    );
+    // Per target: 2 d × 2 DETP engines, 2 photon maps, path tracing.
+    assert_eq!(rows.len(), 2 * 7, "{rows:?}");
+    let col = |name: &str| header.iter().position(|h| h == name).expect(name);
+    for r in &rows {
+        assert_eq!(r[col("scene")], "cornell");
+        let d = r[col("disc_radius")].as_str();
+        let detp = ["sphere-cache", "disc-index"].contains(&r[col("method")].as_str());
+        if detp && d == "80.0" {
+            assert!(r[col("reason")].contains("no cost sweep"), "{r:?}");
+        }
+        if detp && d == "40.0" {
+            // Timed: a γ on the grid and a bootstrap (or a floor above the target).
+            let g: f64 = r[col("cost_gamma")].parse().expect("γ");
+            assert!((0.0..=1.0).contains(&g), "{r:?}");
+            let never: f64 = r[col("never_fraction")].parse().expect("fraction");
+            assert!((0.0..=1.0).contains(&never), "{r:?}");
+        }
+    }
+    let pt: Vec<&Vec<String>> = rows
+        .iter()
+        .filter(|r| r[col("method")] == "path-tracing")
+        .collect();
+    assert_eq!(pt.len(), 2);
+    let paths: f64 = pt[0][col("photons")].parse().expect("paths");
+    assert!(paths >= 1.0);
+    let (bh, best) = read_csv(&out.join("best.csv"));
+    assert_eq!(
+        bh,
+        [
+            "scene",
+            "target",
+            "points",
+            "best",
+            "best_s",
+            "runner_up",
+            "runner_up_s"
+        ]
+    );
+    assert_eq!(best.len(), 2 * 5);
+    let meta = std::fs::read_to_string(out.join("crossover.meta.toml")).expect("meta");
+    assert!(
+        meta.contains("fronts.points.csv") && meta.contains("[extra.points]"),
+        "{meta}"
+    );
+    assert!(!out.join("frames.csv").exists());
+
+    // Existing outputs: refused without --force (exit 2, untouched), replaced with it.
+    let before: Vec<(PathBuf, Vec<u8>)> = files_below(&out)
+        .into_iter()
+        .map(|p| (p.clone(), std::fs::read(&p).expect("read")))
+        .collect();
+    let e = crossover(&fronts, &points, &out).assert().code(2);
+    let err = String::from_utf8_lossy(&e.get_output().stderr).into_owned();
+    assert!(err.contains("--force"), "{err}");
+    let after: Vec<(PathBuf, Vec<u8>)> = files_below(&out)
+        .into_iter()
+        .map(|p| (p.clone(), std::fs::read(&p).expect("read")))
+        .collect();
+    assert_eq!(before, after);
+    crossover(&fronts, &points, &out)
+        .arg("--force")
+        .assert()
+        .success();
+    let (_, again) = read_csv(&out.join("crossover.csv"));
+    // Same inputs, same seed: the same measured columns (the photons and fits).
+    for (a, b) in rows.iter().zip(&again) {
+        assert_eq!(a[..9], b[..9]);
+    }
+
+    // A frames folder (a synthetic quasi-static table: its path-tracing columns are new): one row
+    // per target and frames row, N_ε from the fronts' configuration at the frames' d.
+    let frames = dir.path().join("frames");
+    std::fs::create_dir_all(&frames).expect("mkdir");
+    std::fs::copy(fronts.join("fronts.meta.toml"), frames.join("f.meta.toml")).expect("meta");
+    std::fs::write(
+        frames.join("f.csv"),
+        "point,detp.photons,detp.disc_radius,points_static,points_dynamic,frame0_s,frame_s_mean,full_frame_s_mean,path_tracing_s_per_path_mean,path_tracing_cv_mean\n\
+         0,1000,40.0,900,100,1.1,0.11,1.0,1e-6,3\n\
+         1,2000,40.0,900,100,2.1,0.21,2.0,1e-6,3\n",
+    )
+    .expect("frames table");
+    let z = dir.path().join("z");
+    crossover(&fronts, &points, &z)
+        .arg(&frames)
+        .assert()
+        .success();
+    let (fh, fr) = read_csv(&z.join("frames.csv"));
+    assert_eq!(fr.len(), 2 * 2, "{fr:?}");
+    let at = |name: &str| fh.iter().position(|h| h == name).expect(name);
+    assert!(
+        fr.iter().all(|r| r[at("fronts_disc_radius")] == "40.0"),
+        "{fr:?}"
+    );
+    let paths: f64 = fr[0][at("path_tracing_paths")].parse().expect("paths");
+    assert_eq!(paths, 36.0, "(3/0.5)²");
+
+    // Refusals write nothing: a missing folder, a fronts folder without a points table, a frames
+    // folder without the frames columns.
+    let fresh = dir.path().join("y");
+    let missing = dir.path().join("nope");
+    crossover(&missing, &points, &fresh).assert().code(2);
+    let e = crossover(&points, &points, &fresh).assert().code(2);
+    let err = String::from_utf8_lossy(&e.get_output().stderr).into_owned();
+    assert!(err.contains("points.points.csv"), "{err}");
+    let e = crossover(&fronts, &points, &fresh)
+        .arg(&fronts)
+        .assert()
+        .code(2);
+    let err = String::from_utf8_lossy(&e.get_output().stderr).into_owned();
+    assert!(err.contains("the frames analysis"), "{err}");
+    raycost()
+        .arg("crossover")
+        .arg(&fronts)
+        .arg(&points)
+        .args(["--targets", "0.1,0"])
+        .arg("--out")
+        .arg(&fresh)
+        .assert()
+        .code(2);
+    assert!(!fresh.exists(), "nothing written");
+}
