@@ -91,8 +91,8 @@ impl CrossRow {
 /// Why "never", in words.
 fn never_reason(n: &Never) -> String {
     match n {
-        Never::BiasFloor { floor, target } => {
-            format!("bias floor √B = {floor:.4} ≥ target {target}")
+        Never::ErrorFloor { floor, target } => {
+            format!("error floor √B = {floor:.4} ≥ target {target}")
         }
         Never::PerPointCost { detp, path_tracing } => format!(
             "per-point cost {detp:.3e} s ≥ path tracing's {path_tracing:.3e} s at this target"
@@ -133,7 +133,7 @@ fn base_row(inp: &Inputs, target: f64, config: Config, fit: &ErrorFit) -> CrossR
         reason.push("no cost sweep at this d/edge/direct".to_string());
     }
     if !photons.is_finite() {
-        reason.push(never_reason(&Never::BiasFloor {
+        reason.push(never_reason(&Never::ErrorFloor {
             floor: fit.floor(),
             target,
         }));
@@ -188,11 +188,17 @@ fn detp_rows(inp: &Inputs, e: &DetpErrors, target: f64) -> Vec<CrossRow> {
             };
             let mut row = base_row(inp, target, config, &fit);
             if let Some(c) = row.cost {
+                let samples = inp
+                    .costs
+                    .iter()
+                    .find(|s| row.config.matches(&s.config))
+                    .map_or(&[][..], |s| &s.samples[..]);
                 let (est, ci) = points_crossover_interval(
                     &e.photons,
                     &replicas,
                     inp.timing.median,
                     &c.model,
+                    samples,
                     target,
                     DRAWS,
                     LEVEL,
@@ -293,11 +299,15 @@ pub struct BestRow {
     pub runner_up: Option<(String, f64)>,
 }
 
-/// Per target and n_P of [`BEST_POINTS`], the two fastest configurations that reach the target.
-pub fn best_rows(rows: &[CrossRow], targets: &[f64]) -> Vec<BestRow> {
+/// Per target and n_P of [`BEST_POINTS`] and `more_points` (e.g. the fronts' own point count; in
+/// increasing order with them), the two fastest configurations that reach the target.
+pub fn best_rows(rows: &[CrossRow], targets: &[f64], more_points: &[f64]) -> Vec<BestRow> {
+    let mut grid: Vec<f64> = BEST_POINTS.iter().chain(more_points).copied().collect();
+    grid.sort_by(f64::total_cmp);
+    grid.dedup();
     let mut out = Vec::new();
     for &target in targets {
-        for points in BEST_POINTS {
+        for &points in &grid {
             let mut c: Vec<(String, f64)> = rows
                 .iter()
                 .filter(|r| r.target == target)
@@ -339,6 +349,7 @@ mod tests {
         let truth = ErrorFit {
             floor2: 0.01f64.powi(2),
             c: 50.0,
+            measured_min: 0.0,
         };
         let mse: Vec<Vec<f64>> = (0..3)
             .map(|_| photons.iter().map(|&n| truth.mse(n)).collect())
@@ -419,12 +430,12 @@ mod tests {
         assert_eq!((pt.config.method, pt.photons), (Method::PathTracing, 400.0));
         // Below the floor: never, and why.
         assert!(
-            rows[5].photons.is_nan() && rows[5].reason.contains("bias floor"),
+            rows[5].photons.is_nan() && rows[5].reason.contains("error floor"),
             "{:?}",
             rows[5]
         );
         // best.csv: path tracing at few points, DETP beyond N*.
-        let best = best_rows(&rows, &[0.05]);
+        let best = best_rows(&rows, &[0.05], &[]);
         assert_eq!(best.len(), 5);
         assert!(best[0].best.as_ref().is_some_and(|b| b.0 == "path-tracing"));
         assert!(best[4]

@@ -68,7 +68,7 @@ pub const ERROR_FLOOR: Column = value(
     "error_floor",
     "1",
     Class::Measured,
-    "√B of the fit relative MSE = B + c/N (relative bias floor); 0 for path tracing",
+    "√B of the fit relative MSE = B + c/N (error floor: bias, or noise more photons do not reduce, e.g. NEE direct at fixed detp.direct_samples); 0 for path tracing",
 );
 /// c.
 pub const ERROR_FIT_C: Column = value(
@@ -88,6 +88,30 @@ pub const COST_GAMMA: Column = value(
     Class::Timing,
     "γ of seconds = fixed + a·N + b·N·n_P^γ + c·n_P, best on a 0.05 grid over the n_P sweep",
 );
+/// The fitted cost model's coefficients, so that a plot or a spreadsheet can draw T(N_ε, n_P).
+pub const COST_FIXED: Column = value(
+    "cost_fixed",
+    "s",
+    Class::Timing,
+    "fixed of the cost model seconds = fixed + a·N + b·N·n_P^γ + c·n_P (one estimate: per replica)",
+);
+/// a.
+pub const COST_PER_PHOTON: Column = value(
+    "cost_per_photon",
+    "s",
+    Class::Timing,
+    "a: seconds per photon",
+);
+/// b.
+pub const COST_PER_PHOTON_POINT: Column = value(
+    "cost_per_photon_point",
+    "s",
+    Class::Timing,
+    "b: seconds per photon × n_P^γ",
+);
+/// c.
+pub const COST_PER_POINT: Column =
+    value("cost_per_point", "s", Class::Timing, "c: seconds per point");
 /// Worst misfit.
 pub const COST_WORST_MISFIT: Column = value(
     "cost_worst_misfit",
@@ -113,7 +137,7 @@ pub const NEVER_FRACTION: Column = value(
     "fraction of bootstrap resamples in which it never beats path tracing (NaN: no bootstrap)",
 );
 /// Reason.
-pub const REASON: Column = value("reason", "", Class::Timing, "why a value is NaN or never (bias floor, per-point cost, no cost sweep at this d/edge/direct), or a note on how it was computed; NaN when there is nothing to say");
+pub const REASON: Column = value("reason", "", Class::Timing, "why a value is NaN or never (error floor, per-point cost, no cost sweep at this d/edge/direct), or a note on how it was computed; NaN when there is nothing to say");
 
 /// n_P.
 pub const POINTS: Column = value(
@@ -195,6 +219,8 @@ pub fn crossover_row(r: &CrossRow) -> Row {
     let (gamma, misfit) = r
         .cost
         .map_or((f64::NAN, f64::NAN), |c| (c.model.gamma, c.worst_misfit));
+    let coef =
+        |f: fn(&crate::stats::fit::CostModel) -> f64| r.cost.map_or(f64::NAN, |c| f(&c.model));
     row.put(&SCENE, r.scene.as_str())
         .put(&TARGET, r.target)
         .put(&METHOD, r.config.method.label())
@@ -207,6 +233,10 @@ pub fn crossover_row(r: &CrossRow) -> Row {
         .put(&SECONDS_ONCE, r.seconds_once)
         .put(&SECONDS_PER_POINT, r.seconds_per_point)
         .put(&COST_GAMMA, gamma)
+        .put(&COST_FIXED, coef(|m| m.fixed))
+        .put(&COST_PER_PHOTON, coef(|m| m.per_photon))
+        .put(&COST_PER_PHOTON_POINT, coef(|m| m.per_photon_point))
+        .put(&COST_PER_POINT, coef(|m| m.per_point))
         .put(&COST_WORST_MISFIT, misfit)
         .put(&N_STAR, r.n_star)
         .put(&N_STAR_LO, r.n_star_lo)

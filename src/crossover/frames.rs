@@ -202,7 +202,7 @@ fn frames_row(
     let fit = ErrorFit::fit_relative(&e.photons, &mean);
     match fit.photons_for(target) {
         None => why.push(format!(
-            "bias floor √B = {:.4} ≥ target {target}",
+            "error floor √B = {:.4} ≥ target {target}",
             fit.floor()
         )),
         Some(n) => {

@@ -200,7 +200,9 @@ fn compute(o: &Options) -> Result<Outputs, OutputError> {
         costs: costs::cost_samples(&cost_table)?,
     };
     let rows = analysis::crossover_rows(&inputs, &o.targets);
-    let best = analysis::best_rows(&rows, &o.targets);
+    // The fronts' own point count joins the grid: "at the points I measured, which is fastest?"
+    let fronts_points = first_number(&main, "points", "the fronts' number of points")?;
+    let best = analysis::best_rows(&rows, &o.targets, &[fronts_points]);
     let mut meta = Meta::begin("crossover", Default::default());
     meta.run.seed = seed;
     fronts.record("fronts", &mut meta)?;

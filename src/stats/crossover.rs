@@ -82,8 +82,9 @@ impl PathTracingCost {
 /// Why DETP never beats path tracing.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Never {
-    /// DETP's error floor (√B, relative) is at or above the target: no photon count reaches it.
-    BiasFloor {
+    /// DETP's error floor (√B, relative) is at or above the target: no photon count reaches it
+    /// (a bias, or noise that does not fall with photons, such as NEE's direct part).
+    ErrorFloor {
         /// √B.
         floor: f64,
         /// The target relative RMSE.
@@ -133,7 +134,7 @@ pub fn detp_seconds(
 ) -> Result<f64, Never> {
     match error.photons_for(target) {
         Some(n) => Ok(cost.seconds(n, points)),
-        None => Err(Never::BiasFloor {
+        None => Err(Never::ErrorFloor {
             floor: error.floor(),
             target,
         }),
@@ -149,7 +150,7 @@ pub fn points_crossover(
     target: f64,
 ) -> Crossover {
     let Some(n) = error.photons_for(target) else {
-        return Crossover::Never(Never::BiasFloor {
+        return Crossover::Never(Never::ErrorFloor {
             floor: error.floor(),
             target,
         });
@@ -230,16 +231,33 @@ pub fn bootstrap(
     seed: u64,
     stat: impl Fn(&[usize]) -> f64,
 ) -> Interval {
+    bootstrap_with(replicas, draws, level, seed, |pick, _| stat(pick))
+}
+
+/// [`bootstrap`] whose statistic may draw more randomness of its own for each resample (e.g. a
+/// cost model's residuals, [`resample_cost`]) from the same stream, after the replicas' pick: the
+/// estimate (all replicas, in order) gets `None`. With a statistic that draws nothing it is
+/// [`bootstrap`] exactly.
+///
+/// # Panics
+/// As [`bootstrap`].
+pub fn bootstrap_with(
+    replicas: usize,
+    draws: usize,
+    level: f64,
+    seed: u64,
+    stat: impl Fn(&[usize], Option<&mut crate::sample::rng::Stream>) -> f64,
+) -> Interval {
     assert!(replicas >= 1 && draws >= 1 && level > 0.0 && level < 1.0);
     let all: Vec<usize> = (0..replicas).collect();
-    let estimate = stat(&all);
+    let estimate = stat(&all, None);
     let mut rng = stream(&[domain::BOOTSTRAP, seed]);
     let mut values: Vec<f64> = (0..draws)
         .map(|_| {
             let pick: Vec<usize> = (0..replicas)
                 .map(|_| rand::Rng::gen_range(&mut rng, 0..replicas))
                 .collect();
-            stat(&pick)
+            stat(&pick, Some(&mut rng))
         })
         .collect();
     values.sort_by(f64::total_cmp);
@@ -250,6 +268,38 @@ pub fn bootstrap(
         hi: at(0.5 + 0.5 * level),
         never_fraction: values.iter().filter(|v| v.is_infinite()).count() as f64 / draws as f64,
     }
+}
+
+/// One bootstrap resample of a fitted cost model: a multiplicative residual bootstrap. Each sample
+/// (N, n_P, seconds) keeps its N and n_P, its seconds become the model's × (1 + r), r drawn with
+/// replacement from the samples' relative residuals (seconds/model − 1), and the model is refitted
+/// at the same γ. So N*'s interval carries the cost model's misfit — the spread of the timings
+/// between runs and the model's own lack of fit — not only the replicas' errors. With fewer than 2
+/// samples, or none with a positive model value, the model comes back unchanged.
+pub fn resample_cost(
+    model: &CostModel,
+    samples: &[(f64, f64, f64)],
+    rng: &mut crate::sample::rng::Stream,
+) -> CostModel {
+    let fitted: Vec<f64> = samples.iter().map(|s| model.seconds(s.0, s.1)).collect();
+    let residuals: Vec<f64> = samples
+        .iter()
+        .zip(&fitted)
+        .filter(|(_, &f)| f > 0.0)
+        .map(|(s, &f)| s.2 / f - 1.0)
+        .collect();
+    if samples.len() < 2 || residuals.is_empty() {
+        return *model;
+    }
+    let drawn: Vec<(f64, f64, f64)> = samples
+        .iter()
+        .zip(&fitted)
+        .map(|(s, &f)| {
+            let r = residuals[rand::Rng::gen_range(rng, 0..residuals.len())];
+            (s.0, s.1, f * (1.0 + r))
+        })
+        .collect();
+    CostModel::fit(&drawn, model.gamma)
 }
 
 /// What one replica measured, for the crossover's bootstrap.
@@ -263,19 +313,21 @@ pub struct ReplicaErrors {
 }
 
 /// N* with its bootstrap interval: each resample averages the replicas' MSE curves and cv², refits
-/// B + c/N and re-derives N* (costs fixed). The estimate is from all replicas.
+/// B + c/N, redraws the cost model from `cost_samples` ([`resample_cost`]; empty: costs fixed) and
+/// re-derives N*. The estimate is from all replicas and the fitted cost.
 #[allow(clippy::too_many_arguments)] // the measured summaries, the target and the bootstrap's knobs
 pub fn points_crossover_interval(
     photons: &[f64],
     replicas: &[ReplicaErrors],
     seconds_per_path: f64,
     cost: &CostModel,
+    cost_samples: &[(f64, f64, f64)],
     target: f64,
     draws: usize,
     level: f64,
     seed: u64,
 ) -> (Crossover, Interval) {
-    let at = |pick: &[usize]| {
+    let at = |pick: &[usize], cost: &CostModel| {
         let k = pick.len() as f64;
         let mse: Vec<f64> = (0..photons.len())
             .map(|j| pick.iter().map(|&r| replicas[r].detp_mse[j]).sum::<f64>() / k)
@@ -288,8 +340,11 @@ pub fn points_crossover_interval(
         points_crossover(&pt, &ErrorFit::fit_relative(photons, &mse), cost, target)
     };
     let all: Vec<usize> = (0..replicas.len()).collect();
-    let estimate = at(&all);
-    let interval = bootstrap(replicas.len(), draws, level, seed, |p| at(p).value());
+    let estimate = at(&all, cost);
+    let interval = bootstrap_with(replicas.len(), draws, level, seed, |p, rng| match rng {
+        Some(rng) => at(p, &resample_cost(cost, cost_samples, rng)).value(),
+        None => at(p, cost).value(),
+    });
     (estimate, interval)
 }
 
@@ -337,6 +392,7 @@ mod tests {
         let err = ErrorFit {
             floor2: 0.01f64.powi(2),
             c: 50.0,
+            measured_min: 0.0,
         };
         let model = cost(1e-12, 2e-6, 1.0);
         for target in [0.1, 0.05, 0.02] {
@@ -366,6 +422,7 @@ mod tests {
         let err = ErrorFit {
             floor2: 0.0,
             c: 10.0,
+            measured_min: 0.0,
         };
         let model = cost(1e-9, 1e-6, 0.5);
         let Crossover::At(x) = points_crossover(&pt, &err, &model, 0.05) else {
@@ -384,10 +441,11 @@ mod tests {
         let biased = ErrorFit {
             floor2: 0.08f64.powi(2),
             c: 10.0,
+            measured_min: 0.0,
         };
         assert_eq!(
             points_crossover(&pt, &biased, &cost(0.0, 1e-6, 1.0), 0.05),
-            Crossover::Never(Never::BiasFloor {
+            Crossover::Never(Never::ErrorFloor {
                 floor: 0.08,
                 target: 0.05
             })
@@ -397,6 +455,7 @@ mod tests {
         let unbiased = ErrorFit {
             floor2: 0.0,
             c: 10.0,
+            measured_min: 0.0,
         };
         match points_crossover(&pt, &unbiased, &cost(2.5e-4, 0.0, 1.0), 0.05) {
             Crossover::Never(Never::PerPointCost { detp, path_tracing }) => {
@@ -461,7 +520,7 @@ mod tests {
             (0..6).map(|k| make(0.01 + 0.001 * k as f64, 1.0)).collect();
         let model = cost(1e-12, 1e-6, 1.0);
         let (est, ci) =
-            points_crossover_interval(&photons, &clear, 2e-6, &model, 0.05, 500, 0.95, 1);
+            points_crossover_interval(&photons, &clear, 2e-6, &model, &[], 0.05, 500, 0.95, 1);
         let Crossover::At(x) = est else {
             panic!("{est:?}")
         };
@@ -470,7 +529,57 @@ mod tests {
             .iter()
             .map(|&f| make(f, 1.0))
             .collect();
-        let (_, ci) = points_crossover_interval(&photons, &near, 2e-6, &model, 0.05, 500, 0.95, 1);
+        let (_, ci) =
+            points_crossover_interval(&photons, &near, 2e-6, &model, &[], 0.05, 500, 0.95, 1);
         assert!(ci.never_fraction > 0.1 && ci.hi.is_infinite(), "{ci:?}");
+    }
+
+    /// The cost model's residual bootstrap: exact samples give the model back; noisy ones move
+    /// it, and N*'s interval widens against fixed costs (the replicas' errors alone).
+    #[test]
+    fn the_cost_model_misfit_widens_the_crossover_interval() {
+        let model = cost(1e-12, 1e-6, 1.0);
+        let grid: Vec<(f64, f64)> = [5e4, 2e5, 8e5]
+            .iter()
+            .flat_map(|&n| [1e2, 1e3, 1e4, 1e5].map(|p| (n, p)))
+            .collect();
+        let exact: Vec<(f64, f64, f64)> = grid
+            .iter()
+            .map(|&(n, p)| (n, p, model.seconds(n, p)))
+            .collect();
+        let mut rng = stream(&[domain::BOOTSTRAP, 3]);
+        let same = resample_cost(&model, &exact, &mut rng);
+        for s in &exact {
+            assert!((same.seconds(s.0, s.1) / s.2 - 1.0).abs() < 1e-9);
+        }
+        // ±30 % alternating misfit, as the committed sweeps show (worst misfit 0.13–0.36).
+        let noisy: Vec<(f64, f64, f64)> = exact
+            .iter()
+            .enumerate()
+            .map(|(k, s)| (s.0, s.1, s.2 * if k % 2 == 0 { 1.3 } else { 0.7 }))
+            .collect();
+        let photons = [5e4, 2e5, 8e5];
+        let reps: Vec<ReplicaErrors> = (0..6)
+            .map(|k| ReplicaErrors {
+                detp_mse: photons
+                    .iter()
+                    .map(|&n| 1e-4 + (100.0 + k as f64) / n)
+                    .collect(),
+                pt_cv2: 1.0,
+            })
+            .collect();
+        let fixed =
+            points_crossover_interval(&photons, &reps, 2e-6, &model, &[], 0.05, 500, 0.95, 1);
+        let moved =
+            points_crossover_interval(&photons, &reps, 2e-6, &model, &noisy, 0.05, 500, 0.95, 1);
+        assert_eq!(
+            fixed.0, moved.0,
+            "the estimate uses the fitted cost either way"
+        );
+        let width = |i: &Interval| i.hi - i.lo;
+        assert!(
+            width(&moved.1) > 2.0 * width(&fixed.1),
+            "{fixed:?} {moved:?}"
+        );
     }
 }

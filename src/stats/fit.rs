@@ -18,6 +18,10 @@ pub struct ErrorFit {
     pub floor2: f64,
     /// c: the part that falls as 1/N (relative variance × photons, ≥ 0).
     pub c: f64,
+    /// The smallest photon count the fit was made on (0 for a fit written by hand):
+    /// [`ErrorFit::photons_for`] never answers fewer, since below it the fit is an extrapolation and
+    /// the measured count already reaches the target.
+    pub measured_min: f64,
 }
 
 impl ErrorFit {
@@ -28,17 +32,27 @@ impl ErrorFit {
     /// If the slices differ in length.
     pub fn fit(photons: &[f64], mse: &[f64], weights: &[f64]) -> Self {
         assert!(photons.len() == mse.len() && mse.len() == weights.len());
-        let rows: Vec<([f64; 2], f64, f64)> = photons
+        let kept: Vec<(f64, f64, f64)> = photons
             .iter()
             .zip(mse)
             .zip(weights)
             .filter(|((n, y), w)| n.is_finite() && y.is_finite() && w.is_finite())
-            .map(|((&n, &y), &w)| ([1.0, 1.0 / n], y, w))
+            .map(|((&n, &y), &w)| (n, y, w))
+            .collect();
+        let rows: Vec<([f64; 2], f64, f64)> = kept
+            .iter()
+            .map(|&(n, y, w)| ([1.0, 1.0 / n], y, w))
             .collect();
         let x = nnls(&rows);
+        let measured_min = kept.iter().map(|k| k.0).fold(f64::INFINITY, f64::min);
         Self {
             floor2: x[0],
             c: x[1],
+            measured_min: if measured_min.is_finite() {
+                measured_min
+            } else {
+                0.0
+            },
         }
     }
 
@@ -73,16 +87,19 @@ impl ErrorFit {
         self.mse(photons).sqrt()
     }
 
-    /// The error no photon count goes below: √B.
+    /// The error no photon count goes below: √B. It is a bias where the estimator is biased, and
+    /// also any noise that more photons do not reduce (with `detp.direct = "nee"`, the direct part's
+    /// next-event estimate at a fixed `detp.direct_samples`).
     pub fn floor(&self) -> f64 {
         self.floor2.sqrt()
     }
 
-    /// Photons for a relative RMSE of `target`: c/(target² − B), or `None` if the floor is at or
-    /// above the target.
+    /// Photons for a relative RMSE of `target`: c/(target² − B), but not fewer than
+    /// `measured_min` (conservative: the fit is not trusted below the counts it was made on); `None`
+    /// if the floor is at or above the target.
     pub fn photons_for(&self, target: f64) -> Option<f64> {
         let room = target * target - self.floor2;
-        (room > 0.0).then(|| self.c / room)
+        (room > 0.0).then(|| (self.c / room).max(self.measured_min))
     }
 }
 
@@ -259,11 +276,28 @@ fn solve_support<const K: usize>(
 mod tests {
     use super::*;
 
+    /// Below the smallest measured photon count the fit is not trusted: a target the measured
+    /// count already reaches needs that count, not the extrapolated fewer.
+    #[test]
+    fn photons_for_never_goes_below_the_measured_range() {
+        let photons = [1e4, 1e5, 1e6];
+        let mse: Vec<f64> = photons.iter().map(|n| 1e-4 + 10.0 / n).collect();
+        let fit = ErrorFit::fit_relative(&photons, &mse);
+        assert_eq!(fit.measured_min, 1e4);
+        // error(1e4) = √(1e-4 + 1e-3) ≈ 0.033: a 10 % target is met at the smallest count.
+        assert_eq!(fit.photons_for(0.1), Some(1e4));
+        // 2 % needs c/(ε² − B) = 10/(4e-4 − 1e-4) ≈ 3.3e4, inside the range: unchanged.
+        let n = fit.photons_for(0.02).unwrap();
+        assert!((n / (10.0 / 3e-4) - 1.0).abs() < 1e-6, "{n}");
+        assert_eq!(fit.photons_for(0.009), None, "below the floor (1 %)");
+    }
+
     #[test]
     fn an_exact_bias_variance_curve_is_recovered() {
         let truth = ErrorFit {
             floor2: 0.08f64.powi(2),
             c: 40.0,
+            measured_min: 0.0,
         };
         let n = [2.5e4, 1e5, 4e5, 1.6e6];
         let mse: Vec<f64> = n.iter().map(|&x| truth.mse(x)).collect();
@@ -272,8 +306,11 @@ mod tests {
         assert!((fit.c / truth.c - 1.0).abs() < 1e-9, "{fit:?}");
         assert!((fit.floor() - 0.08).abs() < 1e-9);
         assert_eq!(fit.photons_for(0.05), None, "the floor is above 5 %");
-        let n10 = fit.photons_for(0.10).expect("above the floor");
-        assert!((fit.error(n10) - 0.10).abs() < 1e-9);
+        // 10 % needs 40/(0.01 − 0.0064) ≈ 1.1·10⁴ photons, below the smallest measured 2.5·10⁴:
+        // the measured count is the answer. 8.5 % needs ≈ 4.8·10⁴, inside the range.
+        assert_eq!(fit.photons_for(0.10), Some(2.5e4));
+        let n = fit.photons_for(0.085).expect("above the floor");
+        assert!((fit.error(n) - 0.085).abs() < 1e-9);
     }
 
     /// Unbiased data (B = 0) whose noise makes the unconstrained intercept negative: the fit holds
@@ -300,6 +337,7 @@ mod tests {
         let truth = ErrorFit {
             floor2: 1e-3,
             c: 100.0,
+            measured_min: 0.0,
         };
         let n: Vec<f64> = (0..8).map(|k| 1e4 * 2f64.powi(k)).collect();
         // ±5 % alternating noise.
