@@ -88,6 +88,10 @@ fn crossover_writes_its_tables_and_refuses_what_it_must() {
             "seconds_once",
             "seconds_per_point",
             "cost_gamma",
+            "cost_fixed",
+            "cost_per_photon",
+            "cost_per_photon_point",
+            "cost_per_point",
             "cost_worst_misfit",
             "n_star",
             "n_star_lo",
@@ -134,7 +138,18 @@ fn crossover_writes_its_tables_and_refuses_what_it_must() {
             "runner_up_s"
         ]
     );
-    assert_eq!(best.len(), 2 * 5);
+    // Per target the grid 10², …, 10⁶ and the fronts' own point count (once, if not on the grid).
+    let (fh, fronts_rows) = read_csv(&fronts.join("fronts.csv"));
+    let n_p: f64 = fronts_rows[0][fh.iter().position(|h| h == "points").expect("points")]
+        .parse()
+        .expect("points");
+    let on_grid = [1e2, 1e3, 1e4, 1e5, 1e6].contains(&n_p);
+    assert_eq!(best.len(), 2 * if on_grid { 5 } else { 6 }, "n_P {n_p}");
+    let bp = bh.iter().position(|h| h == "points").expect("points");
+    assert!(
+        best.iter().any(|r| r[bp].parse::<f64>() == Ok(n_p)),
+        "{best:?}"
+    );
     let meta = std::fs::read_to_string(out.join("crossover.meta.toml")).expect("meta");
     assert!(
         meta.contains("fronts.points.csv") && meta.contains("[extra.points]"),
