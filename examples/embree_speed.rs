@@ -1,4 +1,4 @@
-//! Embree speed on the PERFORMANCE.md scene: n = 10⁶ sphere centres uniform in a cube of side 100
+//! Embree speed on the bench's reference scene (docs/bench.md): n = 10⁶ sphere centres uniform in a cube of side 100
 //! (ρ = 1), r = 0.1, 10⁶ rays from the centre. Prints build seconds and rays/s on 1 and 2 threads.
 //!
 //! `CARGO_TARGET_DIR=/work/target-embree cargo run --release --features embree --example embree_speed [n] [rays]`

@@ -79,14 +79,14 @@ Examples:
   raycost merge results/detp-big            # its NAME.photon-shard-*-of-N.json: sums added
   raycost merge a/x.shard-0-of-2.csv b/x.shard-1-of-2.csv --out x.csv")]
     Merge(MergeArgs),
-    /// Which method when (issue 27): from a fronts run, an n_P sweep and optionally a frames run of
+    /// Which method when (DETP, a photon map or per-point path tracing): from a fronts run, an n_P sweep and optionally a frames run of
     /// one scene, the photons or paths each method needs per target error, N* (points beyond which
     /// DETP beats path tracing, with a bootstrap CI) and F* (frames), in DIR/crossover.csv,
     /// DIR/best.csv and DIR/frames.csv.
     #[command(after_help = "\
 Examples:
-  raycost crossover results/issue27-fronts-cornell results/issue27-points-cornell \\
-      --targets 0.1,0.05,0.02 --out results/issue27-crossover-cornell
+  raycost crossover results/fronts-cornell results/point-sweep-cornell \\
+      --targets 0.1,0.05,0.02 --out results/which-method-cornell
   raycost crossover fronts points frames --targets 0.05 --out /tmp/x --force")]
     Crossover(CrossoverArgs),
     /// Render the DETP radiosity (B = albedo·E/π) of a quasi-static spec's frame(s), seen from the

@@ -1,4 +1,4 @@
-//! `raycost bench --quick` end to end: the contract's columns, every engine present, zero
+//! `raycost bench --quick` end to end: the columns docs/bench.md documents, every engine present, zero
 //! mismatches, the per-round table the ratios come from, and no overwriting without `--force`.
 
 use std::collections::BTreeSet;

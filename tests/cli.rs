@@ -1,4 +1,4 @@
-//! The CLI end to end: results land where the contract says, existing results are never lost,
+//! The CLI end to end: results land where docs/cli.md says, existing results are never lost,
 //! and measured columns do not depend on the thread count.
 
 use crate::common::{

@@ -13,22 +13,26 @@ fn stdout_of(args: &[&str]) -> String {
     String::from_utf8(o.stdout).expect("UTF-8")
 }
 
-const SUBCOMMANDS: &[&str] = &[
-    "run",
-    "check",
-    "theory",
-    "bench",
-    "merge",
-    "render",
-    "doc",
-    "completions",
-    "man",
-];
+/// Every subcommand, from the clap definition itself (a new one is checked without editing this
+/// file).
+fn subcommands() -> Vec<String> {
+    use clap::CommandFactory;
+    let names: Vec<String> = raycost::cli::Cli::command()
+        .get_subcommands()
+        .map(|c| c.get_name().to_string())
+        .filter(|n| n != "help")
+        .collect();
+    // The list is not empty and holds the commands users rely on (a broken definition fails here).
+    for must in ["run", "check", "merge", "report", "crossover"] {
+        assert!(names.iter().any(|n| n == must), "no {must} in {names:?}");
+    }
+    names
+}
 
 #[test]
 fn completions_name_every_subcommand() {
     let bash = stdout_of(&["completions", "bash"]);
-    for sub in SUBCOMMANDS {
+    for sub in subcommands() {
         assert!(bash.contains(&format!("raycost,{sub})")), "bash: no {sub}");
     }
     for shell in ["zsh", "fish", "elvish", "powershell"] {
@@ -48,8 +52,8 @@ fn man_page_is_roff_with_every_subcommand() {
         "{}",
         &man[..200.min(man.len())]
     );
-    for sub in SUBCOMMANDS {
-        assert!(man.contains(sub), "man: no {sub}");
+    for sub in subcommands() {
+        assert!(man.contains(&sub), "man: no {sub}");
     }
 }
 
@@ -62,8 +66,8 @@ fn every_help_has_examples_and_the_top_level_lists_exit_codes() {
             "exit code {code}: {top}"
         );
     }
-    for sub in SUBCOMMANDS {
-        let help = stdout_of(&[sub, "--help"]);
+    for sub in subcommands() {
+        let help = stdout_of(&[&sub, "--help"]);
         assert!(
             help.contains("Examples:\n  raycost "),
             "{sub} --help: {help}"
@@ -233,4 +237,74 @@ fn one_replica_is_judged_against_the_exact_value_and_progress_ticks() {
         .iter()
         .all(|l| l.contains("photons") && l.contains("eta")));
     assert!(ticks.last().unwrap().contains("300000/300000 photons"));
+}
+
+/// The repository explains itself: no source, doc, script or spec names a document that a clone
+/// does not have (the project's working notes beside the repository), and no command's help names
+/// an issue number (a user has no issue tracker to look it up in).
+#[test]
+fn nothing_refers_outside_the_repository() {
+    use crate::common::files_below;
+    let outside = [
+        "../shared",
+        "THEORY.md",
+        "PERFORMANCE.md",
+        "CONTRACT.md",
+        "DESIGN.md",
+        "STYLE.md",
+    ];
+    let mut found = Vec::new();
+    let mut read = 0;
+    for dir in [
+        "src",
+        "docs",
+        "scripts",
+        "tests",
+        "examples",
+        "experiments",
+        "claims",
+    ] {
+        for f in files_below(&root().join(dir)) {
+            let ext = f.extension().and_then(|e| e.to_str()).unwrap_or("");
+            if !["rs", "md", "py", "sh", "toml", "sbatch"].contains(&ext) {
+                continue;
+            }
+            // This test names the documents it looks for.
+            if f.ends_with("tests/conventions.rs") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&f).unwrap_or_default();
+            read += 1;
+            for o in outside {
+                if text.contains(o) {
+                    found.push(format!("{} names {o}", f.display()));
+                }
+            }
+        }
+    }
+    let readme = std::fs::read_to_string(root().join("README.md")).expect("README");
+    for o in outside {
+        if readme.contains(o) {
+            found.push(format!("README.md names {o}"));
+        }
+    }
+    assert!(read > 100, "only {read} files read: the walk is broken");
+    assert!(found.is_empty(), "{found:#?}");
+
+    let issue = |text: &str| {
+        let lower = text.to_lowercase();
+        lower.match_indices("issue").any(|(i, _)| {
+            let rest = lower[i + 5..].trim_start_matches([' ', '#']);
+            rest.starts_with(|c: char| c.is_ascii_digit())
+        })
+    };
+    assert!(issue("see issue 27") && issue("Issue #3") && !issue("an issue"));
+    for sub in subcommands() {
+        let help = stdout_of(&[&sub, "--help"]);
+        assert!(!issue(&help), "{sub} --help names an issue number:\n{help}");
+    }
+    assert!(
+        !issue(&stdout_of(&["--help"])),
+        "--help names an issue number"
+    );
 }

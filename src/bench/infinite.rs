@@ -1,5 +1,5 @@
 //! The lazily generated infinite scene in `raycost bench`: the grid experiments' throughput as a
-//! tracked figure (issue 10).
+//! tracked figure, so that a slower scene generator shows up in the bench.
 //!
 //! Set-up, as the grid experiments run it (`experiments/quickstart.toml`): an infinite Poisson scene
 //! at ρ = 1, r = 0.1 ([`InfiniteScene`], which picks the engine as experiments do), the eye uniform
@@ -13,7 +13,7 @@
 //! ([`FastGrid`]) on the bench's n-sphere scene (n = 10⁶; 10⁵ with `--quick`) at the bench's cell
 //! width. All of them run in alternating rounds ([`super::rounds`]): each round traces a fresh slice
 //! of rays with every contestant, so the ratio infinite / finite is a median of per-round paired
-//! ratios, like the bench's other ratios. Issue 10 asks the best width to reach
+//! ratios, like the bench's other ratios. The goal is that the best width reaches
 //! [`TARGET_RATIO`] of the finite grid on 1 and on 2 threads.
 //!
 //! Rows (`bench.csv`): `engine = grid-infinite`, `n = 0`, one per cell width and thread count, with
@@ -54,7 +54,7 @@ pub const WIDTHS: &[f64] = &[0.2, 0.35, 0.5, 0.7, 1.0, 1.5, 2.0];
 pub const QUICK_WIDTHS: &[f64] = &[0.35, 0.7, 1.5];
 /// Rays sharing one scene realisation: the experiments' default (`grid.rays_per_scene`).
 pub const RAYS_PER_SCENE: usize = crate::experiment::grid::DEFAULT_RAYS_PER_SCENE as usize;
-/// Issue 10's target for the best width: at least this fraction of the finite grid's rays/s.
+/// The goal for the best width: at least this fraction of the finite grid's rays/s.
 pub const TARGET_RATIO: f64 = 1.0 / 3.0;
 /// The experiments' default walk bound (`grid.max_steps`).
 const MAX_STEPS: u32 = 10_000_000;

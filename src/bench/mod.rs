@@ -1,7 +1,7 @@
 //! `raycost bench`: the speed of every engine on identical scenes, side by side in one run.
 //!
 //! Scene: n centres uniform in a cube at ρ = 1 (side n^⅓), r = 0.1; rays from the cube's centre in
-//! uniform directions, first hit only (PERFORMANCE.md's setting). Engines:
+//! uniform directions, first hit only (docs/bench.md's reference setting). Engines:
 //! - `grid`: the query-optimised grid ([`FastGrid`]), cell width chosen by the cost model with T_I
 //!   and T_S fitted on this machine ([`calibrate`]);
 //! - `embree` (feature `embree`): Intel Embree 3's BVH over the same spheres;

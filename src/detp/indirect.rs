@@ -1,4 +1,4 @@
-//! DETP for indirect light (issue 27, `detp.direct = "nee"`): the ray store's segments after the
+//! DETP for indirect light (`detp.direct = "nee"`): the ray store's segments after the
 //! first bounce only, so that DETP estimates the indirect irradiance and next-event estimation
 //! ([`crate::lt::direct`]) adds the direct part at each point: E = E_direct(NEE) + E_indirect(DETP).
 //!

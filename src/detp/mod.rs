@@ -24,7 +24,7 @@
 //! - [`quasi_static`]: frame-by-frame incremental recalculation as dynamic objects move;
 //! - [`photon_map`]: Jensen's k-nearest-neighbour estimate over the same photons (the baseline);
 //! - [`indirect`]: the store's segments after the first bounce, for DETP of indirect light only;
-//! - [`stability`]: the same irradiance wherever the scene is placed (issue 26's stability suite and table).
+//! - [`stability`]: the same irradiance wherever the scene is placed (the stability suite and its table).
 
 pub mod brute;
 pub mod disc;

@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use super::store::SegmentStore;
 
 /// A k that grows with the photon count, k(N) = k₀·(N/N₀)^β, so that the photon map's error keeps
-/// falling as photons are added (issue 27); the fixed-k estimate is [`estimate`] with a constant k.
+/// falling as photons are added; the fixed-k estimate is [`estimate`] with a constant k.
 ///
 /// # Why k must grow, and how fast
 /// Photon n carries w = Φ/N, so on a surface of irradiance E the impacts have density ρ = N·E/Φ per

@@ -1,4 +1,4 @@
-//! The paper's sphere cache (§2.3), with the two repairs THEORY.md §2 calls for.
+//! The paper's sphere cache (§2.3), with the two repairs docs/theory.md §2 calls for.
 //!
 //! Level i is a sphere of radius r_i = r_0·Q^i holding a list of segments. Points are visited in
 //! the given order (a space-filling-curve permutation). For each point:
@@ -20,7 +20,7 @@
 //! 3. Test the deepest list against the disc with [`crate::detp::disc::crosses`].
 //!
 //! Defaults: inherited lists and the chain rule — the paper's cache with the one repair that keeps
-//! every disc's answer exact (THEORY.md §2: test the paper's claims with the paper's cache).
+//! every disc's answer exact (docs/theory.md §2: test the paper's claims with the paper's cache).
 //!
 //! # Why no crossing is lost
 //! A segment crossing the disc meets every sphere that contains the disc (filter module doc,
@@ -135,7 +135,7 @@ pub struct LevelStats {
     /// Σ (list length)² over those builds.
     pub inside_rays_held_sq: u128,
     /// Builds holding fewer rays than the threshold: the spheres that are never subdivided (the
-    /// paper's "94.6 rays at level 9" may be their mean; THEORY.md §2).
+    /// paper's "94.6 rays at level 9" may be their mean; docs/theory.md §2).
     pub leaf_builds: u64,
     /// Σ list length over those builds.
     pub leaf_rays_held: u64,

@@ -1,4 +1,4 @@
-//! Numerical stability of DETP wherever a scene sits and whatever its unit (issue 26): a scene's
+//! Numerical stability of DETP wherever a scene sits and whatever its unit: a scene's
 //! text with every vertex moved by an affine map, and the irradiance of the same sample points
 //! (mapped alike) from the same photon streams, summed by brute force, compared with the scene
 //! unmoved. Shared by the stability suite (`tests/stability.rs`) and the committed table

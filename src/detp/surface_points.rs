@@ -8,7 +8,7 @@
 //!
 //! [`open_surface_points`] drops the lattice points that other geometry covers — floor under a box
 //! standing on it, ceiling behind a lamp — where the true irradiance is 0 but a disc of radius d
-//! reaches past the cover and reads leaked light (issue 18). A point is covered when
+//! reaches past the cover and reads leaked light. A point is covered when
 //! - another surface lies within δ of it along its normal (contact: a box's bottom on the floor;
 //!   δ = 10⁻⁶ of the scene's scale, [`crate::lt::precision::Precision::contact`]), or
 //! - every probe of a fixed fan over its hemisphere (the normal and six directions 60° from it)

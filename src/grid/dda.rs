@@ -138,7 +138,7 @@ fn later(t: f64, t_enter: f64) -> f64 {
 
 /// The cell a ray starts in: the one it enters. An origin exactly on a face, moving towards −axis,
 /// starts in the lower cell; otherwise an eye at a cell corner would visit up to three cells for zero
-/// length and count steps the geometry does not have (the floor effect of THEORY.md's E[N_S] for a
+/// length and count steps the geometry does not have (the floor effect of docs/theory.md's E[N_S] for a
 /// corner eye assumes crossings at t = k·a/|d_x|, k ≥ 1). Clamped into a finite grid.
 #[inline(always)]
 pub fn start_cell(frame: &GridFrame, ray: &Ray) -> Cell {

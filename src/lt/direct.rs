@@ -1,4 +1,4 @@
-//! Direct light at a point by next-event estimation alone (issue 27's `detp.direct = "nee"`): the
+//! Direct light at a point by next-event estimation alone (`detp.direct = "nee"`): the
 //! first term of [`crate::lt::reference`]'s sum, with the same physics and the same functions
 //! ([`add_delta_lights`], [`add_area_samples`]). Point and spot lights are exact (one shadow ray
 //! each, no random draw); area lights are the mean of S samples (a point uniform over each light's

@@ -1,4 +1,4 @@
-//! Per-point path tracing as a *competitor* of DETP (issue 27): the estimator of
+//! Per-point path tracing as a *competitor* of DETP: the estimator of
 //! [`crate::lt::reference`] — next-event estimation, the same physics, the very same
 //! [`reference::sample`] — run on its own streams, so that it is statistically independent of the
 //! reference it is judged against, and instrumented for a speed-against-error front.

@@ -1,6 +1,6 @@
 //! The reference: irradiance at given points and normals by Monte Carlo path tracing with next-event
 //! estimation, an unbiased estimate with its own standard error, independent of DETP's discs and
-//! photons (issue 18). It models exactly the physics the photon tracer ([`crate::detp::photon`])
+//! photons. It models exactly the physics the photon tracer ([`crate::detp::photon`])
 //! models, so the two estimate the same quantity:
 //!
 //! - **irradiance** E(x, n) = ∫ L_in(x, ω) (n·ω)⁺ dω: the power per area arriving from the
@@ -23,7 +23,7 @@
 //! another, so a point's estimate depends on neither the thread count nor the other points.
 //!
 //! The pieces are public so that other estimators reuse this very physics rather than a copy
-//! (issue 27): [`Lights`] (the area lights' sampling tables), [`add_delta_lights`] and
+//! (per-point path tracing): [`Lights`] (the area lights' sampling tables), [`add_delta_lights`] and
 //! [`add_area_samples`] (next-event estimation at one vertex: [`crate::lt::direct`] averages them
 //! for the direct light alone) and [`sample`] (one path: [`crate::lt::pathtrace`] runs it on its own
 //! streams as a competitor). Each counts the rays it casts in a [`RayTally`].

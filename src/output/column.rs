@@ -318,7 +318,7 @@ mod tests {
                 Class::Measured
             ]
         );
-        // N_S is measured whatever its name ends with (issue 15: `n_s_mean` was classed as timing).
+        // N_S is measured whatever its name ends with (`n_s_mean` was once classed as timing).
         const N_S: Column = Column::vs_prediction("n_s", "steps", "cell steps");
         assert!(N_S.expand("n_s").iter().all(|c| c.class != Class::Timing));
     }

@@ -380,7 +380,7 @@ mod tests {
     }
 
     /// A declared table gives the cells, classes and summary lines `Metric::write` and `Row::put`
-    /// gave by hand before (issue 28), and a column absent from a row is not written.
+    /// gave by hand before, and a column absent from a row is not written.
     #[test]
     fn a_declared_table_builds_its_row_and_lines() {
         let (row, lines) =

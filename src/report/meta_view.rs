@@ -259,7 +259,7 @@ description = "a <b> test"
             .contains("schema 3"));
         // A schema-2 file missing required tables is refused by the codec, not half-shown.
         assert!(MetaView::parse("schema = 2").is_err());
-        // An empty file (a write cut short) is not an older schema (issue 26), nor is other TOML.
+        // An empty file (a write cut short) is not an older schema, nor is other TOML.
         for empty in ["", "\n  \n"] {
             let e = MetaView::parse(empty).expect_err("empty");
             assert!(e.contains("is empty"), "{e}");

@@ -287,7 +287,7 @@ n_s_mean,n_s_se,n_s_n,n_s_theory,trace_s,tests,tests_theory\n\
         assert_eq!(p[0].claims[2].tone, Tone::NotJudged);
     }
 
-    /// Issue 28: every claim of the committed report was coloured as a disagreement, because
+    /// A past defect: every claim of the committed report was coloured as a disagreement, because
     /// "holds" does not start with "ok". A claim is coloured by its typed outcome, else by its
     /// verdict read whole, never by a prefix.
     #[test]

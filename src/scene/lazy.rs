@@ -11,7 +11,7 @@
 //! independent marks make the class-i spheres independent Poisson processes of intensity α_i·ρ
 //! (the marking theorem), which is the paper's mixture.
 //!
-//! # Why this layout (issue 10)
+//! # Why this layout
 //! A ray walks ~1.5·L/a cells (L ≈ 1/(ρπr²) its free path) and needs only the spheres within reach
 //! of them. The block width is the cell width divided by a whole number (about one or two centres
 //! per block), and the lattice is shifted by −R: a cell's reach box `[ka − R, (k+1)a + R]` then
@@ -23,7 +23,7 @@
 //!
 //! The first version used blocks of about eight centres fixed at width 2 with no offset, memoised
 //! per batch in a hash map: at a = 0.5 each cell gathered ~27 candidates from up to eight blocks
-//! and a batch's spheres overflowed the L2 cache (README, "Issue 10").
+//! and a batch's spheres overflowed the L2 cache (docs/bench.md, the infinite scene).
 //!
 //! # What is exact
 //! A cell's list is every sphere whose padded ball meets the cell: the blocks scanned cover the

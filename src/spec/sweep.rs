@@ -646,7 +646,7 @@ cell_width = 0.5
         );
     }
 
-    /// Issue 15: `--set 'sweep."grid.cell_width"=[0.3, 0.6]'` was accepted and ignored (the spec's
+    /// A past defect: `--set 'sweep."grid.cell_width"=[0.3, 0.6]'` was accepted and ignored (the spec's
     /// own four widths ran, plus a constant column named after the flag).
     #[test]
     fn set_on_a_sweep_axis_replaces_or_adds_it() {

@@ -1,4 +1,4 @@
-//! Which method when (issue 27): the seconds each method needs to reach a target relative RMSE,
+//! Which method when: the seconds each method needs to reach a target relative RMSE,
 //! and the number of points N* beyond which DETP beats per-point path tracing, with a bootstrap CI
 //! over replicas — or "never" with the reason. Pure functions of measured summaries.
 //!

@@ -1,4 +1,4 @@
-//! Least-squares fits for the speed-against-error analysis (issue 27): how an estimator's error
+//! Least-squares fits for the speed-against-error analysis: how an estimator's error
 //! falls with its photons, and how its seconds grow with photons and points. Pure functions.
 //!
 //! Both fits are linear in non-negative coefficients (a variance and a squared bias cannot be

@@ -2,7 +2,7 @@
 //! histograms, goodness-of-fit statistics, and the verdict of a measurement against theory
 //! ([`verdict`]). All of them merge partial results in a fixed order, so a run's numbers do not
 //! depend on how the work was split across threads. [`fit`] and [`crossover`] turn such summaries
-//! into the speed-against-error answers of issue 27 (time to a target error, the crossover in points
+//! into the speed-against-error answers (time to a target error, the crossover in points
 //! or frames, bootstrap CIs over replicas).
 
 pub mod crossover;

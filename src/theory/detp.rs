@@ -1,5 +1,5 @@
-//! Closed forms of the DETP paper (`papers/detp-quasi-static-recalculation.txt`, restated cleanly in
-//! `THEORY.md` §2): rays per sphere-cache level, Theorem 1 for the sphere cache and for disc indexing,
+//! Closed forms of the DETP paper (restated, with the derivations its scan garbles, in
+//! `docs/theory.md` §2): rays per sphere-cache level, Theorem 1 for the sphere cache and for disc indexing,
 //! Proposition 1's optimal ratio Q = 2/3, and the quasi-static re-traced rays f_R with Theorem 2's
 //! crossover. Pure functions: no I/O, no randomness.
 //!
@@ -140,7 +140,7 @@ pub fn crossover_ratio(q: f64, n_d: f64) -> f64 {
 }
 
 /// E[X | X < k] for X ~ Poisson(λ): the mean rays of a sphere that is not subdivided when its
-/// count is Poisson(λ) and a sphere holding k or more is (THEORY.md §2: λ = 106.5, k = 100 gives
+/// count is Poisson(λ) and a sphere holding k or more is (docs/theory.md §2: λ = 106.5, k = 100 gives
 /// 93.6, the likely reading of the paper's "94.6 at level 9"). Uses E[X·1{X<k}] = λ·P(X ≤ k−2), so
 /// the value is λ·P(X ≤ k−2)/P(X ≤ k−1); NaN for k = 0.
 pub fn poisson_mean_below(lambda: f64, k: u64) -> f64 {
@@ -178,7 +178,7 @@ fn ln_factorial(x: u64) -> f64 {
 #[cfg(test)]
 mod tests {
 
-    /// THEORY.md §2's number, and a brute-force sum of the conditional mean.
+    /// docs/theory.md §2's number, and a brute-force sum of the conditional mean.
     #[test]
     fn poisson_mean_below_the_threshold() {
         let m = poisson_mean_below(106.5, 100);

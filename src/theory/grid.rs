@@ -1,7 +1,7 @@
 //! Closed forms for a regular grid of cubic cells over Poisson spheres: what a ray costs until its
 //! first hit.
 //!
-//! Setting (THEORY.md §1): sphere centres form a homogeneous Poisson process of intensity ρ (centres
+//! Setting (docs/theory.md §1): sphere centres form a homogeneous Poisson process of intensity ρ (centres
 //! per unit volume), split into radius classes (class i: fraction α_i, Σα_i = 1, radius law R_i);
 //! the eye is at the origin, directions are uniform on the unit sphere, and spheres containing the
 //! eye are ignored as hits (but they are listed in the cells and tested, so they count in N_I).
@@ -14,7 +14,7 @@
 //! | [`first_hit_survival`], [`first_hit_rate`], [`mean_first_hit`] | eq. (4)/(5); §3.4 for classes |
 //! | [`geometric_pmf`], [`geometric_p_for_s`] | eq. (8)–(9), cylinder model |
 //! | [`n_i_band`] | Result 3.1 (one constant radius), Result 3.2 (classes) |
-//! | [`n_s_uniform_eye`], [`n_s_corner_eye`] | beyond the paper (THEORY.md §1), derived there |
+//! | [`n_s_uniform_eye`], [`n_s_corner_eye`] | beyond the paper (docs/theory.md §1), derived there |
 //! | [`n_i_predictor`], [`n_i_plain_predictor`], [`n_i_mb_predictor`] | beyond the paper, derived there |
 //! | [`query_time`], [`model_query_time`], [`best_cell_width`] | §3, t = N_I·T_I + N_S·T_S |
 //!

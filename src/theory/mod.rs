@@ -2,7 +2,7 @@
 //! measurement is held against.
 //!
 //! - [`grid`]: the regular grid over Poisson spheres, Márton & Szirmay-Kalos, "average-case
-//!   complexity of the regular grid" (`papers/grid-average-case-complexity.txt`): eqs. (3)–(9),
+//!   complexity of the regular grid" (restated in `docs/theory.md` §1): eqs. (3)–(9),
 //!   Results 3.1 and 3.2, plus the cell-step counts and sharper test-count predictors that the paper
 //!   does not state (derived in that module's doc comments).
 //!

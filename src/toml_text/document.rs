@@ -1,7 +1,7 @@
 //! A TOML text read once: its tree, and where each key and value sits in the text, so that a
 //! problem found later on the tree (a serde error of a kind's spec, a value of the wrong range) is
 //! located as if serde had read the text itself: a bad value at the value, an unknown key at the
-//! key, a missing key at its table. A spec is parsed once (issue 28); every later reading works on
+//! key, a missing key at its table. A spec is parsed once; every later reading works on
 //! the tree.
 
 use std::collections::HashMap;

@@ -162,7 +162,7 @@ fn exact_lists_follow_the_area_law_for_concentric_spheres() {
 }
 
 /// Off-centre spheres inside the unit ball obey the same law in Exact mode; the paper's inherited
-/// lists fall short where children stick out of their parents (THEORY.md §2, pitfall 2).
+/// lists fall short where children stick out of their parents (docs/theory.md §2, pitfall 2).
 #[test]
 fn exact_lists_follow_the_area_law_off_centre_and_inherited_lists_fall_short() {
     let n_r = 1u32 << 17;

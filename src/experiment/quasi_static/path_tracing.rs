@@ -1,4 +1,4 @@
-//! Per-point path tracing in the moving scene (issue 27, item 4 "over frames"): with
+//! Per-point path tracing in the moving scene (DETP's competitor over frames): with
 //! `"path-tracing"` in `detp.engines`, each replica runs [`crate::lt::pathtrace::path_trace`] at
 //! frame 0 and at every frame checked against a full recalculation (`dynamic.check_every`), on the
 //! scene posed at that frame and at that frame's sample points (static points, and the dynamic

@@ -3,7 +3,7 @@
 //! It answers exactly what the counting tracer ([`super::FiniteGrid`] + [`super::trace`]) answers
 //! (the same first sphere at the same f64 distance as brute force, the same N_I and N_S; the oracle
 //! tests check all three on adversarial rays), but is laid out and walked for speed. What the
-//! profile taught (issue 3; numbers from this 2-core EPYC VM, n = 10⁶ and 10⁷, ρ = 1, r = 0.1):
+//! profile taught (numbers from this 2-core EPYC VM, n = 10⁶ and 10⁷, ρ = 1, r = 0.1):
 //!
 //! - **Memory, not arithmetic, was the wall.** The first query grid spent ~1 DRAM miss per cell
 //!   step: 16-byte f32 records plus 4-byte ids is ~30 bytes of cell data per unit volume, so the

@@ -593,7 +593,7 @@ mod tests {
         assert!(e.message.contains("cycle"), "{e}");
     }
 
-    /// Issue 26: each file includes the next twice, 40 deep (2⁴¹ inclusions of a few bytes each), and
+    /// A hostile scene: each file includes the next twice, 40 deep (2⁴¹ inclusions of a few bytes each), and
     /// one large file included from many places: both refused in milliseconds with the bound named.
     #[test]
     fn include_fan_out_and_expanded_size_are_bounded() {
