@@ -6,7 +6,10 @@
 //! ```text
 //! cargo run --release --example grid_instr -- finite N A RAYS
 //! cargo run --release --example grid_instr -- infinite A RAYS
+//! cargo run --release --example grid_instr -- infinite-per-slab A RAYS
 //! ```
+//! `infinite` is the engine (the gap to the next occupied slab); `infinite-per-slab` the engine
+//! before it (a Poisson count per slab), the same process on another random stream.
 //! Prints the rays, cells visited (Σ (N_S + 1)) and listings (N_I). Run it at RAYS and 2·RAYS: the
 //! difference of the two instruction totals over RAYS is the cost of a ray without the set-up.
 
@@ -18,6 +21,7 @@ use raycost::sample::directions::{uniform_direction, uniform_unit_cube};
 use raycost::sample::rng::stream;
 use raycost::scene::finite::{FiniteScene, FiniteSize};
 use raycost::scene::infinite::{InfiniteCaches, InfiniteScene, Walk};
+use raycost::scene::tube::SlabDraw;
 use raycost::scene::{RadiusClass, RadiusDist, RadiusDraw};
 
 fn main() {
@@ -53,8 +57,13 @@ fn main() {
             }
             (n_rays, cells, listings)
         }
-        Some("infinite") => {
+        Some(engine @ ("infinite" | "infinite-per-slab")) => {
             let (a, n_rays) = (num(1), num(2) as usize);
+            let slabs = if engine == "infinite" {
+                SlabDraw::Gaps
+            } else {
+                SlabDraw::PerSlab
+            };
             let scene = InfiniteScene {
                 intensity: 1.0,
                 classes: &classes,
@@ -66,6 +75,7 @@ fn main() {
                 rays_per_scene: 1,
                 mailbox: true,
                 max_steps: 10_000_000,
+                slabs,
             };
             let mut caches = InfiniteCaches::default();
             let (mut cells, mut listings) = (0u64, 0u64);
@@ -84,7 +94,7 @@ fn main() {
             }
             (n_rays, cells, listings)
         }
-        _ => panic!("finite N A RAYS | infinite A RAYS"),
+        _ => panic!("finite N A RAYS | infinite A RAYS | infinite-per-slab A RAYS"),
     };
     println!("rays {rays} cells {cells} listings {listings}");
 }

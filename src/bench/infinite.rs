@@ -651,6 +651,7 @@ fn trace_lazy(
         rays_per_scene: RAYS_PER_SCENE,
         mailbox: true,
         max_steps: MAX_STEPS,
+        slabs: crate::scene::tube::SlabDraw::Gaps,
     };
     out.par_chunks_mut(BATCH as usize)
         .zip(rays.par_chunks(BATCH as usize))

@@ -2,7 +2,8 @@
 //! which picks the engine that realises the scene.
 //!
 //! - `rays_per_scene = 1`: every ray has its own realisation, drawn only in the reach boxes of the
-//!   cells it walks ([`super::tube`]), from one stream per ray.
+//!   cells it walks ([`super::tube`]), from one stream per ray, by the gaps between occupied slabs
+//!   (or, for comparison, a count per slab: [`Walk::slabs`]).
 //! - `rays_per_scene > 1`: rays of a group share one realisation, generated block by block where
 //!   they go ([`super::lazy`]), so every ray sees the same spheres wherever their walks meet.
 //!
@@ -13,7 +14,7 @@
 use glam::DVec3;
 
 use super::lazy::{LazyCache, LazyScene};
-use super::tube::{TubeCache, TubeScene};
+use super::tube::{SlabDraw, TubeCache, TubeScene};
 use super::{RadiusClass, RadiusDraw};
 use crate::geom::Ray;
 use crate::grid::mailbox::Mailbox;
@@ -43,6 +44,9 @@ pub struct Walk {
     pub mailbox: bool,
     /// Walk cut-off.
     pub max_steps: u32,
+    /// How the per-ray engine draws its slabs' counts (`rays_per_scene = 1` only; shared
+    /// realisations are drawn in blocks either way).
+    pub slabs: SlabDraw,
 }
 
 /// Per-thread buffers, reused batch after batch.
@@ -74,7 +78,8 @@ impl InfiniteScene<'_> {
         let last = group_key.len() - 1;
         let mb = &mut caches.mailbox;
         if walk.rays_per_scene <= 1 {
-            let scene = TubeScene::new(self.intensity, self.classes, self.draw, walk.cell_width);
+            let scene = TubeScene::new(self.intensity, self.classes, self.draw, walk.cell_width)
+                .with_slabs(walk.slabs);
             let mut lists = scene.cells(frame, walk.eye_magnitude, &mut caches.tube);
             for (g, ray) in rays.iter().enumerate() {
                 group_key[last] = g as u64;

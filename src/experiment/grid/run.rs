@@ -293,6 +293,7 @@ fn run_replica(
                     rays_per_scene: cfg.rays_per_scene as usize,
                     mailbox: cfg.mailbox,
                     max_steps,
+                    slabs: crate::scene::tube::SlabDraw::Gaps,
                 };
                 let key = [domain::SCENE, cfg.seed, point, b];
                 let mut c = Vec::with_capacity(rays.len());
