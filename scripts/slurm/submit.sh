@@ -87,11 +87,11 @@ missing=$(IFS=,; echo "${tasks[*]}")
 if [[ $only == check ]]; then
     if [[ ${#tasks[@]} -eq 0 ]]; then
         echo "MISSING="
-        log "all $shards $split shards of $name are in $out/$name: merge them with $0 --missing (or raycost merge $out/$name)"
+        log "all $shards ${split%s} shards of $name are in $out/$name: merge them with raycost merge $out/$name"
         exit 0
     fi
     echo "MISSING=$missing"
-    log "${#tasks[@]} of $shards $split shards of $name missing (no $(shard_file K) for K = $missing): resubmit just those with $0 --missing$([[ $split == photons ]] && echo ' --photons') $spec $shards $out"
+    log "${#tasks[@]} of $shards ${split%s} shards of $name missing (no $(shard_file K) for K = $missing): resubmit just those with $0 --missing$([[ $split == photons ]] && echo ' --photons') $spec $shards $out"
     exit 1
 fi
 
