@@ -263,3 +263,60 @@ fn submit_refuses_bad_arguments_before_submitting() {
         );
     }
 }
+
+/// `submit.sh --check` (no Slurm needed) lists the shards whose file is missing — photon shards
+/// and point shards — with exit 1, and exit 0 once the set is complete; the merge of the
+/// incomplete photon set names the missing shard and writes nothing.
+#[test]
+fn submit_check_lists_the_missing_shards() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let out = tmp.path().join("cluster");
+    let bin = assert_cmd::cargo::cargo_bin("raycost");
+    let check = |spec: &Path, photons: bool, n: &str| {
+        let mut c = bash(&script("submit.sh"));
+        c.env("RAYCOST", &bin).arg("--check");
+        if photons {
+            c.arg("--photons");
+        }
+        let o = c.arg(spec).arg(n).arg(&out).output().expect("submit.sh");
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stdout).trim().to_string(),
+        )
+    };
+    let photons = root().join("tests/specs/slurm-photons.toml");
+    for k in [0, 2] {
+        run_ok(&photons, &out, &["--photon-shard", &format!("{k}/3")]);
+    }
+    assert_eq!(check(&photons, true, "3"), (Some(1), "MISSING=1".into()));
+    let dir = out.join("slurm-photons");
+    let before = crate::common::files_below(&dir);
+    crate::common::raycost()
+        .arg("merge")
+        .arg(&dir)
+        .assert()
+        .code(2)
+        .stderr(predicates::str::contains("photon shard(s) 1 of 3 missing"))
+        .stderr(predicates::str::contains(
+            "slurm-photons.photon-shard-K-of-3.json",
+        ));
+    assert_eq!(
+        crate::common::files_below(&dir),
+        before,
+        "a refused merge wrote something"
+    );
+    run_ok(&photons, &out, &["--photon-shard", "1/3"]);
+    assert_eq!(check(&photons, true, "3"), (Some(0), "MISSING=".into()));
+
+    let sweep = sweep_spec();
+    for k in [0, 3] {
+        run_ok(&sweep, &out, &["--shard", &format!("{k}/4")]);
+    }
+    assert_eq!(check(&sweep, false, "4"), (Some(1), "MISSING=1,2".into()));
+    crate::common::raycost()
+        .arg("merge")
+        .arg(out.join("slurm-sweep"))
+        .assert()
+        .code(2)
+        .stderr(predicates::str::contains("shards 1, 2 of 4 are missing"));
+}

@@ -11,6 +11,7 @@ mod detp_edge;
 mod detp_engines;
 mod detp_runs;
 mod detp_surface_subsample;
+mod inputs;
 mod layers;
 mod lt;
 mod merge;

@@ -15,7 +15,8 @@
 # K/PHOTON_SHARDS`) and the dependent merge, compared with a local unsplit run: every non-timing
 # column of every table (main, points; a quasi-static run's frames) byte for byte; then the same
 # for a quasi-static run's photons, tests/specs/slurm-photons-qs.toml (objects moving over four
-# frames).
+# frames). For the first, a shard file is then deleted: the merge must name it, `submit.sh --check`
+# list it, and `submit.sh --missing` rerun just it before the merge gives the same table again.
 #
 # Builds nothing. Environment: RAYCOST (default target/release/raycost in the repository), SPEC
 # (default tests/specs/slurm-sweep.toml), SHARDS (default 4), PHOTON_SPEC (default
@@ -167,7 +168,24 @@ photon_array() { # SPEC: its photons as PHOTON_SHARDS array tasks + merge, again
         [[ -s $pmerged/$pname.photon-shard-$k-of-$PHOTON_SHARDS.json ]] || fail "photon task $k wrote no shard file"
     done
     "$RAYCOST" run "$spec" --out "$work/plocal-$pname" --quiet
-    python3 - "$pmerged" "$work/plocal-$pname/$pname" "$pname" <<'EOF'
+    compare_photons "$pmerged" "$work/plocal-$pname/$pname" "$pname"
+    [[ ${2:-} == rerun-missing ]] || return 0
+    # An incomplete set: shard 1's file lost (a task killed at its time limit). The merge names it,
+    # submit.sh --check lists it, --missing reruns just it, and the merge of the whole set follows.
+    rm -f "$pmerged/$pname.photon-shard-1-of-$PHOTON_SHARDS.json" "$pmerged/$pname".csv "$pmerged/$pname".*.csv "$pmerged/$pname.meta.toml"
+    local err check rc=0
+    err=$("$RAYCOST" merge "$pmerged" 2>&1) && fail "the merge of an incomplete set succeeded"
+    [[ $err == *"photon shard(s) 1 of $PHOTON_SHARDS missing"* ]] || fail "the merge did not name the missing shard: $err"
+    check=$(RAYCOST=$RAYCOST bash "$HERE/submit.sh" --check --photons "$spec" "$PHOTON_SHARDS" "$work/photons-$pname" 2>/dev/null) || rc=$?
+    [[ $rc -eq 1 && $check == "MISSING=1" ]] || fail "submit.sh --check said '$check' (exit $rc), expected MISSING=1 (exit 1)"
+    say "merge and submit.sh --check name missing photon shard 1; resubmitting just it"
+    RAYCOST=$RAYCOST bash "$HERE/submit.sh" --wait --timeout 900 --missing --photons "$spec" "$PHOTON_SHARDS" "$work/photons-$pname" ||
+        fail "submit.sh --wait --missing --photons $spec failed"
+    compare_photons "$pmerged" "$work/plocal-$pname/$pname" "$pname"
+}
+
+compare_photons() { # MERGED_DIR LOCAL_DIR NAME: every non-timing cell of every table equal
+    python3 - "$@" <<'EOF'
 import csv, sys, tomllib
 
 merged, local, name = sys.argv[1:]
@@ -201,5 +219,5 @@ for table_name, declared in meta["columns"].items():
 print(f"slurm: photon-sharded {name} identical to the unsplit run ({compared} measured cells; tables {', '.join(tables)})")
 EOF
 }
-photon_array "$PHOTON_SPEC"
+photon_array "$PHOTON_SPEC" rerun-missing
 photon_array "$QS_PHOTON_SPEC"

@@ -10,7 +10,8 @@
 //! The steps are pure and tested one by one: [`fronts`] (errors), [`costs`] (seconds),
 //! [`analysis`] (N*, best), [`frames`] (F*); this file reads the folders ([`input`]) and writes
 //! through the result-folder protocol ([`crate::output::folder`]): refused before anything is
-//! computed if an output exists without `--force`, then under `DIR/crossover.lock` every file is
+//! computed if `--out` is or lies inside one of the input folders (it would then hold two runs and
+//! be refused as an input from then on), or if an output exists without `--force`, then under `DIR/crossover.lock` every file is
 //! written to a temporary beside it and renamed into place, `crossover.csv` last. Bad input is an
 //! [`OutputError`] naming the file (exit 2, nothing written).
 
@@ -71,6 +72,9 @@ pub fn run(o: &Options) -> crate::error::Result<Vec<PathBuf>> {
             o.targets
         )));
     }
+    let mut reads: Vec<&Path> = vec![&o.fronts, &o.points];
+    reads.extend(o.frames.as_deref());
+    crate::output::location::refuse_inside(&o.out, "--out", &reads)?;
     refuse_existing(&o.out, o.force)?;
     let t0 = std::time::Instant::now();
     let mut outputs = compute(o)?;
@@ -128,7 +132,7 @@ impl Source {
     /// What the metadata keeps of this input: its files' hashes and its run's machine.
     fn record(&self, role: &str, meta: &mut Meta) -> Result<(), OutputError> {
         for f in &self.files {
-            let h = InputFile::hash(f, role)
+            let h = InputFile::hash(f, role, &self.results.dir)
                 .map_err(|e| OutputError::new(f, format!("cannot read: {e}")))?;
             meta.inputs.push(h);
         }

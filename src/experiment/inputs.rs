@@ -126,7 +126,7 @@ impl Inputs {
 
     fn record(&mut self, path: &Path, role: &str) -> Result<(), ConfigError> {
         if !self.files.contains_key(path) {
-            let f = InputFile::hash(path, role).map_err(|e| {
+            let f = InputFile::hash(path, role, &self.dir).map_err(|e| {
                 InputError::new(path.display().to_string(), format!("cannot read: {e}"))
             })?;
             self.files.insert(path.to_path_buf(), f);

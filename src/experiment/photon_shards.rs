@@ -38,6 +38,10 @@ struct ShardFile {
     kind: String,
     /// The spec, as an absolute path (the merge reads it again).
     spec_path: String,
+    /// The spec's place relative to this file's folder (`../../ps.toml`): where the merge looks
+    /// when `spec_path` is gone (the spec and its results moved together). Empty in older files.
+    #[serde(default)]
+    spec_from_shard: String,
     /// SHA-256 of the normalised spec.
     spec_hash: String,
     /// `--set` flags.
@@ -153,6 +157,10 @@ pub fn run_shard(plan: &Plan, opts: &RunOptions, shard: Shard) -> Result<(PathBu
         format: FORMAT.into(),
         raycost: Build::current(),
         kind: plan.kind.name().into(),
+        spec_from_shard: crate::output::location::relative_location(
+            &dir,
+            Path::new(&plan.spec.path),
+        ),
         spec_path,
         spec_hash: plan.hash.clone(),
         set: opts.sets.clone(),
@@ -275,12 +283,52 @@ fn complete_set(files: &[PathBuf]) -> Result<Vec<ShardFile>, Error> {
         .map(|k| k.to_string())
         .collect();
     if !missing.is_empty() {
+        let (first_path, _) = by_k.values().next().expect("at least one shard was read");
+        let named = first_path
+            .file_name()
+            .map_or(String::new(), |f| f.to_string_lossy().into_owned());
+        let stem = named.split(".photon-shard-").next().unwrap_or("");
+        let want = first_path.with_file_name(format!("{stem}.photon-shard-K-of-{n}.json"));
         return Err(Error::usage(format!(
-            "photon shard(s) {} of {n} missing (nothing was written)",
+            "photon shard(s) {} of {n} missing: no {} for K = {} (run each with raycost run SPEC --photon-shard K/{n}, or on Slurm scripts/slurm/submit.sh --missing --photons SPEC {n} OUT; nothing was written)",
+            missing.join(", "),
+            want.display(),
             missing.join(", ")
         )));
     }
     Ok(by_k.into_values().map(|(_, f)| f).collect())
+}
+
+/// The shards' spec, planned again: at the absolute path the shards recorded, else at its place
+/// relative to the shard files' folder (a spec moved together with its results). The spec is
+/// identified by its hash, not its path: a file there with another hash is refused as changed.
+fn find_spec(first: &ShardFile, shard_dir: &Path, threads: usize) -> Result<Plan, Error> {
+    let mut candidates = vec![PathBuf::from(&first.spec_path)];
+    if !first.spec_from_shard.is_empty() {
+        let beside = crate::output::location::normalise(&shard_dir.join(&first.spec_from_shard));
+        candidates.push(beside);
+    }
+    let mut changed = None;
+    for c in candidates.iter().filter(|c| c.is_file()) {
+        let plan = Plan::load(c, &first.set, threads)?;
+        if plan.hash == first.spec_hash {
+            return Ok(plan);
+        }
+        changed.get_or_insert((c.clone(), plan.hash));
+    }
+    if let Some((path, now)) = changed {
+        return Err(Error::usage(format!(
+            "{} changed since the photon shards ran (spec hash {} then, {} now)",
+            path.display(),
+            &first.spec_hash[..12.min(first.spec_hash.len())],
+            &now[..12.min(now.len())]
+        )));
+    }
+    let looked: Vec<String> = candidates.iter().map(|c| c.display().to_string()).collect();
+    Err(Error::usage(format!(
+        "the photon shards' spec is gone: no file at {} (put the spec back, unchanged, where it was)",
+        looked.join(" nor at ")
+    )))
 }
 
 /// `raycost merge` of photon shard files: checks them, plans their spec again (refused if it or an
@@ -294,15 +342,8 @@ pub fn merge(
 ) -> Result<(Vec<PathBuf>, String), Error> {
     let shards = complete_set(files)?;
     let first = &shards[0];
-    let plan = Plan::load(Path::new(&first.spec_path), &first.set, threads)?;
-    if plan.hash != first.spec_hash {
-        return Err(Error::usage(format!(
-            "{} changed since the photon shards ran (spec hash {} then, {} now)",
-            first.spec_path,
-            &first.spec_hash[..12.min(first.spec_hash.len())],
-            &plan.hash[..12.min(plan.hash.len())]
-        )));
-    }
+    let shard_dir = files[0].parent().unwrap_or(Path::new("."));
+    let plan = find_spec(first, shard_dir, threads)?;
     if let Some(f) = changed_input(&first.inputs, &plan.inputs) {
         return Err(Error::usage(format!(
             "an input changed since the photon shards ran: {f}"
@@ -322,11 +363,17 @@ pub fn merge(
             merged.entry(i).or_default().push(v);
         }
     }
-    let dir = files[0]
-        .parent()
-        .and_then(Path::parent)
-        .unwrap_or(Path::new("."))
-        .to_path_buf();
+    // The merged table goes into the shards' own folder, however it was named on the command
+    // line (`.` from inside it included); the runner writes OUT/NAME, so that folder is OUT/NAME.
+    let folder = crate::output::location::resolve(shard_dir);
+    let name = &plan.spec.experiment.name;
+    if folder.file_name().and_then(|f| f.to_str()) != Some(name.as_str()) {
+        return Err(Error::usage(format!(
+            "{}: photon shards of experiment '{name}' merge into their folder, which must be named {name} as the run made it (rename it back)",
+            folder.display()
+        )));
+    }
+    let dir = folder.parent().unwrap_or(Path::new("/")).to_path_buf();
     let opts = RunOptions {
         out: dir,
         force,

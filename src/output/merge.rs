@@ -67,6 +67,7 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>, force: bool) -> Result<Merg
     let files = collect(inputs)?;
     let n = files[0].n;
     let name = files[0].name.clone();
+    let default_out = files[0].csv.with_file_name(format!("{name}.csv"));
     // No shard may be written while it is read (a rerun with --force, a --resume).
     let _shard_locks = files
         .iter()
@@ -87,7 +88,9 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>, force: bool) -> Result<Merg
     check_main_rows(&shards, n, total)?;
     let table_names = check_side_tables(&shards)?;
     let outputs = Outputs::new(out, &shards[0], &name, &table_names)?;
-    let _out_lock = outputs.claim(&shards, force)?;
+    let _out_lock = outputs.claim(&shards, force, |main| {
+        refuse_out_inside_inputs(main, inputs, &default_out)
+    })?;
     let contents = outputs.assemble(&shards, header, total, n);
     outputs.publish(&contents)?;
     Ok(Merged {
@@ -95,6 +98,31 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>, force: bool) -> Result<Merg
         points: total,
         written: outputs.all,
     })
+}
+
+/// Refuses an `--out` inside a folder the merge reads, unless it names the merged table where the
+/// merge puts it by default (`default`, `NAME.csv` beside the shards, where the unsplit run writes
+/// it): any other table there would make the shards' folder hold two runs.
+fn refuse_out_inside_inputs(
+    main: &Path,
+    inputs: &[PathBuf],
+    default: &Path,
+) -> Result<(), OutputError> {
+    use super::location::{refuse_inside, resolve};
+    if resolve(main) == resolve(default) {
+        return Ok(());
+    }
+    let folders: Vec<&Path> = inputs
+        .iter()
+        .map(|p| {
+            if p.is_dir() {
+                p.as_path()
+            } else {
+                parent_dir(p)
+            }
+        })
+        .collect();
+    refuse_inside(main, "--out", &folders)
 }
 
 /// One spec, one version, one set of inputs, one sweep size.
@@ -321,9 +349,15 @@ impl Outputs {
         PathBuf::from(format!("{}.{t}.csv", self.base))
     }
 
-    /// Refuses an output that is one of the inputs, or that exists without `--force`; takes the
-    /// output's lock and removes a killed merge's temporaries. The lock is held while it lives.
-    fn claim(&self, shards: &[Shard], force: bool) -> Result<Lock, OutputError> {
+    /// Refuses an output that is one of the inputs, that `inside` refuses (an `--out` inside a
+    /// folder the merge reads), or that exists without `--force`; takes the output's lock and
+    /// removes a killed merge's temporaries. The lock is held while it lives.
+    fn claim(
+        &self,
+        shards: &[Shard],
+        force: bool,
+        inside: impl Fn(&Path) -> Result<(), OutputError>,
+    ) -> Result<Lock, OutputError> {
         let outputs = &self.all;
         let main_out = &self.main;
         let base = &self.base;
@@ -339,6 +373,7 @@ impl Outputs {
                 ));
             }
         }
+        inside(main_out)?;
         let out_dir = parent_dir(main_out);
         fs::create_dir_all(out_dir)
             .map_err(|e| err(out_dir, format!("cannot create the folder: {e}")))?;
@@ -557,7 +592,8 @@ fn collect(inputs: &[PathBuf]) -> Result<Vec<ShardFile>, OutputError> {
             return Err(err(&f.csv, what));
         }
     }
-    if let Some(k) = (0..n).find(|k| !by_k.contains_key(k)) {
+    let missing: Vec<usize> = (0..n).filter(|k| !by_k.contains_key(k)).collect();
+    if let Some(&k) = missing.first() {
         let want = first
             .csv
             .with_file_name(format!("{}.shard-{k}-of-{n}.csv", first.name));
@@ -567,9 +603,21 @@ fn collect(inputs: &[PathBuf]) -> Result<Vec<ShardFile>, OutputError> {
         } else {
             format!(" (run it with raycost run SPEC --shard {k}/{n})")
         };
+        let all = if missing.len() > 1 {
+            format!(
+                "; shards {} of {n} are missing in all",
+                missing
+                    .iter()
+                    .map(usize::to_string)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        } else {
+            String::new()
+        };
         return Err(err(
             &want,
-            format!("is missing: shard {k} of {n} is needed{hint}"),
+            format!("is missing: shard {k} of {n} is needed{hint}{all}"),
         ));
     }
     files.sort_by_key(|f| f.k);

@@ -201,11 +201,20 @@ fn all() -> String {
     "all".into()
 }
 
-/// A file the run read.
+/// A file the run read. It is identified by its `role` and its `location` (its place relative to
+/// the spec's folder), and compared by its content hash: never by how its path was spelled, so
+/// runs started from different working folders, or a result folder moved elsewhere, still resume
+/// and merge (see [`changed_input`]).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Eq, PartialOrd, Ord)]
 pub struct InputFile {
-    /// Its path, as the run resolved it.
+    /// Its path as the run resolved it, from the folder it was started in (information only).
     pub path: String,
+    /// Its place relative to the folder of the spec that names it, `/`-separated, both resolved
+    /// through the file system (`scenes/cornell.toml`, `../meshes/a.obj`); for `raycost crossover`
+    /// relative to the input result folder. Empty in metadata written before it was recorded:
+    /// [`Meta::parse`] fills it in from `path` and the spec's path.
+    #[serde(default)]
+    pub location: String,
     /// What it is: `scene`, `obj`, `aff`, `points`.
     pub role: String,
     /// SHA-256 of its content.
@@ -215,16 +224,55 @@ pub struct InputFile {
 }
 
 impl InputFile {
-    /// Hashes `path` now.
-    pub fn hash(path: &Path, role: &str) -> std::io::Result<Self> {
+    /// Hashes `path` now; `base` is the folder its location is relative to (the spec's folder).
+    pub fn hash(path: &Path, role: &str, base: &Path) -> std::io::Result<Self> {
         use sha2::{Digest, Sha256};
         let bytes = std::fs::read(path)?;
         Ok(Self {
             path: path.display().to_string(),
+            location: super::location::relative_location(base, path),
             role: role.into(),
             sha256: format!("{:x}", Sha256::digest(&bytes)),
             bytes: bytes.len() as u64,
         })
+    }
+
+    /// The location of a record written before locations were: `path` was the spec's folder (as
+    /// `spec_path` spells it, from the same working folder) joined with the spec's relative path,
+    /// so taking that folder off gives the location; else `path` normalised.
+    fn old_location(path: &str, spec_path: &str) -> String {
+        use super::location::{normalise, slashed};
+        let path = normalise(Path::new(path));
+        let spec_dir = normalise(Path::new(spec_path).parent().unwrap_or(Path::new("")));
+        let rel = if spec_path.is_empty() {
+            path.file_name().map(Into::into).unwrap_or(path.clone())
+        } else {
+            path.strip_prefix(&spec_dir)
+                .map(Path::to_path_buf)
+                .unwrap_or_else(|_| super::location::relative(&spec_dir, &path))
+        };
+        slashed(&rel)
+    }
+
+    /// How a message names it: its role and location (`scene file cornell.toml`).
+    fn named(&self) -> String {
+        let at = if self.location.is_empty() {
+            &self.path
+        } else {
+            &self.location
+        };
+        format!("{} file {at}", self.role)
+    }
+
+    /// Whether `other` is the same input: the same role and location, or, when either record has
+    /// no location (an old photon shard file), the same role and content.
+    fn same_input(&self, other: &InputFile) -> bool {
+        self.role == other.role
+            && if self.location.is_empty() || other.location.is_empty() {
+                self.sha256 == other.sha256
+            } else {
+                self.location == other.location
+            }
     }
 }
 
@@ -261,30 +309,35 @@ pub fn point_warnings(warnings: &[(usize, String)]) -> Vec<String> {
 }
 
 /// The first input of `now` whose content differs from what `then` recorded (or that is new or
-/// gone): the file a resume or merge must name when it refuses.
-pub fn changed_input<'a>(then: &'a [InputFile], now: &'a [InputFile]) -> Option<String> {
+/// gone): the file a resume or merge must name when it refuses. Inputs are matched by role and
+/// location relative to the spec ([`InputFile::location`]), whatever folder either run was started
+/// from and however it spelled the path, and compared by content hash.
+pub fn changed_input(then: &[InputFile], now: &[InputFile]) -> Option<String> {
     for t in then {
-        match now.iter().find(|n| n.path == t.path) {
+        let same_place = now
+            .iter()
+            .find(|n| n.role == t.role && n.location == t.location && !t.location.is_empty());
+        match same_place.or_else(|| now.iter().find(|n| t.same_input(n))) {
             None => {
                 return Some(format!(
                     "{} (read by the earlier run, not by this one)",
-                    t.path
+                    t.named()
                 ))
             }
             Some(n) if n.sha256 != t.sha256 => {
                 return Some(format!(
                     "{} (content changed: SHA-256 {} then, {} now)",
-                    t.path,
-                    &t.sha256[..12],
-                    &n.sha256[..12]
+                    t.named(),
+                    &t.sha256[..12.min(t.sha256.len())],
+                    &n.sha256[..12.min(n.sha256.len())]
                 ))
             }
             Some(_) => {}
         }
     }
     now.iter()
-        .find(|n| !then.iter().any(|t| t.path == n.path))
-        .map(|n| format!("{} (not read by the earlier run)", n.path))
+        .find(|n| !then.iter().any(|t| t.same_input(n)))
+        .map(|n| format!("{} (not read by the earlier run)", n.named()))
 }
 
 impl Meta {
@@ -388,9 +441,13 @@ impl Meta {
                 .into())
             }
         }
-        toml::Value::Table(table)
+        let mut meta: Meta = toml::Value::Table(table)
             .try_into()
-            .map_err(|e: toml::de::Error| format!("unreadable metadata: {}", e.message()).into())
+            .map_err(|e: toml::de::Error| format!("unreadable metadata: {}", e.message()))?;
+        for f in meta.inputs.iter_mut().filter(|f| f.location.is_empty()) {
+            f.location = InputFile::old_location(&f.path, &meta.run.spec_path);
+        }
+        Ok(meta)
     }
 
     /// The names of the columns of `table` that must agree between runs (everything but timings).
@@ -590,6 +647,7 @@ mod tests {
             },
             inputs: vec![InputFile {
                 path: "scene.toml".into(),
+                location: "scene.toml".into(),
                 role: "scene".into(),
                 sha256: "0".repeat(64),
                 bytes: 10,
@@ -627,10 +685,58 @@ mod tests {
         assert_eq!(changed_input(&a, &b), None);
         b[0].sha256 = "1".repeat(64);
         let msg = changed_input(&a, &b).expect("changed");
-        assert!(msg.starts_with("scene.toml (content changed"), "{msg}");
+        assert!(
+            msg.starts_with("scene file scene.toml (content changed"),
+            "{msg}"
+        );
         assert!(changed_input(&a, &[])
             .expect("gone")
             .contains("not by this one"));
+        // Another spelling of the same place is the same input; another place is not.
+        let mut c = a.clone();
+        c[0].path = "/elsewhere/sub/../scene.toml".into();
+        assert_eq!(changed_input(&a, &c), None);
+        c[0].location = "other/scene.toml".into();
+        let msg = changed_input(&a, &c).expect("moved");
+        assert!(
+            msg.contains("scene file scene.toml (read by the earlier run"),
+            "{msg}"
+        );
+        // A record without a location (an old photon shard) matches by role and content.
+        let mut old = a.clone();
+        old[0].location.clear();
+        assert_eq!(changed_input(&old, &a), None);
+        assert_eq!(changed_input(&a, &old), None);
+        old[0].sha256 = "2".repeat(64);
+        assert!(changed_input(&old, &a).is_some());
+    }
+
+    /// Metadata written before locations were recorded (paths spelled from the working folder the
+    /// run started in, like the committed `results/*/*.meta.toml`) reads with the location taken
+    /// relative to the spec's folder as the same run spelled it.
+    #[test]
+    fn old_records_get_their_location_from_the_spec_path() {
+        let mut m = sample();
+        m.run.spec_path = "experiments/cornell-levels.toml".into();
+        m.inputs[0].path = "experiments/scenes/cornell.toml".into();
+        m.inputs[0].location.clear();
+        let text = m.render().replace("location = \"\"\n", "");
+        assert!(!text.contains("location"), "{text}");
+        let read = Meta::parse(&text).expect("old record");
+        assert_eq!(read.inputs[0].location, "scenes/cornell.toml");
+        let cases = [
+            (
+                "/abs/x/a.toml",
+                "/abs/x/../scenes/c.toml",
+                "../scenes/c.toml",
+            ),
+            ("a.toml", "c.toml", "c.toml"),
+            ("sub/a.toml", "sub/../c.toml", "../c.toml"),
+            ("", "results/x/x.csv", "x.csv"),
+        ];
+        for (spec, path, want) in cases {
+            assert_eq!(InputFile::old_location(path, spec), want, "{spec} {path}");
+        }
     }
 
     /// Another process spinning on a core while a run goes is measured (about one core) and makes

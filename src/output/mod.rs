@@ -10,6 +10,7 @@
 pub mod column;
 pub mod csv;
 pub mod folder;
+pub mod location;
 pub mod merge;
 pub mod meta;
 pub mod progress;

@@ -84,17 +84,7 @@ pub fn anchor(prefix: &str, name: &str) -> String {
 
 /// The path of `to` relative to the folder `from` (both absolute and canonical): `../x/y.csv`.
 pub fn relative(from: &Path, to: &Path) -> PathBuf {
-    let f: Vec<Component> = from.components().collect();
-    let t: Vec<Component> = to.components().collect();
-    let common = f.iter().zip(&t).take_while(|(a, b)| a == b).count();
-    let mut out = PathBuf::new();
-    for _ in common..f.len() {
-        out.push("..");
-    }
-    for c in &t[common..] {
-        out.push(c.as_os_str());
-    }
-    out
+    crate::output::location::relative(from, to)
 }
 
 #[cfg(test)]

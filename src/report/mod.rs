@@ -138,6 +138,7 @@ pub fn run(opts: &ReportOptions) -> Result<PathBuf, Error> {
         )
         .into());
     }
+    refuse_out_in_a_run(&opts.results, &opts.out)?;
     let index = opts.out.join("index.html");
     if index.exists() && !opts.force {
         return Err(OutputError::new(
@@ -167,6 +168,35 @@ pub fn run(opts: &ReportOptions) -> Result<PathBuf, Error> {
     let html = page::render(&report);
     write::write(&out, &html, &copies)?;
     Ok(index)
+}
+
+/// Refuses an `--out` that is or lies inside one of the run folders the page reads
+/// (`RESULTS/NAME`): the page would become part of that run's folder. A folder of its own beside
+/// them (`--out RESULTS/report`, skipped when the folders are listed) is fine.
+fn refuse_out_in_a_run(results: &Path, out: &Path) -> Result<(), OutputError> {
+    use crate::output::location::{refuse_inside, resolve};
+    let own = resolve(out);
+    let Ok(entries) = std::fs::read_dir(results) else {
+        return Ok(());
+    };
+    let runs: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.is_dir()
+                && !p
+                    .file_name()
+                    .is_some_and(|f| f.to_string_lossy().starts_with('.'))
+        })
+        .filter(|p| {
+            resolve(p) != own
+                || std::fs::read_dir(p).is_ok_and(|d| {
+                    d.filter_map(Result::ok)
+                        .any(|e| e.file_name().to_string_lossy().ends_with(".meta.toml"))
+                })
+        })
+        .collect();
+    let reads: Vec<&Path> = runs.iter().map(PathBuf::as_path).collect();
+    refuse_inside(out, "--out", &reads)
 }
 
 /// Reads everything under `results` (canonical) into a [`Report`] for a page in `out` (canonical),
