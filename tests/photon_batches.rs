@@ -19,7 +19,11 @@ fn with_detp_lines(spec: &Path, dir: &Path, lines: &str) -> PathBuf {
     let text = std::fs::read_to_string(spec).unwrap();
     assert!(text.contains("[detp]\n"));
     let name = spec.file_stem().unwrap().to_str().unwrap();
-    write_spec(dir, name, &text.replacen("[detp]\n", &format!("[detp]\n{lines}\n"), 1))
+    write_spec(
+        dir,
+        name,
+        &text.replacen("[detp]\n", &format!("[detp]\n{lines}\n"), 1),
+    )
 }
 
 /// `raycost check SPEC --json`.
@@ -29,7 +33,11 @@ fn check_json(spec: &Path) -> serde_json::Value {
         .arg(spec)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     serde_json::from_slice(&out.stdout).unwrap()
 }
 
@@ -64,14 +72,34 @@ fn tight_budget(spec: &Path) -> f64 {
     (fixed + per_photon / 3.0) / (1u64 << 30) as f64
 }
 
+/// `spec` forced into 3 photon batches, and `spec` under a budget that "auto" meets with a few:
+/// each a copy in its own folder below `dir`.
+fn batched_variants(spec: &Path, dir: &Path) -> (PathBuf, PathBuf) {
+    let forced = with_detp_lines(spec, &dir.join("forced"), "photon_batches = 3");
+    let budget = tight_budget(spec);
+    let auto = with_detp_lines(
+        spec,
+        &dir.join("auto"),
+        &format!("memory_budget_gib = {budget:e}"),
+    );
+    (forced, auto)
+}
+
+/// Runs each spec into `DIR/out/FOLDER`; returns `DIR/out`.
+fn run_each(specs: &[(&PathBuf, &str)], dir: &Path) -> PathBuf {
+    let runs = dir.join("out");
+    for (spec, out) in specs {
+        run_quiet(spec, &runs.join(out)).assert().success();
+    }
+    runs
+}
+
 /// Every point's photon batches as the run's metadata records them.
 fn recorded_batches(table: &Path) -> Vec<u64> {
     let meta = Meta::read(&table.with_extension("meta.toml")).unwrap();
-    assert!(meta
-        .run
-        .point_memory
-        .iter()
-        .all(|m| m.budget_key == "detp.memory_budget_gib" && m.peak_rss_bytes.is_some_and(|b| b > 0)));
+    assert!(meta.run.point_memory.iter().all(
+        |m| m.budget_key == "detp.memory_budget_gib" && m.peak_rss_bytes.is_some_and(|b| b > 0)
+    ));
     meta.run.point_memory.iter().map(|m| m.batches).collect()
 }
 
@@ -93,35 +121,46 @@ fn photon_batches_of_a_scene_equal_one_pass() {
     let tmp = tempfile::tempdir().unwrap();
     let name = "ps-scene";
     let whole_spec = scene_spec(tmp.path());
-    let forced = with_detp_lines(&whole_spec, &tmp.path().join("forced"), "photon_batches = 3");
-    let budget = tight_budget(&whole_spec);
-    let auto = with_detp_lines(
-        &whole_spec,
-        &tmp.path().join("auto"),
-        &format!("memory_budget_gib = {budget:e}"),
-    );
+    let (forced, auto) = batched_variants(&whole_spec, tmp.path());
     assert_eq!(batches_of(&check_json(&whole_spec)), vec![1; 4]);
     assert_eq!(batches_of(&check_json(&forced)), vec![3; 4]);
     let auto_batches = batches_of(&check_json(&auto));
     assert!(auto_batches.iter().all(|&b| b >= 2), "{auto_batches:?}");
     let text = raycost().arg("check").arg(&auto).output().unwrap();
     let text = String::from_utf8_lossy(&text.stdout);
-    assert!(text.contains(&format!("{} photon batches of about", auto_batches[0])), "{text}");
+    assert!(
+        text.contains(&format!("{} photon batches of about", auto_batches[0])),
+        "{text}"
+    );
 
     let table = |out: &Path, t: &str| out.join(name).join(format!("{name}{t}.csv"));
-    let runs = tmp.path().join("out");
-    for (spec, out) in [(&whole_spec, "whole"), (&forced, "forced"), (&auto, "auto")] {
-        run_quiet(spec, &runs.join(out)).assert().success();
-    }
+    let runs = run_each(
+        &[(&whole_spec, "whole"), (&forced, "forced"), (&auto, "auto")],
+        tmp.path(),
+    );
     let (whole, forced, auto) = (runs.join("whole"), runs.join("forced"), runs.join("auto"));
-    assert_eq!(assert_same_measured(&table(&whole, ""), &table(&forced, "")), 4);
     assert_eq!(
-        same_measured_except(&table(&whole, ""), &table(&auto, ""), "detp.memory_budget_gib"),
+        assert_same_measured(&table(&whole, ""), &table(&forced, "")),
+        4
+    );
+    assert_eq!(
+        same_measured_except(
+            &table(&whole, ""),
+            &table(&auto, ""),
+            "detp.memory_budget_gib"
+        ),
         4
     );
     let points = |d: &Path| measured_columns(&table(d, ".points"));
-    assert!(points(&whole).len() > 100, "the points table holds every disc");
-    assert_eq!(points(&whole), points(&forced), "points table, forced batches");
+    assert!(
+        points(&whole).len() > 100,
+        "the points table holds every disc"
+    );
+    assert_eq!(
+        points(&whole),
+        points(&forced),
+        "points table, forced batches"
+    );
     assert_eq!(
         same_measured_except(&table(&whole, ".points"), &table(&auto, ".points"), ""),
         points(&whole).len()
@@ -136,19 +175,13 @@ fn photon_batches_of_moving_objects_equal_one_pass() {
     let tmp = tempfile::tempdir().unwrap();
     let name = "pb-moving";
     let whole_spec = quasi_static_spec(tmp.path(), name, "disc-index", "");
-    let forced = with_detp_lines(&whole_spec, &tmp.path().join("forced"), "photon_batches = 3");
-    let budget = tight_budget(&whole_spec);
-    let auto = with_detp_lines(
-        &whole_spec,
-        &tmp.path().join("auto"),
-        &format!("memory_budget_gib = {budget:e}"),
-    );
+    let (forced, auto) = batched_variants(&whole_spec, tmp.path());
     let auto_batches = batches_of(&check_json(&auto));
     assert!(auto_batches.iter().all(|&b| b >= 2), "{auto_batches:?}");
-    let runs = tmp.path().join("out");
-    for (spec, out) in [(&whole_spec, "whole"), (&forced, "forced"), (&auto, "auto")] {
-        run_quiet(spec, &runs.join(out)).assert().success();
-    }
+    let runs = run_each(
+        &[(&whole_spec, "whole"), (&forced, "forced"), (&auto, "auto")],
+        tmp.path(),
+    );
     let table = |out: &str, t: &str| runs.join(out).join(name).join(format!("{name}{t}.csv"));
     for t in ["", ".frames", ".points"] {
         assert_same_but_index_work(&table("whole", t), &table("forced", t));
@@ -231,7 +264,14 @@ fn engines_whose_counts_do_not_add_are_refused_over_the_budget() {
         ],
     );
     let forced = sphere_cache_spec(tmp.path(), "photon_batches = 2");
-    refused(&forced, &["pb-cache.toml:", "detp.photon_batches", "cannot be traced in batches"]);
+    refused(
+        &forced,
+        &[
+            "pb-cache.toml:",
+            "detp.photon_batches",
+            "cannot be traced in batches",
+        ],
+    );
 }
 
 #[test]

@@ -95,7 +95,16 @@ pub fn batches(
         }
         let each = split.per_batch(p, b);
         if each.is_nan() || each > bytes {
-            let hint = match batches(split, &Batching { forced: None, ..*batching }, budget, largest, None) {
+            let hint = match batches(
+                split,
+                &Batching {
+                    forced: None,
+                    ..*batching
+                },
+                budget,
+                largest,
+                None,
+            ) {
                 Ok(auto) => format!("\"auto\" takes {auto}"),
                 Err(r) => r.message,
             };
@@ -194,7 +203,13 @@ mod tests {
         }
     }
 
-    fn count(fixed: f64, per_photon: f64, photons: u64, forced: Option<u64>, budget: f64) -> Result<u64, Refusal> {
+    fn count(
+        fixed: f64,
+        per_photon: f64,
+        photons: u64,
+        forced: Option<u64>,
+        budget: f64,
+    ) -> Result<u64, Refusal> {
         batches(
             Split { fixed, per_photon },
             &batching(photons, forced),
@@ -217,9 +232,16 @@ mod tests {
                     };
                     match count(fixed * G, per_photon * G, photons, None, budget) {
                         Ok(b) => {
-                            assert!(split.per_batch(photons, b) <= budget * G, "{photons} {fixed} {per_photon}: {b} does not fit");
+                            assert!(
+                                split.per_batch(photons, b) <= budget * G,
+                                "{photons} {fixed} {per_photon}: {b} does not fit"
+                            );
                             if b > 1 {
-                                assert!(split.per_batch(photons, b - 1) > budget * G, "{photons} {fixed} {per_photon}: {} fits too", b - 1);
+                                assert!(
+                                    split.per_batch(photons, b - 1) > budget * G,
+                                    "{photons} {fixed} {per_photon}: {} fits too",
+                                    b - 1
+                                );
                             }
                         }
                         Err(r) => assert!(
@@ -253,10 +275,24 @@ mod tests {
         let why = || Some("the sphere cache's counts do not add".to_string());
         let b = ("detp.memory_budget_gib", 8.0 * G);
         let r = batches(split, &batching(100, None), b, "detp.photons", why()).expect_err("over");
-        assert!(r.message.contains("cannot be traced in batches"), "{}", r.message);
-        assert!(r.message.contains("raise detp.memory_budget_gib"), "{}", r.message);
-        let small = Split { fixed: 0.0, per_photon: 1.0 * G };
-        assert_eq!(batches(small, &batching(100, None), b, "detp.photons", why()), Ok(1));
+        assert!(
+            r.message.contains("cannot be traced in batches"),
+            "{}",
+            r.message
+        );
+        assert!(
+            r.message.contains("raise detp.memory_budget_gib"),
+            "{}",
+            r.message
+        );
+        let small = Split {
+            fixed: 0.0,
+            per_photon: 1.0 * G,
+        };
+        assert_eq!(
+            batches(small, &batching(100, None), b, "detp.photons", why()),
+            Ok(1)
+        );
         let forced = batches(small, &batching(100, Some(2)), b, "detp.photons", why());
         assert_eq!(forced.expect_err("forced").key, "detp.photon_batches");
     }
@@ -268,6 +304,10 @@ mod tests {
         let r = count(0.0, 30.0 * G, 1000, Some(2), 8.0).expect_err("a batch of 15 GiB");
         assert!(r.message.contains("\"auto\" takes 4"), "{}", r.message);
         let r = count(0.0, 1.0, 5, Some(6), 8.0).expect_err("6 batches of 5 photons");
-        assert!(r.message.contains("more batches than the 5 photons"), "{}", r.message);
+        assert!(
+            r.message.contains("more batches than the 5 photons"),
+            "{}",
+            r.message
+        );
     }
 }

@@ -394,7 +394,10 @@ pub fn add_replica_parts<P: RangePart>(
 /// The parts of a point's replicas over the photons of `a` and then of `b` (both a
 /// [`super::kind::Kind::trace_part`] of every replica, `b`'s photons following `a`'s): what a point
 /// traced in photon batches keeps between its batches (see [`super::photon_batches`]).
-pub fn add_following<P>(a: serde_json::Value, b: serde_json::Value) -> Result<serde_json::Value, Error>
+pub fn add_following<P>(
+    a: serde_json::Value,
+    b: serde_json::Value,
+) -> Result<serde_json::Value, Error>
 where
     P: RangePart + Serialize + serde::de::DeserializeOwned,
 {

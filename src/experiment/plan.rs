@@ -409,13 +409,14 @@ fn check_memory(
             ),
         )
     };
+    let unsplittable = m.batching.and_then(|_| kind.photon_refusal(point));
     let batches = match (m.budget, &m.batching) {
         (Some((key, gib)), Some(batching)) => photon_batches::batches(
             split,
             batching,
             (key, gib * GIB),
             largest.key,
-            kind.photon_refusal(point),
+            unsplittable.clone(),
         )
         .map_err(|r| at(r.key, format!("{} (needs: {listing})", r.message)))?,
         (Some((key, gib)), None) if total.is_nan() || total > gib * GIB => {
@@ -428,11 +429,12 @@ fn check_memory(
         .map_or(total, |b| split.per_batch(b.photons, batches));
     if let Some(avail) = available_memory() {
         if each.is_nan() || each > 0.9 * avail as f64 {
-            let lower = m.batching.map_or(String::new(), |_| {
-                m.budget.map_or(String::new(), |(key, _)| {
+            let lower = match (m.budget, &m.batching, &unsplittable) {
+                (Some((key, _)), Some(_), None) => {
                     format!(" (or lower {key}: more photon batches, each smaller)")
-                })
-            });
+                }
+                _ => String::new(),
+            };
             return Err(refuse(
                 each,
                 format!(

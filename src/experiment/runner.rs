@@ -354,7 +354,11 @@ fn run_points(
         };
         let point = plan.points[i].as_ref();
         // A point merged from photon shards was traced by them, in one part each.
-        let batches = if ctx.merged.is_some() { 1 } else { plan.batches[i] };
+        let batches = if ctx.merged.is_some() {
+            1
+        } else {
+            plan.batches[i]
+        };
         let out = match batches {
             1 => kind.run(point, shared.as_ref(), &ctx),
             b => super::photon_batches::run(kind, point, shared.as_ref(), &ctx, b),
@@ -452,20 +456,16 @@ fn keep_point(
 
 /// Point `i`'s memory record after it ran in `batches` photon batches (None for a kind without a
 /// budget).
-fn point_memory(
-    plan: &Plan,
-    i: usize,
-    batches: u64,
-) -> Option<crate::output::meta::PointMemory> {
+fn point_memory(plan: &Plan, i: usize, batches: u64) -> Option<crate::output::meta::PointMemory> {
     let m = plan.points[i].memory(plan.threads);
     let (key, gib) = m.budget?;
     let split = super::photon_batches::Split::of(&m.needs);
     Some(crate::output::meta::PointMemory {
         point: i,
         batches,
-        model_bytes: m
-            .batching
-            .map_or(split.fixed + split.per_photon, |b| split.per_batch(b.photons, batches)),
+        model_bytes: m.batching.map_or(split.fixed + split.per_photon, |b| {
+            split.per_batch(b.photons, batches)
+        }),
         budget_key: key.into(),
         budget_gib: gib,
         peak_rss_bytes: crate::output::meta::peak_memory(),

@@ -482,31 +482,28 @@ pub fn load_average() -> Vec<f64> {
         .unwrap_or_default()
 }
 
-/// This process's peak resident memory so far (`VmHWM` of `/proc/self/status`), in bytes.
-pub fn peak_memory() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let kib: u64 = status
+/// A `KEY:  N kB` field of a `/proc` file (`/proc/meminfo`, `/proc/self/status`), in bytes.
+fn proc_kib(file: &str, key: &str) -> Option<u64> {
+    let text = std::fs::read_to_string(file).ok()?;
+    let kib: u64 = text
         .lines()
-        .find(|l| l.starts_with("VmHWM:"))?
+        .find_map(|l| l.strip_prefix(key)?.strip_prefix(':'))?
         .split_whitespace()
-        .nth(1)?
+        .next()?
         .parse()
         .ok()?;
     Some(kib * 1024)
 }
 
+/// This process's peak resident memory so far (`VmHWM` of `/proc/self/status`), in bytes.
+pub fn peak_memory() -> Option<u64> {
+    proc_kib("/proc/self/status", "VmHWM")
+}
+
 /// Memory this process can still allocate: the smaller of Linux's `MemAvailable` and the cgroup's
 /// limit minus its usage (a container or Slurm job may allow far less than the machine has).
 pub fn available_memory() -> Option<u64> {
-    let meminfo = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let avail_kib: u64 = meminfo
-        .lines()
-        .find(|l| l.starts_with("MemAvailable:"))?
-        .split_whitespace()
-        .nth(1)?
-        .parse()
-        .ok()?;
-    let mut avail = avail_kib * 1024;
+    let mut avail = proc_kib("/proc/meminfo", "MemAvailable")?;
     let read = |p: &str| {
         std::fs::read_to_string(p)
             .ok()
@@ -530,16 +527,8 @@ pub fn available_memory() -> Option<u64> {
         // SAFETY: getrlimit writes the struct it is given and nothing else.
         let ok = unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut lim) } == 0;
         if ok && lim.rlim_cur != libc::RLIM_INFINITY {
-            let used_kib: u64 = std::fs::read_to_string("/proc/self/status")
-                .ok()
-                .and_then(|s| {
-                    s.lines()
-                        .find(|l| l.starts_with("VmSize:"))
-                        .and_then(|l| l.split_whitespace().nth(1))
-                        .and_then(|v| v.parse().ok())
-                })
-                .unwrap_or(0);
-            avail = avail.min(lim.rlim_cur.saturating_sub(used_kib * 1024));
+            let used = proc_kib("/proc/self/status", "VmSize").unwrap_or(0);
+            avail = avail.min(lim.rlim_cur.saturating_sub(used));
         }
     }
     Some(avail)
