@@ -15,7 +15,7 @@ use crate::merge::assert_same_measured;
 
 /// Photons from the Cornell box onto its surface points, two replicas, a two-point sweep, every
 /// engine whose counts add (and the reference, computed by the merge).
-fn scene_spec(dir: &Path) -> PathBuf {
+pub fn scene_spec(dir: &Path) -> PathBuf {
     let scene = root().join("experiments/scenes/cornell.toml");
     write_spec(
         dir,
@@ -118,7 +118,7 @@ fn photon_shards_of_lines_merge_into_the_unsplit_table() {
 /// full recalculation, two replicas, the points table at frame 2; the dynamic points by the disc
 /// index, fed every segment (the paper's model) or the segment index's answer. `extra`: more
 /// `[dynamic]` lines, `engine`: `detp.engine`.
-fn quasi_static_spec(dir: &Path, name: &str, engine: &str, extra: &str) -> PathBuf {
+pub fn quasi_static_spec(dir: &Path, name: &str, engine: &str, extra: &str) -> PathBuf {
     let scene = root().join("experiments/scenes/cornell-dynamic.toml");
     write_spec(
         dir,

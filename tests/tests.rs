@@ -17,6 +17,7 @@ mod lt;
 mod merge;
 mod never_panics;
 mod oracle;
+mod photon_batches;
 mod photon_shards;
 mod protocol;
 mod quasi_static;

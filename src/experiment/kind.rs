@@ -57,6 +57,10 @@ pub struct Need {
     pub key: &'static str,
     /// What it is ("grid cell lists", "segment store", …).
     pub what: String,
+    /// Whether it grows with the photons traced at once (the segment store): the part that photon
+    /// batches divide. The rest (discs, their sums, indices over the discs) is held whole by every
+    /// batch.
+    pub per_photon: bool,
 }
 
 /// A point's memory: its needs and the spec's budget for them (key, GiB), if the kind has one.
@@ -66,6 +70,20 @@ pub struct Memory {
     pub needs: Vec<Need>,
     /// `(budget key, GiB)`.
     pub budget: Option<(&'static str, f64)>,
+    /// Where the kind can trace a point's photons in batches (see
+    /// [`super::photon_batches`]): its key and photon count (None: no photons to batch).
+    pub batching: Option<Batching>,
+}
+
+/// A point's photons as photon batches see them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Batching {
+    /// The spec key that forces a batch count (`detp.photon_batches`).
+    pub key: &'static str,
+    /// The count it forces (None: `"auto"`, as the budget needs).
+    pub forced: Option<u64>,
+    /// Photons per replica, P: batch K of B traces photons `[K·P/B, (K+1)·P/B)`.
+    pub photons: u64,
 }
 
 /// A built-in check of one point: how many items failed out of how many checked. Every kind's checks
@@ -187,8 +205,9 @@ pub struct Context<'a> {
     pub threads: usize,
     /// Called with the number of work units just finished.
     pub progress: &'a (dyn Fn(u64) + Sync),
-    /// `raycost merge` of photon shards: the point's parts, one per shard in shard order
-    /// ([`Kind::trace_part`]), to measure instead of tracing photons.
+    /// `raycost merge` of photon shards, or a point traced in photon batches: the point's parts,
+    /// one per shard in shard order ([`Kind::trace_part`], or batches added with
+    /// [`Kind::add_parts`]), to measure instead of tracing photons.
     pub merged: Option<&'a [serde_json::Value]>,
 }
 
@@ -259,6 +278,18 @@ pub trait Kind: Send + Sync + 'static {
         _shared: &Self::Shared,
         _ctx: &Context,
         _shard: (u64, u64),
+    ) -> Result<serde_json::Value, Error> {
+        Err(Error::internal(format!(
+            "kind {} has no photons to split",
+            Self::NAME
+        )))
+    }
+    /// Photon batches: the part of the photons of `a` and of `b` (whose photons follow `a`'s), both
+    /// from [`Kind::trace_part`] of this point, so that a point traced in B batches keeps one part.
+    fn add_parts(
+        _p: &Self::Point,
+        _a: serde_json::Value,
+        _b: serde_json::Value,
     ) -> Result<serde_json::Value, Error> {
         Err(Error::internal(format!(
             "kind {} has no photons to split",
@@ -372,6 +403,13 @@ pub trait DynKind: Send + Sync {
         ctx: &Context,
         shard: (u64, u64),
     ) -> Result<serde_json::Value, Error>;
+    /// [`Kind::add_parts`].
+    fn add_parts(
+        &self,
+        point: &dyn DynPoint,
+        a: serde_json::Value,
+        b: serde_json::Value,
+    ) -> Result<serde_json::Value, Error>;
 }
 
 /// Kind `K` behind [`DynKind`].
@@ -474,6 +512,14 @@ impl<K: Kind> DynKind for Registered<K> {
     ) -> Result<serde_json::Value, Error> {
         let shared = shared_of::<K>(shared);
         K::trace_part(point_of::<K>(point), shared, ctx, shard)
+    }
+    fn add_parts(
+        &self,
+        point: &dyn DynPoint,
+        a: serde_json::Value,
+        b: serde_json::Value,
+    ) -> Result<serde_json::Value, Error> {
+        K::add_parts(point_of::<K>(point), a, b)
     }
 }
 

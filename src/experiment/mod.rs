@@ -5,6 +5,7 @@
 pub mod inputs;
 pub mod kind;
 pub mod machine;
+pub mod photon_batches;
 pub mod photon_shards;
 pub mod plan;
 pub mod reference;

@@ -437,3 +437,45 @@ pub fn add_replica_parts<P: RangePart>(
         })
         .collect()
 }
+
+/// The parts of a point's replicas over the photons of `a` and then of `b` (both a
+/// [`super::kind::Kind::trace_part`] of every replica, `b`'s photons following `a`'s): what a point
+/// traced in photon batches keeps between its batches (see [`super::photon_batches`]).
+pub fn add_following<P>(
+    a: serde_json::Value,
+    b: serde_json::Value,
+) -> Result<serde_json::Value, Error>
+where
+    P: RangePart + Serialize + serde::de::DeserializeOwned,
+{
+    let read = |v: serde_json::Value| {
+        serde_json::from_value::<Vec<P>>(v)
+            .map_err(|e| Error::internal(format!("a photon batch's part does not read: {e}")))
+    };
+    let (a, b) = (read(a)?, read(b)?);
+    if a.len() != b.len() {
+        return Err(Error::internal(format!(
+            "photon batches of {} and {} replica(s)",
+            a.len(),
+            b.len()
+        )));
+    }
+    let sum = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| {
+            if y.ids().0 != x.ids().1 {
+                return Err(format!(
+                    "photons {}..{} do not follow photons {}..{}",
+                    y.ids().0,
+                    y.ids().1,
+                    x.ids().0,
+                    x.ids().1
+                ));
+            }
+            x.then(y)
+        })
+        .collect::<Result<Vec<P>, String>>()
+        .map_err(Error::internal)?;
+    serde_json::to_value(sum).map_err(Error::internal)
+}

@@ -9,6 +9,7 @@ use sha2::{Digest, Sha256};
 
 use super::inputs::Inputs;
 use super::kind::{ConfigError, DynKind, DynPoint, Kind, PointOf};
+use super::photon_batches::{self, Split};
 use super::registry;
 use crate::error::InputError;
 use crate::output::meta::{available_memory, InputFile};
@@ -36,6 +37,8 @@ pub struct Plan {
     pub hash: String,
     /// Worker threads the points will run on (their memory is checked for that many).
     pub threads: usize,
+    /// Every point's photon batches (1: traced whole; see [`super::photon_batches`]).
+    pub batches: Vec<u64>,
 }
 
 impl std::fmt::Debug for Plan {
@@ -93,6 +96,7 @@ impl Plan {
         let mut inputs = Inputs::new(&spec.dir);
         let mut points = Vec::with_capacity(spec.points.len());
         let mut params = Vec::with_capacity(spec.points.len());
+        let mut batches = Vec::with_capacity(spec.points.len());
         for p in &spec.points {
             crate::spec::magnitude::check_point(&p.tree)
                 .map_err(|k| spec.locate(Some(p.index), k))?;
@@ -108,7 +112,7 @@ impl Plan {
                 ConfigError::Key(k) => spec.locate(Some(p.index), k),
                 ConfigError::Input(i) => i,
             })?;
-            check_memory(&spec, p.index, point.as_ref(), threads)?;
+            batches.push(check_memory(&spec, p.index, kind, point.as_ref(), threads)?);
             params.push(parameters(&keys, &p.params, &reading.normalized));
             points.push(point);
         }
@@ -136,6 +140,7 @@ impl Plan {
             normalized,
             hash,
             threads,
+            batches,
         })
     }
 
@@ -171,6 +176,9 @@ impl Plan {
                 if params.is_empty() { "" } else { "; " },
                 point.describe()
             );
+            if let Some(line) = self.memory_line(p.index) {
+                let _ = writeln!(s, "      {line}");
+            }
             for w in point.warnings() {
                 let _ = writeln!(s, "      warning: {w}");
             }
@@ -200,6 +208,31 @@ impl Plan {
 }
 
 impl Plan {
+    /// Point `i`'s memory for `check`: the model's bytes (a batch's, when batched) beside the
+    /// budget, and its photon batches (None for a kind without a budget).
+    fn memory_line(&self, i: usize) -> Option<String> {
+        let m = self.points[i].memory(self.threads);
+        let (key, gib) = m.budget?;
+        let split = Split::of(&m.needs);
+        let b = self.batches[i];
+        Some(match m.batching {
+            Some(bt) if b > 1 => format!(
+                "memory: {} photon batches of about {:.3} GiB each (about {:.3} GiB in one pass), {key} = {gib} GiB",
+                b,
+                split.per_batch(bt.photons, b) / GIB,
+                (split.fixed + split.per_photon) / GIB
+            ),
+            Some(_) => format!(
+                "memory: about {:.3} GiB, 1 photon batch (one pass), {key} = {gib} GiB",
+                (split.fixed + split.per_photon) / GIB
+            ),
+            None => format!(
+                "memory: about {:.3} GiB, {key} = {gib} GiB",
+                (split.fixed + split.per_photon) / GIB
+            ),
+        })
+    }
+
     /// `raycost check --json`: what [`Plan::describe`] prints, as data: the kind, every point with
     /// its parameters (values as in the spec), its description, work (units and what they count),
     /// memory needs (bytes, the spec key driving each, the budget) and warnings, and the input files.
@@ -224,8 +257,12 @@ impl Plan {
                 let needs: Vec<serde_json::Value> = memory
                     .needs
                     .iter()
-                    .map(|n| json!({ "what": n.what, "key": n.key, "bytes": n.bytes }))
+                    .map(|n| json!({ "what": n.what, "key": n.key, "bytes": n.bytes, "per_photon": n.per_photon }))
                     .collect();
+                let b = self.batches[p.index];
+                let batch_bytes = memory.batching.map_or(f64::NAN, |bt| {
+                    Split::of(&memory.needs).per_batch(bt.photons, b)
+                });
                 json!({
                     "point": p.index,
                     "params": params,
@@ -235,6 +272,8 @@ impl Plan {
                         "bytes": memory.needs.iter().map(|n| n.bytes).sum::<f64>(),
                         "needs": needs,
                         "budget": memory.budget.map(|(key, gib)| json!({ "key": key, "gib": gib })),
+                        "batches": b,
+                        "batch_bytes": if batch_bytes.is_nan() { serde_json::Value::Null } else { json!(batch_bytes) },
                     },
                     "warnings": point.warnings(),
                 })
@@ -293,12 +332,15 @@ fn param_value(v: &toml::Value) -> Value {
     }
 }
 
-/// Keys of the spec that are not parameters of a point: names, free text and the sweep itself.
+/// Keys of the spec that are not parameters of a point: names, free text, the sweep itself, and
+/// how a point's photons are split in memory (photon batches leave every measured column as a
+/// single pass writes it; a swept value is still a column, as every swept key is).
 const NOT_PARAMETERS: &[&str] = &[
     "experiment.name",
     "experiment.kind",
     "experiment.description",
     "sweep",
+    "detp.photon_batches",
 ];
 
 /// Every parameter of a point, in column order: the swept or `--set` keys first (as `check`
@@ -333,50 +375,74 @@ pub fn parameters(
     out
 }
 
-/// Refuses a point whose structures would not fit: over the spec's budget key, or over the memory
-/// this machine has available (the error names the spec key that drives the largest need).
+/// Refuses a point whose structures would not fit: over the spec's budget key (unless its photons
+/// can be traced in batches that fit: [`super::photon_batches`]), or a batch over the memory this
+/// machine has available (the error names the spec key that drives the largest need). Returns
+/// the point's photon batches (1: one pass).
 fn check_memory(
     spec: &Spec,
     index: usize,
+    kind: &dyn DynKind,
     point: &dyn DynPoint,
     threads: usize,
-) -> Result<(), InputError> {
+) -> Result<u64, InputError> {
     let m = point.memory(threads);
     let Some(largest) = m.needs.iter().max_by(|a, b| a.bytes.total_cmp(&b.bytes)) else {
-        return Ok(());
+        return Ok(1);
     };
-    let total: f64 = m.needs.iter().map(|n| n.bytes).sum();
+    let split = Split::of(&m.needs);
+    let total = split.fixed + split.per_photon;
     let listing = m
         .needs
         .iter()
         .map(|n| format!("{} {:.3} GiB", n.what, n.bytes / GIB))
         .collect::<Vec<_>>()
         .join(", ");
-    let refuse = |limit: String| {
-        spec.locate(
-            Some(index),
-            KeyError::new(
-                largest.key,
-                format!(
-                    "would need about {:.3} GiB ({listing}), over {limit}; reduce {}",
-                    total / GIB,
-                    largest.key
-                ),
+    let at = |key: &str, message: String| spec.locate(Some(index), KeyError::new(key, message));
+    let refuse = |bytes: f64, limit: String| {
+        at(
+            largest.key,
+            format!(
+                "would need about {:.3} GiB ({listing}), over {limit}; reduce {}",
+                bytes / GIB,
+                largest.key
             ),
         )
     };
-    if let Some((key, gib)) = m.budget {
-        if total.is_nan() || total > gib * GIB {
-            return Err(refuse(format!("{key} = {gib} GiB")));
+    let unsplittable = m.batching.and_then(|_| kind.photon_refusal(point));
+    let batches = match (m.budget, &m.batching) {
+        (Some((key, gib)), Some(batching)) => photon_batches::batches(
+            split,
+            batching,
+            (key, gib * GIB),
+            largest.key,
+            unsplittable.clone(),
+        )
+        .map_err(|r| at(r.key, format!("{} (needs: {listing})", r.message)))?,
+        (Some((key, gib)), None) if total.is_nan() || total > gib * GIB => {
+            return Err(refuse(total, format!("{key} = {gib} GiB")))
         }
-    }
+        _ => 1,
+    };
+    let each = m
+        .batching
+        .map_or(total, |b| split.per_batch(b.photons, batches));
     if let Some(avail) = available_memory() {
-        if total.is_nan() || total > 0.9 * avail as f64 {
-            return Err(refuse(format!(
-                "the {:.2} GiB this machine has available",
-                avail as f64 / GIB
-            )));
+        if each.is_nan() || each > 0.9 * avail as f64 {
+            let lower = match (m.budget, &m.batching, &unsplittable) {
+                (Some((key, _)), Some(_), None) => {
+                    format!(" (or lower {key}: more photon batches, each smaller)")
+                }
+                _ => String::new(),
+            };
+            return Err(refuse(
+                each,
+                format!(
+                    "the {:.2} GiB this machine has available{lower}",
+                    avail as f64 / GIB
+                ),
+            ));
         }
     }
-    Ok(())
+    Ok(batches)
 }

@@ -352,10 +352,22 @@ fn run_points(
                 .and_then(|m| m.get(&i))
                 .map(Vec::as_slice),
         };
-        let out = kind
-            .run(plan.points[i].as_ref(), shared.as_ref(), &ctx)
-            .context_with(|| format!("point {i}"))?;
+        let point = plan.points[i].as_ref();
+        // A point merged from photon shards was traced by them, in one part each.
+        let batches = if ctx.merged.is_some() {
+            1
+        } else {
+            plan.batches[i]
+        };
+        let out = match batches {
+            1 => kind.run(point, shared.as_ref(), &ctx),
+            b => super::photon_batches::run(kind, point, shared.as_ref(), &ctx, b),
+        }
+        .context_with(|| format!("point {i}"))?;
         let wall = start.elapsed().as_secs_f64();
+        if let Some(m) = point_memory(plan, i, batches) {
+            meta.run.point_memory.push(m);
+        }
         finished.push(keep_point(plan, i, out, wall, meta, sink)?);
         let line = interrupt_line(plan, opts, &partial, resumed + n + 1, all);
         if interrupt::requested() {
@@ -440,6 +452,24 @@ fn keep_point(
         .collect::<Vec<_>>()
         .join(" ");
     Ok((i, params, out, wall))
+}
+
+/// Point `i`'s memory record after it ran in `batches` photon batches (None for a kind without a
+/// budget).
+fn point_memory(plan: &Plan, i: usize, batches: u64) -> Option<crate::output::meta::PointMemory> {
+    let m = plan.points[i].memory(plan.threads);
+    let (key, gib) = m.budget?;
+    let split = super::photon_batches::Split::of(&m.needs);
+    Some(crate::output::meta::PointMemory {
+        point: i,
+        batches,
+        model_bytes: m.batching.map_or(split.fixed + split.per_photon, |b| {
+            split.per_batch(b.photons, batches)
+        }),
+        budget_key: key.into(),
+        budget_gib: gib,
+        peak_rss_bytes: crate::output::meta::peak_memory(),
+    })
 }
 
 /// Every cell of a kind's rows of `table` must come from the kind's declaration of that table, with

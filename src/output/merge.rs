@@ -758,6 +758,11 @@ fn merged_meta(shards: &[Shard], total: usize, n: usize) -> Meta {
     let first = &shards[0].meta;
     let mut merged = first.clone();
     let mut walls = vec![f64::NAN; total];
+    let mut memory: Vec<_> = shards
+        .iter()
+        .flat_map(|s| s.meta.run.point_memory.iter().cloned())
+        .collect();
+    memory.sort_by_key(|m| m.point);
     for s in shards {
         for (&p, &w) in s.meta.run.points.iter().zip(&s.meta.run.point_wall_s) {
             if p < total {
@@ -788,6 +793,7 @@ fn merged_meta(shards: &[Shard], total: usize, n: usize) -> Meta {
     run.points_total = total;
     run.points = (0..total).collect();
     run.point_wall_s = walls;
+    run.point_memory = memory;
     run.resumed_points = Vec::new();
     merged.shards = shards
         .iter()

@@ -195,6 +195,30 @@ pub struct RunInfo {
     /// Points carried over from a resumed partial run (no wall time recorded here).
     #[serde(default)]
     pub resumed_points: Vec<usize>,
+    /// Each point's memory, in the order of `points` (kinds with a memory budget).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub point_memory: Vec<PointMemory>,
+}
+
+/// One point's memory: its photon batches and the model's bytes beside the budget, and the
+/// process's measured peak.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct PointMemory {
+    /// The point.
+    pub point: usize,
+    /// Photon batches it was traced in (1: one pass).
+    pub batches: u64,
+    /// The memory model's bytes for one batch (the whole point when `batches` is 1).
+    pub model_bytes: f64,
+    /// The budget key.
+    pub budget_key: String,
+    /// Its value, GiB.
+    pub budget_gib: f64,
+    /// The process's peak resident memory so far (`VmHWM` of `/proc/self/status`, bytes), read when
+    /// the point finished: the largest over this point and every point before it in this process
+    /// (absent where the system does not say).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub peak_rss_bytes: Option<u64>,
 }
 
 fn all() -> String {
@@ -367,6 +391,7 @@ impl Meta {
                 points: Vec::new(),
                 point_wall_s: Vec::new(),
                 resumed_points: Vec::new(),
+                point_memory: Vec::new(),
             },
             inputs: Vec::new(),
             warnings: Vec::new(),
@@ -514,18 +539,28 @@ pub fn load_average() -> Vec<f64> {
         .unwrap_or_default()
 }
 
+/// A `KEY:  N kB` field of a `/proc` file (`/proc/meminfo`, `/proc/self/status`), in bytes.
+fn proc_kib(file: &str, key: &str) -> Option<u64> {
+    let text = std::fs::read_to_string(file).ok()?;
+    let kib: u64 = text
+        .lines()
+        .find_map(|l| l.strip_prefix(key)?.strip_prefix(':'))?
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()?;
+    Some(kib * 1024)
+}
+
+/// This process's peak resident memory so far (`VmHWM` of `/proc/self/status`), in bytes.
+pub fn peak_memory() -> Option<u64> {
+    proc_kib("/proc/self/status", "VmHWM")
+}
+
 /// Memory this process can still allocate: the smaller of Linux's `MemAvailable` and the cgroup's
 /// limit minus its usage (a container or Slurm job may allow far less than the machine has).
 pub fn available_memory() -> Option<u64> {
-    let meminfo = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let avail_kib: u64 = meminfo
-        .lines()
-        .find(|l| l.starts_with("MemAvailable:"))?
-        .split_whitespace()
-        .nth(1)?
-        .parse()
-        .ok()?;
-    let mut avail = avail_kib * 1024;
+    let mut avail = proc_kib("/proc/meminfo", "MemAvailable")?;
     let read = |p: &str| {
         std::fs::read_to_string(p)
             .ok()
@@ -549,16 +584,8 @@ pub fn available_memory() -> Option<u64> {
         // SAFETY: getrlimit writes the struct it is given and nothing else.
         let ok = unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut lim) } == 0;
         if ok && lim.rlim_cur != libc::RLIM_INFINITY {
-            let used_kib: u64 = std::fs::read_to_string("/proc/self/status")
-                .ok()
-                .and_then(|s| {
-                    s.lines()
-                        .find(|l| l.starts_with("VmSize:"))
-                        .and_then(|l| l.split_whitespace().nth(1))
-                        .and_then(|v| v.parse().ok())
-                })
-                .unwrap_or(0);
-            avail = avail.min(lim.rlim_cur.saturating_sub(used_kib * 1024));
+            let used = proc_kib("/proc/self/status", "VmSize").unwrap_or(0);
+            avail = avail.min(lim.rlim_cur.saturating_sub(used));
         }
     }
     Some(avail)
@@ -644,6 +671,14 @@ mod tests {
                 points: vec![0, 1],
                 point_wall_s: vec![0.5, 0.25],
                 resumed_points: vec![],
+                point_memory: vec![PointMemory {
+                    point: 1,
+                    batches: 3,
+                    model_bytes: 1.5e9,
+                    budget_key: "detp.memory_budget_gib".into(),
+                    budget_gib: 1.0,
+                    peak_rss_bytes: Some(1 << 30),
+                }],
             },
             inputs: vec![InputFile {
                 path: "scene.toml".into(),

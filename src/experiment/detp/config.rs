@@ -104,6 +104,8 @@ pub struct DetpConfig {
     pub write_points: bool,
     /// `detp.memory_budget_gib`.
     pub memory_budget_gib: f64,
+    /// `detp.photon_batches` when a number (None: `"auto"`).
+    pub photon_batches: Option<u64>,
     /// Whether the spec gave `detp.point_spacing` (else surface points are 2d apart).
     pub spacing_given: bool,
     /// `detp.edge` with its parameter.
@@ -301,6 +303,7 @@ impl DetpConfig {
             replicas: d.replicas,
             write_points: d.write_points,
             memory_budget_gib: d.memory_budget_gib,
+            photon_batches: d.photon_batches.forced(),
             spacing_given: d.point_spacing.is_some(),
             edge,
         };

@@ -62,7 +62,7 @@ use self::path_tracing::PathRow;
 use self::spec::DetpSpec;
 use super::inputs::Inputs;
 use super::kind::{
-    refuse, Check, ConfigError, Context, Kind, Memory, Need, Output, Rate, Table, Work,
+    refuse, Batching, Check, ConfigError, Context, Kind, Memory, Need, Output, Rate, Table, Work,
 };
 use crate::detp::brute;
 use crate::detp::disc::Discs;
@@ -322,7 +322,9 @@ fn segments_per_photon(cfg: &DetpConfig) -> f64 {
 }
 
 /// The large structures of a DETP point: the segment store, the sphere cache's lists along one
-/// path per thread (n_R·Σ Q^{2i} = n_R/(1 − Q²) indices), the discs, and a disc grid's cells.
+/// path per thread (n_R·Σ Q^{2i} = n_R/(1 − Q²) indices), the photon map's tree, the discs, and a
+/// disc grid's cells. The first three grow with the photons traced at once (what photon batches
+/// divide); the discs with their sums and the disc grid do not.
 pub fn memory(cfg: &DetpConfig, threads: usize) -> Memory {
     let segs = cfg.photons as f64 * segments_per_photon(cfg);
     let threads = threads as f64;
@@ -332,6 +334,7 @@ pub fn memory(cfg: &DetpConfig, threads: usize) -> Memory {
             bytes: segs * std::mem::size_of::<crate::detp::store::Segment>() as f64,
             key: "detp.photons",
             what: format!("segment store of ~{segs:.3e} segments"),
+            per_photon: true,
         },
         Need {
             bytes: n_p * 128.0,
@@ -344,6 +347,7 @@ pub fn memory(cfg: &DetpConfig, threads: usize) -> Memory {
                 Points::Surface(_) => "detp.disc_radius",
             },
             what: format!("{n_p:.3e} discs and their sums"),
+            per_photon: false,
         },
     ];
     if cfg.engines.contains(&EngineChoice::SphereCache) {
@@ -351,6 +355,7 @@ pub fn memory(cfg: &DetpConfig, threads: usize) -> Memory {
             bytes: segs * 4.0 * threads / (1.0 - cfg.q() * cfg.q()),
             key: "detp.q",
             what: "sphere-cache ray lists (n_R/(1 − Q²) per thread)".into(),
+            per_photon: true,
         });
     }
     if cfg.engines.iter().any(|e| e.is_photon_map()) {
@@ -358,6 +363,7 @@ pub fn memory(cfg: &DetpConfig, threads: usize) -> Memory {
             bytes: segs * 48.0,
             key: "detp.photons",
             what: "photon-map k-d tree of the impacts".into(),
+            per_photon: true,
         });
     }
     if let (true, Some(cells)) = (
@@ -368,11 +374,17 @@ pub fn memory(cfg: &DetpConfig, threads: usize) -> Memory {
             bytes: cells * 4.0,
             key: "detp.index_cell_width",
             what: format!("{cells:.3e} disc-grid cells"),
+            per_photon: false,
         });
     }
     Memory {
         needs,
         budget: Some(("detp.memory_budget_gib", cfg.memory_budget_gib)),
+        batching: Some(Batching {
+            key: "detp.photon_batches",
+            forced: cfg.photon_batches,
+            photons: cfg.photons,
+        }),
     }
 }
 
@@ -485,5 +497,12 @@ impl Kind for DetpKind {
         let ids = shards::photon_range(p.photons, k, n);
         let parts = measure::replicate_part(p, ctx.stream_point, ids, ctx.progress, refs)?;
         serde_json::to_value(parts).map_err(Error::internal)
+    }
+    fn add_parts(
+        _: &DetpConfig,
+        a: serde_json::Value,
+        b: serde_json::Value,
+    ) -> Result<serde_json::Value, Error> {
+        crate::experiment::photon_shards::add_following::<shards::ReplicaPart>(a, b)
     }
 }

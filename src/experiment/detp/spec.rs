@@ -144,6 +144,14 @@ crate::spec_table! {
         /// Memory the ray store and engines may take; a point needing more is refused before it
         /// allocates.
         memory_budget_gib: f64 = {default 8.0} read positive, "number", "GiB", "> 0";
+        /// Photon batches B: a point whose segments would not fit `memory_budget_gib` traces its
+        /// photons in B batches one after another in this process (each batch's segments freed
+        /// before the next), adding the batches' integer sums, so its table is a single pass's bit
+        /// for bit. `"auto"` takes the fewest that fit (1 when everything fits); a number forces
+        /// it (it must fit too). Engines whose counts do not add (sphere cache, photon maps)
+        /// cannot be batched.
+        photon_batches: PhotonBatches = {default PhotonBatches::Auto}, "integer or string",
+            "batches", "≥ 1, or `\"auto\"`";
         /// Discs near edges: the paper's method, or a remedy (a disc shrunk to the nearest other
         /// surface; crossings cut just past the first impact; both). Scenes only; every engine
         /// stays exact.
@@ -304,6 +312,55 @@ impl Serialize for DiscRadius {
         match self {
             DiscRadius::Value(x) => s.serialize_f64(*x),
             DiscRadius::Spacing => s.serialize_str("spacing"),
+        }
+    }
+}
+
+/// `detp.photon_batches`: `"auto"` or a whole number ≥ 1.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PhotonBatches {
+    /// As few as fit the memory budget.
+    Auto,
+    /// Exactly this many.
+    Count(u64),
+}
+
+impl PhotonBatches {
+    /// The count forced (None: `"auto"`).
+    pub fn forced(self) -> Option<u64> {
+        match self {
+            PhotonBatches::Auto => None,
+            PhotonBatches::Count(b) => Some(b),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for PhotonBatches {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        match toml::Value::deserialize(d)? {
+            toml::Value::String(s) if s == "auto" => Ok(PhotonBatches::Auto),
+            toml::Value::Integer(i) if i >= 1 => Ok(PhotonBatches::Count(i as u64)),
+            other => Err(D::Error::custom(format!(
+                "got {other}, expected a whole number of batches ≥ 1 or \"auto\""
+            ))),
+        }
+    }
+}
+
+/// `"auto"` is left out of the normalised spec: how a point is traced never changes what it
+/// measures, so a spec that does not force batches keeps the hash (and resumes) it had before the
+/// key existed.
+impl crate::toml_text::keys::Omit for PhotonBatches {
+    fn omit(&self) -> bool {
+        *self == PhotonBatches::Auto
+    }
+}
+
+impl Serialize for PhotonBatches {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            PhotonBatches::Auto => s.serialize_str("auto"),
+            PhotonBatches::Count(b) => s.serialize_u64(*b),
         }
     }
 }

@@ -65,6 +65,7 @@ fn memory(g: &GridConfig, threads: usize) -> Memory {
                 bytes: per_box * 64.0 * rays_in_flight.max(1.0) * 8.0,
                 key,
                 what: format!("{per_box:.3e} spheres per cell reach box"),
+                per_photon: false,
             }]
         }
         SceneModel::Finite(f) => {
@@ -73,12 +74,14 @@ fn memory(g: &GridConfig, threads: usize) -> Memory {
                 bytes: n * 40.0 * 2.0,
                 key: "scene.spheres",
                 what: format!("{n:.3e} spheres and their cell listings"),
+                per_photon: false,
             }]
         }
     };
     Memory {
         needs,
         budget: Some(("grid.memory_budget_gib", g.memory_budget_gib)),
+        batching: None,
     }
 }
 

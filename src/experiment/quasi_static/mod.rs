@@ -373,6 +373,9 @@ impl Kind for QuasiStaticKind {
             bytes: segs * 4.0 * 1.5 * cells.cbrt() + cells * 24.0,
             key: "detp.photons",
             what: format!("segment index ({cells:.0} cells)"),
+            // Its listings grow with the segments; its cells are capped (a batch's index is
+            // sized by the batch's segments, so dividing the whole by B over-counts a batch).
+            per_photon: true,
         });
         m
     }
@@ -410,5 +413,12 @@ impl Kind for QuasiStaticKind {
             .map(|r| trace_replica(p, r, ids.clone(), ctx.progress).0)
             .collect();
         serde_json::to_value(parts).map_err(Error::internal)
+    }
+    fn add_parts(
+        _: &QuasiStaticConfig,
+        a: serde_json::Value,
+        b: serde_json::Value,
+    ) -> Result<serde_json::Value, Error> {
+        crate::experiment::photon_shards::add_following::<ReplicaPart>(a, b)
     }
 }
