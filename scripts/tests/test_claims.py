@@ -280,6 +280,59 @@ class EngineEdges(unittest.TestCase):
         self.assertAlmostEqual(m, 0.5)
 
 
+# ----------------------------------------------------------------------------------------------
+# the §4.1 predictor's picks, written from a known truth
+
+PCOLS = ["point", "dynamic.ratio", "dynamic.predictor"] + [
+    "warm_%s_s_%s" % (e, k) for e in ("sphere_cache", "disc_index") for k in ("mean", "se", "n", "clusters")]
+
+
+def predictor_results(root, right_per_run):
+    """results/pred with one run per entry of `right_per_run`: at two ratios, for both predictors,
+    the sphere cache is clearly faster (1 s against 2 s) and that run's first k of 8 replicas
+    picked it."""
+    for run, k in enumerate(right_per_run):
+        rows = []
+        for predictor in ("subsample", "paper"):
+            for x in (0.1, 0.3):
+                picks = ["sphere-cache"] * k + ["disc-index"] * (8 - k)
+                rows.append([len(rows), x, predictor, 1.0, 0.01, 8, 8, 2.0, 0.01, 8, 8] + picks)
+        cols = PCOLS + ["pick_replica_%d" % i for i in range(8)]
+        write(os.path.join(root, "pred", "runs", str(run), "pred.csv"), cols, rows)
+        if run == 0:
+            write(os.path.join(root, "pred", "pred.csv"), cols, rows)
+
+
+def predictor_claim():
+    pre = prereg()
+    c = copy.deepcopy(next(c for c in pre["claim"] if c["statistic"] == "predictor"))
+    c["source"] = "pred"
+    pre["claim"] = [c]
+    return pre
+
+
+class Predictor(unittest.TestCase):
+    def judge(self, right_per_run):
+        with tempfile.TemporaryDirectory() as d:
+            predictor_results(d, right_per_run)
+            return claims.judge_all(d, predictor_claim())[0]
+
+    def test_every_runs_picks_are_judged(self):
+        # Run 0 right every time, runs 1 and 2 never: 8 of 24 picks per ratio, not run 0's 8 of 8.
+        r = self.judge([8, 0, 0])
+        self.assertEqual(r["outcome"], "differs", r["verdict"])
+        self.assertIn("0.1: 8 of 24", r["measured"])
+        self.assertIn("pooled 16 of 48", r["measured"])
+
+    def test_outside_only_when_the_pooled_interval_lies_below_the_share(self):
+        # 21 of 24 right per ratio: 0.875 < 0.9 at every ratio, but the exact interval of 42 of 48
+        # ([0.75, 0.95]) reaches 0.9: undecided, not outside.
+        r = self.judge([7, 7, 7])
+        self.assertEqual(r["outcome"], "inconclusive", r["verdict"])
+        r = self.judge([8, 8, 8])
+        self.assertEqual(r["outcome"], "holds", r["verdict"])
+
+
 class CommittedTables(unittest.TestCase):
     def test_every_claim_is_judged_on_the_committed_tables(self):
         results = os.path.join(SCRIPTS, "..", "results")
