@@ -25,7 +25,7 @@ import claims_rules as R  # noqa: E402
 
 PREREG = os.path.join(SCRIPTS, "..", "claims", "preregistered.toml")
 ENGINE = ["claims.py", "claims_measures.py", "claims_levels.py", "claims_engines.py", "claims_data.py",
-          "claims_derived.py", "claims_rules.py"]
+          "claims_derived.py", "claims_rules.py", "claims_version.py"]
 # Numbers the engine may spell: formatting digits (3, 4, 5), per cent (100), nanoseconds (1e9),
 # float comparison (1e-9, 1e-6), "an integer below 10¹⁵" (display), one half ("more than half",
 # the nearest level on a log scale). A window, a level, a target or a tolerance is none of these.
@@ -331,6 +331,63 @@ class Predictor(unittest.TestCase):
         self.assertEqual(r["outcome"], "inconclusive", r["verdict"])
         r = self.judge([8, 8, 8])
         self.assertEqual(r["outcome"], "holds", r["verdict"])
+
+
+class EngineVersions(unittest.TestCase):
+    """The claims engine versioned like a rule (claims_version.py)."""
+
+    def setUp(self):
+        import claims_version
+        self.V = claims_version
+
+    def records(self, outcome, rule="c/2"):
+        return [{"id": "c", "rule": rule, "outcome": outcome}]
+
+    def test_a_verdict_changed_by_the_engine_without_history_fails(self):
+        v1 = self.V.updated([], self.records("inconclusive"), "h1")
+        v2 = self.V.updated(v1, self.records("holds"), "h2")
+        self.assertEqual([v["version"] for v in v2], [1, 2])
+        pre = {"claim": [{"id": "c", "rule": "c/2"}]}
+        problems = self.V.transition_problems(v2, pre)
+        self.assertEqual(len(problems), 1)
+        self.assertIn("engine = 1", problems[0])
+        pre["claim"][0]["history"] = [{"rule": "c/2", "engine": 1, "verdict": "inconclusive"}]
+        self.assertEqual(self.V.transition_problems(v2, pre), [])
+        # An entry for another version or verdict does not count.
+        pre["claim"][0]["history"] = [{"rule": "c/2", "engine": 2, "verdict": "inconclusive"}]
+        self.assertEqual(len(self.V.transition_problems(v2, pre)), 1)
+
+    def test_a_new_rule_or_new_tables_under_one_engine_need_no_engine_entry(self):
+        v1 = self.V.updated([], self.records("inconclusive", "c/1"), "h1")
+        v2 = self.V.updated(v1, self.records("holds", "c/2"), "h2")
+        self.assertEqual(self.V.transition_problems(v2, {"claim": [{"id": "c", "rule": "c/2"}]}), [])
+        same = self.V.updated(v1, self.records("holds", "c/1"), "h1")
+        self.assertEqual(len(same), 1)
+        self.assertEqual(same[0]["claims"]["c"]["outcome"], "holds")
+
+    def test_the_ledger_round_trips(self):
+        v = self.V.updated([], self.records("holds"), "h1", where='a "quoted" place')
+        with tempfile.TemporaryDirectory() as d:
+            p = os.path.join(d, "l.toml")
+            with open(p, "w") as f:
+                f.write(self.V.render_ledger(v))
+            self.assertEqual(self.V.read_ledger(p), v)
+
+    def test_the_committed_ledger_keeps_every_changed_verdict(self):
+        versions = self.V.read_ledger()
+        self.assertGreaterEqual(len(versions), 1)
+        self.assertEqual(self.V.transition_problems(versions, prereg()), [])
+
+    def test_the_hash_covers_the_whole_engine(self):
+        self.assertLessEqual(set(ENGINE) | {"raycost_stats.py"}, set(self.V.ENGINE_FILES))
+
+    def test_check_refuses_an_engine_entry_without_a_version_number(self):
+        pre = prereg()
+        c = next(c for c in pre["claim"] if c.get("history"))
+        c["history"].append({"rule": c["rule"], "engine": "two", "registered": "x", "text": "x",
+                             "verdict": "holds", "data": "x"})
+        with self.assertRaises(SystemExit):
+            claims.check(pre, PREREG)
 
 
 class CommittedTables(unittest.TestCase):
