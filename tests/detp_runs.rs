@@ -136,7 +136,10 @@ fn detp_shards_on_one_thread_merge_into_the_two_thread_table() {
     // Points in the ball are drawn per replica: one row per replica and disc (samples 0 … 2n − 1 of
     // each sweep point), no per-replica columns (disc i is another point in each replica).
     let (h, rows) = crate::common::read_csv(&w.join("detp-small.points.csv"));
-    assert!(!h.iter().any(|c| c.starts_with("irradiance_replica_")), "{h:?}");
+    assert!(
+        !h.iter().any(|c| c.starts_with("irradiance_replica_")),
+        "{h:?}"
+    );
     assert_eq!(rows.len(), 4 * 2 * 2_000);
 }
 
@@ -214,7 +217,10 @@ fn lines_replicas_draw_their_own_points() {
         .filter(|r| r[at("misses_level_per_replica_se")].parse::<f64>().unwrap() > 0.0)
         .map(|r| r[at("level")].clone())
         .collect();
-    assert!(!varying.is_empty(), "no coarse level's misses vary: {rows:?}");
+    assert!(
+        !varying.is_empty(),
+        "no coarse level's misses vary: {rows:?}"
+    );
 }
 
 #[test]
