@@ -7,16 +7,23 @@ runs for seconds), compute its statistic on every unit listed (claims_measures, 
 claims_engines), judge each unit and the claim by the registered rule (claims_rules), compute what
 goes beside (other accountings, variants, derived figures) and write
 
-  results/claims.toml      one [[claim]] per claim: measured, verdict (text), outcome (one of
-                           holds, holds-in-part, differs, refuted, inconclusive), rule, accounting
+  results/claims.toml      the engine's version, then one [[claim]] per claim: measured, verdict
+                           (text), outcome (one of holds, holds-in-part, differs, refuted,
+                           inconclusive), rule, accounting
   README.md                the claims table between <!-- claims:begin --> and <!-- claims:end -->
+  claims/engine-versions.toml  the engine's versions and every claim's outcome under each
+                           (claims_version.py): a version whose outcome differs from the one before
+                           it under the same rule needs that claim's history entry, else nothing is
+                           written and --check fails
 
 This file holds no verdict, window or claim-specific number: they are all in the pre-registration
 (scripts/tests/test_claims.py checks it).
 
 Usage:
   python3 scripts/claims.py            # rewrite results/claims.toml and README's table
-  python3 scripts/claims.py --check    # exit 1 if either differs from what the tables give (CI)
+  python3 scripts/claims.py --check    # exit 1 if any differs from what the tables give, if the
+                                       # engine changed without a recorded version, or if a
+                                       # verdict changed without a history entry (CI)
   python3 scripts/claims.py --results DIR --prereg FILE --print   # judge other tables, print only
 """
 
@@ -30,6 +37,7 @@ import claims_engines
 import claims_levels
 import claims_measures
 import claims_rules as R
+import claims_version as V
 from claims_data import Missing, Tables, optional_missing, requirement_needs, runs_needs
 from claims_derived import DERIVED
 
@@ -106,7 +114,12 @@ def check(pre, path):
             raise SystemExit("error: %s: claim %s: rule %r must be %s/N" % (path, c["id"], c["rule"], c["id"]))
         for h in c.get("history", []):
             lack = [k for k in ("rule", "registered", "text", "verdict", "data") if k not in h]
-            if lack or h["rule"] == c["rule"]:
+            # An engine entry (`engine` = the version that gave the verdict) keeps the rule's id:
+            # the engine changed, not the rule.
+            if "engine" in h and not isinstance(h["engine"], int):
+                raise SystemExit("error: %s: claim %s: history entry %s: engine must be a version number" % (
+                    path, c["id"], h.get("rule", "?")))
+            if lack or (h["rule"] == c["rule"] and "engine" not in h):
                 raise SystemExit("error: %s: claim %s: history entry %s: %s" % (
                     path, c["id"], h.get("rule", "?"),
                     "missing " + ", ".join(lack) if lack else "has the current rule's id"))
@@ -212,8 +225,10 @@ def registered_text(claim, ctx):
 
 
 def earlier_text(claim):
-    return "; ".join("%s (%s, on the %s tables): %s" % (h["rule"], h["registered"], h["data"], h["verdict"])
-                     for h in claim.get("history", []))
+    def one(h):
+        engine = ", claims engine %d" % h["engine"] if "engine" in h else ""
+        return "%s%s (%s, on the %s tables): %s" % (h["rule"], engine, h["registered"], h["data"], h["verdict"])
+    return "; ".join(one(h) for h in claim.get("history", []))
 
 
 def judge(claim, ctx):
@@ -251,10 +266,13 @@ def toml_str(s):
     return '"%s"' % s.replace("\\", "\\\\").replace('"', '\\"')
 
 
-def render_toml(records):
+def render_toml(records, engine=None):
     lines = ["# The claims of both papers and what raycost measured for each. Written by",
              "# scripts/claims.py from the committed tables and claims/preregistered.toml; do not edit",
              "# by hand (CI checks it).", ""]
+    if engine is not None:
+        lines += ["# The claims engine's version (claims/engine-versions.toml) that judged them.",
+                  "engine = %d" % engine, ""]
     for c in records:
         lines.append("[[claim]]")
         for k in ("claim", "reference", "paper", "source", "measured", "verdict", "outcome", "rule",
@@ -296,12 +314,18 @@ def main():
     ap.add_argument("--prereg", default=os.path.join(ROOT, "claims", "preregistered.toml"))
     ap.add_argument("--print", action="store_true", help="print each claim's outcome and write nothing")
     args = ap.parse_args()
-    records = collect(args.results, args.prereg)
+    pre = load(args.prereg)
+    records = judge_all(args.results, pre)
     if args.print:
         for c in records:
             print("%-24s %-14s %s" % (c["id"], c["outcome"], c["verdict"].split(": ", 1)[1]))
         return 0
-    toml_text = render_toml(records)
+    versions = V.read_ledger()
+    digest = V.engine_hash()
+    new_versions = V.updated(versions, records, digest)
+    ledger_text = V.render_ledger(new_versions)
+    problems = V.transition_problems(new_versions, pre)
+    toml_text = render_toml(records, new_versions[-1]["version"])
     readme_path = os.path.join(ROOT, "README.md")
     readme = open(readme_path).read()
     if BEGIN not in readme or END not in readme:
@@ -311,15 +335,32 @@ def main():
     new_readme = a + BEGIN + "\n" + render_table(records) + "\n" + END + b
     toml_path = os.path.join(args.results, "claims.toml")
     old_toml = open(toml_path).read() if os.path.exists(toml_path) else ""
+    for p in problems:
+        print("error: %s" % p, file=sys.stderr)
     if args.check:
+        if not versions or versions[-1]["hash"] != digest:
+            print("error: the claims engine (%s) changed since its version %d in %s: run python3 scripts/claims.py "
+                  "to record the next version" % (", ".join(V.ENGINE_FILES), len(versions),
+                                                  os.path.relpath(V.LEDGER, ROOT)), file=sys.stderr)
+            return 1
+        old_ledger = open(V.LEDGER).read()
         bad = [n for n, old, new in (("results/claims.toml", old_toml, toml_text),
-                                     ("README.md's claims table", readme, new_readme)) if old != new]
+                                     ("README.md's claims table", readme, new_readme),
+                                     (os.path.relpath(V.LEDGER, ROOT), old_ledger, ledger_text)) if old != new]
         if bad:
             print("error: %s differ(s) from the committed tables: run python3 scripts/claims.py" % " and ".join(bad),
                   file=sys.stderr)
             return 1
-        print("claims: %d claims, README and results/claims.toml match the tables" % len(records))
+        if problems:
+            return 1
+        print("claims: %d claims, README and results/claims.toml match the tables (claims engine %d)"
+              % (len(records), new_versions[-1]["version"]))
         return 0
+    if problems:
+        print("error: nothing written: a verdict changed with the engine; keep the earlier one in the claim's "
+              "history (claims/README.md)", file=sys.stderr)
+        return 1
+    open(V.LEDGER, "w").write(ledger_text)
     open(toml_path, "w").write(toml_text)
     open(readme_path, "w").write(new_readme)
     for c in records:

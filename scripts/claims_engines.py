@@ -233,8 +233,11 @@ def all_points_text(r):
 
 def kind_predictor(v, ctx):
     """Per unit (predictor) and ratio: where the engines' warm timings differ (the interval of
-    log(sphere cache / disc index) excludes 0), the share of replicas whose pick was the faster
-    engine; the unit holds when that share is ≥ min_right at every such ratio."""
+    log(sphere cache / disc index) excludes 0), the share of picks (every replica of every run:
+    the pooled table holds each run's pick_replica_K) that were the faster engine. As the rule
+    states: the unit holds when that share is ≥ min_right at every such ratio; it differs when the
+    pooled share's interval (Clopper–Pearson at the claims' level, all decisive ratios' picks
+    together) lies below min_right; else it is undecided."""
     units, needs = [], []
     need = ["warm_sphere_cache_s_mean", "warm_disc_index_s_mean", "pick_replica_0"]
     try:
@@ -255,14 +258,22 @@ def kind_predictor(v, ctx):
                 continue  # the engines' timings do not differ here: no right pick to make
             faster = "sphere-cache" if lr < 0 else "disc-index"
             picks = [r[k] for k in sorted(r) if k.startswith("pick_replica_")]
+            picks = [p for p in picks if p == p and p not in (None, "")]
             counts.append((r[v["x"]], sum(p == faster for p in picks), len(picks)))
         right, total = sum(c[1] for c in counts), sum(c[2] for c in counts)
+        lo, hi = S.clopper_pearson(right, total, ctx.level)
         if not total:
             j, why = R.UNDECIDED, "no ratio where the engines' timings differ"
         elif all(ok >= tol * n for _, ok, n in counts):
             j, why = R.INSIDE, ""
+        elif hi < tol:
+            j, why = R.OUTSIDE, "right in %.0f %% of picks [%.0f, %.0f] %%, below %g" % (
+                100 * right / total, 100 * lo, 100 * hi, tol)
         else:
-            j, why = R.OUTSIDE, "right in %.0f %% of picks" % (100 * right / total)
+            j, why = R.UNDECIDED, "right in %.0f %% of picks [%.0f, %.0f] %%: below %g at a ratio, the interval reaches it" % (
+                100 * right / total, 100 * lo, 100 * hi, tol)
         per = "; ".join("%g: %d of %d" % c for c in counts)
-        units.append(R.Unit(label(g[0], v["units"]), "right picks at decisive ratios — " + per, j, why))
+        text = "right picks at decisive ratios — %s; pooled %d of %d [%.0f, %.0f] %%" % (
+            per, right, total, 100 * lo, 100 * hi) if total else "right picks at decisive ratios — none"
+        units.append(R.Unit(label(g[0], v["units"]), text, j, why))
     return Measured(units, needs, [])

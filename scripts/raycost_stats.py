@@ -18,6 +18,7 @@
 """
 
 import math
+import re
 import random
 from collections import namedtuple
 from statistics import NormalDist
@@ -69,6 +70,29 @@ def beta_reg(a, b, x):
     if x < (a + 1) / (a + b + 2):
         return front * _betacf(a, b, x) / a
     return 1.0 - front * _betacf(b, a, 1.0 - x) / b
+
+
+def beta_quantile(q, a, b):
+    """The x with I_x(a, b) = q (bisection: I is increasing in x), for 0 ≤ q ≤ 1."""
+    lo, hi = 0.0, 1.0
+    for _ in range(64):  # 2⁻⁶⁴: below a double's resolution near the quantiles that matter
+        mid = 0.5 * (lo + hi)
+        if beta_reg(a, b, mid) < q:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+def clopper_pearson(k, n, level=0.95):
+    """Two-sided exact (Clopper–Pearson) interval of a binomial share from k successes in n trials:
+    (lo, hi) with P(X ≥ k | lo) = P(X ≤ k | hi) = (1 − level)/2; (nan, nan) for n = 0."""
+    if n <= 0:
+        return math.nan, math.nan
+    a = (1.0 - level) / 2.0
+    lo = 0.0 if k <= 0 else beta_quantile(a, k, n - k + 1)
+    hi = 1.0 if k >= n else beta_quantile(1.0 - a, k + 1, n - k)
+    return lo, hi
 
 
 def t_cdf(x, dof):
@@ -721,8 +745,10 @@ def pool_runs(tables, keys, metrics):
     clusters: M_mean is the mean of the runs' means weighted by their clusters, M_se comes from the
     spread of the run means (so between-run variation is inside it) on K − 1 degrees of freedom
     (M_clusters = K), M_n is the sum. M_se_within keeps the within-run SE of the pooled mean for
-    comparison and M_runs the number of runs. A point missing from a run is an error. With one
-    table the rows come back unchanged (M_runs = 1)."""
+    comparison and M_runs the number of runs. Per-replica members (`F_replica_K`, e.g. the
+    predictor's pick_replica_K) are every run's: run 0's replicas keep their K, the next run's
+    follow them (K + R₀, …), so a rule over replicas sees every run's. A point missing from a run is
+    an error. With one table the rows come back unchanged (M_runs = 1)."""
     if not tables:
         raise ValueError("no tables to pool")
     index = []
@@ -741,10 +767,30 @@ def pool_runs(tables, keys, metrics):
             if key not in by:
                 raise ValueError("run %d has no row with %s = %s" % (i, keys, key))
             rows.append(by[key])
-        pooled = dict(first)
+        pooled = {k: v for k, v in first.items() if not _REPLICA_MEMBER.match(k)}
+        pooled.update(_pool_replica_members(rows))
         for m in metrics:
             pooled.update(_pool_metric(rows, m))
         out.append(pooled)
+    return out
+
+
+_REPLICA_MEMBER = re.compile(r"^(.*_replica_)(\d+)$")
+
+
+def _pool_replica_members(rows):
+    """Every run's `F_replica_K` cells, renumbered consecutively over the runs in run order (see
+    pool_runs); empty cells (a run with fewer replicas at this point) are left out."""
+    out, next_k = {}, {}
+    for r in rows:
+        members = sorted((m.group(1), int(m.group(2)), v) for m, v in
+                         ((_REPLICA_MEMBER.match(key), v) for key, v in r.items()) if m)
+        for fam, _, value in members:
+            if value is None or value == "" or value != value:
+                continue
+            k = next_k.get(fam, 0)
+            out["%s%d" % (fam, k)] = value
+            next_k[fam] = k + 1
     return out
 
 

@@ -133,20 +133,94 @@ fn detp_shards_on_one_thread_merge_into_the_two_thread_table() {
     }
     traversal_is_timed_per_replica(&w.join("detp-small.csv"), 2);
     traversal_is_timed_per_replica(&s.join("detp-small.csv"), 2);
-    // Two replicas: every point's value in each replica, whose mean is the pooled value (so a mean
-    // error over a group of points can take its SE across replicas).
+    // Points in the ball are drawn per replica: one row per replica and disc (samples 0 … 2n − 1 of
+    // each sweep point), no per-replica columns (disc i is another point in each replica).
     let (h, rows) = crate::common::read_csv(&w.join("detp-small.points.csv"));
+    assert!(
+        !h.iter().any(|c| c.starts_with("irradiance_replica_")),
+        "{h:?}"
+    );
+    assert_eq!(rows.len(), 4 * 2 * 2_000);
+}
+
+/// The points of each replica of a lines point as (x, y, z, nx, ny, nz) text, from the points
+/// table of sweep point `point` (replica k's discs are samples k·n … (k + 1)·n − 1).
+fn replica_points(dir: &Path, stem: &str, point: &str, n: usize) -> Vec<Vec<Vec<String>>> {
+    let (h, rows) = crate::common::read_csv(&dir.join(format!("{stem}.points.csv")));
     let at = |c: &str| h.iter().position(|x| x == c).expect(c);
-    assert!(!h.iter().any(|c| c == "irradiance_replica_2"));
-    for r in &rows {
-        let v = |c: &str| r[at(c)].parse::<f64>().unwrap();
-        let mean = (v("irradiance_replica_0") + v("irradiance_replica_1")) / 2.0;
-        assert!(
-            (mean - v("irradiance_mean")).abs() <= 1e-9 * mean.abs().max(1e-300),
-            "{mean} vs {}",
-            v("irradiance_mean")
-        );
+    let mut mine: Vec<&Vec<String>> = rows.iter().filter(|r| r[at("point")] == point).collect();
+    mine.sort_by_key(|r| r[at("sample")].parse::<usize>().unwrap());
+    mine.chunks(n)
+        .map(|c| {
+            c.iter()
+                .map(|r| {
+                    ["x", "y", "z", "nx", "ny", "nz"]
+                        .iter()
+                        .map(|k| r[at(k)].clone())
+                        .collect()
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// A lines point's replicas are new lines *and* new points (the specs' "new lines and points
+/// each"): points uniform in the ball differ between replicas, the lattice keeps its centres and
+/// draws new normals; the run is the same on 1 and 2 threads; and the sphere cache's misses per
+/// level, which depend on the points, vary between replicas: an SE of zero at every coarse level
+/// was the sign of one point set shared by the replicas.
+#[test]
+fn lines_replicas_draw_their_own_points() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let text = SPEC
+        .replace("replicas = 2", "replicas = 3")
+        .replace("points = 2_000", "points = 1_000")
+        .replace(
+            "[sweep]\n\"detp.q\" = [0.5, 0.8]\n\"detp.order\" = [\"morton\", \"hilbert\"]",
+            "[sweep]\n\"detp.point_source\" = [\"ball\", \"grid\"]",
+        )
+        .replace("points = 1_000", "points = 1_000\nq = 0.5");
+    assert!(text.contains("point_source"), "{text}");
+    let spec = write_spec(tmp.path(), "detp-small", &text);
+    let (one, two) = (tmp.path().join("one"), tmp.path().join("two"));
+    run_ok(&spec, &one, &["--threads", "1"]);
+    run_ok(&spec, &two, &["--threads", "2"]);
+    let (a, b) = (one.join("detp-small"), two.join("detp-small"));
+    assert_eq!(
+        assert_same_measured(&a.join("detp-small.csv"), &b.join("detp-small.csv")),
+        2
+    );
+    same_side_tables(&a, &b, "detp-small");
+    // Ball (point 0): every replica its own points.
+    let ball = replica_points(&a, "detp-small", "0", 1_000);
+    assert_eq!(ball.len(), 3);
+    for (i, x) in ball.iter().enumerate() {
+        for y in &ball[i + 1..] {
+            let same = x.iter().zip(y).filter(|(p, q)| p[..3] == q[..3]).count();
+            assert_eq!(same, 0, "replicas share {same} of their points");
+        }
     }
+    // The lattice (point 1, 10³ points): the same centres, new normals.
+    let grid = replica_points(&a, "detp-small", "1", 1_000);
+    assert_eq!(grid.len(), 3);
+    for y in &grid[1..] {
+        assert!(grid[0].iter().zip(y).all(|(p, q)| p[..3] == q[..3]));
+        assert!(grid[0].iter().zip(y).all(|(p, q)| p[3..] != q[3..]));
+    }
+    // The misses of the ball's coarse levels (1 … 9) now vary with the points.
+    let (h, rows) = crate::common::read_csv(&a.join("detp-small.levels.csv"));
+    let at = |c: &str| h.iter().position(|x| x == c).expect(c);
+    let varying: Vec<String> = rows
+        .iter()
+        .filter(|r| r[at("point")] == "0")
+        .filter(|r| (1..=9).contains(&r[at("level")].parse::<u32>().unwrap()))
+        .filter(|r| r[at("misses_level_per_replica_se")].parse::<f64>().unwrap() > 0.0)
+        .map(|r| r[at("level")].clone())
+        .collect();
+    assert!(
+        !varying.is_empty(),
+        "no coarse level's misses vary: {rows:?}"
+    );
 }
 
 #[test]

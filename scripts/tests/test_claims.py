@@ -25,7 +25,7 @@ import claims_rules as R  # noqa: E402
 
 PREREG = os.path.join(SCRIPTS, "..", "claims", "preregistered.toml")
 ENGINE = ["claims.py", "claims_measures.py", "claims_levels.py", "claims_engines.py", "claims_data.py",
-          "claims_derived.py", "claims_rules.py"]
+          "claims_derived.py", "claims_rules.py", "claims_version.py"]
 # Numbers the engine may spell: formatting digits (3, 4, 5), per cent (100), nanoseconds (1e9),
 # float comparison (1e-9, 1e-6), "an integer below 10¹⁵" (display), one half ("more than half",
 # the nearest level on a log scale). A window, a level, a target or a tolerance is none of these.
@@ -278,6 +278,116 @@ class EngineEdges(unittest.TestCase):
         pts[0]["reference_e"] = 1.0
         m, se, dof, n = claims_engines.region_bias(pts, 2, lambda p: True)
         self.assertAlmostEqual(m, 0.5)
+
+
+# ----------------------------------------------------------------------------------------------
+# the §4.1 predictor's picks, written from a known truth
+
+PCOLS = ["point", "dynamic.ratio", "dynamic.predictor"] + [
+    "warm_%s_s_%s" % (e, k) for e in ("sphere_cache", "disc_index") for k in ("mean", "se", "n", "clusters")]
+
+
+def predictor_results(root, right_per_run):
+    """results/pred with one run per entry of `right_per_run`: at two ratios, for both predictors,
+    the sphere cache is clearly faster (1 s against 2 s) and that run's first k of 8 replicas
+    picked it."""
+    for run, k in enumerate(right_per_run):
+        rows = []
+        for predictor in ("subsample", "paper"):
+            for x in (0.1, 0.3):
+                picks = ["sphere-cache"] * k + ["disc-index"] * (8 - k)
+                rows.append([len(rows), x, predictor, 1.0, 0.01, 8, 8, 2.0, 0.01, 8, 8] + picks)
+        cols = PCOLS + ["pick_replica_%d" % i for i in range(8)]
+        write(os.path.join(root, "pred", "runs", str(run), "pred.csv"), cols, rows)
+        if run == 0:
+            write(os.path.join(root, "pred", "pred.csv"), cols, rows)
+
+
+def predictor_claim():
+    pre = prereg()
+    c = copy.deepcopy(next(c for c in pre["claim"] if c["statistic"] == "predictor"))
+    c["source"] = "pred"
+    pre["claim"] = [c]
+    return pre
+
+
+class Predictor(unittest.TestCase):
+    def judge(self, right_per_run):
+        with tempfile.TemporaryDirectory() as d:
+            predictor_results(d, right_per_run)
+            return claims.judge_all(d, predictor_claim())[0]
+
+    def test_every_runs_picks_are_judged(self):
+        # Run 0 right every time, runs 1 and 2 never: 8 of 24 picks per ratio, not run 0's 8 of 8.
+        r = self.judge([8, 0, 0])
+        self.assertEqual(r["outcome"], "differs", r["verdict"])
+        self.assertIn("0.1: 8 of 24", r["measured"])
+        self.assertIn("pooled 16 of 48", r["measured"])
+
+    def test_outside_only_when_the_pooled_interval_lies_below_the_share(self):
+        # 21 of 24 right per ratio: 0.875 < 0.9 at every ratio, but the exact interval of 42 of 48
+        # ([0.75, 0.95]) reaches 0.9: undecided, not outside.
+        r = self.judge([7, 7, 7])
+        self.assertEqual(r["outcome"], "inconclusive", r["verdict"])
+        r = self.judge([8, 8, 8])
+        self.assertEqual(r["outcome"], "holds", r["verdict"])
+
+
+class EngineVersions(unittest.TestCase):
+    """The claims engine versioned like a rule (claims_version.py)."""
+
+    def setUp(self):
+        import claims_version
+        self.V = claims_version
+
+    def records(self, outcome, rule="c/2"):
+        return [{"id": "c", "rule": rule, "outcome": outcome}]
+
+    def test_a_verdict_changed_by_the_engine_without_history_fails(self):
+        v1 = self.V.updated([], self.records("inconclusive"), "h1")
+        v2 = self.V.updated(v1, self.records("holds"), "h2")
+        self.assertEqual([v["version"] for v in v2], [1, 2])
+        pre = {"claim": [{"id": "c", "rule": "c/2"}]}
+        problems = self.V.transition_problems(v2, pre)
+        self.assertEqual(len(problems), 1)
+        self.assertIn("engine = 1", problems[0])
+        pre["claim"][0]["history"] = [{"rule": "c/2", "engine": 1, "verdict": "inconclusive"}]
+        self.assertEqual(self.V.transition_problems(v2, pre), [])
+        # An entry for another version or verdict does not count.
+        pre["claim"][0]["history"] = [{"rule": "c/2", "engine": 2, "verdict": "inconclusive"}]
+        self.assertEqual(len(self.V.transition_problems(v2, pre)), 1)
+
+    def test_a_new_rule_or_new_tables_under_one_engine_need_no_engine_entry(self):
+        v1 = self.V.updated([], self.records("inconclusive", "c/1"), "h1")
+        v2 = self.V.updated(v1, self.records("holds", "c/2"), "h2")
+        self.assertEqual(self.V.transition_problems(v2, {"claim": [{"id": "c", "rule": "c/2"}]}), [])
+        same = self.V.updated(v1, self.records("holds", "c/1"), "h1")
+        self.assertEqual(len(same), 1)
+        self.assertEqual(same[0]["claims"]["c"]["outcome"], "holds")
+
+    def test_the_ledger_round_trips(self):
+        v = self.V.updated([], self.records("holds"), "h1", where='a "quoted" place')
+        with tempfile.TemporaryDirectory() as d:
+            p = os.path.join(d, "l.toml")
+            with open(p, "w") as f:
+                f.write(self.V.render_ledger(v))
+            self.assertEqual(self.V.read_ledger(p), v)
+
+    def test_the_committed_ledger_keeps_every_changed_verdict(self):
+        versions = self.V.read_ledger()
+        self.assertGreaterEqual(len(versions), 1)
+        self.assertEqual(self.V.transition_problems(versions, prereg()), [])
+
+    def test_the_hash_covers_the_whole_engine(self):
+        self.assertLessEqual(set(ENGINE) | {"raycost_stats.py"}, set(self.V.ENGINE_FILES))
+
+    def test_check_refuses_an_engine_entry_without_a_version_number(self):
+        pre = prereg()
+        c = next(c for c in pre["claim"] if c.get("history"))
+        c["history"].append({"rule": c["rule"], "engine": "two", "registered": "x", "text": "x",
+                             "verdict": "holds", "data": "x"})
+        with self.assertRaises(SystemExit):
+            claims.check(pre, PREREG)
 
 
 class CommittedTables(unittest.TestCase):

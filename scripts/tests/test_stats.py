@@ -282,6 +282,39 @@ class Pooling(unittest.TestCase):
             S.pool_runs([t, t[:2]], ["point"], ["m"])
 
 
+class RunsPicks(unittest.TestCase):
+    def test_every_runs_replica_members_are_kept_in_run_order(self):
+        a = [{"point": 0, "pick_replica_0": "a", "pick_replica_1": "b", "m_mean": 1.0, "m_se": 0.1, "m_n": 2}]
+        b = [{"point": 0, "pick_replica_0": "c", "pick_replica_1": math.nan, "m_mean": 2.0, "m_se": 0.1,
+              "m_n": 2}]
+        row = S.pool_runs([a, b], ["point"], ["m"])[0]
+        picks = [row[k] for k in sorted(row) if k.startswith("pick_replica_")]
+        self.assertEqual(sorted(picks), ["a", "b", "c"])
+        self.assertEqual((row["pick_replica_0"], row["pick_replica_2"]), ("a", "c"))
+        self.assertNotIn("pick_replica_3", row)
+
+
+class ClopperPearson(unittest.TestCase):
+    def test_exact_values(self):
+        # 8 of 10 at 95 %: [0.4439, 0.9748] (the beta quantiles); 0 and n give 0 and 1 as a bound.
+        lo, hi = S.clopper_pearson(8, 10, 0.95)
+        self.assertAlmostEqual(lo, 0.44390454, places=6)
+        self.assertAlmostEqual(hi, 0.97478927, places=6)
+        self.assertEqual(S.clopper_pearson(0, 10)[0], 0.0)
+        self.assertAlmostEqual(S.clopper_pearson(0, 10)[1], 1 - 0.025 ** (1 / 10), places=9)
+        self.assertEqual(S.clopper_pearson(10, 10)[1], 1.0)
+        self.assertTrue(all(math.isnan(x) for x in S.clopper_pearson(0, 0)))
+
+    def test_coverage_is_at_least_the_level(self):
+        rng = random.Random(3)
+        n, p, hits, trials = 24, 0.8, 0, 400
+        for _ in range(trials):
+            k = sum(rng.random() < p for _ in range(n))
+            lo, hi = S.clopper_pearson(k, n, 0.95)
+            hits += lo <= p <= hi
+        self.assertGreaterEqual(hits / trials, 0.94)
+
+
 class BootstrapBookkeeping(unittest.TestCase):
     def test_undefined_draws_are_reported(self):
         sampler = S.Parametric([0.0], [1.0], [10])

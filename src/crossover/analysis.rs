@@ -166,25 +166,35 @@ fn add_reason(row: &mut CrossRow, why: String) {
     }
 }
 
-/// A DETP configuration's rows (one per engine) at `target`, with the bootstrap CI of N*.
-fn detp_rows(inp: &Inputs, e: &DetpErrors, target: f64) -> Vec<CrossRow> {
-    let reps = e.mse.len().min(inp.pt_cv2.len());
-    let mean: Vec<f64> = (0..e.photons.len())
-        .map(|j| e.mse[..reps].iter().map(|m| m[j]).sum::<f64>() / reps as f64)
+/// The rows of one configuration (one per method of `methods`) at `target` from each replica's
+/// relative MSE at each photon count (`mse[r][j]`, N photons of one replica): the error fit on the
+/// replicas' mean, N* and its bootstrap CI with the replicas as the units (paired with path
+/// tracing's). DETP and the photon maps alike.
+fn replica_rows(
+    inp: &Inputs,
+    config: &Config,
+    methods: &[Method],
+    photons: &[f64],
+    mse: &[Vec<f64>],
+    target: f64,
+) -> Vec<CrossRow> {
+    let reps = mse.len().min(inp.pt_cv2.len());
+    let mean: Vec<f64> = (0..photons.len())
+        .map(|j| mse[..reps].iter().map(|m| m[j]).sum::<f64>() / reps as f64)
         .collect();
-    let fit = ErrorFit::fit_relative(&e.photons, &mean);
+    let fit = ErrorFit::fit_relative(photons, &mean);
     let replicas: Vec<ReplicaErrors> = (0..reps)
         .map(|r| ReplicaErrors {
-            detp_mse: e.mse[r].clone(),
+            detp_mse: mse[r].clone(),
             pt_cv2: inp.pt_cv2[r],
         })
         .collect();
-    Method::DETP
+    methods
         .iter()
         .map(|&method| {
             let config = Config {
                 method,
-                ..e.config.clone()
+                ..config.clone()
             };
             let mut row = base_row(inp, target, config, &fit);
             if let Some(c) = row.cost {
@@ -194,7 +204,7 @@ fn detp_rows(inp: &Inputs, e: &DetpErrors, target: f64) -> Vec<CrossRow> {
                     .find(|s| row.config.matches(&s.config))
                     .map_or(&[][..], |s| &s.samples[..]);
                 let (est, ci) = points_crossover_interval(
-                    &e.photons,
+                    photons,
                     &replicas,
                     inp.timing.median,
                     &c.model,
@@ -216,13 +226,26 @@ fn detp_rows(inp: &Inputs, e: &DetpErrors, target: f64) -> Vec<CrossRow> {
         .collect()
 }
 
-/// A photon map's row at `target`: N* from the fit on the replicas' mean, no CI.
+/// A DETP configuration's rows (one per engine) at `target`, with the bootstrap CI of N*.
+fn detp_rows(inp: &Inputs, e: &DetpErrors, target: f64) -> Vec<CrossRow> {
+    replica_rows(inp, &e.config, &Method::DETP, &e.photons, &e.mse, target)
+}
+
+/// A photon map's row at `target`, judged as DETP is: each replica's error at its own N photons
+/// (a fixed-k map's variance goes as 1/k, whatever N or the replicas), the replicas the
+/// bootstrap's units. Without per-replica values in the points table: N* from the fit on the
+/// replicas' mean MSE, no CI.
 fn map_row(inp: &Inputs, e: &MapErrors, target: f64) -> CrossRow {
-    let fit = ErrorFit::fit_relative(&e.photons, &e.mse);
+    if e.per_replica {
+        let method = [e.config.method];
+        return replica_rows(inp, &e.config, &method, &e.photons, &e.mse, target).remove(0);
+    }
+    let mean = e.mse.first().map_or(&[][..], |m| &m[..]);
+    let fit = ErrorFit::fit_relative(&e.photons, mean);
     let mut row = base_row(inp, target, e.config.clone(), &fit);
     add_reason(
         &mut row,
-        "errors of the mean over replicas only (fit at R·N effective photons): no bootstrap CI"
+        "no per-replica values in the points table: the replicas' mean MSE at N photons from the mean and its SE, no bootstrap CI"
             .into(),
     );
     if let Some(c) = row.cost {
@@ -395,6 +418,50 @@ mod tests {
                 rows: 1,
             },
             costs: vec![CostSamples { config, samples }],
+        }
+    }
+
+    /// A fixed-k photon map whose every replica's error levels off at 20 % (B = 0.04): the mean of
+    /// four replicas would be at 10 %, but one estimate never is, so a 10 % target is out of
+    /// reach (per-replica values, or only their mean MSE, alike).
+    #[test]
+    fn a_photon_map_does_not_reach_what_one_replica_does_not() {
+        let mut inp = inputs();
+        let config = Config {
+            method: Method::PhotonMap,
+            direct: Some("photons".into()),
+            edge: None,
+            disc_radius: None,
+        };
+        let photons = vec![1e4, 1e5, 1e6];
+        for per_replica in [true, false] {
+            let series = if per_replica { 4 } else { 1 };
+            inp.maps = vec![MapErrors {
+                config: config.clone(),
+                photons: photons.clone(),
+                mse: vec![photons.iter().map(|n| 0.04 + 100.0 / n).collect(); series],
+                per_replica,
+            }];
+            inp.pt_cv2 = vec![1.0; 4];
+            let rows = crossover_rows(&inp, &[0.1, 0.25]);
+            let map: Vec<&CrossRow> = rows
+                .iter()
+                .filter(|r| r.config.method == Method::PhotonMap)
+                .collect();
+            assert_eq!(map.len(), 2);
+            assert!(
+                map[0].photons.is_nan() && map[0].n_star.is_nan(),
+                "{:?}",
+                map[0]
+            );
+            assert!(map[0].reason.contains("error floor"), "{}", map[0].reason);
+            assert!(
+                (map[0].error_floor - 0.2).abs() < 1e-6,
+                "{}",
+                map[0].error_floor
+            );
+            // 25 % is within one replica's reach.
+            assert!(map[1].photons.is_finite(), "{:?}", map[1]);
         }
     }
 

@@ -62,7 +62,7 @@ pub const DISC_RADIUS: Column = value(
     "detp.disc_radius d (NaN where the method does not depend on it)",
 );
 /// N_ε or paths.
-pub const PHOTONS: Column = value("photons", "photons", Class::Measured, "N_ε = c/(ε² − B): photons of one estimate that reach the target (photon maps: effective photons R·N); path tracing: paths per point ⌈(cv/ε)²⌉; NaN if unreachable");
+pub const PHOTONS: Column = value("photons", "photons", Class::Measured, "N_ε = c/(ε² − B): photons of one estimate (one replica, DETP and the photon maps alike) that reach the target; path tracing: paths per point ⌈(cv/ε)²⌉; NaN if unreachable");
 /// √B.
 pub const ERROR_FLOOR: Column = value(
     "error_floor",

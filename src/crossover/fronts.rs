@@ -1,7 +1,8 @@
 //! What the fronts (a kind-`detp` run with a reference, ≥ 2 replicas and a sweep over
 //! detp.direct × detp.edge × detp.photons × detp.disc_radius) say about errors: per DETP
-//! configuration and replica the relative MSE at each photon count; per photon map its relative MSE
-//! from the main table's means; per replica the path tracer's cv².
+//! configuration and replica the relative MSE at each photon count; per photon map the same, per
+//! replica at its own N photons (a map's error does not fall with the replicas: a fixed-k map's
+//! variance goes as 1/k whatever N); per replica the path tracer's cv².
 //!
 //! Relative MSE of a replica: [mean_i (E_ri − R_i)² − mean_i se_R,i²] / (mean_i R_i)², the truth's
 //! variance subtracted exactly as the kind computes `irradiance_ref_rmse`
@@ -27,15 +28,30 @@ pub struct DetpErrors {
     pub mse: Vec<Vec<f64>>,
 }
 
-/// A photon map's errors: only the mean over replicas is in the tables.
+/// A photon map's errors, as DETP's: each replica's relative MSE at the N photons it had.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MapErrors {
     /// The map and detp.direct.
     pub config: Config,
-    /// Effective photons R·N of the mean over R replicas, increasing.
+    /// Photons N of one replica's map, increasing.
     pub photons: Vec<f64>,
-    /// (`{}_ref_rmse_mean` / `reference_irradiance_mean`)² at each.
-    pub mse: Vec<f64>,
+    /// `mse[r][j]`: replica r's relative MSE at `photons[j]` where the points table has each
+    /// replica's estimate (`{map}_replica_{r}`); else one series: the mean over replicas of their
+    /// relative MSE, from the mean and its across-replica SE ([`mean_replica_mse`]).
+    pub mse: Vec<Vec<f64>>,
+    /// Whether `mse` holds the replicas (the bootstrap's units) or only their mean.
+    pub per_replica: bool,
+}
+
+/// The mean over R replicas of their relative MSE, from the replicas' mean ē_i and its SE se_i
+/// at every point: (1/R)·Σ_r (e_ri − R_i)² = (ē_i − R_i)² + (R − 1)·se_i² exactly (se_i² being
+/// the replicas' sample variance over R), so this is [`relative_mse`] of the mean plus
+/// (R − 1)·mean_i se_i² over the truth's mean².
+pub fn mean_replica_mse(mean: &[f64], se: &[f64], replicas: f64, refr: &[(f64, f64)]) -> f64 {
+    let n = mean.len().min(refr.len()) as f64;
+    let truth = refr.iter().map(|r| r.0).sum::<f64>() / n;
+    let spread = se.iter().map(|s| s * s).sum::<f64>() / n;
+    relative_mse(mean, refr) + (replicas - 1.0) * spread / (truth * truth)
 }
 
 /// Relative MSE of `est` against the reference `refr` (R_i, se_R,i): see the module doc.
@@ -137,31 +153,67 @@ fn sort_by_photons(photons: &mut Vec<f64>, mse: &mut [Vec<f64>]) {
     }
 }
 
-/// Per photon map present in the table and detp.direct: its relative MSE at R·N effective photons,
-/// from the rows at the first (edge, d) of that direct in the table (a photon map does not depend
-/// on either).
-pub fn map_errors(main: &Csv, replicas: f64) -> Result<Vec<MapErrors>, OutputError> {
-    let truth = main.numbers("reference_irradiance_mean", "the truth's mean irradiance")?;
+/// Per photon map present in the points table and detp.direct: each replica's relative MSE at its N
+/// photons (or, without per-replica columns, their mean: see [`MapErrors`]), from the rows at the
+/// first (edge, d) of that direct in the table (a photon map does not depend on either).
+pub fn map_errors(main: &Csv, points: &Csv, replicas: f64) -> Result<Vec<MapErrors>, OutputError> {
+    let why = "the truth the photon map is judged against: engine reference";
+    let (refe, refse) = (
+        points.numbers("reference_e", why)?,
+        points.numbers("reference_se", why)?,
+    );
+    let by = rows_by_point(points)?;
+    let sweep = main.numbers("point", "the sweep point")?;
     let photons = main.numbers("detp.photons", "the photon count of each row")?;
     let settings = settings(main)?;
     let mut out = Vec::new();
     for method in Method::MAPS {
-        let col = format!("{}_ref_rmse_mean", method.member());
-        if !main.has(&col) {
+        let member = method.member();
+        if !points.has(&format!("{member}_e")) {
             continue;
         }
-        let rmse = main.numbers(&col, "the photon map's error")?;
-        let mut seen: Vec<(String, String, f64)> = Vec::new();
+        let reps: Vec<Vec<f64>> = points
+            .family(&format!("{member}_replica_"))
+            .iter()
+            .map(|(_, c)| points.numbers(c, "the photon map's value per replica"))
+            .collect::<Result<_, _>>()?;
+        let per_replica = reps.len() >= 2;
+        let (mean, se) = if per_replica {
+            (Vec::new(), Vec::new())
+        } else {
+            let why = "the photon map's mean over replicas and its SE";
+            (
+                points.numbers(&format!("{member}_e"), why)?,
+                points.numbers(&format!("{member}_se"), why)?,
+            )
+        };
+        let mut seen: Vec<String> = Vec::new();
         for (direct, edge, d) in &settings {
-            if seen.iter().any(|s| &s.0 == direct) {
+            if seen.contains(direct) {
                 continue;
             }
-            seen.push((direct.clone(), edge.clone(), *d));
-            let mut pts: Vec<(f64, f64)> = (0..settings.len())
-                .filter(|&i| settings[i] == (direct.clone(), edge.clone(), *d))
-                .map(|i| (replicas * photons[i], (rmse[i] / truth[i]).powi(2)))
-                .collect();
-            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            seen.push(direct.clone());
+            let mut at: Vec<(f64, Vec<f64>)> = Vec::new();
+            for i in
+                (0..settings.len()).filter(|&i| settings[i] == (direct.clone(), edge.clone(), *d))
+            {
+                let rows = by.get(&(sweep[i] as u64)).ok_or_else(|| {
+                    OutputError::new(
+                        &points.path,
+                        format!("has no rows of sweep point {}", sweep[i]),
+                    )
+                })?;
+                let refr: Vec<(f64, f64)> = rows.iter().map(|&k| (refe[k], refse[k])).collect();
+                let pick = |v: &[f64]| rows.iter().map(|&k| v[k]).collect::<Vec<_>>();
+                let mse = if per_replica {
+                    reps.iter().map(|v| relative_mse(&pick(v), &refr)).collect()
+                } else {
+                    vec![mean_replica_mse(&pick(&mean), &pick(&se), replicas, &refr)]
+                };
+                at.push((photons[i], mse));
+            }
+            at.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let series = at.first().map_or(0, |a| a.1.len());
             out.push(MapErrors {
                 config: Config {
                     method,
@@ -169,8 +221,11 @@ pub fn map_errors(main: &Csv, replicas: f64) -> Result<Vec<MapErrors>, OutputErr
                     edge: None,
                     disc_radius: None,
                 },
-                photons: pts.iter().map(|p| p.0).collect(),
-                mse: pts.iter().map(|p| p.1).collect(),
+                photons: at.iter().map(|a| a.0).collect(),
+                mse: (0..series)
+                    .map(|r| at.iter().map(|a| a.1[r]).collect())
+                    .collect(),
+                per_replica,
             });
         }
     }
@@ -254,6 +309,53 @@ mod tests {
         assert!((e[0].mse[0][0] - 0.04).abs() < 1e-12 && (e[0].mse[1][0] - 0.16).abs() < 1e-12);
         assert!((e[0].mse[0][1] - 0.01).abs() < 1e-12, "{e:?}");
         assert_eq!(e[1].config.direct.as_deref(), Some("nee"));
+    }
+
+    /// Four replicas of a photon map at two points, truth 1 ± 0: per-replica columns give each
+    /// replica's own MSE at N (not the mean's at 4N); without them the replicas' mean MSE follows
+    /// exactly from the mean and its across-replica SE.
+    #[test]
+    fn photon_maps_are_judged_per_replica_at_their_own_photons() {
+        let main = csv(
+            "point,detp.direct,detp.edge,detp.photons,detp.disc_radius\n0,photons,paper,100,5\n",
+        );
+        let vals = [[1.2, 0.8, 1.1, 0.9], [0.7, 1.3, 1.0, 1.0]];
+        let mut with =
+            String::from("point,sample,reference_e,reference_se,photon_map_e,photon_map_se");
+        for r in 0..4 {
+            with.push_str(&format!(",photon_map_replica_{r}"));
+        }
+        with.push('\n');
+        let mut without =
+            String::from("point,sample,reference_e,reference_se,photon_map_e,photon_map_se\n");
+        for (s, v) in vals.iter().enumerate() {
+            let m = v.iter().sum::<f64>() / 4.0;
+            let var = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / 3.0;
+            let se = (var / 4.0).sqrt();
+            with.push_str(&format!(
+                "0,{s},1,0,{m},{se},{},{},{},{}\n",
+                v[0], v[1], v[2], v[3]
+            ));
+            without.push_str(&format!("0,{s},1,0,{m},{se}\n"));
+        }
+        let e = map_errors(&main, &csv(&with), 4.0).expect("errors");
+        assert_eq!(e.len(), 1);
+        assert!(e[0].per_replica);
+        assert_eq!(e[0].photons, [100.0]);
+        let own: Vec<f64> = (0..4)
+            .map(|r| (vals[0][r] - 1.0f64).powi(2) / 2.0 + (vals[1][r] - 1.0f64).powi(2) / 2.0)
+            .collect();
+        for r in 0..4 {
+            assert!((e[0].mse[r][0] - own[r]).abs() < 1e-12, "{e:?}");
+        }
+        let f = map_errors(&main, &csv(&without), 4.0).expect("errors");
+        assert!(!f[0].per_replica);
+        let mean = own.iter().sum::<f64>() / 4.0;
+        assert!(
+            (f[0].mse[0][0] - mean).abs() < 1e-12,
+            "{} vs {mean}",
+            f[0].mse[0][0]
+        );
     }
 
     /// mse_n = cv²/n exactly: cv² comes back per replica, relative to the mean truth over the

@@ -186,10 +186,14 @@ fn compute(o: &Options) -> Result<Outputs, OutputError> {
     let points = fronts.side("points")?;
     let pt_side = fronts.side("path_tracing")?;
     let seed = first_number(&main, "experiment.seed", "the bootstrap's seed")? as u64;
-    let replicas = first_number(&main, "detp.replicas", "the photon maps' effective photons")?;
+    let replicas = first_number(
+        &main,
+        "detp.replicas",
+        "the photon maps' spread over replicas",
+    )?;
     let scene = scene_name(&main, &fronts.results.name);
     let detp = fronts::detp_errors(&main, &points)?;
-    let maps = fronts::map_errors(&main, replicas)?;
+    let maps = fronts::map_errors(&main, &points, replicas)?;
     let (pt_point, pt_cv2) = fronts::path_tracing_cv2(&pt_side, &points)?;
     let mut sweep = Source::open(&o.points)?;
     let cost_table = sweep.main()?;

@@ -55,7 +55,7 @@ pub mod domain {
     pub const BLOCK: u64 = 0x626c_6f63;
     /// A batch of μ-random lines of a DETP point: `[LINES, seed, point, replica, batch]`.
     pub const LINES: u64 = 0x6c69_6e65;
-    /// A batch of DETP sample points: `[POINTS, seed, point, batch]`.
+    /// A batch of DETP sample points of one replica: `[POINTS, seed, point, replica, batch]`.
     pub const POINTS: u64 = 0x706f_696e;
     /// One photon's path: `[PHOTON, seed, photon id]` (re-traceable alone).
     pub const PHOTON: u64 = 0x7068_6f74;

@@ -678,7 +678,7 @@ pub const LEVELS: Table<DetpConfig, LevelRow> = Table {
 
 /// Sample index.
 pub const SAMPLE: Column =
-    Column::value("sample", "1", Class::Measured, "the sample point's index");
+    Column::value("sample", "1", Class::Measured, "the sample point's index (points drawn per replica, lines: replica k's point i is k·n_P + i)");
 /// Coordinates and normal.
 pub const X: Column = Column::value("x", "length", Class::Measured, "the point");
 /// y.

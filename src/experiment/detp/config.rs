@@ -128,6 +128,14 @@ impl DetpConfig {
         self.cache.q
     }
 
+    /// Whether each replica draws its own sample points (see `detp::points`): points uniform in the
+    /// ball and the lattice's random normals are part of what a replica samples (the specs' "new
+    /// lines and points each"); a scene's surface lattice and a user's points file are fixed by
+    /// design and shared by every replica.
+    pub fn points_per_replica(&self) -> bool {
+        matches!(self.points, Points::Ball(_) | Points::Grid(_))
+    }
+
     /// The scene, for a scene source.
     pub fn scene(&self) -> Option<&SceneFile> {
         match &self.rays {

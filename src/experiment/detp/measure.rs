@@ -111,7 +111,14 @@ pub type PathAtPoint = (Vec<(String, f64)>, f64);
 
 /// What the replicas of one point leave.
 pub(super) struct Replicated {
+    /// The point set every replica shares or, where each replica draws its own
+    /// ([`DetpConfig::points_per_replica`]), the replica's being traced or last absorbed.
     pts: PointSet,
+    /// Each absorbed replica's exact irradiance per disc (of its own points where they vary).
+    exact: Vec<Vec<f64>>,
+    /// Points drawn per replica with `detp.write_points`: the earlier replicas' sets (the last one
+    /// is `pts`), for their rows in the points table.
+    earlier: Vec<PointSet>,
     refs: ReferenceCache,
     /// `detp.direct = "nee"`: the direct part per replica.
     direct: Vec<Arc<DirectPart>>,
@@ -149,7 +156,9 @@ impl Replicated {
             edge_s: 0.0,
             mismatches: 0,
             bf_checked: 0,
-            pts: points(cfg, point)?,
+            pts: points(cfg, point, 0)?,
+            exact: Vec::with_capacity(cfg.replicas as usize),
+            earlier: Vec::new(),
             refs: refs.clone(),
             direct: Vec::new(),
             segments_direct: 0,
@@ -158,6 +167,26 @@ impl Replicated {
             r.edge_s = r.pts.edge_s;
             r
         })
+    }
+
+    /// Makes `pts` replica `replica`'s point set: drawn anew where points vary per replica (replica
+    /// 0's is drawn by [`Replicated::new`]), kept for the points table if it is written.
+    fn enter(&mut self, cfg: &DetpConfig, point: u64, replica: u64) -> Result<(), Error> {
+        if replica == 0 || !cfg.points_per_replica() {
+            return Ok(());
+        }
+        let next = points(cfg, point, replica)?;
+        self.edge_s += next.edge_s;
+        let prev = std::mem::replace(&mut self.pts, next);
+        if cfg.write_points {
+            self.earlier.push(prev);
+        }
+        Ok(())
+    }
+
+    /// The point sets of the replicas in replica order (one where they share it).
+    fn sets(&self) -> impl Iterator<Item = &PointSet> {
+        self.earlier.iter().chain(std::iter::once(&self.pts))
     }
 
     /// Adds one replica's sums and counts (traced here, or summed over its photon shards): the
@@ -194,6 +223,7 @@ impl Replicated {
                 .collect(),
         );
         self.direct.extend(direct);
+        self.exact.push(self.pts.exact.clone());
     }
 
     /// The mean over replicas of the direct part at disc `i` and its variance (0, 0 without one).
@@ -265,6 +295,7 @@ pub(super) fn replicate(
 ) -> Result<Replicated, Error> {
     let mut r = Replicated::new(cfg, point, refs)?;
     for replica in 0..cfg.replicas {
+        r.enter(cfg, point, replica)?;
         let direct = engines::direct_part(cfg, &r.pts, replica, refs);
         let part = trace_replica(
             cfg,
@@ -294,9 +325,12 @@ pub(super) fn replicate_part(
         .iter()
         .map(|&e| engines::engine(e, refs))
         .collect();
-    let pts = points(cfg, point)?;
+    let mut pts = points(cfg, point, 0)?;
     let mut parts = Vec::with_capacity(cfg.replicas as usize);
     for replica in 0..cfg.replicas {
+        if replica > 0 && cfg.points_per_replica() {
+            pts = points(cfg, point, replica)?;
+        }
         let mut part = trace_replica(
             cfg,
             point,
@@ -327,6 +361,7 @@ pub(super) fn replicate_merged(
 ) -> Result<Replicated, Error> {
     let mut r = Replicated::new(cfg, point, refs)?;
     for (replica, part) in (0..cfg.replicas).zip(parts) {
+        r.enter(cfg, point, replica)?;
         for (e, p) in r.engines.iter_mut().zip(&part.engines) {
             e.absorb(cfg, &r.pts, p);
         }
@@ -358,7 +393,14 @@ pub(super) fn measure(
         exact: &r.pts.exact,
         reference: None,
     };
-    let detp_points = per_disc(r);
+    // Points drawn per replica have no per-disc mean across replicas (disc i is another point in
+    // each): their rows are per replica (`point_rows`), and no engine that needs one (the
+    // reference, scenes only) runs on them.
+    let detp_points = if cfg.points_per_replica() {
+        Vec::new()
+    } else {
+        per_disc(r)
+    };
     // Baselines' estimates per disc, and every engine against the reference where it runs.
     let baselines: Vec<(EngineChoice, Vec<(f64, f64)>)> = cfg
         .engines
@@ -375,7 +417,8 @@ pub(super) fn measure(
     let errs: Vec<(f64, f64)> = r
         .irr
         .iter()
-        .map(|e| engines::errors(e, &r.pts.exact))
+        .zip(&r.exact)
+        .map(|(e, x)| engines::errors(e, x))
         .collect();
     let engine_s: f64 = r.engines.iter().map(|e| e.seconds()).sum();
     let law = Law {
@@ -494,27 +537,43 @@ fn against_reference(
     })
 }
 
-/// DETP's mean irradiance and the exact mean, over the discs with an exact value (all of them where
-/// none has one, so the mean irradiance is still reported).
-fn mean_irradiance(r: &Replicated) -> (Estimate, f64) {
-    let (discs, exact) = (&r.pts.discs, &r.pts.exact);
-    let with_exact: Vec<usize> = (0..discs.len()).filter(|&i| exact[i].is_finite()).collect();
-    let judged: Vec<usize> = if with_exact.is_empty() {
-        (0..discs.len()).collect()
+/// The discs judged against an exact value: those with one (all of them where none has one, so the
+/// mean irradiance is still reported).
+fn judged_discs(exact: &[f64]) -> Vec<usize> {
+    let with_exact: Vec<usize> = (0..exact.len()).filter(|&i| exact[i].is_finite()).collect();
+    if with_exact.is_empty() {
+        (0..exact.len()).collect()
     } else {
         with_exact
-    };
-    let exact_mean = if exact.iter().any(|x| x.is_finite()) {
-        mean_over(exact, &judged)
-    } else {
-        f64::NAN
+    }
+}
+
+/// DETP's mean irradiance and the exact mean, over the discs with an exact value (see
+/// [`judged_discs`]), each replica over its own points' (they differ where points vary per replica;
+/// the exact mean is then the mean over replicas of theirs).
+fn mean_irradiance(r: &Replicated) -> (Estimate, f64) {
+    let judged_of: Vec<Vec<usize>> = r.exact.iter().map(|x| judged_discs(x)).collect();
+    let with_exact: Vec<f64> = r
+        .exact
+        .iter()
+        .zip(&judged_of)
+        .filter(|(x, _)| x.iter().any(|v| v.is_finite()))
+        .map(|(x, j)| mean_over(x, j))
+        .collect();
+    let exact_mean = match with_exact.first() {
+        None => f64::NAN,
+        // A shared point set: its own mean, bit for bit.
+        Some(&first) if with_exact.iter().all(|&x| x == first) => first,
+        Some(_) => with_exact.iter().sum::<f64>() / with_exact.len() as f64,
     };
     let mut mean_irr = engines::per_replica(
         &r.irr
             .iter()
-            .map(|e| mean_over(e, &judged))
+            .zip(&judged_of)
+            .map(|(e, j)| mean_over(e, j))
             .collect::<Vec<_>>(),
     );
+    let (discs, judged) = (&r.pts.discs, judged_discs(&r.pts.exact));
     if r.irr.len() == 1 && !judged.is_empty() {
         // One replica: the Poisson SE of the mean over the n judged points, each point's sum
         // counted as independent (as the points table does per point): √(Σ Ē·w̄/(π·d_i²))/n, which
@@ -535,14 +594,43 @@ fn mean_irradiance(r: &Replicated) -> (Estimate, f64) {
     (mean_irr, exact_mean)
 }
 
+/// Points drawn per replica: one row per replica and disc (replica k's disc i is sample k·n_P + i),
+/// its value in that replica with the Poisson SE of one replica's sum (as [`per_disc`] gives with
+/// one replica). Only lines draw points per replica: no direct part, edge distance, baseline or
+/// path tracing.
+fn replica_point_rows(r: &Replicated) -> Vec<PointRow> {
+    let mut rows = Vec::new();
+    for (k, (set, irr)) in r.sets().zip(&r.irr).enumerate() {
+        let discs = &set.discs;
+        rows.extend((0..discs.len()).map(|i| PointRow {
+            sample: k * discs.len() + i,
+            center: discs.centers[i],
+            normal: discs.normals[i],
+            disc_radius: discs.radius_of(i),
+            edge_distance: f64::NAN,
+            mean: irr[i],
+            se: (irr[i].max(0.0) * r.mean_segment_watts / discs.area(i)).sqrt(),
+            replicas: Vec::new(),
+            exact: set.exact[i],
+            baselines: Vec::new(),
+            path_tracing: None,
+            direct: (0.0, 0.0),
+        }));
+    }
+    rows
+}
+
 /// The points table: DETP's estimate and SE per disc, its value in each replica, then each
-/// baseline's.
+/// baseline's (per replica and disc where points vary per replica: [`replica_point_rows`]).
 fn point_rows(
     cfg: &DetpConfig,
     r: &Replicated,
     detp_points: &[(f64, f64)],
     baselines: &[(EngineChoice, Vec<(f64, f64)>)],
 ) -> Vec<PointRow> {
+    if cfg.points_per_replica() {
+        return replica_point_rows(r);
+    }
     let discs = &r.pts.discs;
     let path = path_tracing_points(r, discs.len());
     let edge = cfg.scene().map_or_else(

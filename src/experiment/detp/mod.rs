@@ -98,7 +98,8 @@ pub(crate) struct RaySet {
     pub(crate) direct: Option<std::sync::Arc<engines::DirectPart>>,
 }
 
-/// The sample points of a point (shared by its replicas) with their exact irradiance where known.
+/// The sample points of one replica (or, for the fixed sources, of every replica: see [`points`])
+/// with their exact irradiance where known.
 pub(crate) struct PointSet {
     pub(crate) discs: Discs,
     /// Exact irradiance per disc, NaN where the source has none.
@@ -110,9 +111,22 @@ pub(crate) struct PointSet {
     pub(crate) covered: Option<u64>,
 }
 
-/// Sample points: uniform in the ball (drawn once per point: all replicas share them, only the rays
-/// change), on a scene's surfaces, or from a user's CSV.
-pub(crate) fn points(cfg: &DetpConfig, point: u64) -> Result<PointSet, Error> {
+/// The sample points of replica `replica` at stream point `point`.
+///
+/// Which sources vary per replica ([`DetpConfig::points_per_replica`]):
+/// - uniform in the ball (`Points::Ball`): positions and normals are random, so each replica draws
+///   its own (`[POINTS, seed, point, replica, batch]`): a replica is a new sample of lines *and*
+///   points, and an SE across replicas covers both (the sphere cache's misses depend on the points);
+/// - eq. 4's lattice (`Points::Grid`): its centres are fixed by the layout, its normals random, so
+///   each replica draws its own normals on the same centres;
+/// - a scene's surface lattice and a user's points file: fixed by design (the places the reference
+///   is computed once and the same at every sweep point, or the points the user chose), shared by
+///   every replica; `replica` is not read.
+///
+/// `point` is the stream point: with `experiment.common_random_numbers` every sweep point reads the
+/// same streams, so replica r has the same points at every sweep point (a choice between sweep
+/// points, never between replicas).
+pub(crate) fn points(cfg: &DetpConfig, point: u64, replica: u64) -> Result<PointSet, Error> {
     if let Some(s) = cfg.scene() {
         return scene::points(cfg, &s.scene);
     }
@@ -122,7 +136,7 @@ pub(crate) fn points(cfg: &DetpConfig, point: u64) -> Result<PointSet, Error> {
             let pairs: Vec<(DVec3, DVec3)> = (0..n.div_ceil(BATCH))
                 .into_par_iter()
                 .flat_map_iter(|b| {
-                    let mut rng = stream(&[domain::POINTS, cfg.seed, point, b]);
+                    let mut rng = stream(&[domain::POINTS, cfg.seed, point, replica, b]);
                     let count = BATCH.min(n - b * BATCH);
                     (0..count).map(move |_| {
                         let c = uniform_in_ball(&mut rng);
@@ -132,7 +146,7 @@ pub(crate) fn points(cfg: &DetpConfig, point: u64) -> Result<PointSet, Error> {
                 .collect();
             pairs.into_iter().unzip()
         }
-        Points::Grid(k) => lattice(cfg.seed, point, *k),
+        Points::Grid(k) => lattice(cfg.seed, point, replica, *k),
         Points::File(p) => (p.centers.clone(), p.normals.clone()),
         Points::Surface(_) => {
             return Err(Error::internal(
@@ -156,8 +170,8 @@ pub(crate) fn points(cfg: &DetpConfig, point: u64) -> Result<PointSet, Error> {
 
 /// Eq. 4's layout: k³ points at the cell centres of a k-per-side lattice filling the cube inscribed
 /// in the unit ball (spacing 2/(√3·k), so r_0 = √3·spacing·k/2 = 1), with uniform normals drawn
-/// from the same keyed streams as points in the ball.
-fn lattice(seed: u64, point: u64, k: u64) -> (Vec<DVec3>, Vec<DVec3>) {
+/// from the same keyed streams as points in the ball (the replica's own).
+fn lattice(seed: u64, point: u64, replica: u64, k: u64) -> (Vec<DVec3>, Vec<DVec3>) {
     let s = config::lattice_spacing(k);
     let a = 1.0 / 3f64.sqrt();
     let n = k.pow(3);
@@ -165,7 +179,7 @@ fn lattice(seed: u64, point: u64, k: u64) -> (Vec<DVec3>, Vec<DVec3>) {
     let pairs: Vec<(DVec3, DVec3)> = (0..n.div_ceil(BATCH))
         .into_par_iter()
         .flat_map_iter(|b| {
-            let mut rng = stream(&[domain::POINTS, seed, point, b]);
+            let mut rng = stream(&[domain::POINTS, seed, point, replica, b]);
             let lo = b * BATCH;
             (lo..(lo + BATCH).min(n)).map(move |i| {
                 let c = DVec3::new(at(i % k), at(i / k % k), at(i / (k * k)));
@@ -337,7 +351,14 @@ pub fn memory(cfg: &DetpConfig, threads: usize) -> Memory {
             per_photon: true,
         },
         Need {
-            bytes: n_p * 128.0,
+            // Points drawn per replica are all kept for the points table when it is written.
+            bytes: n_p
+                * 128.0
+                * if cfg.points_per_replica() && cfg.write_points {
+                    cfg.replicas as f64
+                } else {
+                    1.0
+                },
             key: match cfg.points {
                 Points::Ball(_) | Points::Grid(_) => "detp.points",
                 Points::File(_) => "detp.points_file",

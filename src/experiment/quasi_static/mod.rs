@@ -120,7 +120,9 @@ fn start_photons(
         })
         .unwrap_or(1.0);
     let source = if cfg.lines {
-        let set = super::detp::points(&cfg.detp, 0).expect("points uniform in the ball are finite");
+        // The replica's own static points (see `detp::points`): a replica is new lines and points.
+        let set = super::detp::points(&cfg.detp, 0, replica)
+            .expect("points uniform in the ball are finite");
         RaySource::Lines(set.discs)
     } else {
         RaySource::Photons
