@@ -20,6 +20,8 @@ const SUBCOMMANDS: &[&str] = &[
     "bench",
     "merge",
     "render",
+    "crossover",
+    "reproduce",
     "doc",
     "completions",
     "man",
