@@ -386,32 +386,26 @@ fn compare_table(
     c.columns = a.header.len();
     c.rows = a.rows.len();
     if a.header != b.header {
-        let gone: Vec<&str> = a
-            .header
-            .iter()
-            .filter(|h| !b.header.contains(h))
-            .map(String::as_str)
-            .collect();
-        let added: Vec<&str> = b
-            .header
-            .iter()
-            .filter(|h| !a.header.contains(h))
-            .map(String::as_str)
-            .collect();
+        let only = |x: &Cells, y: &Cells| -> Vec<String> {
+            x.header
+                .iter()
+                .filter(|h| !y.header.contains(h))
+                .cloned()
+                .collect()
+        };
+        let (gone, added) = (only(a, b), only(b, a));
         c.problems.push(if gone.is_empty() && added.is_empty() {
-            "headers differ: the same names in another order".into()
+            "headers differ: the same names in another order (cells compared by name)".into()
         } else {
             format!(
-                "headers differ: only in the result [{}], only in the rerun [{}]",
+                "headers differ: only in the result [{}], only in the rerun [{}] (the other columns compared by name)",
                 gone.join(", "),
                 added.join(", ")
             )
         });
-        return;
     }
-    let class_of = |cols: &[ColumnInfo], name: &str| {
-        cols.iter().find(|c| c.name == name).map(|c| c.class)
-    };
+    let class_of =
+        |cols: &[ColumnInfo], name: &str| cols.iter().find(|c| c.name == name).map(|c| c.class);
     let undeclared: Vec<&str> = a
         .header
         .iter()
@@ -428,9 +422,7 @@ fn compare_table(
         .header
         .iter()
         .filter_map(|h| match (class_of(classes, h), class_of(new_classes, h)) {
-            (Some(x), Some(y)) if x != y => {
-                Some(format!("{h} {} → {}", x.as_str(), y.as_str()))
-            }
+            (Some(x), Some(y)) if x != y => Some(format!("{h} {} → {}", x.as_str(), y.as_str())),
             _ => None,
         })
         .collect();
@@ -446,25 +438,29 @@ fn compare_table(
         ));
     }
     let timing = |h: &str| class_of(classes, h) == Some(Class::Timing);
-    let point = a.header.iter().position(|h| h == "point");
-    let diff = |r: usize, col: usize, x: &str, y: &str| CellDiff {
+    let at = |x: &Cells, name: &str| x.header.iter().position(|h| h == name);
+    let point = at(a, "point");
+    let diff = |r: usize, name: &str, x: &str, y: &str| CellDiff {
         row: r,
         point: point.map(|p| a.rows[r][p].clone()),
-        column: a.header[col].clone(),
+        column: name.to_string(),
         old: x.to_string(),
         new: y.to_string(),
     };
     let mut ratios = Vec::new();
-    for (col, name) in a.header.iter().enumerate() {
+    // Every column of the result that the rerun has, found by name.
+    for (ca, name) in a.header.iter().enumerate() {
+        let Some(cb) = at(b, name) else { continue };
+        let pairs = a.rows.iter().zip(&b.rows).enumerate();
         if !timing(name) {
             c.compared += 1;
             let mut differs = false;
-            for (r, (x, y)) in a.rows.iter().zip(&b.rows).enumerate() {
-                if x[col] != y[col] {
+            for (r, (x, y)) in pairs {
+                if x[ca] != y[cb] {
                     differs = true;
                     c.cells_differ += 1;
                     if c.first.len() < SHOWN {
-                        c.first.push(diff(r, col, &x[col], &y[col]));
+                        c.first.push(diff(r, name, &x[ca], &y[cb]));
                     }
                 }
             }
@@ -474,59 +470,43 @@ fn compare_table(
             continue;
         }
         c.timings.columns += 1;
-        let se = name
-            .strip_suffix("_mean")
-            .map(|stem| format!("{stem}_se"))
-            .and_then(|se| a.header.iter().position(|h| *h == se));
+        let se_name = name.strip_suffix("_mean").map(|stem| format!("{stem}_se"));
+        let se = se_name
+            .as_deref()
+            .and_then(|n| Some((at(a, n)?, at(b, n)?)));
         if se.is_some() {
             c.timings.with_interval += 1;
         }
-        for (r, (x, y)) in a.rows.iter().zip(&b.rows).enumerate() {
-            if x[col] == y[col] {
-                continue;
-            }
-            c.timings.differ += 1;
-            let (u, v) = (number(&x[col]), number(&y[col]));
-            if let (Some(u), Some(v)) = (u, v) {
-                if u > 0.0 && v > 0.0 {
-                    ratios.push(v / u);
-                }
-            }
-            let Some(se) = se else { continue };
-            match (u, v, number(&x[se]), number(&y[se])) {
-                (Some(u), Some(v), Some(su), Some(sv)) => {
-                    if (u - v).abs() <= TIMING_SIGMAS * su.hypot(sv) {
-                        c.timings.inside += 1;
-                    } else {
-                        c.timings.outside += 1;
-                        if c.timings.first_outside.len() < SHOWN {
-                            c.timings.first_outside.push(diff(r, col, &x[col], &y[col]));
-                        }
+        for (r, (x, y)) in pairs {
+            let (u, v) = (number(&x[ca]), number(&y[cb]));
+            if x[ca] != y[cb] {
+                c.timings.differ += 1;
+                if let (Some(u), Some(v)) = (u, v) {
+                    if u > 0.0 && v > 0.0 {
+                        ratios.push(v / u);
                     }
                 }
-                // An interval that cannot be formed (one replica: SE NaN) judges nothing.
-                _ => {}
+            }
+            let Some((sa, sb)) = se else { continue };
+            if x[ca] == y[cb] {
+                c.timings.inside += 1;
+                continue;
+            }
+            // An interval that cannot be formed (one replica: SE NaN) judges nothing.
+            if let (Some(u), Some(v), Some(su), Some(sv)) = (u, v, number(&x[sa]), number(&y[sb])) {
+                if (u - v).abs() <= TIMING_SIGMAS * su.hypot(sv) {
+                    c.timings.inside += 1;
+                } else {
+                    c.timings.outside += 1;
+                    if c.timings.first_outside.len() < SHOWN {
+                        c.timings
+                            .first_outside
+                            .push(diff(r, name, &x[ca], &y[cb]));
+                    }
+                }
             }
         }
     }
-    // Equal cells are inside their interval too.
-    c.timings.inside += a
-        .header
-        .iter()
-        .enumerate()
-        .filter(|(_, h)| {
-            timing(h)
-                && h.strip_suffix("_mean")
-                    .is_some_and(|s| a.header.contains(&format!("{s}_se")))
-        })
-        .map(|(col, _)| {
-            a.rows
-                .iter()
-                .zip(&b.rows)
-                .filter(|(x, y)| x[col] == y[col])
-                .count()
-        })
-        .sum::<usize>();
     c.timings.ratios = summary(&mut ratios);
 }
 
@@ -639,6 +619,13 @@ mod tests {
         let renamed = "point,n_mean,t_mean,t_se,wall\n0,1.5,10,1,2\n1,2.5,20,1,4\n";
         compare_table(&mut c, &cells(OLD), &cells(renamed), &classes(), &classes());
         assert!(c.problems[0].contains("only in the result [wall_s], only in the rerun [wall]"));
+        assert_eq!(c.compared, 2, "the other columns are still compared");
+        let mut c = fresh("main");
+        let reordered = "point,t_mean,n_mean,t_se,wall_s\n0,10,1.5,1,2\n1,20,2.6,1,4\n";
+        compare_table(&mut c, &cells(OLD), &cells(reordered), &classes(), &classes());
+        assert!(c.problems[0].contains("another order"), "{:?}", c.problems);
+        assert_eq!((c.compared, c.cells_differ), (2, 1), "compared by name");
+        assert_eq!(c.first[0].new, "2.6");
         let mut c = fresh("main");
         let short = "point,n_mean,t_mean,t_se,wall_s\n0,1.5,10,1,2\n";
         compare_table(&mut c, &cells(OLD), &cells(short), &classes(), &classes());

@@ -338,6 +338,14 @@ fn reproduce_run(
     let run = run_index(&meta);
     let mut sets = meta.run.set.clone();
     sets.extend(run.map(|r| format!("experiment.run={r}")));
+    // The rerun goes to `SCRATCH/NAME/runs/R` where the result came from `--run R`.
+    let run_folder = run.filter(|_| {
+        o.dir
+            .canonicalize()
+            .ok()
+            .and_then(|d| d.parent().map(|p| p.ends_with("runs")))
+            .unwrap_or(false)
+    });
     let plan = Plan::load(&spec, &sets, o.threads)?;
     if plan.hash != meta.run.spec_hash {
         let keys = spec_differences(&meta.spec, &plan.normalized);
@@ -393,7 +401,7 @@ fn reproduce_run(
         shard,
         sets: meta.run.set.clone(),
         threads: o.threads,
-        run,
+        run: run_folder,
         merged: None,
     };
     let new_dir = opts.dir(&name);
