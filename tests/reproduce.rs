@@ -58,7 +58,11 @@ fn a_fresh_run_reproduces_and_a_tampered_cell_is_named() {
     let dir = results.join("tiny-grid");
 
     let scratch = tmp.path().join("scratch");
-    let (code, out, err) = output(reproduce(&dir, &["--out", scratch.to_str().unwrap()]).arg("--threads").arg("1"));
+    let (code, out, err) = output(
+        reproduce(&dir, &["--out", scratch.to_str().unwrap()])
+            .arg("--threads")
+            .arg("1"),
+    );
     assert_eq!(code, 0, "{out}{err}");
     assert!(out.contains("tiny-grid.csv (main):"), "{out}");
     assert!(out.contains("tiny-grid.hist.csv (hist):"), "{out}");
@@ -88,7 +92,12 @@ fn a_fresh_run_reproduces_and_a_tampered_cell_is_named() {
             .expect("python3 runs")
     };
     let py = compare(&scratch);
-    assert_eq!(py.status.code(), Some(0), "{}", String::from_utf8_lossy(&py.stdout));
+    assert_eq!(
+        py.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&py.stdout)
+    );
 
     // A timing cell (no interval) may differ: reported, not counted.
     let main = dir.join("tiny-grid.csv");
@@ -104,9 +113,8 @@ fn a_fresh_run_reproduces_and_a_tampered_cell_is_named() {
     fs::write(&main, &original).expect("restore");
     tamper(&main, 1, "n_s_mean", |s| format!("{s}1"));
     let scratch2 = tmp.path().join("scratch2");
-    let (code, out, err) = output(
-        reproduce(&dir, &["--out", scratch2.to_str().unwrap()]).arg("--json"),
-    );
+    let (code, out, err) =
+        output(reproduce(&dir, &["--out", scratch2.to_str().unwrap()]).arg("--json"));
     assert_eq!(code, 1, "{out}{err}");
     let json: serde_json::Value = serde_json::from_str(&out).expect("JSON");
     assert_eq!(json["reproduced"], false);
@@ -115,23 +123,39 @@ fn a_fresh_run_reproduces_and_a_tampered_cell_is_named() {
     assert_eq!(main_json["cells_differ"], 1);
     assert_eq!(main_json["differences"][0]["column"], "n_s_mean");
     assert_eq!(main_json["differences"][0]["row"], 1);
-    assert_eq!(json["tables"][1]["same"], true, "the hist table is untouched");
+    assert_eq!(
+        json["tables"][1]["same"], true,
+        "the hist table is untouched"
+    );
     let (code, out, _) = output(&mut reproduce(&dir, &[]));
     assert_eq!(code, 1);
     assert!(
         out.contains("DIFFERS tiny-grid.csv (main)") && out.contains("row 1 (point 1) n_s_mean"),
         "{out}"
     );
-    assert!(out.contains("NOT reproduced: 1 of 2 table(s) differ (tiny-grid.csv)"), "{out}");
+    assert!(
+        out.contains("NOT reproduced: 1 of 2 table(s) differ (tiny-grid.csv)"),
+        "{out}"
+    );
     // The temporary rerun of a result that differs is kept for inspection.
-    let kept = out.rsplit("the rerun is kept in ").next().expect("kept").trim();
-    assert!(Path::new(kept).join("tiny-grid/tiny-grid.csv").is_file(), "{kept}");
+    let kept = out
+        .rsplit("the rerun is kept in ")
+        .next()
+        .expect("kept")
+        .trim();
+    assert!(
+        Path::new(kept).join("tiny-grid/tiny-grid.csv").is_file(),
+        "{kept}"
+    );
     fs::remove_dir_all(kept).ok();
     // … and Python's comparison names the same cell.
     let py = compare(&scratch2);
     let text = String::from_utf8_lossy(&py.stdout);
     assert_eq!(py.status.code(), Some(1), "{text}");
-    assert!(text.contains("DIFFERS tiny-grid:") && text.contains("row 1 n_s_mean"), "{text}");
+    assert!(
+        text.contains("DIFFERS tiny-grid:") && text.contains("row 1 n_s_mean"),
+        "{text}"
+    );
 }
 
 #[test]
@@ -151,8 +175,14 @@ fn a_changed_spec_a_changed_input_and_a_gone_spec_are_refused() {
     grid_spec(tmp.path(), 4000);
     let (code, out, err) = output(&mut reproduce(&dir, &[]));
     assert_eq!(code, 2, "{out}{err}");
-    assert!(err.contains("tiny-grid.toml") && err.contains(&then), "{err}");
-    assert!(err.contains("experiment.rays = 3000 then, 4000 now"), "{err}");
+    assert!(
+        err.contains("tiny-grid.toml") && err.contains(&then),
+        "{err}"
+    );
+    assert!(
+        err.contains("experiment.rays = 3000 then, 4000 now"),
+        "{err}"
+    );
     fs::remove_file(&spec).expect("remove");
     let (code, _, err) = output(&mut reproduce(&dir, &[]));
     assert_eq!(code, 2);
@@ -181,7 +211,10 @@ fn a_changed_spec_a_changed_input_and_a_gone_spec_are_refused() {
     points(0.01);
     let (code, _, err) = output(&mut reproduce(&results.join("pts"), &[]));
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("pts.csv") && err.contains("content changed"), "{err}");
+    assert!(
+        err.contains("pts.csv") && err.contains("content changed"),
+        "{err}"
+    );
 }
 
 /// A run of `--run R` reruns as run R (its own seed); a merged shard set reruns unsplit.
@@ -190,14 +223,20 @@ fn a_run_index_and_a_merged_shard_set_rerun_as_recorded() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let spec = grid_spec(tmp.path(), 2000);
     let results = tmp.path().join("results");
-    run_quiet(&spec, &results).args(["--run", "1"]).assert().success();
+    run_quiet(&spec, &results)
+        .args(["--run", "1"])
+        .assert()
+        .success();
     let (code, out, err) = output(&mut reproduce(&results.join("tiny-grid/runs/1"), &[]));
     assert_eq!(code, 0, "{out}{err}");
     assert!(out.contains("  run: 1\n"), "{out}");
 
     let sharded = tmp.path().join("sharded");
     for k in 0..2 {
-        run_quiet(&spec, &sharded).args(["--shard", &format!("{k}/2")]).assert().success();
+        run_quiet(&spec, &sharded)
+            .args(["--shard", &format!("{k}/2")])
+            .assert()
+            .success();
     }
     let dir = sharded.join("tiny-grid");
     let (code, out, err) = output(&mut reproduce(&dir, &[]));
@@ -205,7 +244,10 @@ fn a_run_index_and_a_merged_shard_set_rerun_as_recorded() {
     raycost().arg("merge").arg(&dir).assert().success();
     let (code, out, err) = output(&mut reproduce(&dir, &[]));
     assert_eq!(code, 0, "{out}{err}");
-    assert!(out.contains("merged from 2 shards (rerun unsplit)"), "{out}");
+    assert!(
+        out.contains("merged from 2 shards (rerun unsplit)"),
+        "{out}"
+    );
 }
 
 #[test]
@@ -218,11 +260,19 @@ fn a_crossover_result_reruns_on_its_recorded_inputs() {
         .success();
     let (code, text, err) = output(&mut reproduce(&out, &[]));
     assert_eq!(code, 0, "{text}{err}");
-    assert!(text.contains("crossover.csv (main):") && text.contains("best.csv (best):"), "{text}");
+    assert!(
+        text.contains("crossover.csv (main):") && text.contains("best.csv (best):"),
+        "{text}"
+    );
     assert!(text.contains("targets: 0.5,0.2"), "{text}");
     // A crossover input changed since: named.
-    tamper(&points.join("points.csv"), 0, "experiment.seed", |s| format!("{s}0"));
+    tamper(&points.join("points.csv"), 0, "experiment.seed", |s| {
+        format!("{s}0")
+    });
     let (code, _, err) = output(&mut reproduce(&out, &[]));
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("points.csv") && err.contains("content changed"), "{err}");
+    assert!(
+        err.contains("points.csv") && err.contains("content changed"),
+        "{err}"
+    );
 }

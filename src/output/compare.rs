@@ -327,7 +327,9 @@ pub fn compare(old: &Side, new: &Side) -> Result<Vec<TableComparison>, OutputErr
                 .map(|f| f.to_string_lossy().into_owned())
         };
         let mut c = TableComparison {
-            file: file(old).or_else(|| file(new)).unwrap_or_else(|| table.clone()),
+            file: file(old)
+                .or_else(|| file(new))
+                .unwrap_or_else(|| table.clone()),
             table: table.clone(),
             columns: 0,
             compared: 0,
@@ -345,11 +347,17 @@ pub fn compare(old: &Side, new: &Side) -> Result<Vec<TableComparison>, OutputErr
             (Some(a), Some(b)) => {
                 let classes = old.meta.columns.get(&table).map_or(&[][..], Vec::as_slice);
                 let new_classes = new.meta.columns.get(&table).map_or(&[][..], Vec::as_slice);
-                compare_table(&mut c, &read_cells(a)?, &read_cells(b)?, classes, new_classes);
+                compare_table(
+                    &mut c,
+                    &read_cells(a)?,
+                    &read_cells(b)?,
+                    classes,
+                    new_classes,
+                );
             }
-            (None, Some(_)) => c
-                .problems
-                .push("missing in the result (declared in its metadata or written by the rerun)".into()),
+            (None, Some(_)) => c.problems.push(
+                "missing in the result (declared in its metadata or written by the rerun)".into(),
+            ),
             (Some(_), None) => c.problems.push("not written by the rerun".into()),
             (None, None) => c
                 .problems
@@ -499,9 +507,7 @@ fn compare_table(
                 } else {
                     c.timings.outside += 1;
                     if c.timings.first_outside.len() < SHOWN {
-                        c.timings
-                            .first_outside
-                            .push(diff(r, name, &x[ca], &y[cb]));
+                        c.timings.first_outside.push(diff(r, name, &x[ca], &y[cb]));
                     }
                 }
             }
@@ -538,7 +544,9 @@ mod tests {
     }
 
     fn cells(text: &str) -> Cells {
-        let mut lines = text.lines().map(|l| l.split(',').map(str::to_string).collect());
+        let mut lines = text
+            .lines()
+            .map(|l| l.split(',').map(str::to_string).collect());
         Cells {
             header: lines.next().expect("a header"),
             rows: lines.collect(),
@@ -581,9 +589,17 @@ mod tests {
         compare_table(&mut c, &cells(OLD), &cells(new), &classes(), &classes());
         assert_eq!((c.compared, c.cells_differ), (2, 1));
         assert_eq!(c.columns_differ, ["n_mean"]);
-        assert_eq!(c.first[0].to_string(), "row 1 (point 1) n_mean: \"2.5\" → \"2.50\"");
+        assert_eq!(
+            c.first[0].to_string(),
+            "row 1 (point 1) n_mean: \"2.5\" → \"2.50\""
+        );
         assert!(!c.same());
-        assert!(c.line().starts_with("DIFFERS x.main.csv (main): 2 of 5 columns"), "{}", c.line());
+        assert!(
+            c.line()
+                .starts_with("DIFFERS x.main.csv (main): 2 of 5 columns"),
+            "{}",
+            c.line()
+        );
     }
 
     /// A timing mean inside 3·√(se_a² + se_b²) passes, outside fails when counted and only
@@ -610,7 +626,11 @@ mod tests {
         c.timings.not_counted = Some("another CPU".into());
         compare_table(&mut c, &cells(OLD), &cells(outside), &classes(), &classes());
         assert!(c.same(), "{}", c.line());
-        assert!(c.line().contains("not counted: another CPU"), "{}", c.line());
+        assert!(
+            c.line().contains("not counted: another CPU"),
+            "{}",
+            c.line()
+        );
     }
 
     #[test]
@@ -622,7 +642,13 @@ mod tests {
         assert_eq!(c.compared, 2, "the other columns are still compared");
         let mut c = fresh("main");
         let reordered = "point,t_mean,n_mean,t_se,wall_s\n0,10,1.5,1,2\n1,20,2.6,1,4\n";
-        compare_table(&mut c, &cells(OLD), &cells(reordered), &classes(), &classes());
+        compare_table(
+            &mut c,
+            &cells(OLD),
+            &cells(reordered),
+            &classes(),
+            &classes(),
+        );
         assert!(c.problems[0].contains("another order"), "{:?}", c.problems);
         assert_eq!((c.compared, c.cells_differ), (2, 1), "compared by name");
         assert_eq!(c.first[0].new, "2.6");
@@ -634,7 +660,11 @@ mod tests {
         other[1].class = Class::Timing;
         let mut c = fresh("main");
         compare_table(&mut c, &cells(OLD), &cells(OLD), &classes(), &other);
-        assert!(c.problems[0].contains("n_mean measured → timing"), "{:?}", c.problems);
+        assert!(
+            c.problems[0].contains("n_mean measured → timing"),
+            "{:?}",
+            c.problems
+        );
         assert!(!c.same());
     }
 }

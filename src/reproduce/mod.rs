@@ -80,9 +80,10 @@ impl Report {
                 differ.len(),
                 self.tables.len(),
                 differ.join(", "),
-                self.scratch
-                    .as_ref()
-                    .map_or(String::new(), |s| format!("; the rerun is kept in {}", s.display()))
+                self.scratch.as_ref().map_or(String::new(), |s| format!(
+                    "; the rerun is kept in {}",
+                    s.display()
+                ))
             )
         }
     }
@@ -215,12 +216,19 @@ fn scratch(o: &Options, name: &str, forbidden: &[(&Path, &str)]) -> Result<(Path
     let Some(out) = &o.out else {
         let base = std::env::temp_dir();
         for n in 0..1000 {
-            let p = base.join(format!("raycost-reproduce-{name}-{}-{n}", std::process::id()));
+            let p = base.join(format!(
+                "raycost-reproduce-{name}-{}-{n}",
+                std::process::id()
+            ));
             match std::fs::create_dir(&p) {
                 Ok(()) => return Ok((p, true)),
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
                 Err(e) => {
-                    return Err(OutputError::new(&p, format!("cannot create a scratch folder: {e}")).into())
+                    return Err(OutputError::new(
+                        &p,
+                        format!("cannot create a scratch folder: {e}"),
+                    )
+                    .into())
                 }
             }
         }
@@ -382,16 +390,20 @@ fn reproduce_run(
     // A merged shard set reruns unsplit: the same counted columns, by the runner's guarantee.
     let shard = match meta.run.shard.as_str() {
         s if meta.run.command == "merge" || s == "all" => None,
-        s => Some(s.parse::<Shard>().map_err(|e| {
-            OutputError::new(meta_path, format!("records shard {e}"))
-        })?),
+        s => Some(
+            s.parse::<Shard>()
+                .map_err(|e| OutputError::new(meta_path, format!("records shard {e}")))?,
+        ),
     };
     let name = plan.spec.experiment.name.clone();
     let spec_dir = spec.parent().unwrap_or(Path::new(".")).to_path_buf();
     let (out, temporary) = scratch(
         o,
         &name,
-        &[(&o.dir, "the result folder"), (&spec_dir, "the spec's folder")],
+        &[
+            (&o.dir, "the result folder"),
+            (&spec_dir, "the spec's folder"),
+        ],
     )?;
     let opts = RunOptions {
         out: out.clone(),
@@ -405,7 +417,9 @@ fn reproduce_run(
         merged: None,
     };
     let new_dir = opts.dir(&name);
-    if absolute(&new_dir).starts_with(absolute(&o.dir)) || absolute(&o.dir).starts_with(absolute(&new_dir)) {
+    if absolute(&new_dir).starts_with(absolute(&o.dir))
+        || absolute(&o.dir).starts_with(absolute(&new_dir))
+    {
         return Err(OutputError::new(
             &out,
             format!(
@@ -416,18 +430,37 @@ fn reproduce_run(
         .into());
     }
     let mut rerun = vec![
-        ("spec".to_string(), format!("{} (hash {}, unchanged)", spec.display(), &plan.hash[..16])),
+        (
+            "spec".to_string(),
+            format!("{} (hash {}, unchanged)", spec.display(), &plan.hash[..16]),
+        ),
         ("seed".into(), plan.spec.experiment.seed.to_string()),
-        ("set".into(), if meta.run.set.is_empty() { "(none)".into() } else { meta.run.set.join(" ") }),
+        (
+            "set".into(),
+            if meta.run.set.is_empty() {
+                "(none)".into()
+            } else {
+                meta.run.set.join(" ")
+            },
+        ),
         ("run".into(), run.map_or("(none)".into(), |r| r.to_string())),
-        ("shard".into(), match (shard, meta.run.command.as_str()) {
-            (Some(s), _) => format!("{}/{}", s.k, s.n),
-            (None, "merge") => format!("{} (rerun unsplit)", meta.run.shard),
-            (None, _) => "all".into(),
-        }),
+        (
+            "shard".into(),
+            match (shard, meta.run.command.as_str()) {
+                (Some(s), _) => format!("{}/{}", s.k, s.n),
+                (None, "merge") => format!("{} (rerun unsplit)", meta.run.shard),
+                (None, _) => "all".into(),
+            },
+        ),
         ("points".into(), plan.points.len().to_string()),
-        ("threads".into(), format!("{} (the result: {})", o.threads, meta.run.threads)),
-        ("inputs".into(), format!("{} file(s), content unchanged", meta.inputs.len())),
+        (
+            "threads".into(),
+            format!("{} (the result: {})", o.threads, meta.run.threads),
+        ),
+        (
+            "inputs".into(),
+            format!("{} file(s), content unchanged", meta.inputs.len()),
+        ),
     ];
     let mut notes = Vec::new();
     build_notes("the result", &meta.raycost, &mut notes);
@@ -463,13 +496,15 @@ fn crossover_targets(meta: &Meta, dir: &Path) -> Result<Vec<f64>, OutputError> {
         .map_err(bad)?
         .iter()
         .position(|h| h == "target")
-        .ok_or_else(|| OutputError::new(&path, "has no column 'target' (the crossover's targets)"))?;
+        .ok_or_else(|| {
+            OutputError::new(&path, "has no column 'target' (the crossover's targets)")
+        })?;
     let mut targets: Vec<f64> = Vec::new();
     for r in reader.records() {
         let r = r.map_err(bad)?;
-        let t: f64 = r[col]
-            .parse()
-            .map_err(|_| OutputError::new(&path, format!("target {:?} is not a number", &r[col])))?;
+        let t: f64 = r[col].parse().map_err(|_| {
+            OutputError::new(&path, format!("target {:?} is not a number", &r[col]))
+        })?;
         if !targets.contains(&t) {
             targets.push(t);
         }
@@ -497,14 +532,20 @@ fn reproduce_crossover(o: &Options, meta_path: &Path) -> Result<Report, Error> {
         })
     };
     let missing = |role: &str| {
-        OutputError::new(meta_path, format!("records no {role} input folder ([extra.{role}] dir)"))
+        OutputError::new(
+            meta_path,
+            format!("records no {role} input folder ([extra.{role}] dir)"),
+        )
     };
     let fronts = input("fronts")?.ok_or_else(|| missing("fronts"))?;
     let points = input("points")?.ok_or_else(|| missing("points"))?;
     let frames = input("frames")?;
     let targets = crossover_targets(&meta, &o.dir)?;
     let mut forbidden: Vec<(&Path, &str)> = vec![(&o.dir, "the result folder")];
-    for d in [Some(&fronts), Some(&points), frames.as_ref()].into_iter().flatten() {
+    for d in [Some(&fronts), Some(&points), frames.as_ref()]
+        .into_iter()
+        .flatten()
+    {
         forbidden.push((d, "an input folder"));
     }
     let label = o
@@ -512,13 +553,23 @@ fn reproduce_crossover(o: &Options, meta_path: &Path) -> Result<Report, Error> {
         .file_name()
         .map_or("crossover".into(), |n| n.to_string_lossy().into_owned());
     let (out, temporary) = scratch(o, &label, &forbidden)?;
-    let show = |p: &Option<PathBuf>| p.as_ref().map_or("(none)".into(), |p| p.display().to_string());
+    let show = |p: &Option<PathBuf>| {
+        p.as_ref()
+            .map_or("(none)".into(), |p| p.display().to_string())
+    };
     let rerun = vec![
         ("command".to_string(), "crossover".to_string()),
         ("fronts".into(), fronts.display().to_string()),
         ("points".into(), points.display().to_string()),
         ("frames".into(), show(&frames)),
-        ("targets".into(), targets.iter().map(|t| t.to_string()).collect::<Vec<_>>().join(",")),
+        (
+            "targets".into(),
+            targets
+                .iter()
+                .map(|t| t.to_string())
+                .collect::<Vec<_>>()
+                .join(","),
+        ),
         ("rerun".into(), out.display().to_string()),
     ];
     let mut notes = Vec::new();
@@ -576,13 +627,18 @@ mod tests {
 
     #[test]
     fn spec_differences_name_the_keys() {
-        let then: toml::Table = "[base.detp]\nphotons = 1000\nq = 0.5\n[sweep]\n".parse().unwrap();
+        let then: toml::Table = "[base.detp]\nphotons = 1000\nq = 0.5\n[sweep]\n"
+            .parse()
+            .unwrap();
         let now: toml::Table = "[base.detp]\nphotons = 2000\nq = 0.5\nnew_key = true\n[sweep]\n"
             .parse()
             .unwrap();
         assert_eq!(
             spec_differences(&then, &now),
-            ["detp.new_key absent then, true now", "detp.photons = 1000 then, 2000 now"]
+            [
+                "detp.new_key absent then, true now",
+                "detp.photons = 1000 then, 2000 now"
+            ]
         );
         assert!(spec_differences(&then, &then).is_empty());
     }
