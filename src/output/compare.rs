@@ -62,6 +62,8 @@ impl Side {
             };
             tables.push((table, e.path()));
         }
+        // Only the tables the run declared (not the shards merged beside a merged table).
+        tables.retain(|(t, _)| t == "main" || meta.columns.contains_key(t));
         tables.sort();
         // Both `T.csv` and `T.csv.gz`: the plain one is read (as `raycost crossover` does).
         tables.dedup_by(|b, a| a.0 == b.0);

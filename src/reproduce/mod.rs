@@ -317,6 +317,26 @@ fn build_notes(what: &str, then: &Build, notes: &mut Vec<String>) {
     }
 }
 
+/// Whether a result came from `raycost run --run R`: it sits in `runs/R`, or its table has
+/// `experiment.run` among the `--set` keys, which come before the other keys (`experiment.seed`
+/// precedes `experiment.run` otherwise).
+fn made_with_run_flag(dir: &Path, main: &Path) -> bool {
+    let in_runs = std::fs::canonicalize(dir)
+        .ok()
+        .and_then(|d| d.parent().map(|p| p.ends_with("runs")))
+        .unwrap_or(false);
+    let header: Vec<String> = ::csv::Reader::from_path(main)
+        .ok()
+        .and_then(|mut r| {
+            r.headers()
+                .ok()
+                .map(|h| h.iter().map(str::to_string).collect())
+        })
+        .unwrap_or_default();
+    let at = |k: &str| header.iter().position(|h| h == k);
+    in_runs || matches!((at("experiment.run"), at("experiment.seed")), (Some(r), Some(s)) if r < s)
+}
+
 /// The run index a run recorded (`experiment.run`, set by `--run R`).
 fn run_index(meta: &Meta) -> Option<u64> {
     meta.spec
@@ -343,17 +363,12 @@ fn reproduce_run(
             ),
         )
     })?;
-    let run = run_index(&meta);
+    // `--run R` is given again only where the result came from it: it makes `experiment.run` a
+    // `--set` key, which moves its column to the front of the table.
+    let run = run_index(&meta).filter(|_| made_with_run_flag(&o.dir, &results.file("csv")));
     let mut sets = meta.run.set.clone();
     sets.extend(run.map(|r| format!("experiment.run={r}")));
-    // The rerun goes to `SCRATCH/NAME/runs/R` where the result came from `--run R`.
-    let run_folder = run.filter(|_| {
-        o.dir
-            .canonicalize()
-            .ok()
-            .and_then(|d| d.parent().map(|p| p.ends_with("runs")))
-            .unwrap_or(false)
-    });
+    let run_folder = run;
     let plan = Plan::load(&spec, &sets, o.threads)?;
     if plan.hash != meta.run.spec_hash {
         let keys = spec_differences(&meta.spec, &plan.normalized);
