@@ -84,6 +84,7 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             print_run(m.quiet, &summary, &written)
         }
         Command::Render(r) => render(r),
+        Command::Reproduce(r) => reproduce(r),
         Command::Crossover(c) => {
             let written = crate::crossover::run(&crate::crossover::Options {
                 fronts: c.fronts,
@@ -99,6 +100,28 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
             }
             Ok(())
         }
+    }
+}
+
+/// `raycost reproduce`: the report on stdout, exit 1 when something counted differs.
+fn reproduce(a: crate::cli::ReproduceArgs) -> crate::error::Result<()> {
+    let threads = thread_pool(a.threads)?;
+    let report = crate::reproduce::run(&crate::reproduce::Options {
+        dir: a.dir,
+        out: a.out,
+        threads,
+        force: a.force,
+    })?;
+    let text = if a.json {
+        json_text(&report.json())
+    } else {
+        report.text()
+    };
+    write!(std::io::stdout().lock(), "{text}")?;
+    if report.same() {
+        Ok(())
+    } else {
+        Err(Error::CheckFailed(report.verdict()))
     }
 }
 

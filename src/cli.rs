@@ -89,6 +89,21 @@ Examples:
       --targets 0.1,0.05,0.02 --out results/which-method-cornell
   raycost crossover fronts points frames --targets 0.05 --out /tmp/x --force")]
     Crossover(CrossoverArgs),
+    /// Rerun a result from its metadata (spec, --set, seed, run, shard; or a crossover's inputs)
+    /// into a scratch folder and compare: counted columns byte for byte, timings against their
+    /// intervals. Exit 0 reproduced, 1 something counted differs, 2 refused (the spec or an input
+    /// changed).
+    #[command(after_help = "\
+Examples:
+  raycost reproduce results/quickstart
+  raycost reproduce results/detp-engines-cost/runs/1 --threads 2
+  raycost reproduce results/issue27-crossover-hard --out /tmp/rerun --force
+  raycost reproduce results/grid-first-hit --json | jq '.tables[] | select(.same | not)'
+
+Counted columns are every column whose class in NAME.meta.toml is not timing. A timing X_mean with
+an X_se beside it is held to |a - b| <= 3*sqrt(se_a^2 + se_b^2) when both runs had the same CPU
+model and a quiet machine; other timings are reported as ratios only.")]
+    Reproduce(ReproduceArgs),
     /// Render the DETP radiosity (B = albedo·E/π) of a quasi-static spec's frame(s), seen from the
     /// scene's camera.
     #[command(after_help = "\
@@ -155,6 +170,26 @@ pub struct CrossoverArgs {
     /// Replace existing outputs.
     #[arg(long)]
     pub force: bool,
+}
+
+/// `raycost reproduce`.
+#[derive(Debug, Args)]
+pub struct ReproduceArgs {
+    /// The result folder (NAME.csv + NAME.meta.toml, or a crossover's crossover.meta.toml).
+    pub dir: PathBuf,
+    /// The scratch folder the rerun writes (default: a fresh temporary folder, removed when the
+    /// result reproduces); never inside DIR or the spec's folder.
+    #[arg(long, value_name = "SCRATCH")]
+    pub out: Option<PathBuf>,
+    /// Worker threads (default: all cores; the counted columns do not depend on it).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Replace the rerun's files in SCRATCH if they exist.
+    #[arg(long)]
+    pub force: bool,
+    /// Print the comparison as JSON (the exit code is the same).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// `raycost completions`.

@@ -31,8 +31,10 @@
 //! 14. `render`, `report`, `crossover`: `raycost render` (images of a quasi-static run), `raycost
 //!     report` (the HTML page of a results folder), `raycost crossover` (which method when, from the
 //!     tables of three runs; it reads the `detp` kind's error sum)
-//! 15. `cli`: clap definitions
-//! 16. `app`: subcommand glue (`main.rs` sits on top)
+//! 15. `reproduce`: `raycost reproduce` (reruns a result from its metadata through the runner or
+//!     `crossover`, and compares its tables with `output::compare`)
+//! 16. `cli`: clap definitions
+//! 17. `app`: subcommand glue (`main.rs` sits on top)
 #![warn(missing_docs)]
 
 pub mod app;
@@ -50,6 +52,7 @@ pub mod lt;
 pub mod output;
 pub mod render;
 pub mod report;
+pub mod reproduce;
 pub mod sample;
 pub mod scene;
 pub mod spec;

@@ -23,7 +23,7 @@ fn subcommands() -> Vec<String> {
         .filter(|n| n != "help")
         .collect();
     // The list is not empty and holds the commands users rely on (a broken definition fails here).
-    for must in ["run", "check", "merge", "report", "crossover"] {
+    for must in ["run", "check", "merge", "report", "crossover", "reproduce"] {
         assert!(names.iter().any(|n| n == must), "no {must} in {names:?}");
     }
     names

@@ -35,7 +35,7 @@ path_samples = 4
 }
 
 /// The two runs, once per test binary run (they take a few seconds).
-fn runs(dir: &Path) -> (PathBuf, PathBuf) {
+pub(crate) fn runs(dir: &Path) -> (PathBuf, PathBuf) {
     let fronts = spec(
         dir,
         "fronts",
@@ -55,7 +55,7 @@ fn runs(dir: &Path) -> (PathBuf, PathBuf) {
     (out.join("fronts"), out.join("points"))
 }
 
-fn crossover(fronts: &Path, points: &Path, out: &Path) -> assert_cmd::Command {
+pub(crate) fn crossover(fronts: &Path, points: &Path, out: &Path) -> assert_cmd::Command {
     let mut c = raycost();
     c.arg("crossover")
         .arg(fronts)

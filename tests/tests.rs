@@ -25,6 +25,7 @@ mod quasi_static_path_tracing;
 mod reference;
 mod render;
 mod report;
+mod reproduce;
 mod reproducible;
 mod resume;
 mod runs;

@@ -8,6 +8,7 @@
 //! happens before the first point is traced.
 
 pub mod column;
+pub mod compare;
 pub mod csv;
 pub mod folder;
 pub mod location;

@@ -1,0 +1,672 @@
+//! Two runs' tables compared column class by column class: what `raycost reproduce` judges a rerun
+//! by. One [`Side`] is a result as written (its tables, plain or gzip-compressed, and its metadata);
+//! [`compare`] holds the second against the first, table by table.
+//!
+//! The rule, per table (the classes are the first side's `[[columns.TABLE]]`):
+//! - the header must be the same (names and order) and every column's class the same; the number
+//!   of rows the same;
+//! - every column whose class is not `timing` (parameters, measured counts and estimates, theory,
+//!   checks) is *counted*: equal byte for byte in every row;
+//! - a timing `X_mean` whose table has `X_se` is held against its stated interval,
+//!   |a − b| ≤ 3·√(se_a² + se_b²), and counted only when both runs' seconds are comparable: the same
+//!   CPU model and neither run busy (other processes under [`super::meta::BUSY_CORES`] cores);
+//!   otherwise, and for every other timing column, the cells are reported (ratios new/old), never
+//!   counted. Seconds of one machine say nothing about another's.
+//!
+//! A table declared in the first side's metadata but missing from either side is a counted
+//! difference: a result that cannot be compared is not reproduced.
+
+use std::io::Read as _;
+use std::path::{Path, PathBuf};
+
+use super::column::{Class, ColumnInfo};
+use super::meta::Meta;
+use crate::error::OutputError;
+
+/// Differences printed per table before the rest are only counted.
+pub const SHOWN: usize = 5;
+
+/// How many standard errors of the difference a timing mean may move (three: a 99.7 % band).
+pub const TIMING_SIGMAS: f64 = 3.0;
+
+/// One result as written: its tables (table name → file) and its metadata.
+#[derive(Clone, Debug)]
+pub struct Side {
+    /// Table name (`main`, or a side table's name) → its file.
+    pub tables: Vec<(String, PathBuf)>,
+    /// The run's metadata (the classes of its columns, its machine).
+    pub meta: Meta,
+}
+
+impl Side {
+    /// The tables of run `stem` in `dir`: `STEM.csv` is `main`, `STEM.TABLE.csv` (or
+    /// `STEM.TABLE.csv.gz`, as large committed tables are kept) is `TABLE`.
+    pub fn of_run(dir: &Path, stem: &str, meta: Meta) -> Result<Side, OutputError> {
+        let entries = std::fs::read_dir(dir)
+            .map_err(|e| OutputError::new(dir, format!("cannot read the results folder: {e}")))?;
+        let mut tables = Vec::new();
+        for e in entries.flatten() {
+            let file = e.file_name().to_string_lossy().into_owned();
+            let Some(rest) = file.strip_prefix(stem) else {
+                continue;
+            };
+            let rest = rest
+                .strip_suffix(".csv.gz")
+                .or_else(|| rest.strip_suffix(".csv"));
+            let table = match rest {
+                Some("") => "main".to_string(),
+                Some(t) if t.len() > 1 && t.starts_with('.') && !t[1..].contains('.') => {
+                    t[1..].to_string()
+                }
+                _ => continue,
+            };
+            tables.push((table, e.path()));
+        }
+        // Only the tables the run declared (not the shards merged beside a merged table).
+        tables.retain(|(t, _)| t == "main" || meta.columns.contains_key(t));
+        tables.sort();
+        // Both `T.csv` and `T.csv.gz`: the plain one is read (as `raycost crossover` does).
+        tables.dedup_by(|b, a| a.0 == b.0);
+        Ok(Side { tables, meta })
+    }
+
+    /// The tables of a `raycost crossover` folder: `crossover.csv` (`main`), `best.csv`,
+    /// `frames.csv`.
+    pub fn of_crossover(dir: &Path, meta: Meta) -> Side {
+        let tables = [
+            ("main", "crossover.csv"),
+            ("best", "best.csv"),
+            ("frames", "frames.csv"),
+        ]
+        .iter()
+        .map(|(t, f)| (t.to_string(), dir.join(f)))
+        .filter(|(_, p)| p.is_file())
+        .collect();
+        Side { tables, meta }
+    }
+
+    fn file(&self, table: &str) -> Option<&PathBuf> {
+        self.tables.iter().find(|(t, _)| t == table).map(|(_, p)| p)
+    }
+
+    /// Whether this run's seconds were taken on a quiet machine.
+    fn quiet(&self) -> bool {
+        !self.meta.busy()
+    }
+}
+
+/// One counted cell that differs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellDiff {
+    /// Data row, from 0.
+    pub row: usize,
+    /// The row's `point` cell, where the table has that column.
+    pub point: Option<String>,
+    /// The column.
+    pub column: String,
+    /// The first side's cell.
+    pub old: String,
+    /// The second side's cell.
+    pub new: String,
+}
+
+impl std::fmt::Display for CellDiff {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.point {
+            Some(p) => write!(f, "row {} (point {p})", self.row)?,
+            None => write!(f, "row {}", self.row)?,
+        }
+        write!(f, " {}: {:?} → {:?}", self.column, self.old, self.new)
+    }
+}
+
+/// The timing columns of one table.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Timings {
+    /// Timing columns.
+    pub columns: usize,
+    /// `X_mean` columns with an `X_se` beside them.
+    pub with_interval: usize,
+    /// Why their intervals do not count (another CPU, a busy machine); `None` when they do.
+    pub not_counted: Option<String>,
+    /// Cells judged against an interval: inside it.
+    pub inside: usize,
+    /// … outside it (the first few in `first_outside`).
+    pub outside: usize,
+    /// The first cells outside their interval.
+    pub first_outside: Vec<CellDiff>,
+    /// new/old over every timing cell where both are finite and > 0: (min, median, max).
+    pub ratios: Option<(f64, f64, f64)>,
+    /// Timing cells that differ as text (any timing column).
+    pub differ: usize,
+}
+
+/// One table compared.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TableComparison {
+    /// The table's name (`main`, `levels`, …).
+    pub table: String,
+    /// The first side's file name (or the table name when it has none).
+    pub file: String,
+    /// Columns in the header.
+    pub columns: usize,
+    /// Counted columns (every class but timing).
+    pub compared: usize,
+    /// Rows of the first side.
+    pub rows: usize,
+    /// Counted cells that differ.
+    pub cells_differ: usize,
+    /// Counted columns with at least one differing cell.
+    pub columns_differ: Vec<String>,
+    /// The first differing counted cells.
+    pub first: Vec<CellDiff>,
+    /// What else is wrong (a missing table, another header, other classes, another row count).
+    pub problems: Vec<String>,
+    /// The timing columns.
+    pub timings: Timings,
+}
+
+impl TableComparison {
+    /// Whether everything counted is the same.
+    pub fn same(&self) -> bool {
+        self.cells_differ == 0
+            && self.problems.is_empty()
+            && (self.timings.not_counted.is_some() || self.timings.outside == 0)
+    }
+
+    /// One line: what was compared and what differs.
+    pub fn line(&self) -> String {
+        let mut s = format!(
+            "{}{} ({}): {} of {} columns compared, {} rows, {} cell{} differ{}",
+            if self.same() { "" } else { "DIFFERS " },
+            self.file,
+            self.table,
+            self.compared,
+            self.columns,
+            self.rows,
+            self.cells_differ,
+            if self.cells_differ == 1 { "" } else { "s" },
+            if self.cells_differ == 1 { "s" } else { "" },
+        );
+        if !self.columns_differ.is_empty() {
+            s.push_str(&format!(
+                " in {} column(s) [{}]",
+                self.columns_differ.len(),
+                self.columns_differ.join(", ")
+            ));
+        }
+        if !self.first.is_empty() {
+            let shown: Vec<String> = self.first.iter().map(ToString::to_string).collect();
+            s.push_str(&format!(": {}", shown.join("; ")));
+        }
+        for p in &self.problems {
+            s.push_str(&format!(" | {p}"));
+        }
+        let t = &self.timings;
+        if t.columns > 0 {
+            s.push_str(&format!("; {} timing column(s)", t.columns));
+            if t.with_interval > 0 {
+                match &t.not_counted {
+                    None => s.push_str(&format!(
+                        ", {} cell(s) inside their ±{TIMING_SIGMAS}σ interval, {} outside",
+                        t.inside, t.outside
+                    )),
+                    Some(why) => s.push_str(&format!(
+                        ", {} cell(s) inside their ±{TIMING_SIGMAS}σ interval, {} outside (not counted: {why})",
+                        t.inside, t.outside
+                    )),
+                }
+                if !t.first_outside.is_empty() {
+                    let shown: Vec<String> =
+                        t.first_outside.iter().map(ToString::to_string).collect();
+                    s.push_str(&format!(" [{}]", shown.join("; ")));
+                }
+            }
+            if let Some((lo, med, hi)) = t.ratios {
+                s.push_str(&format!(
+                    ", seconds new/old {lo:.3}…{hi:.3} (median {med:.3})"
+                ));
+            }
+        }
+        s
+    }
+
+    /// The comparison as JSON.
+    pub fn json(&self) -> serde_json::Value {
+        let cells = |v: &[CellDiff]| -> Vec<serde_json::Value> {
+            v.iter()
+                .map(|d| {
+                    serde_json::json!({
+                        "row": d.row, "point": d.point, "column": d.column,
+                        "old": d.old, "new": d.new,
+                    })
+                })
+                .collect()
+        };
+        let t = &self.timings;
+        serde_json::json!({
+            "table": self.table,
+            "file": self.file,
+            "same": self.same(),
+            "columns": self.columns,
+            "compared": self.compared,
+            "rows": self.rows,
+            "cells_differ": self.cells_differ,
+            "columns_differ": self.columns_differ,
+            "differences": cells(&self.first),
+            "problems": self.problems,
+            "timing": {
+                "columns": t.columns,
+                "with_interval": t.with_interval,
+                "counted": t.not_counted.is_none(),
+                "not_counted_because": t.not_counted,
+                "inside": t.inside,
+                "outside": t.outside,
+                "first_outside": cells(&t.first_outside),
+                "ratio_min": t.ratios.map(|r| r.0),
+                "ratio_median": t.ratios.map(|r| r.1),
+                "ratio_max": t.ratios.map(|r| r.2),
+                "cells_differ": t.differ,
+            },
+        })
+    }
+}
+
+/// A table's header and rows as text.
+struct Cells {
+    header: Vec<String>,
+    rows: Vec<Vec<String>>,
+}
+
+/// Reads a table (gzip-decompressed if its name ends in `.gz`).
+fn read_cells(path: &Path) -> Result<Cells, OutputError> {
+    let raw =
+        std::fs::read(path).map_err(|e| OutputError::new(path, format!("cannot read: {e}")))?;
+    let text = if path.extension().is_some_and(|e| e == "gz") {
+        let mut out = Vec::new();
+        flate2::read::GzDecoder::new(raw.as_slice())
+            .read_to_end(&mut out)
+            .map_err(|e| OutputError::new(path, format!("is not a readable gzip file: {e}")))?;
+        out
+    } else {
+        raw
+    };
+    let mut reader = ::csv::ReaderBuilder::new()
+        .has_headers(true)
+        .from_reader(text.as_slice());
+    let bad = |e: ::csv::Error| OutputError::new(path, format!("unreadable CSV: {e}"));
+    let header = reader
+        .headers()
+        .map_err(bad)?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let rows = reader
+        .records()
+        .map(|r| r.map(|r| r.iter().map(str::to_string).collect()))
+        .collect::<Result<Vec<Vec<String>>, _>>()
+        .map_err(bad)?;
+    Ok(Cells { header, rows })
+}
+
+/// Compares every table of `old` (and any `new` has beyond them) with `new`'s. A table that cannot
+/// be read is an error naming its file.
+pub fn compare(old: &Side, new: &Side) -> Result<Vec<TableComparison>, OutputError> {
+    let mut names: Vec<String> = old.meta.columns.keys().cloned().collect();
+    for (t, _) in old.tables.iter().chain(&new.tables) {
+        if !names.contains(t) {
+            names.push(t.clone());
+        }
+    }
+    // `main` first, then the side tables by name.
+    names.sort_by_key(|t| (t != "main", t.clone()));
+    let not_counted = timings_comparable(old, new).err();
+    let mut out = Vec::new();
+    for table in names {
+        let file = |s: &Side| {
+            s.file(&table)
+                .and_then(|p| p.file_name())
+                .map(|f| f.to_string_lossy().into_owned())
+        };
+        let mut c = TableComparison {
+            file: file(old)
+                .or_else(|| file(new))
+                .unwrap_or_else(|| table.clone()),
+            table: table.clone(),
+            columns: 0,
+            compared: 0,
+            rows: 0,
+            cells_differ: 0,
+            columns_differ: Vec::new(),
+            first: Vec::new(),
+            problems: Vec::new(),
+            timings: Timings {
+                not_counted: not_counted.clone(),
+                ..Timings::default()
+            },
+        };
+        match (old.file(&table), new.file(&table)) {
+            (Some(a), Some(b)) => {
+                let classes = old.meta.columns.get(&table).map_or(&[][..], Vec::as_slice);
+                let new_classes = new.meta.columns.get(&table).map_or(&[][..], Vec::as_slice);
+                compare_table(
+                    &mut c,
+                    &read_cells(a)?,
+                    &read_cells(b)?,
+                    classes,
+                    new_classes,
+                );
+            }
+            (None, Some(_)) => c.problems.push(
+                "missing in the result (declared in its metadata or written by the rerun)".into(),
+            ),
+            (Some(_), None) => c.problems.push("not written by the rerun".into()),
+            (None, None) => c
+                .problems
+                .push("declared in the metadata, missing in both folders".into()),
+        }
+        out.push(c);
+    }
+    Ok(out)
+}
+
+/// Whether timing intervals count: both runs on the same CPU model, neither busy.
+fn timings_comparable(old: &Side, new: &Side) -> Result<(), String> {
+    if old.meta.machine.cpu != new.meta.machine.cpu {
+        return Err(format!(
+            "another CPU: {} then, {} now",
+            old.meta.machine.cpu, new.meta.machine.cpu
+        ));
+    }
+    for (side, which) in [(old, "the result"), (new, "the rerun")] {
+        if !side.quiet() {
+            return Err(format!("{which} ran on a busy machine"));
+        }
+    }
+    Ok(())
+}
+
+fn compare_table(
+    c: &mut TableComparison,
+    a: &Cells,
+    b: &Cells,
+    classes: &[ColumnInfo],
+    new_classes: &[ColumnInfo],
+) {
+    c.columns = a.header.len();
+    c.rows = a.rows.len();
+    if a.header != b.header {
+        let only = |x: &Cells, y: &Cells| -> Vec<String> {
+            x.header
+                .iter()
+                .filter(|h| !y.header.contains(h))
+                .cloned()
+                .collect()
+        };
+        let (gone, added) = (only(a, b), only(b, a));
+        c.problems.push(if gone.is_empty() && added.is_empty() {
+            "headers differ: the same names in another order (cells compared by name)".into()
+        } else {
+            format!(
+                "headers differ: only in the result [{}], only in the rerun [{}] (the other columns compared by name)",
+                gone.join(", "),
+                added.join(", ")
+            )
+        });
+    }
+    let class_of =
+        |cols: &[ColumnInfo], name: &str| cols.iter().find(|c| c.name == name).map(|c| c.class);
+    let undeclared: Vec<&str> = a
+        .header
+        .iter()
+        .filter(|h| class_of(classes, h).is_none())
+        .map(String::as_str)
+        .collect();
+    if !undeclared.is_empty() {
+        c.problems.push(format!(
+            "columns without a class in the metadata (compared as measured): [{}]",
+            undeclared.join(", ")
+        ));
+    }
+    let reclassed: Vec<String> = a
+        .header
+        .iter()
+        .filter_map(|h| match (class_of(classes, h), class_of(new_classes, h)) {
+            (Some(x), Some(y)) if x != y => Some(format!("{h} {} → {}", x.as_str(), y.as_str())),
+            _ => None,
+        })
+        .collect();
+    if !reclassed.is_empty() {
+        c.problems
+            .push(format!("classes differ: {}", reclassed.join(", ")));
+    }
+    if a.rows.len() != b.rows.len() {
+        c.problems.push(format!(
+            "{} rows in the result, {} in the rerun",
+            a.rows.len(),
+            b.rows.len()
+        ));
+    }
+    let timing = |h: &str| class_of(classes, h) == Some(Class::Timing);
+    let at = |x: &Cells, name: &str| x.header.iter().position(|h| h == name);
+    let point = at(a, "point");
+    let diff = |r: usize, name: &str, x: &str, y: &str| CellDiff {
+        row: r,
+        point: point.map(|p| a.rows[r][p].clone()),
+        column: name.to_string(),
+        old: x.to_string(),
+        new: y.to_string(),
+    };
+    let mut ratios = Vec::new();
+    // Every column of the result that the rerun has, found by name.
+    for (ca, name) in a.header.iter().enumerate() {
+        let Some(cb) = at(b, name) else { continue };
+        let pairs = a.rows.iter().zip(&b.rows).enumerate();
+        if !timing(name) {
+            c.compared += 1;
+            let mut differs = false;
+            for (r, (x, y)) in pairs {
+                if x[ca] != y[cb] {
+                    differs = true;
+                    c.cells_differ += 1;
+                    if c.first.len() < SHOWN {
+                        c.first.push(diff(r, name, &x[ca], &y[cb]));
+                    }
+                }
+            }
+            if differs {
+                c.columns_differ.push(name.clone());
+            }
+            continue;
+        }
+        c.timings.columns += 1;
+        let se_name = name.strip_suffix("_mean").map(|stem| format!("{stem}_se"));
+        let se = se_name
+            .as_deref()
+            .and_then(|n| Some((at(a, n)?, at(b, n)?)));
+        if se.is_some() {
+            c.timings.with_interval += 1;
+        }
+        for (r, (x, y)) in pairs {
+            let (u, v) = (number(&x[ca]), number(&y[cb]));
+            if x[ca] != y[cb] {
+                c.timings.differ += 1;
+                if let (Some(u), Some(v)) = (u, v) {
+                    if u > 0.0 && v > 0.0 {
+                        ratios.push(v / u);
+                    }
+                }
+            }
+            let Some((sa, sb)) = se else { continue };
+            if x[ca] == y[cb] {
+                c.timings.inside += 1;
+                continue;
+            }
+            // An interval that cannot be formed (one replica: SE NaN) judges nothing.
+            if let (Some(u), Some(v), Some(su), Some(sv)) = (u, v, number(&x[sa]), number(&y[sb])) {
+                if (u - v).abs() <= TIMING_SIGMAS * su.hypot(sv) {
+                    c.timings.inside += 1;
+                } else {
+                    c.timings.outside += 1;
+                    if c.timings.first_outside.len() < SHOWN {
+                        c.timings.first_outside.push(diff(r, name, &x[ca], &y[cb]));
+                    }
+                }
+            }
+        }
+    }
+    c.timings.ratios = summary(&mut ratios);
+}
+
+/// A finite number, or `None`.
+fn number(s: &str) -> Option<f64> {
+    s.parse::<f64>().ok().filter(|x| x.is_finite())
+}
+
+/// (min, median, max) of `v`, or `None` when it is empty.
+fn summary(v: &mut [f64]) -> Option<(f64, f64, f64)> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    Some((v[0], v[v.len() / 2], v[v.len() - 1]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::output::column::ColumnInfo;
+
+    fn info(name: &str, class: Class) -> ColumnInfo {
+        ColumnInfo {
+            name: name.into(),
+            class,
+            unit: String::new(),
+        }
+    }
+
+    fn cells(text: &str) -> Cells {
+        let mut lines = text
+            .lines()
+            .map(|l| l.split(',').map(str::to_string).collect());
+        Cells {
+            header: lines.next().expect("a header"),
+            rows: lines.collect(),
+        }
+    }
+
+    fn fresh(table: &str) -> TableComparison {
+        TableComparison {
+            table: table.into(),
+            file: format!("x.{table}.csv"),
+            columns: 0,
+            compared: 0,
+            rows: 0,
+            cells_differ: 0,
+            columns_differ: Vec::new(),
+            first: Vec::new(),
+            problems: Vec::new(),
+            timings: Timings::default(),
+        }
+    }
+
+    fn classes() -> Vec<ColumnInfo> {
+        vec![
+            info("point", Class::Parameter),
+            info("n_mean", Class::Measured),
+            info("t_mean", Class::Timing),
+            info("t_se", Class::Timing),
+            info("wall_s", Class::Timing),
+        ]
+    }
+
+    const OLD: &str = "point,n_mean,t_mean,t_se,wall_s\n0,1.5,10,1,2\n1,2.5,20,1,4\n";
+
+    /// Counted cells must match byte for byte (`1.50` is not `1.5`); the row, its point and the
+    /// column are named.
+    #[test]
+    fn a_counted_cell_that_differs_is_named() {
+        let mut c = fresh("main");
+        let new = "point,n_mean,t_mean,t_se,wall_s\n0,1.5,10,1,2\n1,2.50,20,1,4\n";
+        compare_table(&mut c, &cells(OLD), &cells(new), &classes(), &classes());
+        assert_eq!((c.compared, c.cells_differ), (2, 1));
+        assert_eq!(c.columns_differ, ["n_mean"]);
+        assert_eq!(
+            c.first[0].to_string(),
+            "row 1 (point 1) n_mean: \"2.5\" → \"2.50\""
+        );
+        assert!(!c.same());
+        assert!(
+            c.line()
+                .starts_with("DIFFERS x.main.csv (main): 2 of 5 columns"),
+            "{}",
+            c.line()
+        );
+    }
+
+    /// A timing mean inside 3·√(se_a² + se_b²) passes, outside fails when counted and only
+    /// reports when not; timing columns without an interval never fail.
+    #[test]
+    fn timings_are_held_to_their_interval_only_when_comparable() {
+        // |20 − 24| = 4 ≤ 3·√2 ≈ 4.24: inside; wall_s doubles: a ratio only.
+        let inside = "point,n_mean,t_mean,t_se,wall_s\n0,1.5,10,1,4\n1,2.5,24,1,8\n";
+        let mut c = fresh("main");
+        c.timings.not_counted = None;
+        compare_table(&mut c, &cells(OLD), &cells(inside), &classes(), &classes());
+        assert_eq!((c.timings.inside, c.timings.outside), (2, 0));
+        assert_eq!(c.timings.ratios, Some((1.2, 2.0, 2.0)));
+        assert!(c.same(), "{}", c.line());
+        // |20 − 25| = 5 > 4.24: outside.
+        let outside = "point,n_mean,t_mean,t_se,wall_s\n0,1.5,10,1,4\n1,2.5,25,1,8\n";
+        let mut c = fresh("main");
+        c.timings.not_counted = None;
+        compare_table(&mut c, &cells(OLD), &cells(outside), &classes(), &classes());
+        assert_eq!((c.timings.inside, c.timings.outside), (1, 1));
+        assert!(!c.same());
+        assert!(c.line().contains("row 1 (point 1) t_mean"), "{}", c.line());
+        let mut c = fresh("main");
+        c.timings.not_counted = Some("another CPU".into());
+        compare_table(&mut c, &cells(OLD), &cells(outside), &classes(), &classes());
+        assert!(c.same(), "{}", c.line());
+        assert!(
+            c.line().contains("not counted: another CPU"),
+            "{}",
+            c.line()
+        );
+    }
+
+    #[test]
+    fn another_header_or_row_count_or_class_is_a_difference() {
+        let mut c = fresh("main");
+        let renamed = "point,n_mean,t_mean,t_se,wall\n0,1.5,10,1,2\n1,2.5,20,1,4\n";
+        compare_table(&mut c, &cells(OLD), &cells(renamed), &classes(), &classes());
+        assert!(c.problems[0].contains("only in the result [wall_s], only in the rerun [wall]"));
+        assert_eq!(c.compared, 2, "the other columns are still compared");
+        let mut c = fresh("main");
+        let reordered = "point,t_mean,n_mean,t_se,wall_s\n0,10,1.5,1,2\n1,20,2.6,1,4\n";
+        compare_table(
+            &mut c,
+            &cells(OLD),
+            &cells(reordered),
+            &classes(),
+            &classes(),
+        );
+        assert!(c.problems[0].contains("another order"), "{:?}", c.problems);
+        assert_eq!((c.compared, c.cells_differ), (2, 1), "compared by name");
+        assert_eq!(c.first[0].new, "2.6");
+        let mut c = fresh("main");
+        let short = "point,n_mean,t_mean,t_se,wall_s\n0,1.5,10,1,2\n";
+        compare_table(&mut c, &cells(OLD), &cells(short), &classes(), &classes());
+        assert!(c.problems[0].contains("2 rows in the result, 1 in the rerun"));
+        let mut other = classes();
+        other[1].class = Class::Timing;
+        let mut c = fresh("main");
+        compare_table(&mut c, &cells(OLD), &cells(OLD), &classes(), &other);
+        assert!(
+            c.problems[0].contains("n_mean measured → timing"),
+            "{:?}",
+            c.problems
+        );
+        assert!(!c.same());
+    }
+}

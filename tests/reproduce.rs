@@ -1,0 +1,278 @@
+//! `raycost reproduce DIR`: a fresh run reproduces (exit 0); a tampered counted cell is named with
+//! its table, column and row (exit 1), and `scripts/compare_tables.py` finds the same cell; a
+//! timing-only difference passes; a changed spec, a changed input or a gone spec is refused naming
+//! what changed (exit 2); a `--run R` run, a merged shard set and a crossover result reproduce.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use crate::common::{raycost, read_csv, root, run_quiet, write_spec};
+
+/// A small grid sweep (two cell widths, 3000 rays): a main table with timings and a hist table.
+fn grid_spec(dir: &Path, rays: u64) -> PathBuf {
+    write_spec(
+        dir,
+        "tiny-grid",
+        &format!(
+            "[experiment]\nname = \"tiny-grid\"\nkind = \"grid\"\nseed = 5\nrays = {rays}\n\n\
+             [scene]\nintensity = 1.0\nradius = 0.1\nextent = \"infinite\"\n\n\
+             [grid]\ncell_width = 0.5\n\n[sweep]\n\"grid.cell_width\" = [0.5, 1.0]\n"
+        ),
+    )
+}
+
+fn reproduce(dir: &Path, args: &[&str]) -> assert_cmd::Command {
+    let mut c = raycost();
+    c.arg("reproduce").arg(dir).args(args);
+    c
+}
+
+fn output(c: &mut assert_cmd::Command) -> (i32, String, String) {
+    let o = c.output().expect("raycost runs");
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+/// Rewrites cell (`row`, `column`) of a CSV with `f` of its text.
+fn tamper(path: &Path, row: usize, column: &str, f: impl Fn(&str) -> String) {
+    let (header, mut rows) = read_csv(path);
+    let col = header.iter().position(|h| h == column).expect("the column");
+    rows[row][col] = f(&rows[row][col]);
+    let mut w = csv::Writer::from_path(path).expect("write");
+    w.write_record(&header).expect("header");
+    for r in rows {
+        w.write_record(&r).expect("row");
+    }
+    w.flush().expect("flush");
+}
+
+#[test]
+fn a_fresh_run_reproduces_and_a_tampered_cell_is_named() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let spec = grid_spec(tmp.path(), 3000);
+    let results = tmp.path().join("results");
+    run_quiet(&spec, &results).assert().success();
+    let dir = results.join("tiny-grid");
+
+    let scratch = tmp.path().join("scratch");
+    let (code, out, err) = output(
+        reproduce(&dir, &["--out", scratch.to_str().unwrap()])
+            .arg("--threads")
+            .arg("1"),
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("tiny-grid.csv (main):"), "{out}");
+    assert!(out.contains("tiny-grid.hist.csv (hist):"), "{out}");
+    assert!(out.contains("\nreproduced: 2 table(s)"), "{out}");
+    assert!(scratch.join("tiny-grid/tiny-grid.csv").is_file());
+    // The same scratch again is refused (nothing overwritten) unless --force.
+    let (code, _, err) = output(&mut reproduce(&dir, &["--out", scratch.to_str().unwrap()]));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--force"), "{err}");
+    reproduce(&dir, &["--out", scratch.to_str().unwrap(), "--force"])
+        .assert()
+        .success();
+    // Never into the result folder or the spec's.
+    for inside in [dir.join("x"), tmp.path().join("y")] {
+        let (code, _, err) = output(&mut reproduce(&dir, &["--out", inside.to_str().unwrap()]));
+        assert_eq!(code, 2, "{}: {err}", inside.display());
+        assert!(err.contains("must not write there"), "{err}");
+    }
+
+    // Python's comparison agrees on the untouched pair.
+    let compare = |new: &Path| {
+        std::process::Command::new("python3")
+            .arg(root().join("scripts/compare_tables.py"))
+            .arg(&results)
+            .arg(new)
+            .output()
+            .expect("python3 runs")
+    };
+    let py = compare(&scratch);
+    assert_eq!(
+        py.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&py.stdout)
+    );
+
+    // A timing cell (no interval) may differ: reported, not counted.
+    let main = dir.join("tiny-grid.csv");
+    let original = fs::read(&main).expect("read");
+    tamper(&main, 1, "time_per_ray_s", |s| {
+        (s.parse::<f64>().expect("a number") * 2.0).to_string()
+    });
+    let (code, out, err) = output(&mut reproduce(&dir, &[]));
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("seconds new/old"), "{out}");
+
+    // One measured cell changed: exit 1, the table, the column and the row named.
+    fs::write(&main, &original).expect("restore");
+    tamper(&main, 1, "n_s_mean", |s| format!("{s}1"));
+    let scratch2 = tmp.path().join("scratch2");
+    let (code, out, err) =
+        output(reproduce(&dir, &["--out", scratch2.to_str().unwrap()]).arg("--json"));
+    assert_eq!(code, 1, "{out}{err}");
+    let json: serde_json::Value = serde_json::from_str(&out).expect("JSON");
+    assert_eq!(json["reproduced"], false);
+    let main_json = &json["tables"][0];
+    assert_eq!(main_json["table"], "main");
+    assert_eq!(main_json["cells_differ"], 1);
+    assert_eq!(main_json["differences"][0]["column"], "n_s_mean");
+    assert_eq!(main_json["differences"][0]["row"], 1);
+    assert_eq!(
+        json["tables"][1]["same"], true,
+        "the hist table is untouched"
+    );
+    let (code, out, _) = output(&mut reproduce(&dir, &[]));
+    assert_eq!(code, 1);
+    assert!(
+        out.contains("DIFFERS tiny-grid.csv (main)") && out.contains("row 1 (point 1) n_s_mean"),
+        "{out}"
+    );
+    assert!(
+        out.contains("NOT reproduced: 1 of 2 table(s) differ (tiny-grid.csv)"),
+        "{out}"
+    );
+    // The temporary rerun of a result that differs is kept for inspection.
+    let kept = out
+        .rsplit("the rerun is kept in ")
+        .next()
+        .expect("kept")
+        .trim();
+    assert!(
+        Path::new(kept).join("tiny-grid/tiny-grid.csv").is_file(),
+        "{kept}"
+    );
+    fs::remove_dir_all(kept).ok();
+    // … and Python's comparison names the same cell.
+    let py = compare(&scratch2);
+    let text = String::from_utf8_lossy(&py.stdout);
+    assert_eq!(py.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("DIFFERS tiny-grid:") && text.contains("row 1 n_s_mean"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_changed_spec_a_changed_input_and_a_gone_spec_are_refused() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let spec = grid_spec(tmp.path(), 3000);
+    let results = tmp.path().join("results");
+    run_quiet(&spec, &results).assert().success();
+    let dir = results.join("tiny-grid");
+    let meta = fs::read_to_string(dir.join("tiny-grid.meta.toml")).expect("meta");
+    let then = meta
+        .lines()
+        .find_map(|l| l.strip_prefix("spec_hash = \""))
+        .expect("a hash")
+        .trim_end_matches('"')
+        .to_string();
+    grid_spec(tmp.path(), 4000);
+    let (code, out, err) = output(&mut reproduce(&dir, &[]));
+    assert_eq!(code, 2, "{out}{err}");
+    assert!(
+        err.contains("tiny-grid.toml") && err.contains(&then),
+        "{err}"
+    );
+    assert!(
+        err.contains("experiment.rays = 3000 then, 4000 now"),
+        "{err}"
+    );
+    fs::remove_file(&spec).expect("remove");
+    let (code, _, err) = output(&mut reproduce(&dir, &[]));
+    assert_eq!(code, 2);
+    assert!(err.contains("is gone"), "{err}");
+
+    // A points file read by the run, changed since: named.
+    let pts = tmp.path().join("pts.csv");
+    let points = |shift: f64| {
+        let mut s = String::from("x,y,z,nx,ny,nz\n");
+        for i in 0..10 {
+            let t = i as f64 / 10.0 - 0.5 + shift;
+            s.push_str(&format!("{t},{},{},0,0,1\n", 0.3 * t, -0.2 * t));
+        }
+        fs::write(&pts, s).expect("points");
+    };
+    points(0.0);
+    let detp = write_spec(
+        tmp.path(),
+        "pts",
+        "[experiment]\nname = \"pts\"\nkind = \"detp\"\nseed = 3\n\n[detp]\nphotons = 2000\n\
+         point_source = \"file\"\npoints_file = \"pts.csv\"\ndisc_radius = 0.1\n\
+         engines = [\"sphere-cache\"]\n",
+    );
+    run_quiet(&detp, &results).assert().success();
+    reproduce(&results.join("pts"), &[]).assert().success();
+    points(0.01);
+    let (code, _, err) = output(&mut reproduce(&results.join("pts"), &[]));
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("pts.csv") && err.contains("content changed"),
+        "{err}"
+    );
+}
+
+/// A run of `--run R` reruns as run R (its own seed); a merged shard set reruns unsplit.
+#[test]
+fn a_run_index_and_a_merged_shard_set_rerun_as_recorded() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let spec = grid_spec(tmp.path(), 2000);
+    let results = tmp.path().join("results");
+    run_quiet(&spec, &results)
+        .args(["--run", "1"])
+        .assert()
+        .success();
+    let (code, out, err) = output(&mut reproduce(&results.join("tiny-grid/runs/1"), &[]));
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("  run: 1\n"), "{out}");
+
+    let sharded = tmp.path().join("sharded");
+    for k in 0..2 {
+        run_quiet(&spec, &sharded)
+            .args(["--shard", &format!("{k}/2")])
+            .assert()
+            .success();
+    }
+    let dir = sharded.join("tiny-grid");
+    let (code, out, err) = output(&mut reproduce(&dir, &[]));
+    assert_eq!(code, 2, "two shards and no merged table: {out}{err}");
+    raycost().arg("merge").arg(&dir).assert().success();
+    let (code, out, err) = output(&mut reproduce(&dir, &[]));
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains("merged from 2 shards (rerun unsplit)"),
+        "{out}"
+    );
+}
+
+#[test]
+fn a_crossover_result_reruns_on_its_recorded_inputs() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let (fronts, points) = crate::crossover::runs(tmp.path());
+    let out = tmp.path().join("x");
+    crate::crossover::crossover(&fronts, &points, &out)
+        .assert()
+        .success();
+    let (code, text, err) = output(&mut reproduce(&out, &[]));
+    assert_eq!(code, 0, "{text}{err}");
+    assert!(
+        text.contains("crossover.csv (main):") && text.contains("best.csv (best):"),
+        "{text}"
+    );
+    assert!(text.contains("targets: 0.5,0.2"), "{text}");
+    // A crossover input changed since: named.
+    tamper(&points.join("points.csv"), 0, "experiment.seed", |s| {
+        format!("{s}0")
+    });
+    let (code, _, err) = output(&mut reproduce(&out, &[]));
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("points.csv") && err.contains("content changed"),
+        "{err}"
+    );
+}
