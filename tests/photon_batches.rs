@@ -183,9 +183,22 @@ fn photon_batches_of_moving_objects_equal_one_pass() {
         tmp.path(),
     );
     let table = |out: &str, t: &str| runs.join(out).join(name).join(format!("{name}{t}.csv"));
-    for t in ["", ".frames", ".points"] {
+    for t in ["", ".frames"] {
         assert_same_but_index_work(&table("whole", t), &table("forced", t));
     }
+    // The points table holds no index work: every measured column equal.
+    let points = |out: &str| measured_columns(&table(out, ".points"));
+    assert!(!points("whole").is_empty());
+    assert_eq!(
+        points("whole"),
+        points("forced"),
+        "points table, forced batches"
+    );
+    assert_eq!(
+        points("whole"),
+        points("auto"),
+        "points table, auto batches"
+    );
     // The auto run's budget is a parameter column: the rest is compared as above.
     assert_same_but_index_work(&table("whole", ".frames"), &table("auto", ".frames"));
     let main = |out: &str| {

@@ -253,9 +253,10 @@ mod tests {
                 }
             }
         }
-        // 8.3 GiB of segments and 0.3 GiB of discs within 8 GiB: two batches; within 3: three.
+        // 8.3 GiB of segments and 0.3 GiB of discs: two batches within 8 GiB, three within 3.5, four within 3.
         assert_eq!(count(0.3 * G, 8.3 * G, 32_000_000, None, 8.0), Ok(2));
-        assert_eq!(count(0.3 * G, 8.3 * G, 32_000_000, None, 3.0), Ok(3));
+        assert_eq!(count(0.3 * G, 8.3 * G, 32_000_000, None, 3.5), Ok(3));
+        assert_eq!(count(0.3 * G, 8.3 * G, 32_000_000, None, 3.0), Ok(4));
         assert_eq!(count(0.3 * G, 7.0 * G, 32_000_000, None, 8.0), Ok(1));
     }
 
