@@ -1,17 +1,15 @@
 //! Every column kind `detp` writes, declared once, and the tables that read them from a point's
 //! typed measurement: [`MAIN`] (the point's own columns around one group per engine, in the
-//! point's engine order, each engine's group from its own table: [`SPHERE_CACHE`],
-//! [`DISC_INDEX`], [`BRUTE_FORCE`], [`PHOTON_MAP`], [`PHOTON_MAP_GROWING`], [`PATH_TRACING`],
-//! [`REFERENCE`]), [`LEVELS`], [`POINTS_TABLE`] and [`PATH_TRACING_TABLE`].
+//! point's engine order, each engine's group from its estimator's own table,
+//! `estimators/NAME.rs`), [`LEVELS`], [`POINTS_TABLE`] and [`PATH_TRACING_TABLE`]. The engine
+//! families (`tests_{}`, `cost_{}_s`, …) are declared here, once, for every estimator.
 //! Engine columns are families, one member per engine (`tests_{}` → `tests_sphere_cache`).
 
 use super::config::DetpConfig;
-use super::engines::{
-    BruteMeasured, CacheMeasured, EngineMeasured, IndexMeasured, LevelRow, MapMeasured, Sizes,
-};
+use super::estimators::path_tracing::PathRow;
+use super::estimators::sphere_cache::LevelRow;
+use super::estimators::ESTIMATORS;
 use super::measure::{DetpMeasured, PointRow};
-use super::path_tracing::{PathMeasured, PathRow};
-use super::spec::EngineChoice;
 use crate::output::column::{Class, Column};
 use crate::output::table::{cells, col, Against, Cell, Cells, Entry, Line, Table};
 use crate::stats::{Estimate, Theory};
@@ -351,99 +349,6 @@ pub const RAYS_PER_S: Column = Column::value(
     "segments handled per second of engine time",
 );
 
-/// Theorem 1's (T_R, T_I) for the sphere cache at these sizes (t = u = 1).
-fn cache_cost(p: &DetpConfig, z: &Sizes) -> (f64, f64) {
-    th::sphere_cache_cost(1.0, 1.0, z.n_r, z.n_p, p.q())
-}
-
-/// The sphere cache's columns.
-pub const SPHERE_CACHE: Table<DetpConfig, CacheMeasured> = Table::of(&[
-    col(&TESTS, |_, e| (e.sphere_tests + e.disc_tests).into()),
-    col(&TESTS_THEORY, |p, e| {
-        let (t_r, t_i) = cache_cost(p, &e.sizes);
-        (e.sizes.reps * (t_r + t_i)).into()
-    }),
-    col(&RAY_SPHERE_TESTS, |_, e| e.sphere_tests.into()),
-    col(&RAY_SPHERE_TESTS_THEORY, |p, e| {
-        (e.sizes.reps * cache_cost(p, &e.sizes).0).into()
-    }),
-    col(&RAY_DISC_TESTS, |_, e| e.disc_tests.into()),
-    col(&RAY_DISC_TESTS_THEORY, |p, e| {
-        (e.sizes.reps * cache_cost(p, &e.sizes).1).into()
-    }),
-    col(&RAYS_COPIED, |_, e| e.rays_copied.into()),
-    col(&SPHERES_BUILT, |_, e| e.spheres_built.into()),
-    col(&POP_REPAIRS, |_, e| e.pop_repairs.into()),
-    col(&COUNTED_COST, |_, e| (e.sphere_tests + e.disc_tests).into()),
-    col(&COST_S, |_, e| e.seconds.into()),
-    col(&BUILD_S, |_, e| e.order_s.into()),
-    col(&ORDER_S, |_, e| e.order_s.into()),
-    col(&TESTS_PER_REPLICA, |_, e| e.tests_per_replica.into()),
-    col(&COST_PER_REPLICA_S, |_, e| e.seconds_per_replica.into()),
-]);
-
-/// The disc index's columns.
-pub const DISC_INDEX: Table<DetpConfig, IndexMeasured> = Table::of(&[
-    col(&BOX_TESTS, |_, e| e.stats.box_tests.into()),
-    col(&DDA_STEPS, |_, e| e.stats.dda_steps.into()),
-    col(&COUNTED_COST, |_, e| e.stats.counted_cost().into()),
-    col(&TESTS, |_, e| e.stats.ray_disc_tests.into()),
-    col(&TESTS_THEORY, |_, e| {
-        (e.sizes.reps * th::disc_index_cost(1.0, e.sizes.n_r, e.sizes.n_p)).into()
-    }),
-    col(&NODES, |_, e| e.stats.nodes_visited.into()),
-    col(&COST_S, |_, e| e.seconds.into()),
-    col(&BUILD_S, |_, e| e.build_s.into()),
-    col(&BYTES, |_, e| e.bytes.into()),
-    col(&TESTS_PER_REPLICA, |_, e| e.tests_per_replica.into()),
-    col(&COST_PER_REPLICA_S, |_, e| e.seconds_per_replica.into()),
-    col(&TRAVERSAL_PER_REPLICA_S, |_, e| {
-        e.traversal_per_replica.into()
-    }),
-]);
-
-/// Brute force's columns.
-pub const BRUTE_FORCE: Table<DetpConfig, BruteMeasured> = Table::of(&[
-    col(&TESTS, |_, e| e.tests.into()),
-    col(&COUNTED_COST, |_, e| e.tests.into()),
-    col(&TESTS_THEORY, |_, e| {
-        (e.sizes.reps * e.sizes.n_r * e.sizes.n_p).into()
-    }),
-    col(&COST_S, |_, e| e.seconds.into()),
-    col(&TESTS_PER_REPLICA, |_, e| e.tests_per_replica.into()),
-    col(&COST_PER_REPLICA_S, |_, e| e.seconds_per_replica.into()),
-]);
-
-/// The photon map's columns.
-pub const PHOTON_MAP: Table<DetpConfig, MapMeasured> = Table::of(&[
-    col(&PHOTON_MAP_RMSE, |_, e| e.rmse.into()),
-    col(&PHOTON_MAP_BIAS, |_, e| e.bias.into()),
-    col(&COST_S, |_, e| e.seconds.into()),
-    col(&BUILD_S, |_, e| e.build_s.into()),
-]);
-
-/// The growing photon map's columns (its errors: `photon_map_growing_ref_*`).
-pub const PHOTON_MAP_GROWING: Table<DetpConfig, MapMeasured> = Table::of(&[
-    col(&PHOTON_MAP_GROWING_K, |_, e| e.k.into()),
-    col(&COST_S, |_, e| e.seconds.into()),
-    col(&BUILD_S, |_, e| e.build_s.into()),
-]);
-
-/// The path-tracing competitor's columns (its errors: `path_tracing_ref_*`).
-pub const PATH_TRACING: Table<DetpConfig, PathMeasured> = Table::of(&[
-    col(&COST_S, |_, e| e.seconds.into()),
-    col(&BUILD_S, |_, _| 0.0.into()),
-    col(&PATH_TRACING_POINTS, |_, e| e.points.into()),
-    col(&PATH_TRACING_CV, |_, e| e.cv.into()),
-    col(&PATH_TRACING_CV_PREFIX, |_, e| e.cv_prefix.into()),
-    col(&PATH_TRACING_RAYS_PATH, |_, e| e.rays_path.into()),
-    col(&PATH_TRACING_RAYS_SHADOW, |_, e| e.rays_shadow.into()),
-    col(&PATH_TRACING_S_PER_PATH, |_, e| e.s_per_path.into()),
-]);
-
-/// The reference's column: its seconds.
-pub const REFERENCE: Table<DetpConfig, f64> = Table::of(&[col(&COST_S, |_, s| (*s).into())]);
-
 /// A baseline's errors against the reference.
 pub const BASELINE_REF: Table<DetpConfig, (Estimate, Estimate)> = Table::of(&[
     col(&BASELINE_REF_BIAS, |_, e| e.0.into()),
@@ -462,53 +367,12 @@ fn baseline_ref_cells(p: &DetpConfig, m: &DetpMeasured) -> Vec<(&'static str, Ce
 
 /// One group of cells per engine, in the point's engine order.
 fn engine_cells(p: &DetpConfig, m: &DetpMeasured) -> Vec<(&'static str, Cells)> {
-    m.engines
-        .iter()
-        .map(|e| match e {
-            EngineMeasured::SphereCache(x) => (
-                EngineChoice::SphereCache.column(),
-                cells(SPHERE_CACHE.entries, p, x),
-            ),
-            EngineMeasured::DiscIndex(x) => (
-                EngineChoice::DiscIndex.column(),
-                cells(DISC_INDEX.entries, p, x),
-            ),
-            EngineMeasured::BruteForce(x) => (
-                EngineChoice::BruteForce.column(),
-                cells(BRUTE_FORCE.entries, p, x),
-            ),
-            EngineMeasured::PhotonMap(x) => (
-                EngineChoice::PhotonMap.column(),
-                cells(PHOTON_MAP.entries, p, x),
-            ),
-            EngineMeasured::PhotonMapGrowing(x) => (
-                EngineChoice::PhotonMapGrowing.column(),
-                cells(PHOTON_MAP_GROWING.entries, p, x),
-            ),
-            EngineMeasured::PathTracing(x) => (
-                EngineChoice::PathTracing.column(),
-                cells(PATH_TRACING.entries, p, x),
-            ),
-            EngineMeasured::Reference(x) => (
-                EngineChoice::Reference.column(),
-                cells(REFERENCE.entries, p, x),
-            ),
-        })
-        .collect()
+    m.engines.iter().map(|e| (e.column(), e.cells(p))).collect()
 }
 
-/// Every engine's columns.
+/// Every engine's columns, in registry order.
 fn engine_columns() -> Vec<&'static Column> {
-    [
-        SPHERE_CACHE.columns(),
-        DISC_INDEX.columns(),
-        BRUTE_FORCE.columns(),
-        PHOTON_MAP.columns(),
-        PHOTON_MAP_GROWING.columns(),
-        PATH_TRACING.columns(),
-        REFERENCE.columns(),
-    ]
-    .concat()
+    ESTIMATORS.iter().flat_map(|e| e.columns()).collect()
 }
 
 /// The main table: the point's counts, one group per engine, the checks, the accuracy against the

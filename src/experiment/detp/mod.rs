@@ -42,9 +42,9 @@ use rayon::prelude::*;
 pub mod columns;
 pub mod config;
 pub mod engines;
+pub mod estimators;
 mod lines;
 pub mod measure;
-pub mod path_tracing;
 mod scene;
 pub mod shards;
 pub mod spec;
@@ -53,12 +53,14 @@ pub mod spec;
 // table and its parts, what a point needs in memory, the one-line description, and the defaults of
 // the edge remedies.
 pub use self::config::{lattice_spacing, DetpConfig, Points, Rays, SurfacePoints};
+pub use self::estimators::path_tracing;
 pub use self::spec::{DynamicEngine, EngineChoice, RawDetp, EDGE_GAP, EDGE_MIN_RADIUS};
 
 use self::columns as col;
-use self::engines::{LevelRow, ReferenceCache};
+use self::engines::ReferenceCache;
+use self::estimators::sphere_cache::LevelRow;
 use self::measure::{DetpMeasured, PointRow};
-use self::path_tracing::PathRow;
+use self::path_tracing::{PathMeasured, PathRow};
 use self::spec::DetpSpec;
 use super::inputs::Inputs;
 use super::kind::{
@@ -204,7 +206,7 @@ struct Agreement {
 /// disc anyway, or is not asked for): it depends on the seed, the point and the replica only, so
 /// photon shards and their merge draw the same subset.
 fn check_subset(cfg: &DetpConfig, point: u64, replica: u64, n: usize) -> Option<Vec<u32>> {
-    if cfg.engines.contains(&EngineChoice::BruteForce) || cfg.brute_force_points == 0 || n == 0 {
+    if oracle_runs(cfg) || cfg.brute_force_points == 0 || n == 0 {
         return None;
     }
     let k = (cfg.brute_force_points as usize).min(n);
@@ -215,6 +217,11 @@ fn check_subset(cfg: &DetpConfig, point: u64, replica: u64, n: usize) -> Option<
         .collect();
     subset.sort_unstable();
     Some(subset)
+}
+
+/// Does brute force (an estimator whose sums are the oracle) run on every disc?
+fn oracle_runs(cfg: &DetpConfig) -> bool {
+    cfg.engines.iter().any(|e| e.estimator().oracle())
 }
 
 /// Brute force's sums on the check subset of discs (in subset order; empty without a subset).
@@ -244,7 +251,7 @@ fn agree(
         .filter(|&i| rest.iter().any(|o| o[i] != first[i]))
         .count() as u64;
     let bf_checked = match check_subset(cfg, point, replica, n) {
-        _ if cfg.engines.contains(&EngineChoice::BruteForce) => n as u64,
+        _ if oracle_runs(cfg) => n as u64,
         Some(subset) => {
             mismatches += subset
                 .iter()
@@ -346,29 +353,15 @@ pub fn memory(cfg: &DetpConfig, threads: usize) -> Memory {
             what: format!("{n_p:.3e} discs and their sums"),
         },
     ];
-    if cfg.engines.contains(&EngineChoice::SphereCache) {
-        needs.push(Need {
-            bytes: segs * 4.0 * threads / (1.0 - cfg.q() * cfg.q()),
-            key: "detp.q",
-            what: "sphere-cache ray lists (n_R/(1 − Q²) per thread)".into(),
-        });
-    }
-    if cfg.engines.iter().any(|e| e.is_photon_map()) {
-        needs.push(Need {
-            bytes: segs * 48.0,
-            key: "detp.photons",
-            what: "photon-map k-d tree of the impacts".into(),
-        });
-    }
-    if let (true, Some(cells)) = (
-        cfg.engines.contains(&EngineChoice::DiscIndex),
-        cfg.grid_cells(),
-    ) {
-        needs.push(Need {
-            bytes: cells * 4.0,
-            key: "detp.index_cell_width",
-            what: format!("{cells:.3e} disc-grid cells"),
-        });
+    // Each estimator's own, once (the two photon maps share their k-d tree's line).
+    for e in estimators::ESTIMATORS {
+        if cfg.engines.iter().any(|c| c.as_str() == e.name()) {
+            for need in e.memory(cfg, segs, threads) {
+                if !needs.contains(&need) {
+                    needs.push(need);
+                }
+            }
+        }
     }
     Memory {
         needs,
@@ -446,10 +439,7 @@ impl Kind for DetpKind {
         let path_tracing = measured
             .engines
             .iter()
-            .find_map(|e| match e {
-                engines::EngineMeasured::PathTracing(m) => Some(m.rows.clone()),
-                _ => None,
-            })
+            .find_map(|e| e.get::<PathMeasured>().map(|m| m.rows.clone()))
             .unwrap_or_default();
         let checks = vec![Check {
             name: col::MISMATCHES.name,

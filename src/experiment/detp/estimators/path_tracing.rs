@@ -1,4 +1,4 @@
-//! Engine `path-tracing`: per-point path tracing with next-event estimation as DETP's competitor
+//! Estimator `path-tracing`: per-point path tracing with next-event estimation as DETP's competitor
 //! (issue 27), [`crate::lt::pathtrace`] run on its own streams (`[PATH_TRACE, seed, replica, i]`,
 //! i the point's place in the subset it runs on), so it shares no random number with the
 //! reference it is judged against.
@@ -20,12 +20,17 @@ use std::sync::Arc;
 use glam::DVec3;
 use rand::seq::SliceRandom;
 
-use super::config::DetpConfig;
-use super::engines::{
+use super::{Estimator, Role, Shards};
+use crate::experiment::detp::columns::*;
+use crate::experiment::detp::config::DetpConfig;
+use crate::experiment::detp::engines::{
     per_replica, point_set_key, Engine, EngineMeasured, EnginePart, Output, Pooled,
     ReferenceCache,
 };
-use super::{PointSet, RaySet};
+use crate::experiment::detp::spec::RawDetp;
+use crate::experiment::detp::{PointSet, RaySet};
+use crate::experiment::kind::{refuse, ConfigError};
+use crate::output::table::{col, Table};
 use crate::lt::pathtrace::{path_trace, powers_of_two, PathTraceRun};
 use crate::sample::rng::{domain, stream};
 use crate::stats::crossover::PathTracingCost;
@@ -57,16 +62,49 @@ pub struct PathTraced {
     pub run: PathTraceRun,
 }
 
+/// Estimator `path-tracing`.
+pub struct PathTracing;
+
+impl Estimator for PathTracing {
+    const NAME: &'static str = "path-tracing";
+    const COLUMN: &'static str = "path_tracing";
+    const ROLE: Role = Role::Baseline;
+    const SHARDS: Shards = Shards::Skip;
+    type Measured = PathMeasured;
+    const COLUMNS: Table<DetpConfig, PathMeasured> = Table::of(&[
+        col(&COST_S, |_, e| e.seconds.into()),
+        col(&BUILD_S, |_, _| 0.0.into()),
+        col(&PATH_TRACING_POINTS, |_, e| e.points.into()),
+        col(&PATH_TRACING_CV, |_, e| e.cv.into()),
+        col(&PATH_TRACING_CV_PREFIX, |_, e| e.cv_prefix.into()),
+        col(&PATH_TRACING_RAYS_PATH, |_, e| e.rays_path.into()),
+        col(&PATH_TRACING_RAYS_SHADOW, |_, e| e.rays_shadow.into()),
+        col(&PATH_TRACING_S_PER_PATH, |_, e| e.s_per_path.into()),
+    ]);
+    fn check(_d: &RawDetp, lines: bool) -> Result<(), ConfigError> {
+        if lines {
+            return refuse(
+                "detp.engines",
+                "\"path-tracing\" path-traces a scene's lights and surfaces: it needs detp.source = \"scene\"",
+            );
+        }
+        Ok(())
+    }
+    fn engine(refs: &ReferenceCache) -> Box<dyn Engine> {
+        Box::new(Runs::new(refs.clone()))
+    }
+}
+
 /// The competitor over a point's replicas.
-pub(super) struct PathTracing {
+pub(crate) struct Runs {
     cache: ReferenceCache,
     /// One run per replica, in replica order.
     runs: Vec<Arc<PathTraced>>,
 }
 
-impl PathTracing {
+impl Runs {
     /// A competitor that reads and fills the run's `cache`.
-    pub(super) fn new(cache: ReferenceCache) -> Self {
+    fn new(cache: ReferenceCache) -> Self {
         Self {
             cache,
             runs: Vec::new(),
@@ -108,13 +146,13 @@ impl PathTracing {
     }
 
     /// The runs, one per replica.
-    pub(super) fn runs(&self) -> &[Arc<PathTraced>] {
+    pub(in crate::experiment::detp) fn runs(&self) -> &[Arc<PathTraced>] {
         &self.runs
     }
 
     /// Per point of the subset (in its order): the running mean at each checkpoint and the per-path
     /// variance, each the mean over replicas.
-    pub(super) fn point_means(&self) -> Vec<(Vec<f64>, f64)> {
+    pub(in crate::experiment::detp) fn point_means(&self) -> Vec<(Vec<f64>, f64)> {
         let Some(first) = self.runs.first() else {
             return Vec::new();
         };
@@ -210,13 +248,13 @@ pub struct PathMeasured {
     pub rows: Vec<PathRow>,
 }
 
-impl Engine for PathTracing {
+impl Engine for Runs {
     fn run(&mut self, cfg: &DetpConfig, _rays: &RaySet, pts: &PointSet) -> Output {
         self.compute(cfg, pts);
         Output::Baseline
     }
     fn part(&self) -> Option<EnginePart> {
-        Some(EnginePart::PathTracing)
+        Some(EnginePart::unit("PathTracing"))
     }
     /// Photon shards skip the competitor (it needs no photons); the merge computes it, once.
     fn absorb(&mut self, cfg: &DetpConfig, pts: &PointSet, _part: &EnginePart) {
@@ -226,7 +264,7 @@ impl Engine for PathTracing {
         // A baseline: not part of the DETP engines' speed.
         0.0
     }
-    fn as_path_tracing(&self) -> Option<&PathTracing> {
+    fn as_path_tracing(&self) -> Option<&Runs> {
         Some(self)
     }
     /// At K paths: the mean over replicas and its SE (across replicas, or with one replica
@@ -288,7 +326,7 @@ impl Engine for PathTracing {
                 n += 1.0;
             }
         }
-        EngineMeasured::PathTracing(PathMeasured {
+        EngineMeasured::of::<PathTracing>(PathMeasured {
             points,
             seconds,
             rays_path: at_k(|t| t.path),
@@ -301,7 +339,7 @@ impl Engine for PathTracing {
     }
 }
 
-impl PathTracing {
+impl Runs {
     /// cv from the prefix errors: the checkpoints' MSE (mean over replicas) relative to the
     /// reference's mean over the subset squared, through
     /// [`PathTracingCost::cv2_from_prefix_errors`] (NaN without a reference).
