@@ -397,6 +397,34 @@ pub(super) fn against_reference(
 mod tests {
     use super::*;
 
+    /// Parts add field by field under their engine's tag, sizes take the larger, and parts of two
+    /// different engines do not add.
+    #[test]
+    fn engine_parts_add_counts_and_keep_the_larger_size() {
+        #[derive(serde::Serialize, serde::Deserialize, Debug, PartialEq)]
+        struct Counts {
+            stats: [u64; 2],
+            seconds: f64,
+            bytes: usize,
+        }
+        let a = EnginePart::new("X", &Counts { stats: [1, 2], seconds: 0.5, bytes: 10 });
+        let b = EnginePart::new("X", &Counts { stats: [3, 4], seconds: 0.25, bytes: 7 });
+        let sum = a.add(&b).expect("the same engine's parts add");
+        assert_eq!(
+            sum.read::<Counts>("X"),
+            Some(Counts { stats: [4, 6], seconds: 0.75, bytes: 10 })
+        );
+        assert_eq!(sum.read::<Counts>("Y"), None);
+        let text = serde_json::to_string(&sum).expect("json");
+        let back: EnginePart = serde_json::from_str(&text).expect("reads back");
+        assert_eq!(back, sum);
+        assert!(a.add(&EnginePart::unit("X")).is_none());
+        assert!(EnginePart::unit("R").add(&EnginePart::unit("Q")).is_none());
+        assert_eq!(EnginePart::unit("R").add(&EnginePart::unit("R")), Some(EnginePart::unit("R")));
+        let other = EnginePart::new("Y", &Counts { stats: [1, 2], seconds: 0.5, bytes: 10 });
+        assert!(a.add(&other).is_none());
+    }
+
     /// Replicas whose errors are shared by every point (a replica-wide offset): the per-point sum
     /// of variances would call the mean error exact to within s/√n; across replicas it is the
     /// offsets' spread, as it must be.

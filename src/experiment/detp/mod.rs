@@ -1,6 +1,6 @@
 //! Kind `detp`: one point builds a ray store (μ-random lines through the unit ball, or photons traced
 //! from a scene), discs on sample points, and runs the engines the spec names on it, once per replica
-//! (the engines themselves live in `engines.rs`, one [`engines::Engine`] each):
+//! (each an estimator of the registry, one file each in `estimators/`, see [`estimators`]):
 //!
 //! - `sphere-cache`: the hierarchy of spheres (points visited in Morton/Hilbert/no order), with its
 //!   counters per level — rays held, rebuilds (cache misses), ray–sphere tests — against
@@ -11,7 +11,7 @@
 //! - `photon-map`: Jensen's k-nearest-neighbour estimate over the same photons (scenes only), and
 //!   `photon-map-growing` with k(N) = k₀·(N/N₀)^β so that its error keeps falling;
 //! - `path-tracing`: per-point path tracing with next-event estimation, DETP's competitor at a
-//!   target error (`path_tracing.rs`; scenes only, once per point set and replica in a run);
+//!   target error (scenes only, once per point set and replica in a run);
 //! - `reference`: the path-traced irradiance at every point ([`crate::lt::reference`]), the ground
 //!   truth DETP and the photon map are measured against (scenes only; computed once per point set
 //!   in a run, not per replica).
@@ -22,15 +22,16 @@
 //!
 //! The spec's `[detp]` table is declared in `spec.rs` and validated in `config.rs`; a point's run and
 //! its typed measurement are in `measure.rs`; columns are declared with their accessors in
-//! `columns.rs` (counts are totals over the point's replicas; estimates have one cluster per
-//! replica, so their standard errors cover independent ray sets).
+//! `columns.rs` and each estimator's file (counts are totals over the point's replicas; estimates
+//! have one cluster per replica, so their standard errors cover independent ray sets).
 //!
 //! # Interface for other kinds and commands
 //!
 //! Kind `quasi-static` reads the same `[detp]` table and `raycost render` draws a DETP point; both
 //! use only what is re-exported here: [`RawDetp`] (the table as written), [`DetpConfig`] (it
 //! validated: [`Rays`], [`Points`], d, the sphere cache's parameters, the index), [`memory`],
-//! [`describe`], [`DynamicEngine`] (quasi-static's engine choice), [`EngineChoice`], the edge
+//! [`describe`], [`DynamicEngine`] (quasi-static's engine choice), [`EngineChoice`] (a name of the
+//! estimator registry; `EngineChoice::is::<E>()` tells an estimator of [`estimators`]), the edge
 //! remedies' defaults [`EDGE_MIN_RADIUS`] and [`EDGE_GAP`], and [`lattice_spacing`].
 
 use std::ops::Range;
@@ -273,9 +274,9 @@ crate::side_tables!(
     /// `NAME.levels.csv` (one row per sphere-cache level) and, with `detp.write_points`,
     /// `NAME.points.csv` (one row per sample point).
     DetpTables for DetpConfig {
-        levels: LevelRow = col::LEVELS,
+        levels: LevelRow = estimators::sphere_cache::LEVELS,
         points: PointRow = col::POINTS_TABLE,
-        path_tracing: PathRow = col::PATH_TRACING_TABLE,
+        path_tracing: PathRow = path_tracing::PATH_TRACING_TABLE,
     }
 );
 

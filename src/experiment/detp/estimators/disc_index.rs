@@ -11,6 +11,7 @@ use crate::experiment::detp::{PointSet, RaySet};
 use crate::output::table::{col, Table};
 use crate::stats::Estimate;
 use super::{Estimator, Role, Shards};
+use crate::output::column::{Class, Column};
 use crate::detp::disc_index::{self, DiscIndex as Index, IndexKind, IndexStats};
 use crate::experiment::kind::Need;
 use crate::theory::detp as th;
@@ -200,3 +201,42 @@ impl Engine for Runs {
         })
     }
 }
+
+/// The disc index's walk alone, per replica.
+pub const TRAVERSAL_PER_REPLICA_S: Column = Column::timed_estimate(
+    "traversal_{}_per_replica_s",
+    "s",
+    "disc index: seconds of a second pass in one replica that walks the index for the same segments exactly as the engine's pass does (cells or nodes, box tests, DDA steps, candidate lists) but tests no disc, timed apart right after it on the same threads (not in cost_disc_index_s); over cost_disc_index_per_replica_s it is eq. 8's traversal share in seconds: mean, standard error across replicas, replicas",
+);
+
+/// Index nodes visited.
+pub const NODES: Column = Column::value(
+    "nodes_{}",
+    "nodes",
+    Class::Measured,
+    "disc index: nodes (octree) or cells (grid) visited by the segments, summed over replicas",
+);
+
+/// Index box tests.
+pub const BOX_TESTS: Column = Column::value(
+    "box_tests_{}",
+    "tests",
+    Class::Measured,
+    "disc index: segment–box slab tests (octree: every node tested; grid: each segment clipped to the grid's box), summed over replicas",
+);
+
+/// Index DDA steps.
+pub const DDA_STEPS: Column = Column::value(
+    "dda_steps_{}",
+    "steps",
+    Class::Measured,
+    "disc index: 3D-DDA steps through grid cells (0 for an octree, whose steps are its box tests), summed over replicas",
+);
+
+/// Index size.
+pub const BYTES: Column = Column::value(
+    "bytes_{}",
+    "bytes",
+    Class::Measured,
+    "disc index: bytes of the largest replica's index",
+);

@@ -21,6 +21,7 @@ use glam::DVec3;
 use rand::seq::SliceRandom;
 
 use super::{Estimator, Role, Shards};
+use crate::output::column::{Class, Column};
 use crate::experiment::detp::columns::*;
 use crate::experiment::detp::config::DetpConfig;
 use crate::experiment::detp::engines::{
@@ -368,3 +369,133 @@ impl Runs {
             .sqrt()
     }
 }
+
+/// Path tracing: points it ran on.
+pub const PATH_TRACING_POINTS: Column = Column::value(
+    "path_tracing_points",
+    "points",
+    Class::Measured,
+    "path-tracing: the points it ran on (detp.path_points of them, or all); its cost for n points is cost_path_tracing_s·n/path_tracing_points",
+);
+
+/// Path tracing: per-path relative spread.
+pub const PATH_TRACING_CV: Column = Column::value(
+    "path_tracing_cv",
+    "1",
+    Class::Measured,
+    "path-tracing: √(mean σ_i²)/mean E_i over its points and replicas, σ_i² the per-path variance at point i: the relative RMSE of one path per point",
+);
+
+/// Path tracing: cv from its prefix errors.
+pub const PATH_TRACING_CV_PREFIX: Column = Column::value(
+    "path_tracing_cv_prefix",
+    "1",
+    Class::Measured,
+    "path-tracing: √(mean_k n_k·mse_k)/mean R over its checkpoints n_k, mse_k its mean squared error against engine reference (the reference's variance subtracted, mean over replicas), R the reference at its points: cv as its errors show it, robust to heavy tails; NaN without reference",
+);
+
+/// Path tracing: continuation rays.
+pub const PATH_TRACING_RAYS_PATH: Column = Column::value(
+    "path_tracing_rays_path",
+    "rays",
+    Class::Measured,
+    "path-tracing: continuation rays of all its paths, summed over replicas",
+);
+
+/// Path tracing: shadow rays.
+pub const PATH_TRACING_RAYS_SHADOW: Column = Column::value(
+    "path_tracing_rays_shadow",
+    "rays",
+    Class::Measured,
+    "path-tracing: shadow rays of all its paths, summed over replicas",
+);
+
+/// Path tracing: seconds per path.
+pub const PATH_TRACING_S_PER_PATH: Column = Column::value(
+    "path_tracing_s_per_path",
+    "s",
+    Class::Timing,
+    "path-tracing: wall seconds per path (its seconds over path_tracing_points·detp.path_samples·replicas)",
+);
+
+/// Replica.
+pub const PT_REPLICA: Column =
+    Column::value("replica", "1", Class::Measured, "the replica");
+
+/// Checkpoint.
+pub const PT_PATHS: Column = Column::value(
+    "paths",
+    "paths",
+    Class::Measured,
+    "checkpoint: paths per point (1, 2, 4, …, detp.path_samples)",
+);
+
+/// Continuation rays.
+pub const PT_RAYS_PATH: Column = Column::value(
+    "rays_path",
+    "rays",
+    Class::Measured,
+    "continuation rays of the first `paths` paths of every point",
+);
+
+/// Shadow rays.
+pub const PT_RAYS_SHADOW: Column = Column::value(
+    "rays_shadow",
+    "rays",
+    Class::Measured,
+    "shadow rays of the first `paths` paths of every point",
+);
+
+/// Seconds to the checkpoint.
+pub const PT_SECONDS: Column = Column::value(
+    "seconds_s",
+    "s",
+    Class::Timing,
+    "wall-clock seconds to this checkpoint: the points' thread seconds rescaled so that the last checkpoint's equal the run's wall time",
+);
+
+/// Thread seconds.
+pub const PT_THREAD_S: Column = Column::value(
+    "thread_s",
+    "s",
+    Class::Timing,
+    "the points' thread seconds to this checkpoint, summed",
+);
+
+/// MSE against the reference.
+pub const PT_REF_MSE: Column = Column::value(
+    "ref_mse",
+    "W²/m⁴",
+    Class::Measured,
+    "this replica's mean over its points of (E_i − R_i)² − se_R,i² against engine reference at this checkpoint (its own mean squared error, the reference's variance subtracted); NaN without reference",
+);
+
+/// Mean error against the reference.
+pub const PT_REF_BIAS: Column = Column::value(
+    "ref_bias",
+    "W/m²",
+    Class::Measured,
+    "this replica's mean over its points of E_i − R_i at this checkpoint; NaN without reference",
+);
+
+/// Mean per-path variance.
+pub const PT_VARIANCE_MEAN: Column = Column::value(
+    "variance_mean",
+    "W²/m⁴",
+    Class::Measured,
+    "this replica's per-path variance at K paths, mean over its points (the same on every row of the replica)",
+);
+
+/// `NAME.path_tracing.csv`: engine `path-tracing`, one row per replica and checkpoint (per replica,
+/// so that an analysis can bootstrap over replicas).
+pub const PATH_TRACING_TABLE: Table<DetpConfig, PathRow> = Table::of(&[
+    col(&PT_REPLICA, |_, r| r.replica.into()),
+    col(&PT_PATHS, |_, r| r.paths.into()),
+    col(&PT_RAYS_PATH, |_, r| r.rays_path.into()),
+    col(&PT_RAYS_SHADOW, |_, r| r.rays_shadow.into()),
+    col(&PT_SECONDS, |_, r| r.seconds_s.into()),
+    col(&PT_THREAD_S, |_, r| r.thread_s.into()),
+    col(&PT_REF_MSE, |_, r| r.ref_mse.into()),
+    col(&PT_REF_BIAS, |_, r| r.ref_bias.into()),
+    col(&PT_VARIANCE_MEAN, |_, r| r.variance_mean.into()),
+]);

@@ -10,6 +10,7 @@ use crate::experiment::detp::{PointSet, RaySet};
 use crate::output::table::{col, Table};
 use super::photon_map_growing::PhotonMapGrowing;
 use super::{Estimator, Role, Shards};
+use crate::output::column::{Class, Column};
 use crate::detp::photon_map::{self, Filter};
 use crate::experiment::detp::engines::errors;
 use crate::experiment::detp::spec::{FilterChoice, RawDetp};
@@ -174,3 +175,17 @@ impl Engine for Runs {
         }
     }
 }
+
+/// Photon-map RMSE.
+pub const PHOTON_MAP_RMSE: Column = Column::estimate(
+    "photon_map_rmse",
+    "W/m²",
+    "photon map: root-mean-square error against the exact irradiance (where the scene has one), one sample per replica",
+);
+
+/// Photon-map bias.
+pub const PHOTON_MAP_BIAS: Column = Column::estimate(
+    "photon_map_bias",
+    "W/m²",
+    "photon map: mean error against the exact irradiance, one sample per replica",
+);

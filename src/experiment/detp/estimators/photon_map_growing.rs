@@ -4,6 +4,7 @@
 
 use super::photon_map::{kd_tree, needs_a_scene, MapMeasured, Runs, NO_SHARDS};
 use super::{Estimator, Role, Shards};
+use crate::output::column::{Class, Column};
 use crate::experiment::detp::columns::*;
 use crate::experiment::detp::config::DetpConfig;
 use crate::experiment::detp::engines::{Engine, ReferenceCache};
@@ -35,3 +36,11 @@ impl Estimator for PhotonMapGrowing {
         Box::new(Runs::growing())
     }
 }
+
+/// The growing photon map's k.
+pub const PHOTON_MAP_GROWING_K: Column = Column::value(
+    "photon_map_growing_k",
+    "photons",
+    Class::Measured,
+    "photon-map-growing: the k it used at this photon count, photon_map_k·(photons/photon_map_k_photons)^photon_map_k_growth rounded (at least 1)",
+);

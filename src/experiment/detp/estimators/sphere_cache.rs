@@ -11,6 +11,9 @@ use crate::experiment::detp::{PointSet, RaySet};
 use crate::output::table::{col, Table};
 use crate::stats::Estimate;
 use super::{Estimator, Role, Shards};
+use crate::output::column::{Class, Column};
+use crate::output::table::{Against, Cell, Line};
+use crate::stats::Theory;
 use crate::detp::{order, sphere_cache};
 use crate::experiment::detp::engines::Law;
 use crate::experiment::kind::Need;
@@ -238,3 +241,208 @@ impl Runs {
         }
     }
 }
+
+/// Sphere cache: ray–sphere tests.
+pub const RAY_SPHERE_TESTS: Column = Column::value(
+    "ray_sphere_tests",
+    "tests",
+    Class::Measured,
+    "sphere cache: ray–sphere tests building lists (T_R's work)",
+);
+
+/// Their theory.
+pub const RAY_SPHERE_TESTS_THEORY: Column = Column::value(
+    "ray_sphere_tests_theory",
+    "tests",
+    Class::Theory,
+    "Theorem 1's T_R = t·n_R/Q²·(∛n_P − 1)/(1 − Q), times the replicas",
+);
+
+/// Sphere cache: ray–disc tests.
+pub const RAY_DISC_TESTS: Column = Column::value(
+    "ray_disc_tests",
+    "tests",
+    Class::Measured,
+    "sphere cache: ray–disc tests against the deepest list (T_I's work)",
+);
+
+/// Their theory.
+pub const RAY_DISC_TESTS_THEORY: Column = Column::value(
+    "ray_disc_tests_theory",
+    "tests",
+    Class::Theory,
+    "Theorem 1's T_I = (4/3)·u·n_R·∛n_P, times the replicas",
+);
+
+/// Sphere cache: segments copied into lists.
+pub const RAYS_COPIED: Column = Column::value(
+    "rays_copied",
+    "segments",
+    Class::Measured,
+    "sphere cache: segments copied into lists while building them (the root's list once per replica, included), summed over replicas; weight 0 in counted_cost_sphere_cache (each copy follows a counted ray–sphere test)",
+);
+
+/// Sphere cache: spheres built.
+pub const SPHERES_BUILT: Column = Column::value(
+    "spheres_built",
+    "spheres",
+    Class::Measured,
+    "sphere cache: spheres built over all levels (the root once per replica, included), summed over replicas",
+);
+
+/// Sphere cache: paper pop repairs.
+pub const POP_REPAIRS: Column = Column::value(
+    "pop_repairs",
+    "points",
+    Class::Measured,
+    "sphere cache, detp.pop_rule = \"paper\": points whose kept chain held a level not containing the disc (inherited lists: cut back to the chain there to stay exact; exact lists: harmless); 0 for \"chain\"",
+);
+
+/// Ordering time.
+pub const ORDER_S: Column = Column::value(
+    "order_s",
+    "s",
+    Class::Timing,
+    "sphere cache: seconds to sort the points along the space-filling curve",
+);
+
+/// Level number.
+pub const LEVEL: Column = Column::value(
+    "level",
+    "1",
+    Class::Measured,
+    "sphere-cache level i (0: the root)",
+);
+
+/// Its radius.
+pub const RADIUS: Column = Column::value("radius", "length", Class::Theory, "its radius r_0·Q^i");
+
+/// Builds.
+pub const BUILDS_LEVEL: Column = Column::value(
+    "builds_level",
+    "spheres",
+    Class::Measured,
+    "spheres built at this level, over replicas",
+);
+
+/// Rays held.
+pub const RAYS_LEVEL: Column = Column::estimate(
+    "rays_level",
+    "rays",
+    "mean rays held by the spheres built at this level (one cluster per replica)",
+);
+
+/// Its law.
+pub const RAYS_LEVEL_THEORY: Column = Column::value(
+    "rays_level_theory",
+    "rays",
+    Class::Theory,
+    "the uniform-line law n_R·(r_i/r_law)²",
+);
+
+/// Lens-clipped law.
+pub const RAYS_LEVEL_THEORY_CLIPPED: Column = Column::value(
+    "rays_level_theory_clipped",
+    "rays",
+    Class::Theory,
+    "lines: the law for sphere centres uniform in the ball, clipped where spheres stick out of it",
+);
+
+/// Spheres inside the law's ball.
+pub const RAYS_LEVEL_INSIDE: Column = Column::estimate(
+    "rays_level_inside",
+    "rays",
+    "lines: mean rays held by the spheres that lie inside the ball (where the law is exact)",
+);
+
+/// Misses.
+pub const MISSES_LEVEL: Column = Column::value(
+    "misses_level",
+    "spheres",
+    Class::Measured,
+    "cache misses: builds of this level except a chunk's cold start",
+);
+
+/// Rays held by the spheres of this level that hold fewer than the threshold (never subdivided).
+pub const RAYS_LEVEL_LEAF: Column = Column::vs_prediction(
+    "rays_level_leaf",
+    "segments",
+    "rays held per sphere of this level that holds fewer than detp.threshold (a sphere never subdivided): mean over those builds, SE clustered by replica, builds; theory: E[X | X < threshold] for X ~ Poisson(rays_level_theory)",
+);
+
+/// Misses per replica.
+pub const MISSES_LEVEL_PER_REPLICA: Column = Column::estimate(
+    "misses_level_per_replica",
+    "builds",
+    "misses at this level in one replica: mean, standard error across replicas, replicas",
+);
+
+/// The paper's rebuild model.
+pub const MISSES_LEVEL_THEORY: Column = Column::value(
+    "misses_level_theory",
+    "spheres",
+    Class::Theory,
+    "the paper's rebuild model m_i ≈ Q^(−3i) (one rebuild per region of S_i's size the sorted points visit; THEORY §2), times the replicas",
+);
+
+/// Rays copied per level.
+pub const RAYS_COPIED_LEVEL: Column = Column::value(
+    "rays_copied_level",
+    "segments",
+    Class::Measured,
+    "segments copied into this level's lists (Σ list length over its builds), over replicas",
+);
+
+/// Tests.
+pub const RAY_SPHERE_TESTS_LEVEL: Column = Column::value(
+    "ray_sphere_tests_level",
+    "tests",
+    Class::Measured,
+    "ray–sphere tests building this level's lists",
+);
+
+/// A level's summary line: rays held against the uniform-line law (photons of a scene are shown
+/// against it, not judged: the README's real scenes hold 1.2–2.3× the law); none for a level no
+/// replica built.
+fn level_line(_: &DetpConfig, r: &LevelRow) -> Vec<Line> {
+    if r.rays.n == 0 {
+        return Vec::new();
+    }
+    vec![Line {
+        metric: format!("rays L{}", r.level),
+        estimate: r.rays,
+        against: Against::Law {
+            value: r.law,
+            name: "n_R·(r_i/r_law)²",
+            not_judged: (!r.lines).then_some("photons"),
+        },
+    }]
+}
+
+/// `NAME.levels.csv`: one row per sphere-cache level (the leaf mean is not summarised: one line
+/// per level would drown the rays' lines).
+pub const LEVELS: Table<DetpConfig, LevelRow> = Table {
+    entries: &[
+        col(&LEVEL, |_, r| r.level.into()),
+        col(&RADIUS, |_, r| r.radius.into()),
+        col(&BUILDS_LEVEL, |_, r| r.builds.into()),
+        col(&RAYS_LEVEL, |_, r| r.rays.into()),
+        col(&RAYS_LEVEL_THEORY, |_, r| r.law.into()),
+        col(&RAYS_LEVEL_THEORY_CLIPPED, |_, r| r.clipped.into()),
+        col(&RAYS_LEVEL_INSIDE, |_, r| r.inside.into()),
+        col(&MISSES_LEVEL, |_, r| r.misses.into()),
+        col(&MISSES_LEVEL_PER_REPLICA, |_, r| {
+            r.misses_per_replica.into()
+        }),
+        col(&MISSES_LEVEL_THEORY, |p, r| {
+            (p.replicas as f64 * p.q().powi(-3 * r.level as i32)).into()
+        }),
+        col(&RAYS_COPIED_LEVEL, |_, r| r.copied.into()),
+        col(&RAY_SPHERE_TESTS_LEVEL, |_, r| r.sphere_tests.into()),
+        col(&RAYS_LEVEL_LEAF, |p, r| {
+            let law = th::poisson_mean_below(r.law, p.cache.threshold as u64);
+            Cell::Judged(r.leaf, Theory::Prediction(law))
+        }),
+    ],
+    lines: level_line,
+};
