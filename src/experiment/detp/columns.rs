@@ -10,9 +10,8 @@ use super::config::DetpConfig;
 use super::estimators::ESTIMATORS;
 use super::measure::{DetpMeasured, PointRow};
 use crate::output::column::{Class, Column};
-use crate::output::table::{cells, col, Against, Cell, Cells, Entry, Line, Table};
+use crate::output::table::{cells, col, Cell, Cells, Entry, Table};
 use crate::stats::{Estimate, Theory};
-use crate::theory::detp as th;
 
 /// Segments in the store.
 pub const SEGMENTS: Column = Column::value(

@@ -10,7 +10,7 @@ use crate::experiment::detp::{PointSet, RaySet};
 use crate::output::table::{col, Table};
 use super::photon_map_growing::PhotonMapGrowing;
 use super::{Estimator, Role, Shards};
-use crate::output::column::{Class, Column};
+use crate::output::column::Column;
 use crate::detp::photon_map::{self, Filter};
 use crate::experiment::detp::engines::errors;
 use crate::experiment::detp::spec::{FilterChoice, RawDetp};
