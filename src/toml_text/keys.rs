@@ -163,7 +163,7 @@ macro_rules! spec_table {
         pub struct $name:ident $(with $dflt:ident)? {
             $(
                 $(#[doc = $doc:literal])*
-                $field:ident : $ty:ty = $how:tt $(read $reader:path)? $(, $kty:literal, $unit:literal, $range:literal)?;
+                $field:ident : $ty:ty = $how:tt $(read $reader:path)? $(, $kty:literal, $unit:literal, $range:expr)?;
             )*
         }
     ) => {
@@ -280,7 +280,7 @@ macro_rules! spec_table {
     (@key $out:ident, $prefix:ident, $field:ident, $ty:ty, {tables}, [$($doc:literal),*]) => {
         $crate::spec_table!(@key $out, $prefix, $field, $ty, {table}, [])
     };
-    (@key $out:ident, $prefix:ident, $field:ident, $ty:ty, $how:tt, [$($doc:literal),*], $kty:literal, $unit:literal, $range:literal) => {
+    (@key $out:ident, $prefix:ident, $field:ident, $ty:ty, $how:tt, [$($doc:literal),*], $kty:literal, $unit:literal, $range:expr) => {
         $out.push($crate::toml_text::keys::KeyDoc {
             key: $crate::toml_text::keys::join($prefix, stringify!($field)),
             ty: $kty,

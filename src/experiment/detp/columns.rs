@@ -1,21 +1,17 @@
 //! Every column kind `detp` writes, declared once, and the tables that read them from a point's
 //! typed measurement: [`MAIN`] (the point's own columns around one group per engine, in the
-//! point's engine order, each engine's group from its own table: [`SPHERE_CACHE`],
-//! [`DISC_INDEX`], [`BRUTE_FORCE`], [`PHOTON_MAP`], [`PHOTON_MAP_GROWING`], [`PATH_TRACING`],
-//! [`REFERENCE`]), [`LEVELS`], [`POINTS_TABLE`] and [`PATH_TRACING_TABLE`].
+//! point's engine order, each engine's group from its estimator's own table,
+//! `estimators/NAME.rs`, which also declares the columns only it writes and its side table, if it
+//! has one) and [`POINTS_TABLE`]. The engine families every estimator may write (`tests_{}`,
+//! `cost_{}_s`, `build_{}_s`, …) are declared here, once.
 //! Engine columns are families, one member per engine (`tests_{}` → `tests_sphere_cache`).
 
 use super::config::DetpConfig;
-use super::engines::{
-    BruteMeasured, CacheMeasured, EngineMeasured, IndexMeasured, LevelRow, MapMeasured, Sizes,
-};
+use super::estimators::ESTIMATORS;
 use super::measure::{DetpMeasured, PointRow};
-use super::path_tracing::{PathMeasured, PathRow};
-use super::spec::EngineChoice;
 use crate::output::column::{Class, Column};
-use crate::output::table::{cells, col, Against, Cell, Cells, Entry, Line, Table};
+use crate::output::table::{cells, col, Cell, Cells, Entry, Table};
 use crate::stats::{Estimate, Theory};
-use crate::theory::detp as th;
 
 /// Segments in the store.
 pub const SEGMENTS: Column = Column::value(
@@ -88,67 +84,12 @@ pub const COST_PER_REPLICA_S: Column = Column::timed_estimate(
     "s",
     "seconds the engine took in one replica: mean, standard error across replicas, replicas",
 );
-/// The disc index's walk alone, per replica.
-pub const TRAVERSAL_PER_REPLICA_S: Column = Column::timed_estimate(
-    "traversal_{}_per_replica_s",
-    "s",
-    "disc index: seconds of a second pass in one replica that walks the index for the same segments exactly as the engine's pass does (cells or nodes, box tests, DDA steps, candidate lists) but tests no disc, timed apart right after it on the same threads (not in cost_disc_index_s); over cost_disc_index_per_replica_s it is eq. 8's traversal share in seconds: mean, standard error across replicas, replicas",
-);
 /// Theorem 1 for them.
 pub const TESTS_THEORY: Column = Column::value(
     "tests_{}_theory",
     "tests",
     Class::Theory,
     "Theorem 1's count for the engine (t = u = 1), times the replicas; brute force n_R·n_P",
-);
-/// Sphere cache: ray–sphere tests.
-pub const RAY_SPHERE_TESTS: Column = Column::value(
-    "ray_sphere_tests",
-    "tests",
-    Class::Measured,
-    "sphere cache: ray–sphere tests building lists (T_R's work)",
-);
-/// Their theory.
-pub const RAY_SPHERE_TESTS_THEORY: Column = Column::value(
-    "ray_sphere_tests_theory",
-    "tests",
-    Class::Theory,
-    "Theorem 1's T_R = t·n_R/Q²·(∛n_P − 1)/(1 − Q), times the replicas",
-);
-/// Sphere cache: ray–disc tests.
-pub const RAY_DISC_TESTS: Column = Column::value(
-    "ray_disc_tests",
-    "tests",
-    Class::Measured,
-    "sphere cache: ray–disc tests against the deepest list (T_I's work)",
-);
-/// Their theory.
-pub const RAY_DISC_TESTS_THEORY: Column = Column::value(
-    "ray_disc_tests_theory",
-    "tests",
-    Class::Theory,
-    "Theorem 1's T_I = (4/3)·u·n_R·∛n_P, times the replicas",
-);
-/// Sphere cache: segments copied into lists.
-pub const RAYS_COPIED: Column = Column::value(
-    "rays_copied",
-    "segments",
-    Class::Measured,
-    "sphere cache: segments copied into lists while building them (the root's list once per replica, included), summed over replicas; weight 0 in counted_cost_sphere_cache (each copy follows a counted ray–sphere test)",
-);
-/// Sphere cache: spheres built.
-pub const SPHERES_BUILT: Column = Column::value(
-    "spheres_built",
-    "spheres",
-    Class::Measured,
-    "sphere cache: spheres built over all levels (the root once per replica, included), summed over replicas",
-);
-/// Sphere cache: paper pop repairs.
-pub const POP_REPAIRS: Column = Column::value(
-    "pop_repairs",
-    "points",
-    Class::Measured,
-    "sphere cache, detp.pop_rule = \"paper\": points whose kept chain held a level not containing the disc (inherited lists: cut back to the chain there to stay exact; exact lists: harmless); 0 for \"chain\"",
 );
 /// Engine's counted cost.
 pub const COUNTED_COST: Column = Column::value(
@@ -164,108 +105,12 @@ pub const COST_S: Column = Column::value(
     Class::Timing,
     "seconds of the engine's work on the points (after the rays exist and build_{}_s is paid), summed over replicas; path tracing: all detp.path_samples paths on its path_tracing_points points",
 );
-/// Ordering time.
-pub const ORDER_S: Column = Column::value(
-    "order_s",
-    "s",
-    Class::Timing,
-    "sphere cache: seconds to sort the points along the space-filling curve",
-);
-/// Index nodes visited.
-pub const NODES: Column = Column::value(
-    "nodes_{}",
-    "nodes",
-    Class::Measured,
-    "disc index: nodes (octree) or cells (grid) visited by the segments, summed over replicas",
-);
-/// Index box tests.
-pub const BOX_TESTS: Column = Column::value(
-    "box_tests_{}",
-    "tests",
-    Class::Measured,
-    "disc index: segment–box slab tests (octree: every node tested; grid: each segment clipped to the grid's box), summed over replicas",
-);
-/// Index DDA steps.
-pub const DDA_STEPS: Column = Column::value(
-    "dda_steps_{}",
-    "steps",
-    Class::Measured,
-    "disc index: 3D-DDA steps through grid cells (0 for an octree, whose steps are its box tests), summed over replicas",
-);
 /// What an engine pays once per photon set.
 pub const BUILD_S: Column = Column::value(
     "build_{}_s",
     "s",
     Class::Timing,
     "seconds the engine pays once per photon set before any point's work, summed over replicas (disc index: building it; sphere cache: sorting the points, = order_s; photon maps: the kd-tree; path tracing: 0): with trace_s the part paid once, cost_{}_s/points the part per point",
-);
-/// Index size.
-pub const BYTES: Column = Column::value(
-    "bytes_{}",
-    "bytes",
-    Class::Measured,
-    "disc index: bytes of the largest replica's index",
-);
-/// The growing photon map's k.
-pub const PHOTON_MAP_GROWING_K: Column = Column::value(
-    "photon_map_growing_k",
-    "photons",
-    Class::Measured,
-    "photon-map-growing: the k it used at this photon count, photon_map_k·(photons/photon_map_k_photons)^photon_map_k_growth rounded (at least 1)",
-);
-/// Path tracing: points it ran on.
-pub const PATH_TRACING_POINTS: Column = Column::value(
-    "path_tracing_points",
-    "points",
-    Class::Measured,
-    "path-tracing: the points it ran on (detp.path_points of them, or all); its cost for n points is cost_path_tracing_s·n/path_tracing_points",
-);
-/// Path tracing: per-path relative spread.
-pub const PATH_TRACING_CV: Column = Column::value(
-    "path_tracing_cv",
-    "1",
-    Class::Measured,
-    "path-tracing: √(mean σ_i²)/mean E_i over its points and replicas, σ_i² the per-path variance at point i: the relative RMSE of one path per point",
-);
-/// Path tracing: cv from its prefix errors.
-pub const PATH_TRACING_CV_PREFIX: Column = Column::value(
-    "path_tracing_cv_prefix",
-    "1",
-    Class::Measured,
-    "path-tracing: √(mean_k n_k·mse_k)/mean R over its checkpoints n_k, mse_k its mean squared error against engine reference (the reference's variance subtracted, mean over replicas), R the reference at its points: cv as its errors show it, robust to heavy tails; NaN without reference",
-);
-/// Path tracing: continuation rays.
-pub const PATH_TRACING_RAYS_PATH: Column = Column::value(
-    "path_tracing_rays_path",
-    "rays",
-    Class::Measured,
-    "path-tracing: continuation rays of all its paths, summed over replicas",
-);
-/// Path tracing: shadow rays.
-pub const PATH_TRACING_RAYS_SHADOW: Column = Column::value(
-    "path_tracing_rays_shadow",
-    "rays",
-    Class::Measured,
-    "path-tracing: shadow rays of all its paths, summed over replicas",
-);
-/// Path tracing: seconds per path.
-pub const PATH_TRACING_S_PER_PATH: Column = Column::value(
-    "path_tracing_s_per_path",
-    "s",
-    Class::Timing,
-    "path-tracing: wall seconds per path (its seconds over path_tracing_points·detp.path_samples·replicas)",
-);
-/// Photon-map RMSE.
-pub const PHOTON_MAP_RMSE: Column = Column::estimate(
-    "photon_map_rmse",
-    "W/m²",
-    "photon map: root-mean-square error against the exact irradiance (where the scene has one), one sample per replica",
-);
-/// Photon-map bias.
-pub const PHOTON_MAP_BIAS: Column = Column::estimate(
-    "photon_map_bias",
-    "W/m²",
-    "photon map: mean error against the exact irradiance, one sample per replica",
 );
 /// Engine disagreements.
 pub const MISMATCHES: Column = Column::value(
@@ -351,99 +196,6 @@ pub const RAYS_PER_S: Column = Column::value(
     "segments handled per second of engine time",
 );
 
-/// Theorem 1's (T_R, T_I) for the sphere cache at these sizes (t = u = 1).
-fn cache_cost(p: &DetpConfig, z: &Sizes) -> (f64, f64) {
-    th::sphere_cache_cost(1.0, 1.0, z.n_r, z.n_p, p.q())
-}
-
-/// The sphere cache's columns.
-pub const SPHERE_CACHE: Table<DetpConfig, CacheMeasured> = Table::of(&[
-    col(&TESTS, |_, e| (e.sphere_tests + e.disc_tests).into()),
-    col(&TESTS_THEORY, |p, e| {
-        let (t_r, t_i) = cache_cost(p, &e.sizes);
-        (e.sizes.reps * (t_r + t_i)).into()
-    }),
-    col(&RAY_SPHERE_TESTS, |_, e| e.sphere_tests.into()),
-    col(&RAY_SPHERE_TESTS_THEORY, |p, e| {
-        (e.sizes.reps * cache_cost(p, &e.sizes).0).into()
-    }),
-    col(&RAY_DISC_TESTS, |_, e| e.disc_tests.into()),
-    col(&RAY_DISC_TESTS_THEORY, |p, e| {
-        (e.sizes.reps * cache_cost(p, &e.sizes).1).into()
-    }),
-    col(&RAYS_COPIED, |_, e| e.rays_copied.into()),
-    col(&SPHERES_BUILT, |_, e| e.spheres_built.into()),
-    col(&POP_REPAIRS, |_, e| e.pop_repairs.into()),
-    col(&COUNTED_COST, |_, e| (e.sphere_tests + e.disc_tests).into()),
-    col(&COST_S, |_, e| e.seconds.into()),
-    col(&BUILD_S, |_, e| e.order_s.into()),
-    col(&ORDER_S, |_, e| e.order_s.into()),
-    col(&TESTS_PER_REPLICA, |_, e| e.tests_per_replica.into()),
-    col(&COST_PER_REPLICA_S, |_, e| e.seconds_per_replica.into()),
-]);
-
-/// The disc index's columns.
-pub const DISC_INDEX: Table<DetpConfig, IndexMeasured> = Table::of(&[
-    col(&BOX_TESTS, |_, e| e.stats.box_tests.into()),
-    col(&DDA_STEPS, |_, e| e.stats.dda_steps.into()),
-    col(&COUNTED_COST, |_, e| e.stats.counted_cost().into()),
-    col(&TESTS, |_, e| e.stats.ray_disc_tests.into()),
-    col(&TESTS_THEORY, |_, e| {
-        (e.sizes.reps * th::disc_index_cost(1.0, e.sizes.n_r, e.sizes.n_p)).into()
-    }),
-    col(&NODES, |_, e| e.stats.nodes_visited.into()),
-    col(&COST_S, |_, e| e.seconds.into()),
-    col(&BUILD_S, |_, e| e.build_s.into()),
-    col(&BYTES, |_, e| e.bytes.into()),
-    col(&TESTS_PER_REPLICA, |_, e| e.tests_per_replica.into()),
-    col(&COST_PER_REPLICA_S, |_, e| e.seconds_per_replica.into()),
-    col(&TRAVERSAL_PER_REPLICA_S, |_, e| {
-        e.traversal_per_replica.into()
-    }),
-]);
-
-/// Brute force's columns.
-pub const BRUTE_FORCE: Table<DetpConfig, BruteMeasured> = Table::of(&[
-    col(&TESTS, |_, e| e.tests.into()),
-    col(&COUNTED_COST, |_, e| e.tests.into()),
-    col(&TESTS_THEORY, |_, e| {
-        (e.sizes.reps * e.sizes.n_r * e.sizes.n_p).into()
-    }),
-    col(&COST_S, |_, e| e.seconds.into()),
-    col(&TESTS_PER_REPLICA, |_, e| e.tests_per_replica.into()),
-    col(&COST_PER_REPLICA_S, |_, e| e.seconds_per_replica.into()),
-]);
-
-/// The photon map's columns.
-pub const PHOTON_MAP: Table<DetpConfig, MapMeasured> = Table::of(&[
-    col(&PHOTON_MAP_RMSE, |_, e| e.rmse.into()),
-    col(&PHOTON_MAP_BIAS, |_, e| e.bias.into()),
-    col(&COST_S, |_, e| e.seconds.into()),
-    col(&BUILD_S, |_, e| e.build_s.into()),
-]);
-
-/// The growing photon map's columns (its errors: `photon_map_growing_ref_*`).
-pub const PHOTON_MAP_GROWING: Table<DetpConfig, MapMeasured> = Table::of(&[
-    col(&PHOTON_MAP_GROWING_K, |_, e| e.k.into()),
-    col(&COST_S, |_, e| e.seconds.into()),
-    col(&BUILD_S, |_, e| e.build_s.into()),
-]);
-
-/// The path-tracing competitor's columns (its errors: `path_tracing_ref_*`).
-pub const PATH_TRACING: Table<DetpConfig, PathMeasured> = Table::of(&[
-    col(&COST_S, |_, e| e.seconds.into()),
-    col(&BUILD_S, |_, _| 0.0.into()),
-    col(&PATH_TRACING_POINTS, |_, e| e.points.into()),
-    col(&PATH_TRACING_CV, |_, e| e.cv.into()),
-    col(&PATH_TRACING_CV_PREFIX, |_, e| e.cv_prefix.into()),
-    col(&PATH_TRACING_RAYS_PATH, |_, e| e.rays_path.into()),
-    col(&PATH_TRACING_RAYS_SHADOW, |_, e| e.rays_shadow.into()),
-    col(&PATH_TRACING_S_PER_PATH, |_, e| e.s_per_path.into()),
-]);
-
-/// The reference's column: its seconds.
-pub const REFERENCE: Table<DetpConfig, f64> = Table::of(&[col(&COST_S, |_, s| (*s).into())]);
-
 /// A baseline's errors against the reference.
 pub const BASELINE_REF: Table<DetpConfig, (Estimate, Estimate)> = Table::of(&[
     col(&BASELINE_REF_BIAS, |_, e| e.0.into()),
@@ -462,53 +214,12 @@ fn baseline_ref_cells(p: &DetpConfig, m: &DetpMeasured) -> Vec<(&'static str, Ce
 
 /// One group of cells per engine, in the point's engine order.
 fn engine_cells(p: &DetpConfig, m: &DetpMeasured) -> Vec<(&'static str, Cells)> {
-    m.engines
-        .iter()
-        .map(|e| match e {
-            EngineMeasured::SphereCache(x) => (
-                EngineChoice::SphereCache.column(),
-                cells(SPHERE_CACHE.entries, p, x),
-            ),
-            EngineMeasured::DiscIndex(x) => (
-                EngineChoice::DiscIndex.column(),
-                cells(DISC_INDEX.entries, p, x),
-            ),
-            EngineMeasured::BruteForce(x) => (
-                EngineChoice::BruteForce.column(),
-                cells(BRUTE_FORCE.entries, p, x),
-            ),
-            EngineMeasured::PhotonMap(x) => (
-                EngineChoice::PhotonMap.column(),
-                cells(PHOTON_MAP.entries, p, x),
-            ),
-            EngineMeasured::PhotonMapGrowing(x) => (
-                EngineChoice::PhotonMapGrowing.column(),
-                cells(PHOTON_MAP_GROWING.entries, p, x),
-            ),
-            EngineMeasured::PathTracing(x) => (
-                EngineChoice::PathTracing.column(),
-                cells(PATH_TRACING.entries, p, x),
-            ),
-            EngineMeasured::Reference(x) => (
-                EngineChoice::Reference.column(),
-                cells(REFERENCE.entries, p, x),
-            ),
-        })
-        .collect()
+    m.engines.iter().map(|e| (e.column(), e.cells(p))).collect()
 }
 
-/// Every engine's columns.
+/// Every engine's columns, in registry order.
 fn engine_columns() -> Vec<&'static Column> {
-    [
-        SPHERE_CACHE.columns(),
-        DISC_INDEX.columns(),
-        BRUTE_FORCE.columns(),
-        PHOTON_MAP.columns(),
-        PHOTON_MAP_GROWING.columns(),
-        PATH_TRACING.columns(),
-        REFERENCE.columns(),
-    ]
-    .concat()
+    ESTIMATORS.iter().flat_map(|e| e.columns()).collect()
 }
 
 /// The main table: the point's counts, one group per engine, the checks, the accuracy against the
@@ -546,135 +257,6 @@ pub const MAIN: Table<DetpConfig, DetpMeasured> = Table::of(&[
     col(&IRRADIANCE_BIAS, |_, m| m.irradiance_bias.into()),
     col(&RAYS_PER_S, |_, m| m.rays_per_s.into()),
 ]);
-
-/// Level number.
-pub const LEVEL: Column = Column::value(
-    "level",
-    "1",
-    Class::Measured,
-    "sphere-cache level i (0: the root)",
-);
-/// Its radius.
-pub const RADIUS: Column = Column::value("radius", "length", Class::Theory, "its radius r_0·Q^i");
-/// Builds.
-pub const BUILDS_LEVEL: Column = Column::value(
-    "builds_level",
-    "spheres",
-    Class::Measured,
-    "spheres built at this level, over replicas",
-);
-/// Rays held.
-pub const RAYS_LEVEL: Column = Column::estimate(
-    "rays_level",
-    "rays",
-    "mean rays held by the spheres built at this level (one cluster per replica)",
-);
-/// Its law.
-pub const RAYS_LEVEL_THEORY: Column = Column::value(
-    "rays_level_theory",
-    "rays",
-    Class::Theory,
-    "the uniform-line law n_R·(r_i/r_law)²",
-);
-/// Lens-clipped law.
-pub const RAYS_LEVEL_THEORY_CLIPPED: Column = Column::value(
-    "rays_level_theory_clipped",
-    "rays",
-    Class::Theory,
-    "lines: the law for sphere centres uniform in the ball, clipped where spheres stick out of it",
-);
-/// Spheres inside the law's ball.
-pub const RAYS_LEVEL_INSIDE: Column = Column::estimate(
-    "rays_level_inside",
-    "rays",
-    "lines: mean rays held by the spheres that lie inside the ball (where the law is exact)",
-);
-/// Misses.
-pub const MISSES_LEVEL: Column = Column::value(
-    "misses_level",
-    "spheres",
-    Class::Measured,
-    "cache misses: builds of this level except a chunk's cold start",
-);
-/// Rays held by the spheres of this level that hold fewer than the threshold (never subdivided).
-pub const RAYS_LEVEL_LEAF: Column = Column::vs_prediction(
-    "rays_level_leaf",
-    "segments",
-    "rays held per sphere of this level that holds fewer than detp.threshold (a sphere never subdivided): mean over those builds, SE clustered by replica, builds; theory: E[X | X < threshold] for X ~ Poisson(rays_level_theory)",
-);
-/// Misses per replica.
-pub const MISSES_LEVEL_PER_REPLICA: Column = Column::estimate(
-    "misses_level_per_replica",
-    "builds",
-    "misses at this level in one replica: mean, standard error across replicas, replicas",
-);
-/// The paper's rebuild model.
-pub const MISSES_LEVEL_THEORY: Column = Column::value(
-    "misses_level_theory",
-    "spheres",
-    Class::Theory,
-    "the paper's rebuild model m_i ≈ Q^(−3i) (one rebuild per region of S_i's size the sorted points visit; THEORY §2), times the replicas",
-);
-/// Rays copied per level.
-pub const RAYS_COPIED_LEVEL: Column = Column::value(
-    "rays_copied_level",
-    "segments",
-    Class::Measured,
-    "segments copied into this level's lists (Σ list length over its builds), over replicas",
-);
-/// Tests.
-pub const RAY_SPHERE_TESTS_LEVEL: Column = Column::value(
-    "ray_sphere_tests_level",
-    "tests",
-    Class::Measured,
-    "ray–sphere tests building this level's lists",
-);
-
-/// A level's summary line: rays held against the uniform-line law (photons of a scene are shown
-/// against it, not judged: the README's real scenes hold 1.2–2.3× the law); none for a level no
-/// replica built.
-fn level_line(_: &DetpConfig, r: &LevelRow) -> Vec<Line> {
-    if r.rays.n == 0 {
-        return Vec::new();
-    }
-    vec![Line {
-        metric: format!("rays L{}", r.level),
-        estimate: r.rays,
-        against: Against::Law {
-            value: r.law,
-            name: "n_R·(r_i/r_law)²",
-            not_judged: (!r.lines).then_some("photons"),
-        },
-    }]
-}
-
-/// `NAME.levels.csv`: one row per sphere-cache level (the leaf mean is not summarised: one line
-/// per level would drown the rays' lines).
-pub const LEVELS: Table<DetpConfig, LevelRow> = Table {
-    entries: &[
-        col(&LEVEL, |_, r| r.level.into()),
-        col(&RADIUS, |_, r| r.radius.into()),
-        col(&BUILDS_LEVEL, |_, r| r.builds.into()),
-        col(&RAYS_LEVEL, |_, r| r.rays.into()),
-        col(&RAYS_LEVEL_THEORY, |_, r| r.law.into()),
-        col(&RAYS_LEVEL_THEORY_CLIPPED, |_, r| r.clipped.into()),
-        col(&RAYS_LEVEL_INSIDE, |_, r| r.inside.into()),
-        col(&MISSES_LEVEL, |_, r| r.misses.into()),
-        col(&MISSES_LEVEL_PER_REPLICA, |_, r| {
-            r.misses_per_replica.into()
-        }),
-        col(&MISSES_LEVEL_THEORY, |p, r| {
-            (p.replicas as f64 * p.q().powi(-3 * r.level as i32)).into()
-        }),
-        col(&RAYS_COPIED_LEVEL, |_, r| r.copied.into()),
-        col(&RAY_SPHERE_TESTS_LEVEL, |_, r| r.sphere_tests.into()),
-        col(&RAYS_LEVEL_LEAF, |p, r| {
-            let law = th::poisson_mean_below(r.law, p.cache.threshold as u64);
-            Cell::Judged(r.leaf, Theory::Prediction(law))
-        }),
-    ],
-    lines: level_line,
-};
 
 /// Sample index.
 pub const SAMPLE: Column =
@@ -827,77 +409,3 @@ pub const POINT_DIRECT_SE: Column = Column::value(
     Class::Measured,
     "its standard error (mean over replicas: √Σse_r²/R)",
 );
-
-/// Replica.
-pub const PT_REPLICA: Column =
-    Column::value("replica", "1", Class::Measured, "the replica");
-/// Checkpoint.
-pub const PT_PATHS: Column = Column::value(
-    "paths",
-    "paths",
-    Class::Measured,
-    "checkpoint: paths per point (1, 2, 4, …, detp.path_samples)",
-);
-/// Continuation rays.
-pub const PT_RAYS_PATH: Column = Column::value(
-    "rays_path",
-    "rays",
-    Class::Measured,
-    "continuation rays of the first `paths` paths of every point",
-);
-/// Shadow rays.
-pub const PT_RAYS_SHADOW: Column = Column::value(
-    "rays_shadow",
-    "rays",
-    Class::Measured,
-    "shadow rays of the first `paths` paths of every point",
-);
-/// Seconds to the checkpoint.
-pub const PT_SECONDS: Column = Column::value(
-    "seconds_s",
-    "s",
-    Class::Timing,
-    "wall-clock seconds to this checkpoint: the points' thread seconds rescaled so that the last checkpoint's equal the run's wall time",
-);
-/// Thread seconds.
-pub const PT_THREAD_S: Column = Column::value(
-    "thread_s",
-    "s",
-    Class::Timing,
-    "the points' thread seconds to this checkpoint, summed",
-);
-/// MSE against the reference.
-pub const PT_REF_MSE: Column = Column::value(
-    "ref_mse",
-    "W²/m⁴",
-    Class::Measured,
-    "this replica's mean over its points of (E_i − R_i)² − se_R,i² against engine reference at this checkpoint (its own mean squared error, the reference's variance subtracted); NaN without reference",
-);
-/// Mean error against the reference.
-pub const PT_REF_BIAS: Column = Column::value(
-    "ref_bias",
-    "W/m²",
-    Class::Measured,
-    "this replica's mean over its points of E_i − R_i at this checkpoint; NaN without reference",
-);
-/// Mean per-path variance.
-pub const PT_VARIANCE_MEAN: Column = Column::value(
-    "variance_mean",
-    "W²/m⁴",
-    Class::Measured,
-    "this replica's per-path variance at K paths, mean over its points (the same on every row of the replica)",
-);
-
-/// `NAME.path_tracing.csv`: engine `path-tracing`, one row per replica and checkpoint (per replica,
-/// so that an analysis can bootstrap over replicas).
-pub const PATH_TRACING_TABLE: Table<DetpConfig, PathRow> = Table::of(&[
-    col(&PT_REPLICA, |_, r| r.replica.into()),
-    col(&PT_PATHS, |_, r| r.paths.into()),
-    col(&PT_RAYS_PATH, |_, r| r.rays_path.into()),
-    col(&PT_RAYS_SHADOW, |_, r| r.rays_shadow.into()),
-    col(&PT_SECONDS, |_, r| r.seconds_s.into()),
-    col(&PT_THREAD_S, |_, r| r.thread_s.into()),
-    col(&PT_REF_MSE, |_, r| r.ref_mse.into()),
-    col(&PT_REF_BIAS, |_, r| r.ref_bias.into()),
-    col(&PT_VARIANCE_MEAN, |_, r| r.variance_mean.into()),
-]);

@@ -14,6 +14,7 @@ use super::spec::{
     DirectChoice, DiscRadius, LengthUnit, EdgeChoice, EngineChoice, FilterChoice, IndexChoice, ListModeChoice, OrderChoice,
     PointSourceKind, PopRuleChoice, RawDetp, RaySource, EDGE_GAP, EDGE_MIN_RADIUS,
 };
+use super::estimators::{self, Role};
 use crate::detp::disc_index::IndexKind;
 use crate::detp::edge::EdgeMode;
 use crate::detp::order::Order;
@@ -503,7 +504,10 @@ fn check_engines(d: &RawDetp, rays: &Rays) -> Result<(), ConfigError> {
     if d.engines.iter().all(|x| x.is_baseline()) {
         return refuse(
             "detp.engines",
-            "name a DETP engine (sphere-cache, disc-index or brute-force): the photon map and the reference are baselines beside them",
+            format!(
+                "name a DETP engine ({}): the photon map and the reference are baselines beside them",
+                estimators::names_of(Role::Detp, "or")
+            ),
         );
     }
     for (i, a) in d.engines.iter().enumerate() {
@@ -513,21 +517,6 @@ fn check_engines(d: &RawDetp, rays: &Rays) -> Result<(), ConfigError> {
                 format!("\"{}\" is listed twice", a.as_str()),
             );
         }
-    }
-    if let (Some(e), true) = (d.engines.iter().find(|e| e.is_photon_map()), lines) {
-        return refuse(
-            "detp.engines",
-            format!(
-                "the photon map needs photon impacts on surfaces (\"{}\"): use detp.source = \"scene\"",
-                e.as_str()
-            ),
-        );
-    }
-    if d.engines.contains(&EngineChoice::PathTracing) && lines {
-        return refuse(
-            "detp.engines",
-            "\"path-tracing\" path-traces a scene's lights and surfaces: it needs detp.source = \"scene\"",
-        );
     }
     if d.direct == DirectChoice::Nee && lines {
         return refuse(
@@ -541,17 +530,9 @@ fn check_engines(d: &RawDetp, rays: &Rays) -> Result<(), ConfigError> {
             "got 1, at least 2 (the direct part's standard error comes from its samples' variance)",
         );
     }
-    if d.engines.contains(&EngineChoice::Reference) && lines {
-        return refuse(
-            "detp.engines",
-            "the reference path-traces a scene's lights and surfaces: it needs detp.source = \"scene\" (lines through the unit ball have an exact irradiance already)",
-        );
-    }
-    if d.engines.contains(&EngineChoice::Reference) && d.reference_samples < 2 {
-        return refuse(
-            "detp.reference_samples",
-            "got 1, at least 2 (the reference's standard error comes from its samples' variance)",
-        );
+    // Each estimator's own refusals, in the spec's order.
+    for e in &d.engines {
+        e.estimator().check(d, lines)?;
     }
     Ok(())
 }

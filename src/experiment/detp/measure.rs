@@ -11,8 +11,10 @@ use glam::DVec3;
 
 use super::config::DetpConfig;
 use super::engines::{
-    self, DirectPart, EngineMeasured, Law, LevelRow, Output, Pooled, ReferenceCache, Sizes,
+    self, DirectPart, EngineMeasured, Law, Output, Pooled, ReferenceCache, Sizes,
 };
+use super::estimators::sphere_cache::LevelRow;
+use super::estimators::Role;
 use super::spec::EngineChoice;
 use super::shards::ReplicaPart;
 use super::{agree, check_sums, points, rays, PointSet};
@@ -144,7 +146,7 @@ impl Replicated {
             engines: cfg
                 .engines
                 .iter()
-                .map(|&e| engines::engine(e, refs))
+                .map(|&e| e.estimator().engine(refs))
                 .collect(),
             irr: Vec::with_capacity(cfg.replicas as usize),
             law_radius: 1.0,
@@ -323,7 +325,7 @@ pub(super) fn replicate_part(
     let mut engines: Vec<Box<dyn engines::Engine>> = cfg
         .engines
         .iter()
-        .map(|&e| engines::engine(e, refs))
+        .map(|&e| e.estimator().engine(refs))
         .collect();
     let mut pts = points(cfg, point, 0)?;
     let mut parts = Vec::with_capacity(cfg.replicas as usize);
@@ -371,6 +373,11 @@ pub(super) fn replicate_merged(
     Ok(r)
 }
 
+/// Is it the reference the others are judged against?
+fn is_reference(c: EngineChoice) -> bool {
+    c.estimator().role() == Role::Reference
+}
+
 /// The mean of `values` over the indices `judged`.
 fn mean_over(values: &[f64], judged: &[usize]) -> f64 {
     judged.iter().map(|&i| values[i]).sum::<f64>() / judged.len().max(1) as f64
@@ -410,7 +417,7 @@ pub(super) fn measure(
         .collect();
     pooled.reference = baselines
         .iter()
-        .find(|(c, _)| *c == EngineChoice::Reference)
+        .find(|(c, _)| is_reference(*c))
         .map(|(_, v)| v.as_slice());
     let reference = against_reference(cfg, r, &detp_points, &baselines);
     let (irradiance, exact_mean) = mean_irradiance(r);
@@ -499,14 +506,14 @@ fn against_reference(
 ) -> Option<AgainstReference> {
     let (_, refr) = baselines
         .iter()
-        .find(|(c, _)| *c == EngineChoice::Reference)?;
+        .find(|(c, _)| is_reference(*c))?;
     let n = refr.len().max(1) as f64;
     let se2: f64 = refr.iter().map(|r| r.1 * r.1).sum();
     // Every other baseline over the points where it has an estimate (path tracing may run on a
     // subset of them).
     let others = baselines
         .iter()
-        .filter(|(c, _)| *c != EngineChoice::Reference)
+        .filter(|(c, _)| !is_reference(*c))
         .map(|(c, est)| {
             let replicas = cfg
                 .engines

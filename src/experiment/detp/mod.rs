@@ -1,6 +1,6 @@
 //! Kind `detp`: one point builds a ray store (μ-random lines through the unit ball, or photons traced
 //! from a scene), discs on sample points, and runs the engines the spec names on it, once per replica
-//! (the engines themselves live in `engines.rs`, one [`engines::Engine`] each):
+//! (each an estimator of the registry, one file each in `estimators/`, see [`estimators`]):
 //!
 //! - `sphere-cache`: the hierarchy of spheres (points visited in Morton/Hilbert/no order), with its
 //!   counters per level — rays held, rebuilds (cache misses), ray–sphere tests — against
@@ -11,7 +11,7 @@
 //! - `photon-map`: Jensen's k-nearest-neighbour estimate over the same photons (scenes only), and
 //!   `photon-map-growing` with k(N) = k₀·(N/N₀)^β so that its error keeps falling;
 //! - `path-tracing`: per-point path tracing with next-event estimation, DETP's competitor at a
-//!   target error (`path_tracing.rs`; scenes only, once per point set and replica in a run);
+//!   target error (scenes only, once per point set and replica in a run);
 //! - `reference`: the path-traced irradiance at every point ([`crate::lt::reference`]), the ground
 //!   truth DETP and the photon map are measured against (scenes only; computed once per point set
 //!   in a run, not per replica).
@@ -22,15 +22,16 @@
 //!
 //! The spec's `[detp]` table is declared in `spec.rs` and validated in `config.rs`; a point's run and
 //! its typed measurement are in `measure.rs`; columns are declared with their accessors in
-//! `columns.rs` (counts are totals over the point's replicas; estimates have one cluster per
-//! replica, so their standard errors cover independent ray sets).
+//! `columns.rs` and each estimator's file (counts are totals over the point's replicas; estimates
+//! have one cluster per replica, so their standard errors cover independent ray sets).
 //!
 //! # Interface for other kinds and commands
 //!
 //! Kind `quasi-static` reads the same `[detp]` table and `raycost render` draws a DETP point; both
 //! use only what is re-exported here: [`RawDetp`] (the table as written), [`DetpConfig`] (it
 //! validated: [`Rays`], [`Points`], d, the sphere cache's parameters, the index), [`memory`],
-//! [`describe`], [`DynamicEngine`] (quasi-static's engine choice), [`EngineChoice`], the edge
+//! [`describe`], [`DynamicEngine`] (quasi-static's engine choice), [`EngineChoice`] (a name of the
+//! estimator registry; `EngineChoice::is::<E>()` tells an estimator of [`estimators`]), the edge
 //! remedies' defaults [`EDGE_MIN_RADIUS`] and [`EDGE_GAP`], and [`lattice_spacing`].
 
 use std::ops::Range;
@@ -42,9 +43,9 @@ use rayon::prelude::*;
 pub mod columns;
 pub mod config;
 pub mod engines;
+pub mod estimators;
 mod lines;
 pub mod measure;
-pub mod path_tracing;
 mod scene;
 pub mod shards;
 pub mod spec;
@@ -53,12 +54,14 @@ pub mod spec;
 // table and its parts, what a point needs in memory, the one-line description, and the defaults of
 // the edge remedies.
 pub use self::config::{lattice_spacing, DetpConfig, Points, Rays, SurfacePoints};
+pub use self::estimators::path_tracing;
 pub use self::spec::{DynamicEngine, EngineChoice, RawDetp, EDGE_GAP, EDGE_MIN_RADIUS};
 
 use self::columns as col;
-use self::engines::{LevelRow, ReferenceCache};
+use self::engines::ReferenceCache;
+use self::estimators::sphere_cache::LevelRow;
 use self::measure::{DetpMeasured, PointRow};
-use self::path_tracing::PathRow;
+use self::path_tracing::{PathMeasured, PathRow};
 use self::spec::DetpSpec;
 use super::inputs::Inputs;
 use super::kind::{
@@ -218,7 +221,7 @@ struct Agreement {
 /// disc anyway, or is not asked for): it depends on the seed, the point and the replica only, so
 /// photon shards and their merge draw the same subset.
 fn check_subset(cfg: &DetpConfig, point: u64, replica: u64, n: usize) -> Option<Vec<u32>> {
-    if cfg.engines.contains(&EngineChoice::BruteForce) || cfg.brute_force_points == 0 || n == 0 {
+    if oracle_runs(cfg) || cfg.brute_force_points == 0 || n == 0 {
         return None;
     }
     let k = (cfg.brute_force_points as usize).min(n);
@@ -229,6 +232,11 @@ fn check_subset(cfg: &DetpConfig, point: u64, replica: u64, n: usize) -> Option<
         .collect();
     subset.sort_unstable();
     Some(subset)
+}
+
+/// Does brute force (an estimator whose sums are the oracle) run on every disc?
+fn oracle_runs(cfg: &DetpConfig) -> bool {
+    cfg.engines.iter().any(|e| e.estimator().oracle())
 }
 
 /// Brute force's sums on the check subset of discs (in subset order; empty without a subset).
@@ -258,7 +266,7 @@ fn agree(
         .filter(|&i| rest.iter().any(|o| o[i] != first[i]))
         .count() as u64;
     let bf_checked = match check_subset(cfg, point, replica, n) {
-        _ if cfg.engines.contains(&EngineChoice::BruteForce) => n as u64,
+        _ if oracle_runs(cfg) => n as u64,
         Some(subset) => {
             mismatches += subset
                 .iter()
@@ -280,9 +288,9 @@ crate::side_tables!(
     /// `NAME.levels.csv` (one row per sphere-cache level) and, with `detp.write_points`,
     /// `NAME.points.csv` (one row per sample point).
     DetpTables for DetpConfig {
-        levels: LevelRow = col::LEVELS,
+        levels: LevelRow = estimators::sphere_cache::LEVELS,
         points: PointRow = col::POINTS_TABLE,
-        path_tracing: PathRow = col::PATH_TRACING_TABLE,
+        path_tracing: PathRow = path_tracing::PATH_TRACING_TABLE,
     }
 );
 
@@ -371,32 +379,15 @@ pub fn memory(cfg: &DetpConfig, threads: usize) -> Memory {
             per_photon: false,
         },
     ];
-    if cfg.engines.contains(&EngineChoice::SphereCache) {
-        needs.push(Need {
-            bytes: segs * 4.0 * threads / (1.0 - cfg.q() * cfg.q()),
-            key: "detp.q",
-            what: "sphere-cache ray lists (n_R/(1 − Q²) per thread)".into(),
-            per_photon: true,
-        });
-    }
-    if cfg.engines.iter().any(|e| e.is_photon_map()) {
-        needs.push(Need {
-            bytes: segs * 48.0,
-            key: "detp.photons",
-            what: "photon-map k-d tree of the impacts".into(),
-            per_photon: true,
-        });
-    }
-    if let (true, Some(cells)) = (
-        cfg.engines.contains(&EngineChoice::DiscIndex),
-        cfg.grid_cells(),
-    ) {
-        needs.push(Need {
-            bytes: cells * 4.0,
-            key: "detp.index_cell_width",
-            what: format!("{cells:.3e} disc-grid cells"),
-            per_photon: false,
-        });
+    // Each estimator's own, once (the two photon maps share their k-d tree's line).
+    for e in estimators::ESTIMATORS {
+        if cfg.engines.iter().any(|c| c.as_str() == e.name()) {
+            for need in e.memory(cfg, segs, threads) {
+                if !needs.contains(&need) {
+                    needs.push(need);
+                }
+            }
+        }
     }
     Memory {
         needs,
@@ -479,10 +470,7 @@ impl Kind for DetpKind {
         let path_tracing = measured
             .engines
             .iter()
-            .find_map(|e| match e {
-                engines::EngineMeasured::PathTracing(m) => Some(m.rows.clone()),
-                _ => None,
-            })
+            .find_map(|e| e.get::<PathMeasured>().map(|m| m.rows.clone()))
             .unwrap_or_default();
         let checks = vec![Check {
             name: col::MISMATCHES.name,

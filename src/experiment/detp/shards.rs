@@ -19,7 +19,7 @@ use std::ops::Range;
 use serde::{Deserialize, Serialize};
 
 use super::engines::EnginePart;
-use super::spec::EngineChoice;
+use super::estimators::{DynEstimator, Shards, ESTIMATORS};
 use super::{DetpConfig, RaySet};
 use crate::experiment::photon_shards::{add_replica_parts, RangePart};
 use crate::detp::fixed::{Acc, PowerScale};
@@ -155,18 +155,38 @@ pub fn photon_range(photons: u64, k: u64, n: u64) -> Range<u64> {
     at(k)..at(k + 1)
 }
 
-/// Why `cfg` cannot be split by photons, if it cannot.
+/// Why `cfg` cannot be split by photons, if it cannot: it lists estimators whose counts do not
+/// add ([`Shards::Refuse`]).
 pub fn refusal(cfg: &DetpConfig) -> Option<String> {
+    let refused = |e: &&dyn DynEstimator| matches!(e.shards(), Shards::Refuse(_));
     let bad: Vec<&str> = cfg
         .engines
         .iter()
-        .filter(|e| matches!(e, EngineChoice::SphereCache) || e.is_photon_map())
+        .filter(|e| refused(&e.estimator()))
         .map(|e| e.as_str())
         .collect();
     (!bad.is_empty()).then(|| {
+        let mut why: Vec<&str> = Vec::new();
+        for e in ESTIMATORS {
+            if let Shards::Refuse(w) = e.shards() {
+                if !why.contains(&w) {
+                    why.push(w);
+                }
+            }
+        }
+        let ok: Vec<&str> = ESTIMATORS
+            .iter()
+            .filter(|e| !refused(e))
+            .map(|e| e.name())
+            .collect();
+        let ok = match ok.split_last() {
+            Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+            _ => ok.join(""),
+        };
         format!(
-            "detp.engines has {}: its counts do not add across photon shards (the sphere cache subdivides a sphere by how many rays it holds, the photon map gathers each point's nearest photons among all of them); --photon-shard needs engines among disc-index, brute-force, path-tracing and reference",
-            bad.join(" and ")
+            "detp.engines has {}: its counts do not add across photon shards ({}); --photon-shard needs engines among {ok}",
+            bad.join(" and "),
+            why.join(", ")
         )
     })
 }

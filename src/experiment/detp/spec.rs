@@ -9,6 +9,8 @@
 
 use serde::{de::Error as _, Deserialize, Deserializer, Serialize};
 
+use super::estimators;
+pub use super::estimators::EngineChoice;
 use crate::toml_text::de::{count, open_unit, opt_count, opt_positive, positive};
 
 crate::spec_file! {
@@ -85,9 +87,8 @@ crate::spec_table! {
         /// Kind `detp`: the engines run on every point (columns per engine). Kind
         /// `quasi-static` picks its engine with `detp.engine`; here it takes `"sphere-cache"` and
         /// `"path-tracing"` (path tracing in the posed scene at frame 0 and the checked frames).
-        engines: Vec<EngineChoice> = {default vec![EngineChoice::SphereCache]},
-            "array of strings", "",
-            "`\"sphere-cache\"`, `\"disc-index\"`, `\"brute-force\"`, `\"photon-map\"`, `\"photon-map-growing\"`, `\"path-tracing\"`, `\"reference\"`";
+        engines: Vec<EngineChoice> = {default estimators::default_engines()},
+            "array of strings", "", estimators::spellings();
         /// The disc index's structure.
         index: IndexChoice = {default IndexChoice::Octree}, "string", "",
             "`\"octree\"`, `\"grid\"`";
@@ -198,18 +199,6 @@ choice!(
     PopRuleChoice { Chain => "chain", Paper => "paper" } default Chain
 );
 choice!(
-    /// An irradiance engine.
-    EngineChoice {
-        SphereCache => "sphere-cache",
-        DiscIndex => "disc-index",
-        BruteForce => "brute-force",
-        PhotonMap => "photon-map",
-        PhotonMapGrowing => "photon-map-growing",
-        PathTracing => "path-tracing",
-        Reference => "reference",
-    } default SphereCache
-);
-choice!(
     /// `detp.direct`: direct light in DETP's photons, or by next-event estimation.
     DirectChoice { Photons => "photons", Nee => "nee" } default Photons
 );
@@ -241,43 +230,6 @@ choice!(
         Predicted => "predicted",
     } default Hybrid
 );
-
-impl EngineChoice {
-    /// Column stem: `sphere_cache`, `disc_index`, `brute_force`, `photon_map`, `reference`.
-    pub fn column(self) -> &'static str {
-        match self {
-            EngineChoice::SphereCache => "sphere_cache",
-            EngineChoice::DiscIndex => "disc_index",
-            EngineChoice::BruteForce => "brute_force",
-            EngineChoice::PhotonMap => "photon_map",
-            EngineChoice::PhotonMapGrowing => "photon_map_growing",
-            EngineChoice::PathTracing => "path_tracing",
-            EngineChoice::Reference => "reference",
-        }
-    }
-
-    /// A baseline beside the DETP engines (its own estimates, not DETP's integer sums)?
-    pub fn is_baseline(self) -> bool {
-        matches!(
-            self,
-            EngineChoice::PhotonMap
-                | EngineChoice::PhotonMapGrowing
-                | EngineChoice::PathTracing
-                | EngineChoice::Reference
-        )
-    }
-
-    /// A photon map (fixed or growing k)?
-    pub fn is_photon_map(self) -> bool {
-        matches!(self, EngineChoice::PhotonMap | EngineChoice::PhotonMapGrowing)
-    }
-
-    /// Does it read the photons? The reference and the path-tracing competitor do not: a photon
-    /// shard skips them and the merge computes them once.
-    pub fn reads_photons(self) -> bool {
-        !matches!(self, EngineChoice::Reference | EngineChoice::PathTracing)
-    }
-}
 
 /// `detp.disc_radius`: a number > 0 or `"spacing"`.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -7,9 +7,8 @@
 //! as the scene, leave the scene's box at any frame, or overlap another object.
 
 use crate::detp::quasi_static::{Feed, Predictor};
-use crate::experiment::detp::{
-    DetpConfig, DynamicEngine, EngineChoice, Points, RawDetp, Rays, SurfacePoints,
-};
+use crate::experiment::detp::estimators::{path_tracing::PathTracing, sphere_cache::SphereCache};
+use crate::experiment::detp::{DetpConfig, DynamicEngine, Points, RawDetp, Rays, SurfacePoints};
 use crate::experiment::inputs::{Inputs, SceneFile};
 use crate::experiment::kind::{refuse, ConfigError};
 use crate::lt::Scene;
@@ -151,7 +150,7 @@ impl QuasiStaticConfig {
     /// Per-point path tracing at frame 0 and the checked frames (`"path-tracing"` in
     /// `detp.engines`; [`super::path_tracing`]).
     pub fn path_tracing(&self) -> bool {
-        self.detp.engines.contains(&EngineChoice::PathTracing)
+        self.detp.engines.iter().any(|e| e.is::<PathTracing>())
     }
 
     /// Validates `[detp]` and `[dynamic]` together, loading the scene (once per run, through
@@ -284,7 +283,7 @@ fn paper_method_only(detp: &DetpConfig) -> Result<(), ConfigError> {
     if detp
         .engines
         .iter()
-        .any(|e| !matches!(e, EngineChoice::SphereCache | EngineChoice::PathTracing))
+        .any(|e| !(e.is::<SphereCache>() || e.is::<PathTracing>()))
     {
         return refuse(
             "detp.engines",

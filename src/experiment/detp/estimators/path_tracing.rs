@@ -1,4 +1,4 @@
-//! Engine `path-tracing`: per-point path tracing with next-event estimation as DETP's competitor
+//! Estimator `path-tracing`: per-point path tracing with next-event estimation as DETP's competitor
 //! (issue 27), [`crate::lt::pathtrace`] run on its own streams (`[PATH_TRACE, seed, replica, i]`,
 //! i the point's place in the subset it runs on), so it shares no random number with the
 //! reference it is judged against.
@@ -20,12 +20,18 @@ use std::sync::Arc;
 use glam::DVec3;
 use rand::seq::SliceRandom;
 
-use super::config::DetpConfig;
-use super::engines::{
+use super::{Estimator, Role, Shards};
+use crate::output::column::{Class, Column};
+use crate::experiment::detp::columns::*;
+use crate::experiment::detp::config::DetpConfig;
+use crate::experiment::detp::engines::{
     per_replica, point_set_key, Engine, EngineMeasured, EnginePart, Output, Pooled,
     ReferenceCache,
 };
-use super::{PointSet, RaySet};
+use crate::experiment::detp::spec::RawDetp;
+use crate::experiment::detp::{PointSet, RaySet};
+use crate::experiment::kind::{refuse, ConfigError};
+use crate::output::table::{col, Table};
 use crate::lt::pathtrace::{path_trace, powers_of_two, PathTraceRun};
 use crate::sample::rng::{domain, stream};
 use crate::stats::crossover::PathTracingCost;
@@ -57,16 +63,49 @@ pub struct PathTraced {
     pub run: PathTraceRun,
 }
 
+/// Estimator `path-tracing`.
+pub struct PathTracing;
+
+impl Estimator for PathTracing {
+    const NAME: &'static str = "path-tracing";
+    const COLUMN: &'static str = "path_tracing";
+    const ROLE: Role = Role::Baseline;
+    const SHARDS: Shards = Shards::Skip;
+    type Measured = PathMeasured;
+    const COLUMNS: Table<DetpConfig, PathMeasured> = Table::of(&[
+        col(&COST_S, |_, e| e.seconds.into()),
+        col(&BUILD_S, |_, _| 0.0.into()),
+        col(&PATH_TRACING_POINTS, |_, e| e.points.into()),
+        col(&PATH_TRACING_CV, |_, e| e.cv.into()),
+        col(&PATH_TRACING_CV_PREFIX, |_, e| e.cv_prefix.into()),
+        col(&PATH_TRACING_RAYS_PATH, |_, e| e.rays_path.into()),
+        col(&PATH_TRACING_RAYS_SHADOW, |_, e| e.rays_shadow.into()),
+        col(&PATH_TRACING_S_PER_PATH, |_, e| e.s_per_path.into()),
+    ]);
+    fn check(_d: &RawDetp, lines: bool) -> Result<(), ConfigError> {
+        if lines {
+            return refuse(
+                "detp.engines",
+                "\"path-tracing\" path-traces a scene's lights and surfaces: it needs detp.source = \"scene\"",
+            );
+        }
+        Ok(())
+    }
+    fn engine(refs: &ReferenceCache) -> Box<dyn Engine> {
+        Box::new(Runs::new(refs.clone()))
+    }
+}
+
 /// The competitor over a point's replicas.
-pub(super) struct PathTracing {
+pub(crate) struct Runs {
     cache: ReferenceCache,
     /// One run per replica, in replica order.
     runs: Vec<Arc<PathTraced>>,
 }
 
-impl PathTracing {
+impl Runs {
     /// A competitor that reads and fills the run's `cache`.
-    pub(super) fn new(cache: ReferenceCache) -> Self {
+    fn new(cache: ReferenceCache) -> Self {
         Self {
             cache,
             runs: Vec::new(),
@@ -108,13 +147,13 @@ impl PathTracing {
     }
 
     /// The runs, one per replica.
-    pub(super) fn runs(&self) -> &[Arc<PathTraced>] {
+    pub(in crate::experiment::detp) fn runs(&self) -> &[Arc<PathTraced>] {
         &self.runs
     }
 
     /// Per point of the subset (in its order): the running mean at each checkpoint and the per-path
     /// variance, each the mean over replicas.
-    pub(super) fn point_means(&self) -> Vec<(Vec<f64>, f64)> {
+    pub(in crate::experiment::detp) fn point_means(&self) -> Vec<(Vec<f64>, f64)> {
         let Some(first) = self.runs.first() else {
             return Vec::new();
         };
@@ -210,13 +249,13 @@ pub struct PathMeasured {
     pub rows: Vec<PathRow>,
 }
 
-impl Engine for PathTracing {
+impl Engine for Runs {
     fn run(&mut self, cfg: &DetpConfig, _rays: &RaySet, pts: &PointSet) -> Output {
         self.compute(cfg, pts);
         Output::Baseline
     }
     fn part(&self) -> Option<EnginePart> {
-        Some(EnginePart::PathTracing)
+        Some(EnginePart::unit("PathTracing"))
     }
     /// Photon shards skip the competitor (it needs no photons); the merge computes it, once.
     fn absorb(&mut self, cfg: &DetpConfig, pts: &PointSet, _part: &EnginePart) {
@@ -226,7 +265,7 @@ impl Engine for PathTracing {
         // A baseline: not part of the DETP engines' speed.
         0.0
     }
-    fn as_path_tracing(&self) -> Option<&PathTracing> {
+    fn as_path_tracing(&self) -> Option<&Runs> {
         Some(self)
     }
     /// At K paths: the mean over replicas and its SE (across replicas, or with one replica
@@ -288,7 +327,7 @@ impl Engine for PathTracing {
                 n += 1.0;
             }
         }
-        EngineMeasured::PathTracing(PathMeasured {
+        EngineMeasured::of::<PathTracing>(PathMeasured {
             points,
             seconds,
             rays_path: at_k(|t| t.path),
@@ -301,7 +340,7 @@ impl Engine for PathTracing {
     }
 }
 
-impl PathTracing {
+impl Runs {
     /// cv from the prefix errors: the checkpoints' MSE (mean over replicas) relative to the
     /// reference's mean over the subset squared, through
     /// [`PathTracingCost::cv2_from_prefix_errors`] (NaN without a reference).
@@ -330,3 +369,133 @@ impl PathTracing {
             .sqrt()
     }
 }
+
+/// Path tracing: points it ran on.
+pub const PATH_TRACING_POINTS: Column = Column::value(
+    "path_tracing_points",
+    "points",
+    Class::Measured,
+    "path-tracing: the points it ran on (detp.path_points of them, or all); its cost for n points is cost_path_tracing_s·n/path_tracing_points",
+);
+
+/// Path tracing: per-path relative spread.
+pub const PATH_TRACING_CV: Column = Column::value(
+    "path_tracing_cv",
+    "1",
+    Class::Measured,
+    "path-tracing: √(mean σ_i²)/mean E_i over its points and replicas, σ_i² the per-path variance at point i: the relative RMSE of one path per point",
+);
+
+/// Path tracing: cv from its prefix errors.
+pub const PATH_TRACING_CV_PREFIX: Column = Column::value(
+    "path_tracing_cv_prefix",
+    "1",
+    Class::Measured,
+    "path-tracing: √(mean_k n_k·mse_k)/mean R over its checkpoints n_k, mse_k its mean squared error against engine reference (the reference's variance subtracted, mean over replicas), R the reference at its points: cv as its errors show it, robust to heavy tails; NaN without reference",
+);
+
+/// Path tracing: continuation rays.
+pub const PATH_TRACING_RAYS_PATH: Column = Column::value(
+    "path_tracing_rays_path",
+    "rays",
+    Class::Measured,
+    "path-tracing: continuation rays of all its paths, summed over replicas",
+);
+
+/// Path tracing: shadow rays.
+pub const PATH_TRACING_RAYS_SHADOW: Column = Column::value(
+    "path_tracing_rays_shadow",
+    "rays",
+    Class::Measured,
+    "path-tracing: shadow rays of all its paths, summed over replicas",
+);
+
+/// Path tracing: seconds per path.
+pub const PATH_TRACING_S_PER_PATH: Column = Column::value(
+    "path_tracing_s_per_path",
+    "s",
+    Class::Timing,
+    "path-tracing: wall seconds per path (its seconds over path_tracing_points·detp.path_samples·replicas)",
+);
+
+/// Replica.
+pub const PT_REPLICA: Column =
+    Column::value("replica", "1", Class::Measured, "the replica");
+
+/// Checkpoint.
+pub const PT_PATHS: Column = Column::value(
+    "paths",
+    "paths",
+    Class::Measured,
+    "checkpoint: paths per point (1, 2, 4, …, detp.path_samples)",
+);
+
+/// Continuation rays.
+pub const PT_RAYS_PATH: Column = Column::value(
+    "rays_path",
+    "rays",
+    Class::Measured,
+    "continuation rays of the first `paths` paths of every point",
+);
+
+/// Shadow rays.
+pub const PT_RAYS_SHADOW: Column = Column::value(
+    "rays_shadow",
+    "rays",
+    Class::Measured,
+    "shadow rays of the first `paths` paths of every point",
+);
+
+/// Seconds to the checkpoint.
+pub const PT_SECONDS: Column = Column::value(
+    "seconds_s",
+    "s",
+    Class::Timing,
+    "wall-clock seconds to this checkpoint: the points' thread seconds rescaled so that the last checkpoint's equal the run's wall time",
+);
+
+/// Thread seconds.
+pub const PT_THREAD_S: Column = Column::value(
+    "thread_s",
+    "s",
+    Class::Timing,
+    "the points' thread seconds to this checkpoint, summed",
+);
+
+/// MSE against the reference.
+pub const PT_REF_MSE: Column = Column::value(
+    "ref_mse",
+    "W²/m⁴",
+    Class::Measured,
+    "this replica's mean over its points of (E_i − R_i)² − se_R,i² against engine reference at this checkpoint (its own mean squared error, the reference's variance subtracted); NaN without reference",
+);
+
+/// Mean error against the reference.
+pub const PT_REF_BIAS: Column = Column::value(
+    "ref_bias",
+    "W/m²",
+    Class::Measured,
+    "this replica's mean over its points of E_i − R_i at this checkpoint; NaN without reference",
+);
+
+/// Mean per-path variance.
+pub const PT_VARIANCE_MEAN: Column = Column::value(
+    "variance_mean",
+    "W²/m⁴",
+    Class::Measured,
+    "this replica's per-path variance at K paths, mean over its points (the same on every row of the replica)",
+);
+
+/// `NAME.path_tracing.csv`: engine `path-tracing`, one row per replica and checkpoint (per replica,
+/// so that an analysis can bootstrap over replicas).
+pub const PATH_TRACING_TABLE: Table<DetpConfig, PathRow> = Table::of(&[
+    col(&PT_REPLICA, |_, r| r.replica.into()),
+    col(&PT_PATHS, |_, r| r.paths.into()),
+    col(&PT_RAYS_PATH, |_, r| r.rays_path.into()),
+    col(&PT_RAYS_SHADOW, |_, r| r.rays_shadow.into()),
+    col(&PT_SECONDS, |_, r| r.seconds_s.into()),
+    col(&PT_THREAD_S, |_, r| r.thread_s.into()),
+    col(&PT_REF_MSE, |_, r| r.ref_mse.into()),
+    col(&PT_REF_BIAS, |_, r| r.ref_bias.into()),
+    col(&PT_VARIANCE_MEAN, |_, r| r.variance_mean.into()),
+]);
