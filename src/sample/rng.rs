@@ -293,7 +293,7 @@ mod tests {
             .map(|i| stream(&[domain::PHOTON, 3, i]).gen())
             .collect();
         for bit in 0..64 {
-            let ones = words.iter().filter(|w| *w >> bit & 1 == 1).count() as f64;
+            let ones = words.iter().filter(|w| (*w >> bit) & 1 == 1).count() as f64;
             let z = (ones - N as f64 / 2.0) / (N as f64 / 4.0).sqrt();
             assert!(z.abs() < Z_MAX, "bit {bit}: z = {z:.2}");
         }
