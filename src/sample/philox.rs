@@ -4,7 +4,7 @@
 //! Why this generator (the choice is argued in full in [`super::rng`]): its output block is a keyed
 //! bijection of a 128-bit counter, so a stream is set up by storing two words — no key schedule,
 //! no state to warm — and streams told apart by a counter word can never overlap. Ten rounds of
-//! one 64×64→128-bit multiply each give 128 bits for ≈ 50 instructions.
+//! one 64×64→128-bit multiply each give 128 bits for ≈ 60 instructions.
 //!
 //! The block function is pinned to the reference implementation by its known-answer vectors
 //! (Random123's `kat_vectors`, tested below), so a stream is the same on every machine and build.
@@ -15,7 +15,7 @@ use rand::{RngCore, SeedableRng};
 const M: u64 = 0xd2b7_4407_b1ce_6e93;
 /// The key's Weyl increment between rounds (Random123's `PHILOX_W64_0`, the golden ratio).
 const W: u64 = 0x9e37_79b9_7f4a_7c15;
-/// Rounds: the authors' default; they report Philox2x64 passing BigCrush from 6 rounds on.
+/// Rounds: the authors' recommended default; they report Philox2x64 Crush-resistant from 6 on.
 const ROUNDS: usize = 10;
 
 /// Philox2x64-10's block function: the 128-bit output for counter `ctr` under `key`.

@@ -11,16 +11,17 @@
 //! per word) and the counter's high word `wₙ₋₁`; the stream is the blocks at counters
 //! `(0, wₙ₋₁), (1, wₙ₋₁), …`. Why:
 //! - *Cost.* Making a stream is hashing n − 1 words (≈ 20 instructions a word) and storing two;
-//!   a draw is half a block, ≈ 25 instructions. ChaCha8, used before, needed a 256-bit seed
-//!   expanded from the hash and a first block of 4 × 64 bytes before the first draw: ≈ 670
-//!   instructions per photon for a photon's handful of draws (callgrind, docs/bench.md).
+//!   a draw is half a block, ≈ 40 instructions with rand's float conversion. ChaCha8, used before,
+//!   needed a 256-bit seed expanded from the hash and a first block of 4 × 64 bytes before the
+//!   first draw: ≈ 670 instructions per photon for a photon's ≈ 10 draws (callgrind, docs/bench.md:
+//!   a photon segment went from 2 170 to 2 035 instructions on the Cornell box).
 //! - *Streams that differ in the last word* — consecutive photons, points, batches, samples, the
 //!   common case and the hard one for a counter generator — share the Philox key and use disjoint
 //!   counters of one keyed bijection: they can never overlap or coincide. This is the layout the
 //!   generator's authors designed it for (key = seed, counter = (position, object id)), and the one
-//!   their statistical tests cover: Philox2x64 passes TestU01's BigCrush from 6 rounds on, with
-//!   counters that differ in one word; 10 rounds is their default and keeps a margin (Salmon et
-//!   al. 2011, table 2). A counter-incremented SplitMix64 (state = hash(key), output i =
+//!   their statistical tests cover: they report Philox2x64 "Crush-resistant" (passing TestU01's
+//!   SmallCrush, Crush and BigCrush over many keys and counter sequences) from 6 rounds on; 10
+//!   rounds is their recommended default, a safety margin (Salmon et al. 2011). A counter-incremented SplitMix64 (state = hash(key), output i =
 //!   mix(state + i·γ)) would be cheaper per draw, but all its streams are windows on one sequence:
 //!   among 10⁹ photons of 100 draws each, some two would share draws with probability ≈ 1.
 //! - *Streams that differ in an earlier word* get unrelated 64-bit Philox keys; two distinct
