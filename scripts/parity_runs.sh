@@ -21,8 +21,13 @@
 #   scripts/parity_runs.sh /tmp/raycost-chacha /tmp/parity/chacha
 #   python3 scripts/compare_tables.py /tmp/parity/old /tmp/parity/chacha   # must be all equal
 #
-# A later change compares as before: both binaries on the default (Philox) streams, or both built
-# with `--features chacha-streams` against tables of a binary from before the switch.
+# And to see that the new streams give the same results in distribution (no byte equality possible):
+#
+#   scripts/parity_runs.sh target/release/raycost /tmp/parity/new
+#   python3 scripts/compare_tables.py --stream-changed 4 /tmp/parity/old /tmp/parity/new
+#
+# (parameters equal, every X_mean within 4 combined SE of the old one). A later change compares as
+# before: both binaries on the default (Philox) streams, byte for byte.
 set -euo pipefail
 # The sweep values ([a,b]) are not file patterns.
 set -f
