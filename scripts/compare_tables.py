@@ -16,10 +16,20 @@ that side table (`frames:static_index_build_s`), `main:COLUMN` only in the main 
 
 Prints one line per table: "N measured columns of M compared, 0 differ", or the first differences;
 exits 1 on any difference (or a missing table), 0 otherwise.
+
+`--stream-changed Z` compares two binaries whose random streams differ (every measured cell moves):
+parameter columns of the main tables must still be equal (side tables whose rows follow the data —
+levels, histogram bins — are skipped when their keys move), and every measured `X_mean` with its
+`X_se` in both tables must agree within Z combined standard errors (|a − b| / √(se_a² + se_b²) ≤ Z); other measured and
+theory cells are only counted. The largest such z per table is printed. An SE from few clusters is
+itself noisy (two replicas give an SE from two values), so a z above Z is a lead to rerun with
+more replicas, not a verdict; read it with the table's `X_clusters`. To show that nothing but the
+streams changed, build with the old streams instead and compare byte for byte (scripts/parity_runs.sh).
 """
 
 import argparse
 import csv
+import math
 import sys
 import tomllib
 from pathlib import Path
@@ -103,12 +113,65 @@ def compare_table(label, old_path, new_path, old_cls, new_cls, added=()):
     return True, line
 
 
+def compare_streams(label, old_path, new_path, old_cls, z_max):
+    """Returns (ok, line) for two runs on different random streams (see --stream-changed)."""
+    if not new_path.exists():
+        return False, f"{label}: missing in the new folder"
+    old_header, old_rows = read_csv(old_path)
+    new_header, new_rows = read_csv(new_path)
+    if old_header != new_header:
+        return False, f"{label}: headers differ"
+    if len(old_rows) != len(new_rows):
+        # Rows that are bins or levels of the data (a histogram's range) may follow the stream.
+        return True, f"{label}: {len(old_rows)} rows → {len(new_rows)}, not compared"
+    declared = dict(old_cls)
+    col = {c: i for i, c in enumerate(old_header)}
+    params_differ, moved, worst, over = 0, 0, (0.0, ""), []
+    for a, b in zip(old_rows, new_rows):
+        for c, i in col.items():
+            kind = declared.get(c, "measured")
+            if kind == "timing" or a[i] == b[i]:
+                continue
+            if kind == "parameter":
+                params_differ += 1
+                continue
+            moved += 1
+            se = c[: -len("_mean")] + "_se" if c.endswith("_mean") else None
+            if se not in col:
+                continue
+            try:
+                ma, mb, sa, sb = (float(a[i]), float(b[i]), float(a[col[se]]), float(b[col[se]]))
+            except ValueError:
+                continue
+            if not all(math.isfinite(v) for v in (ma, mb, sa, sb)) or sa == sb == 0.0:
+                continue
+            z = abs(ma - mb) / math.hypot(sa, sb)
+            worst = max(worst, (z, c))
+            if z > z_max:
+                over.append(f"{c} z = {z:.2f}")
+    line = (
+        f"{label}: {moved} measured cells moved, largest |z| of a mean {worst[0]:.2f}"
+        + (f" ({worst[1]})" if worst[1] else "")
+    )
+    problems = []
+    if params_differ and not label.count("."):
+        problems.append(f"{params_differ} parameter cell(s) differ")
+    elif params_differ:
+        # A side table's rows (levels, bins) follow the data: misaligned rows cannot be compared.
+        return True, f"{label}: rows keyed by the data moved with the stream ({params_differ} key cells), not compared"
+    if over:
+        problems.append(f"{len(over)} mean(s) beyond {z_max} SE: " + "; ".join(over[:SHOWN]))
+    return (not problems), line + (" — " + " | ".join(problems) if problems else "")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("old", type=Path, help="folder of the reference results")
     ap.add_argument("new", type=Path, help="folder of the results to check")
     ap.add_argument("--added", action="append", default=[], metavar="COLUMN",
                     help="a column only the new tables have (dropped before comparing)")
+    ap.add_argument("--stream-changed", type=float, metavar="Z",
+                    help="the random streams differ: means must agree within Z standard errors")
     args = ap.parse_args()
     ok_all = True
     n_tables = 0
@@ -134,17 +197,23 @@ def main():
             label = name if table == "main" else f"{name}.{table}"
             added = [a.split(":", 1)[-1] for a in args.added
                      if ":" not in a or a.split(":", 1)[0] == table]
-            ok, line = compare_table(
-                label,
-                path,
-                new_exp / path.name,
-                old_meta.get(table, []),
-                new_meta.get(table, []),
-                added,
-            )
+            if args.stream_changed is not None:
+                ok, line = compare_streams(
+                    label, path, new_exp / path.name, old_meta.get(table, []), args.stream_changed
+                )
+            else:
+                ok, line = compare_table(
+                    label,
+                    path,
+                    new_exp / path.name,
+                    old_meta.get(table, []),
+                    new_meta.get(table, []),
+                    added,
+                )
             ok_all &= ok
             print(("" if ok else "DIFFERS ") + line)
-    print(f"{n_tables} tables of {len(experiments)} experiments: " + ("all equal in their measured columns" if ok_all else "DIFFERENCES"))
+    agree = "all means within the SE bound" if args.stream_changed is not None else "all equal in their measured columns"
+    print(f"{n_tables} tables of {len(experiments)} experiments: " + (agree if ok_all else "DIFFERENCES"))
     return 0 if ok_all else 1
 
 

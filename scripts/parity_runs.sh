@@ -11,6 +11,23 @@
 # has several, one replica where a spec's single-replica path matters, every sweep axis) and only
 # shrinks its rays, photons, points, frames and reference samples, so that each run takes seconds.
 # `--full NAME…` runs the named specs at their committed size instead.
+#
+# Across a change of the random streams (every measured column moves), build the new source with the
+# old streams and compare that with the old binary: equal tables mean nothing but the stream changed.
+# For the switch from ChaCha8 to Philox2x64 (src/sample/rng.rs):
+#
+#   cargo build --release --features chacha-streams && cp target/release/raycost /tmp/raycost-chacha
+#   scripts/parity_runs.sh OLD_BINARY /tmp/parity/old
+#   scripts/parity_runs.sh /tmp/raycost-chacha /tmp/parity/chacha
+#   python3 scripts/compare_tables.py /tmp/parity/old /tmp/parity/chacha   # must be all equal
+#
+# And to see that the new streams give the same results in distribution (no byte equality possible):
+#
+#   scripts/parity_runs.sh target/release/raycost /tmp/parity/new
+#   python3 scripts/compare_tables.py --stream-changed 4 /tmp/parity/old /tmp/parity/new
+#
+# (parameters equal, every X_mean within 4 combined SE of the old one). A later change compares as
+# before: both binaries on the default (Philox) streams, byte for byte.
 set -euo pipefail
 # The sweep values ([a,b]) are not file patterns.
 set -f

@@ -5,6 +5,7 @@
 pub mod counter;
 pub mod directions;
 pub mod lines;
+pub mod philox;
 pub mod radius;
 pub mod rng;
 pub mod subset;

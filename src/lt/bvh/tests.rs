@@ -103,7 +103,7 @@ fn rays(tris: &[Triangle], seed: u64, n: usize) -> Vec<(DVec3, DVec3, f64, u32)>
     }
     let size = (hi - lo).max_element();
     let eps = 1e-9 * lo.abs().max(hi.abs()).max_element().max(1.0);
-    let inside = |rng: &mut rand_chacha::ChaCha8Rng| {
+    let inside = |rng: &mut crate::sample::rng::Stream| {
         lo + (hi - lo) * DVec3::new(rng.gen(), rng.gen(), rng.gen())
     };
     let mut out = Vec::with_capacity(n);
