@@ -14,7 +14,7 @@
 
 use glam::DVec3;
 
-use super::layout::{Block, ChildRef, Node, Packet, LANES, MAX_LEAF_PACKETS, WIDTH};
+use super::layout::{ChildRef, Node, Packet, LANES, MAX_LEAF_PACKETS, WIDTH};
 use crate::lt::shapes::Triangle;
 
 const BINS: usize = 16;
@@ -50,8 +50,6 @@ fn half_area(lo: DVec3, hi: DVec3) -> f64 {
 pub struct Built {
     pub nodes: Vec<Node>,
     pub packets: Vec<Packet>,
-    /// Packets 2b and 2b + 1 in f32 (every leaf starts at an even packet).
-    pub blocks: Vec<Block>,
     pub root: ChildRef,
     /// The root's f64 box (padded).
     pub lo: DVec3,
@@ -255,7 +253,6 @@ impl Builder<'_> {
         let mut out = Built {
             nodes: Vec::new(),
             packets: Vec::new(),
-            blocks: Vec::new(),
             root: ChildRef::EMPTY,
             lo: self.bins.first().map_or(DVec3::ZERO, |b| b.lo),
             hi: self.bins.first().map_or(DVec3::ZERO, |b| b.hi),
@@ -264,14 +261,6 @@ impl Builder<'_> {
             return out;
         }
         out.root = self.emit(root, order, &mut out);
-        if out.packets.len() % 2 == 1 {
-            out.packets.push(Packet::new(&[]));
-        }
-        out.blocks = out
-            .packets
-            .chunks(2)
-            .map(|pair| Block::new([&pair[0], &pair[1]]))
-            .collect();
         out
     }
 
@@ -280,10 +269,6 @@ impl Builder<'_> {
         let bin = &self.bins[b];
         let Some(_) = bin.kids else {
             let (s, e) = bin.range;
-            // Leaves start at an even packet, so that they are whole f32 blocks.
-            if out.packets.len() % 2 == 1 {
-                out.packets.push(Packet::new(&[]));
-            }
             let start = out.packets.len();
             for chunk in order[s..e].chunks(LANES) {
                 let tris: Vec<(u32, Triangle)> = chunk

@@ -1,9 +1,6 @@
 //! The memory layout traversal reads: 8-wide nodes with f32 boxes rounded outward, and leaves of
 //! triangle packets (four triangles as structure-of-arrays f64, their edges precomputed with the
-//! same f64 subtractions as [`Triangle::intersect`], so a packet test is bit for bit that test),
-//! each pair of packets also as a [`Block`]: the same eight triangles in f32 with the magnitudes
-//! the f32 filter's error bounds need. A leaf starts at an even packet, so its packets are whole
-//! blocks (the last one's second half may be padding, or empty).
+//! same f64 subtractions as [`Triangle::intersect`], so a packet test is bit for bit that test).
 
 use glam::DVec3;
 
@@ -13,12 +10,6 @@ use crate::lt::shapes::Triangle;
 pub const WIDTH: usize = 8;
 /// Triangles per packet.
 pub const LANES: usize = 4;
-/// Triangles per f32 block (two packets).
-pub const BLOCK: usize = 2 * LANES;
-/// Largest magnitude (of a vertex, an edge, an origin or a direction component) the f32 filter
-/// accepts; beyond it a triangle or a ray goes straight to the f64 test (see `kernel`, "The f32
-/// filter").
-pub const F32_RANGE: f64 = (1u64 << 24) as f64;
 
 /// A child reference: a node index, or (bit 31 set) a leaf of `count` packets from `start`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -141,75 +132,6 @@ impl Packet {
             p.id[l] = *id;
         }
         p
-    }
-}
-
-/// Eight triangles (packets 2b and 2b + 1) in f32 for the filter of `kernel`: vertex 0 and the
-/// edges rounded to nearest from the packets' f64 values, and per lane the magnitudes E₁ = max|e1ᵢ|,
-/// E₂ = max|e2ᵢ|, E₁E₂ and V = max|v0ᵢ|, each rounded up. A lane the filter must not judge (an
-/// unused lane, or a triangle with a coordinate or edge beyond [`F32_RANGE`] or not finite) has
-/// NaN magnitudes, which make every "clear miss" comparison false; unused lanes are also left out
-/// of `live`.
-#[derive(Clone, Copy, Debug)]
-#[repr(C, align(32))]
-pub struct Block {
-    /// Vertex 0, per axis, per lane.
-    pub v0: [[f32; BLOCK]; 3],
-    /// Edge v1 − v0.
-    pub e1: [[f32; BLOCK]; 3],
-    /// Edge v2 − v0.
-    pub e2: [[f32; BLOCK]; 3],
-    /// max|e1ᵢ|, rounded up.
-    pub e1_max: [f32; BLOCK],
-    /// max|e2ᵢ|, rounded up.
-    pub e2_max: [f32; BLOCK],
-    /// E₁·E₂, rounded up.
-    pub e12_max: [f32; BLOCK],
-    /// max|v0ᵢ|, rounded up.
-    pub v0_max: [f32; BLOCK],
-    /// Bit l: lane l holds a triangle.
-    pub live: u32,
-}
-
-impl Block {
-    /// The block of two packets.
-    pub fn new(pair: [&Packet; 2]) -> Self {
-        let mut b = Self {
-            v0: [[0.0; BLOCK]; 3],
-            e1: [[0.0; BLOCK]; 3],
-            e2: [[0.0; BLOCK]; 3],
-            e1_max: [f32::NAN; BLOCK],
-            e2_max: [f32::NAN; BLOCK],
-            e12_max: [f32::NAN; BLOCK],
-            v0_max: [f32::NAN; BLOCK],
-            live: 0,
-        };
-        for (h, p) in pair.iter().enumerate() {
-            for l in 0..LANES {
-                if p.id[l] == u32::MAX {
-                    continue;
-                }
-                let k = h * LANES + l;
-                b.live |= 1 << k;
-                let (mut e1m, mut e2m, mut v0m) = (0.0f64, 0.0f64, 0.0f64);
-                for a in 0..3 {
-                    b.v0[a][k] = p.v0[a][l] as f32;
-                    b.e1[a][k] = p.e1[a][l] as f32;
-                    b.e2[a][k] = p.e2[a][l] as f32;
-                    e1m = e1m.max(p.e1[a][l].abs());
-                    e2m = e2m.max(p.e2[a][l].abs());
-                    v0m = v0m.max(p.v0[a][l].abs());
-                }
-                // `!(x <= R)` also refuses NaN.
-                if [e1m, e2m, v0m].iter().all(|&x| x <= F32_RANGE) {
-                    b.e1_max[k] = f32_up(e1m);
-                    b.e2_max[k] = f32_up(e2m);
-                    b.e12_max[k] = f32_up(f64::from(b.e1_max[k]) * f64::from(b.e2_max[k]));
-                    b.v0_max[k] = f32_up(v0m);
-                }
-            }
-        }
-        b
     }
 }
 

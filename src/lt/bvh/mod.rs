@@ -6,9 +6,8 @@
 //! # Structure
 //! A binned-SAH binary tree collapsed into 8-wide nodes ([`build`]); each node holds its children's
 //! boxes in f32, rounded outward, tested eight at a time; leaves are packets of four triangles as
-//! structure-of-arrays f64, each pair also in f32: eight triangles go through a conservative f32
-//! filter at once, and only the lanes it cannot rule out through the exact f64 Möller–Trumbore
-//! test ([`kernel`], "The f32 filter"). Traversal is ordered (nearest child first) and culls every box that starts beyond
+//! structure-of-arrays f64, tested four at a time with the f64 Möller–Trumbore test
+//! ([`kernel`]). Traversal is ordered (nearest child first) and culls every box that starts beyond
 //! the distance that still matters. A scene of at most [`SINGLE_LEAF`] triangles is one leaf: for
 //! so few (the Cornell box's 32), testing them all in packets beats any tree.
 //!
@@ -49,8 +48,8 @@ mod tests;
 
 use glam::DVec3;
 
-use self::kernel::{Deferred, Query, RayData};
-use self::layout::{Block, ChildRef, Node, Packet};
+use self::kernel::{Query, RayData};
+use self::layout::{ChildRef, Node, Packet};
 use super::shapes::Triangle;
 
 /// Scenes of at most this many triangles are one leaf (measured: the Cornell box's 32 triangles
@@ -128,8 +127,7 @@ impl Query for Nearest {
 
 /// The two nearest crossings. A hit within 10⁻¹² of the current first that is not itself the
 /// first is dropped; if the first later moves nearer, such a hit could become the second, so
-/// `dropped` sends the ray through a second pass ([`SecondOnly`]). Subtrees entered beyond the
-/// current first are set aside for the second crossing ([`Query::near_bound`]).
+/// `dropped` sends the ray through a second pass ([`SecondOnly`]).
 struct Two {
     best: TwoNearest,
     dropped: bool,
@@ -139,10 +137,6 @@ impl Query for Two {
     #[inline(always)]
     fn bound(&self) -> f64 {
         self.best.second.0
-    }
-    #[inline(always)]
-    fn near_bound(&self) -> f64 {
-        self.best.first.0
     }
     #[inline(always)]
     fn offer(&mut self, t: f64, id: u32) -> bool {
@@ -167,6 +161,21 @@ impl Query for Two {
             self.dropped = true;
         }
         false
+    }
+}
+
+/// [`Two`] culling beyond the first crossing only: the first pass of a tree's two-nearest query,
+/// whose second crossing (an upper bound of the true one) lets the second pass cull early.
+struct TwoFirstPass(Two);
+
+impl Query for TwoFirstPass {
+    #[inline(always)]
+    fn bound(&self) -> f64 {
+        self.0.best.first.0
+    }
+    #[inline(always)]
+    fn offer(&mut self, t: f64, id: u32) -> bool {
+        self.0.offer(t, id)
     }
 }
 
@@ -254,8 +263,6 @@ pub struct Bvh {
     nodes: Vec<Node>,
     /// Triangles by rank (packets hold ranks, answers map them back to indices).
     packets: Vec<Packet>,
-    /// Packets 2b and 2b + 1 in f32, for the filter.
-    blocks: Vec<Block>,
     /// Rank → triangle index.
     id_of: Vec<u32>,
     /// Triangle index → rank.
@@ -264,8 +271,6 @@ pub struct Bvh {
     /// The largest |coordinate| of any box (sets the f32 test's margin).
     bound: f64,
     path: Path,
-    /// Leaves through the f32 filter (false: the f64 packet test alone, for comparison).
-    filter: bool,
 }
 
 impl Default for Bvh {
@@ -273,13 +278,11 @@ impl Default for Bvh {
         Self {
             nodes: Vec::new(),
             packets: Vec::new(),
-            blocks: Vec::new(),
             id_of: Vec::new(),
             key_of: Vec::new(),
             root: ChildRef::EMPTY,
             bound: 0.0,
             path: Path::Scalar,
-            filter: true,
         }
     }
 }
@@ -307,22 +310,12 @@ impl Bvh {
         Self {
             nodes: built.nodes,
             packets: built.packets,
-            blocks: built.blocks,
             id_of,
             key_of,
             root: built.root,
             bound: f64::from(layout::f32_up(bound)),
             path: Path::detect(),
-            filter: true,
         }
-    }
-
-    /// The same hierarchy with leaves tested by the f32 filter and then f64 (`true`, the default)
-    /// or by the f64 packet test alone (the kernel before the filter; same answers, kept to
-    /// compare against).
-    pub fn with_f32_filter(mut self, filter: bool) -> Self {
-        self.filter = filter;
-        self
     }
 
     /// The same hierarchy traversed with `path` (which this CPU must be able to run).
@@ -346,7 +339,6 @@ impl Bvh {
     pub fn bytes(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<Node>()
             + self.packets.len() * std::mem::size_of::<Packet>()
-            + self.blocks.len() * std::mem::size_of::<Block>()
             + 8 * self.id_of.len()
     }
 
@@ -367,116 +359,84 @@ impl Bvh {
         (t, self.id_of.get(key as usize).copied().unwrap_or(u32::MAX))
     }
 
-    /// The ray as the tests read it.
-    #[inline]
-    fn ray(&self, o: DVec3, d: DVec3) -> RayData {
-        RayData::new(o.to_array(), d.to_array(), self.bound)
-    }
-
-    /// Runs `q` over every hit with t > t_min in the subtree `start` (a reference and its entry
-    /// distance), skipping rank `skip`, culled by `q`'s bound; subtrees entered beyond
-    /// `q.near_bound()` go to `deferred` (`q` sees ranks, not indices).
-    #[inline]
-    #[allow(clippy::too_many_arguments)]
-    fn traverse<Q: Query>(
-        &self,
-        ray: &RayData,
-        start: (ChildRef, f32),
-        t_min: f64,
-        skip: u32,
-        q: &mut Q,
-        deferred: &mut Deferred,
-    ) {
-        let (n, p, b) = (&self.nodes[..], &self.packets[..], &self.blocks[..]);
-        let (r, s, f) = (ray, start, self.filter);
-        match (self.path, f) {
-            // SAFETY: the portable tests need nothing.
-            (Path::Scalar, true) => unsafe {
-                kernel::traverse_scalar::<Q, true>(n, p, b, s, r, t_min, skip, q, deferred)
-            },
-            (Path::Scalar, false) => unsafe {
-                kernel::traverse_scalar::<Q, false>(n, p, b, s, r, t_min, skip, q, deferred)
-            },
-            // SAFETY: `with_path` and `detect` only choose AVX2 where the CPU has it.
-            #[cfg(target_arch = "x86_64")]
-            (Path::Avx2, true) => unsafe {
-                kernel::traverse_avx2::<Q, true>(n, p, b, s, r, t_min, skip, q, deferred)
-            },
-            #[cfg(target_arch = "x86_64")]
-            (Path::Avx2, false) => unsafe {
-                kernel::traverse_avx2::<Q, false>(n, p, b, s, r, t_min, skip, q, deferred)
-            },
-            #[cfg(not(target_arch = "x86_64"))]
-            (Path::Avx2, _) => unreachable!("AVX2 is never chosen off x86-64"),
-        }
-    }
-
     /// Runs `q` over every hit with t > t_min, skipping triangle `skip`, culled by `q`'s bound
-    /// (`q` sees ranks, not indices; it must not set subtrees aside).
+    /// (`q` sees ranks, not indices).
     #[inline]
     fn run<Q: Query>(&self, o: DVec3, d: DVec3, t_min: f64, skip: u32, q: &mut Q) {
         if self.packets.is_empty() {
             return;
         }
-        let mut deferred = Deferred::new();
-        let start = (self.root, f32::NEG_INFINITY);
-        self.traverse(
-            &self.ray(o, d),
-            start,
-            t_min,
-            self.key(skip),
-            q,
-            &mut deferred,
-        );
-        debug_assert!(deferred.entries().is_empty() && !deferred.overflow);
+        let skip = self.key(skip);
+        let ray = RayData::new(o.to_array(), d.to_array(), self.bound);
+        let (n, p, r) = (&self.nodes[..], &self.packets[..], self.root);
+        match self.path {
+            // SAFETY: the portable tests need nothing.
+            Path::Scalar => unsafe { kernel::traverse_scalar(n, p, r, &ray, t_min, skip, q) },
+            // SAFETY: `with_path` and `detect` only choose AVX2 where the CPU has it.
+            #[cfg(target_arch = "x86_64")]
+            Path::Avx2 => unsafe { kernel::traverse_avx2(n, p, r, &ray, t_min, skip, q) },
+            #[cfg(not(target_arch = "x86_64"))]
+            Path::Avx2 => unreachable!("AVX2 is never chosen off x86-64"),
+        }
     }
 
     /// The two nearest crossings with t > t_min, skipping triangle `skip` (the surface a photon
     /// leaves), by the rule of the module doc.
     ///
-    /// One traversal finds the nearest, culling beyond it, and keeps every farther crossing its
-    /// leaves hold; the subtrees it meets beyond the current nearest are set aside
-    /// ([`Deferred`]) rather than dropped. When it ends, the nearest is final, and the next
-    /// crossing is the best of what the leaves held and of the set-aside subtrees, traversed
-    /// then, nearest first, culled beyond the best found so far. Only if more than
-    /// [`kernel::DEFER`] subtrees were set aside, or a hit within 10⁻¹² of a provisional nearest
-    /// was dropped ([`Two`]), is the next crossing found by a second traversal from the root.
-    /// (The tree used to be traversed twice for every ray: measured 2–5× faster on the BART
-    /// kitchen than one traversal that could cull only beyond the second crossing.)
+    /// A single-node tree tests its packets once, keeping both crossings ([`Two`]); a deeper tree
+    /// is traversed twice: for the nearest (culling beyond it, and keeping any farther crossing
+    /// its leaves hold) and then for the next crossing beyond it, culling beyond the best found
+    /// so far (measured 2–5× faster on the BART kitchen than one traversal that can cull only
+    /// beyond the second crossing).
     pub fn two_nearest(&self, o: DVec3, d: DVec3, t_min: f64, skip: u32) -> TwoNearest {
-        if self.packets.is_empty() {
-            return TwoNearest::EMPTY;
+        if self.nodes.len() <= 1 {
+            let mut q = Two {
+                best: TwoNearest::EMPTY,
+                dropped: false,
+            };
+            self.run(o, d, t_min, skip, &mut q);
+            if q.dropped {
+                q.best.second = self.second(o, d, t_min, skip, q.best.first.0, q.best.second);
+            }
+            return TwoNearest {
+                first: self.id(q.best.first),
+                second: self.id(q.best.second),
+            };
         }
-        let ray = self.ray(o, d);
-        let skip = self.key(skip);
-        let mut q = Two {
+        let mut q = TwoFirstPass(Two {
             best: TwoNearest::EMPTY,
             dropped: false,
-        };
-        let mut deferred = Deferred::new();
-        let root = (self.root, f32::NEG_INFINITY);
-        self.traverse(&ray, root, t_min, skip, &mut q, &mut deferred);
-        let best = q.best;
+        });
+        self.run(o, d, t_min, skip, &mut q);
+        let best = q.0.best;
         if !best.first.0.is_finite() {
             return TwoNearest::EMPTY;
         }
-        let mut s = SecondOnly {
-            first: best.first.0,
-            second: best.second,
-        };
-        let t_after = t_min.max(best.first.0);
-        let mut none = Deferred::new();
-        if q.dropped || deferred.overflow {
-            self.traverse(&ray, root, t_after, skip, &mut s, &mut none);
-        } else {
-            for &e in deferred.entries() {
-                self.traverse(&ray, e, t_after, skip, &mut s, &mut none);
-            }
-        }
+        // Any second crossing the first pass met bounds the second pass.
+        let second = self.second(o, d, t_min, skip, best.first.0, best.second);
         TwoNearest {
             first: self.id(best.first),
-            second: self.id(s.second),
+            second: self.id(second),
         }
+    }
+
+    /// The nearest crossing that is not the same crossing as `first`, given one such, `bound`.
+    /// Every such crossing lies beyond `first`, so hits at or before it are not even tested.
+    fn second(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        t_min: f64,
+        skip: u32,
+        first: f64,
+        bound: (f64, u32),
+    ) -> (f64, u32) {
+        let mut s = SecondOnly {
+            first,
+            second: bound,
+        };
+        self.run(o, d, t_min.max(first), skip, &mut s);
+        s.second
     }
 
     /// The nearest crossing with t_min < t < limit, skipping triangle `skip`: (t, triangle), or

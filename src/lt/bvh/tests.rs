@@ -4,8 +4,8 @@
 use glam::DVec3;
 use rand::Rng;
 
-use super::kernel::{block_scalar, filter_limits, node_scalar, packet_scalar, RayData};
-use super::layout::{f32_down, f32_up, Block, ChildRef, Node, Packet, WIDTH};
+use super::kernel::{node_scalar, packet_scalar, RayData};
+use super::layout::{f32_down, f32_up, ChildRef, Node, Packet, WIDTH};
 use super::*;
 use crate::sample::{directions::uniform_direction, rng::stream};
 
@@ -70,24 +70,6 @@ fn mesh(cells: usize) -> Vec<Triangle> {
         out.push(tri(q[0], q[2], q[3], 7));
     }
     out
-}
-
-/// Slivers: triangles whose third vertex lies on, or within 10⁻¹⁵…10⁻³ of, the line through the
-/// other two (exactly degenerate ones included), and long thin ones.
-fn slivers(seed: u64, n: usize) -> Vec<Triangle> {
-    let mut rng = stream(&[seed, 2]);
-    (0..n)
-        .map(|k| {
-            let a = DVec3::new(rng.gen(), rng.gen(), rng.gen()) * 10.0;
-            let e = uniform_direction(&mut rng) * rng.gen_range(0.01..3.0);
-            let off = match k % 3 {
-                0 => DVec3::ZERO,
-                1 => uniform_direction(&mut rng) * 10f64.powf(rng.gen_range(-15.0..-3.0)),
-                _ => uniform_direction(&mut rng) * 1e-2,
-            };
-            tri(a, a + e, a + e * rng.gen_range(-1.0..2.0) + off, k as u32)
-        })
-        .collect()
 }
 
 /// Adversarial rays for `tris`: through vertices, edge points and centroids, from points on
@@ -249,170 +231,6 @@ fn check_scene(name: &str, tris: &[Triangle], seed: u64, n: usize, single_leaf: 
             }
         }
     }
-}
-
-/// The kernel before the f32 filter: f64 packet tests, the two nearest by two traversals (the
-/// first culling beyond the nearest and keeping its leaves' farther crossings as the second's
-/// bound).
-fn two_nearest_f64_two_pass(bvh: &Bvh, o: DVec3, d: DVec3, t_min: f64, skip: u32) -> TwoNearest {
-    /// [`Two`] culling beyond the first crossing only.
-    struct TwoFirstPass(Two);
-    impl Query for TwoFirstPass {
-        fn bound(&self) -> f64 {
-            self.0.best.first.0
-        }
-        fn offer(&mut self, t: f64, id: u32) -> bool {
-            self.0.offer(t, id)
-        }
-    }
-    let bvh = bvh.clone().with_f32_filter(false);
-    let mut q = TwoFirstPass(Two {
-        best: TwoNearest::EMPTY,
-        dropped: false,
-    });
-    bvh.run(o, d, t_min, skip, &mut q);
-    let best = q.0.best;
-    if !best.first.0.is_finite() {
-        return TwoNearest::EMPTY;
-    }
-    let mut s = SecondOnly {
-        first: best.first.0,
-        second: best.second,
-    };
-    bvh.run(o, d, t_min.max(best.first.0), skip, &mut s);
-    TwoNearest {
-        first: bvh.id(best.first),
-        second: bvh.id(s.second),
-    }
-}
-
-fn bits(b: TwoNearest) -> [(u64, u32); 2] {
-    [
-        (b.first.0.to_bits(), b.first.1),
-        (b.second.0.to_bits(), b.second.1),
-    ]
-}
-
-/// The f32 filter and the one-traversal two-nearest query against the kernel before them (f64
-/// packets, two traversals), every query, every path, bit for bit — on every ray, including the
-/// grazing ones brute force sets apart.
-#[test]
-fn f32_filter_kernel_equals_the_f64_kernel_bit_for_bit() {
-    let scenes = [
-        ("soup", soup(94, 3000, 1.0, 0.0), 0),
-        ("mesh", mesh(12), 0),
-        ("mesh leaf", mesh(2), SINGLE_LEAF),
-        ("huge", soup(95, 800, 1e7, 1e3), 0),
-        ("tiny", soup(96, 800, 1e-7, -5.0), 0),
-        ("far", soup(97, 800, 1.0, 1e6), 0),
-        ("slivers", slivers(98, 1500), 0),
-    ];
-    for (name, tris, single) in scenes {
-        for path in paths() {
-            let bvh = Bvh::build_with(&tris, single).with_path(path);
-            let old = bvh.clone().with_f32_filter(false);
-            for (k, &(o, d, t_min, skip)) in rays(&tris, 10, 3000).iter().enumerate() {
-                let want = two_nearest_f64_two_pass(&bvh, o, d, t_min, skip);
-                let got = bvh.two_nearest(o, d, t_min, skip);
-                assert_eq!(bits(got), bits(want), "{name} {path:?} ray {k}: {o} {d}");
-                let near = |b: &Bvh, limit| {
-                    let (t, i) = b.nearest_before(o, d, t_min, limit, skip);
-                    (t.to_bits(), i)
-                };
-                for limit in [
-                    f64::INFINITY,
-                    want.first.0,
-                    want.first.0.next_up(),
-                    want.second.0,
-                    0.5 * (want.first.0 + want.second.0),
-                ] {
-                    assert_eq!(near(&bvh, limit), near(&old, limit), "{name} ray {k}");
-                    assert_eq!(
-                        bvh.any_before(o, d, t_min, limit, skip),
-                        old.any_before(o, d, t_min, limit, skip),
-                        "{name} ray {k}"
-                    );
-                }
-            }
-        }
-    }
-}
-
-/// The filter lane by lane: it never rules out a lane the f64 test hits at t ≤ the cull distance
-/// (cull distances +∞, at the hit, just below it, half of it, 0), its AVX2 mask is its scalar
-/// mask, and it rules out most misses of ordinary rays (so that it earns its keep).
-#[test]
-fn f32_filter_never_rules_out_a_hit_that_matters() {
-    let sets = [
-        soup(90, 800, 1.0, 0.0),
-        mesh(4),
-        slivers(99, 800),
-        soup(91, 400, 1e7, 0.3),
-        soup(92, 400, 1e-7, -5.0),
-        soup(93, 400, 1.0, 1e6),
-    ];
-    let (mut misses, mut ruled_out, mut kept_hits) = (0u64, 0u64, 0u64);
-    // Misses of the random rays (from inside the scene in uniform directions), ruled out.
-    let (mut random_misses, mut random_ruled_out) = (0u64, 0u64);
-    for (n, tris) in sets.iter().enumerate() {
-        for (c, chunk) in tris.chunks(8).enumerate() {
-            let with: Vec<(u32, Triangle)> = chunk.iter().map(|&t| (0, t)).collect();
-            let half = with.len().min(4);
-            let (p0, p1) = (Packet::new(&with[..half]), Packet::new(&with[half..]));
-            let b = Block::new([&p0, &p1]);
-            let rays = rays(chunk, (1000 * n + c) as u64, 64);
-            for (k, &(o, d, t_min, _)) in rays.iter().enumerate() {
-                let r = RayData::new(o.to_array(), d.to_array(), 1.0);
-                let hits: Vec<Option<f64>> =
-                    chunk.iter().map(|t| t.intersect(o, d, t_min)).collect();
-                let some = hits.iter().flatten().copied().fold(f64::INFINITY, f64::min);
-                for bound in [f64::INFINITY, some, some.next_down(), 0.5 * some, 0.0] {
-                    let (lo, hi) = filter_limits(t_min, bound);
-                    let m = block_scalar(&b, &r, lo, hi);
-                    #[cfg(target_arch = "x86_64")]
-                    if Path::Avx2.available() {
-                        // SAFETY: AVX2 checked.
-                        let ma = unsafe { super::kernel::avx2::block(&b, &r, lo, hi) };
-                        assert_eq!(ma, m, "set {n} block {c} ray {k}");
-                    }
-                    assert_eq!(m >> chunk.len(), 0, "unused lanes are never kept");
-                    for (l, h) in hits.iter().enumerate() {
-                        let kept = m & (1 << l) != 0;
-                        match h {
-                            Some(t) if *t <= bound => {
-                                assert!(kept, "set {n} block {c} ray {k} lane {l}: hit at {t}, bound {bound}, {o} {d}");
-                                kept_hits += 1;
-                            }
-                            None if bound == f64::INFINITY && n < 2 && (k / 4) % 8 != 3 => {
-                                misses += 1;
-                                ruled_out += u64::from(!kept);
-                                if (k / 4) % 8 >= 6 {
-                                    random_misses += 1;
-                                    random_ruled_out += u64::from(!kept);
-                                }
-                            }
-                            _ => {}
-                        }
-                    }
-                }
-            }
-        }
-    }
-    assert!(kept_hits > 1000, "only {kept_hits} hits tested");
-    eprintln!(
-        "filter: {ruled_out} of {misses} misses ruled out ({random_ruled_out} of {random_misses} \
-         for random rays)"
-    );
-    // Rays aimed at vertices and edges, or leaving a surface at t_min = 0, are often within the
-    // bound of an edge or of t_min: 86.7 % measured when this test was written.
-    assert!(
-        ruled_out * 100 >= misses * 80,
-        "the filter rules out only {ruled_out} of {misses} misses"
-    );
-    assert!(
-        random_ruled_out * 100 >= random_misses * 98,
-        "the filter rules out only {random_ruled_out} of {random_misses} misses of random rays"
-    );
 }
 
 #[test]
