@@ -52,7 +52,10 @@ fn tamper(path: &Path, row: usize, column: &str, f: impl Fn(&str) -> String) {
 #[test]
 fn a_fresh_run_reproduces_and_a_tampered_cell_is_named() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let spec = grid_spec(tmp.path(), 3000);
+    // The spec in a folder of its own: the scratch folders beside it are not inside it.
+    let spec_dir = tmp.path().join("spec");
+    fs::create_dir(&spec_dir).expect("spec folder");
+    let spec = grid_spec(&spec_dir, 3000);
     let results = tmp.path().join("results");
     run_quiet(&spec, &results).assert().success();
     let dir = results.join("tiny-grid");
@@ -76,7 +79,7 @@ fn a_fresh_run_reproduces_and_a_tampered_cell_is_named() {
         .assert()
         .success();
     // Never into the result folder or the spec's.
-    for inside in [dir.join("x"), tmp.path().join("y")] {
+    for inside in [dir.join("x"), spec_dir.join("y")] {
         let (code, _, err) = output(&mut reproduce(&dir, &["--out", inside.to_str().unwrap()]));
         assert_eq!(code, 2, "{}: {err}", inside.display());
         assert!(err.contains("must not write there"), "{err}");
