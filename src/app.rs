@@ -111,6 +111,7 @@ fn reproduce(a: crate::cli::ReproduceArgs) -> crate::error::Result<()> {
         out: a.out,
         threads,
         force: a.force,
+        judge_timings: a.timings == crate::cli::Timings::Judge,
     })?;
     let text = if a.json {
         json_text(&report.json())

@@ -97,7 +97,7 @@ Examples:
 Examples:
   raycost reproduce results/quickstart
   raycost reproduce results/detp-engines-cost/runs/1 --threads 2
-  raycost reproduce results/issue27-crossover-hard --out /tmp/rerun --force
+  raycost reproduce results/which-method-hard --out /tmp/rerun --force
   raycost reproduce results/grid-first-hit --json | jq '.tables[] | select(.same | not)'
 
 Counted columns are every column whose class in NAME.meta.toml is not timing. A timing X_mean with
@@ -190,6 +190,19 @@ pub struct ReproduceArgs {
     /// Print the comparison as JSON (the exit code is the same).
     #[arg(long)]
     pub json: bool,
+    /// Timing means: held against their stated intervals (`judge`) or only reported (`report`;
+    /// a run's standard errors cover its replicas, not the spread between separate runs).
+    #[arg(long, value_enum, default_value_t = Timings::Judge)]
+    pub timings: Timings,
+}
+
+/// How `raycost reproduce` treats timing means.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Timings {
+    /// Held against their stated intervals when both runs are comparable.
+    Judge,
+    /// Reported as ratios, never counted.
+    Report,
 }
 
 /// `raycost completions`.

@@ -435,7 +435,11 @@ fn lazy_infinite_scene_agrees_with_brute_force() {
             }
         }
     }
-    assert!(checked > 100_000, "checked {checked}");
+    // Enough rays were checked: the expected count is 3·40 000·(1 − exp(−10λ)) ≈ 101 200 with
+    // λ = ρπΣα_iE[R_i²] = 0.185 (t* is exponential), but each case is one realisation seen from one
+    // eye, so the count moves by a few per cent between realisations (a near sphere of radius up to
+    // 0.6 shades a whole cone of directions); the floor is three quarters of the rays.
+    assert!(checked > 90_000, "checked {checked}");
 }
 
 /// N_I, N_S and the distinct count N_I,mb (partly counted without the mailbox, for spheres that sit

@@ -37,6 +37,10 @@ pub struct Options {
     pub threads: usize,
     /// Replace files in `out`.
     pub force: bool,
+    /// Hold timing means against their stated intervals (`--timings judge`, the default) or only
+    /// report them (`--timings report`): a run's standard errors cover its replicas, not the
+    /// spread between separate runs, which can be wider.
+    pub judge_timings: bool,
 }
 
 /// What a reproduction found.
@@ -490,7 +494,7 @@ fn reproduce_run(
         let new_meta = Meta::read(&new_dir.join(format!("{stem}.meta.toml")))?;
         let old = Side::of_run(&o.dir, &results.name, meta.clone())?;
         let new = Side::of_run(&new_dir, &stem, new_meta)?;
-        Ok(compare(&old, &new)?)
+        Ok(compare(&old, &new, o.judge_timings)?)
     });
     rerun.push(("rerun".into(), new_dir.display().to_string()));
     finish(o, out, temporary, rerun, notes, outcome)
@@ -608,7 +612,7 @@ fn reproduce_crossover(o: &Options, meta_path: &Path) -> Result<Report, Error> {
         }
         let old = Side::of_crossover(&o.dir, meta.clone());
         let new = Side::of_crossover(&out, new_meta);
-        Ok(compare(&old, &new)?)
+        Ok(compare(&old, &new, o.judge_timings)?)
     });
     finish(o, out, temporary, rerun, notes, outcome)
 }
