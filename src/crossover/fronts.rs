@@ -345,8 +345,8 @@ mod tests {
         let own: Vec<f64> = (0..4)
             .map(|r| (vals[0][r] - 1.0f64).powi(2) / 2.0 + (vals[1][r] - 1.0f64).powi(2) / 2.0)
             .collect();
-        for r in 0..4 {
-            assert!((e[0].mse[r][0] - own[r]).abs() < 1e-12, "{e:?}");
+        for (r, want) in own.iter().enumerate() {
+            assert!((e[0].mse[r][0] - want).abs() < 1e-12, "{e:?}");
         }
         let f = map_errors(&main, &csv(&without), 4.0).expect("errors");
         assert!(!f[0].per_replica);
