@@ -46,6 +46,10 @@ pub const FILE: &str = "claims.toml";
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ClaimsFile {
+    /// The claims engine's version that judged them (`claims/engine-versions.toml`); the page
+    /// shows the verdicts as judged, whatever the version.
+    #[serde(default, rename = "engine")]
+    _engine: Option<u64>,
     #[serde(default)]
     claim: Vec<Entry>,
 }
