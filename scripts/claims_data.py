@@ -11,10 +11,10 @@ one run.
 
 import csv
 import glob
-import gzip
 import math
 import os
 
+import raycost_tables
 from raycost_stats import pool_runs
 
 
@@ -31,18 +31,16 @@ def num(v):
         return v
 
 
-def table_file(path):
-    """PATH, or PATH.gz when only the compressed table is committed (a points table over 5 MiB)."""
-    if not os.path.exists(path) and os.path.exists(path + ".gz"):
-        return path + ".gz"
-    return path
+table_file = raycost_tables.table_file
 
 
 def read_csv(path):
-    path = table_file(path)
-    opener = gzip.open(path, "rt", newline="") if path.endswith(".gz") else open(path, newline="")
-    with opener as f:
-        return [{k: num(v) for k, v in r.items()} for r in csv.DictReader(f)]
+    """The rows of a committed table, its header checked against the columns its metadata
+    declares (raycost_tables)."""
+    try:
+        return raycost_tables.read_rows(path, num)[1]
+    except raycost_tables.TableError as e:
+        raise SystemExit("error: %s" % e) from None
 
 
 def close(a, b):

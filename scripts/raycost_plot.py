@@ -21,6 +21,7 @@ matplotlib.use("Agg")  # non-interactive: the scripts only write PNG files
 
 import matplotlib.pyplot as plt  # noqa: E402
 
+import raycost_tables  # noqa: E402
 from raycost_stats import ci95  # noqa: E402,F401  (re-exported: rp.ci95(row, metric))
 
 #: multiplier of the standard error for a two-sided 95 % normal confidence interval (many clusters;
@@ -124,31 +125,27 @@ def _convert(value):
 
 def read_csv(path, required=()):
     """Read a results CSV into a list of dicts with numbers converted. Fails (PlotError) when the
-    file is missing or empty, or when a column of `required` is absent."""
-    if not os.path.exists(path):
+    file is missing or empty, when its header is not the columns its metadata declares, or when a
+    column of `required` is absent or undeclared (raycost_tables)."""
+    if not os.path.exists(raycost_tables.table_file(path)):
         raise PlotError(
             "%s: no such file (run the experiment first (`raycost run SPEC.toml` or `raycost bench`), "
             "or pass --input)" % path
         )
-    with open(path, newline="") as f:
-        reader = csv.DictReader(f)
-        header = reader.fieldnames or []
-        rows = [{k: _convert(v) for k, v in row.items()} for row in reader]
-    if not header:
-        raise PlotError("%s: empty file" % path)
-    require_columns(path, header, required)
+    try:
+        _, rows = raycost_tables.read_rows(path, _convert, required)
+    except raycost_tables.TableError as e:
+        raise PlotError(str(e)) from None
     if not rows:
         raise PlotError("%s: no data rows" % path)
     return rows
 
 
 def require_columns(path, header, required):
-    missing = [c for c in required if c not in header]
-    if missing:
-        raise PlotError(
-            "%s: missing required column%s %s (present: %s)"
-            % (path, "s" if len(missing) > 1 else "", ", ".join(missing), ", ".join(header))
-        )
+    try:
+        raycost_tables.check_header(path, header, required)
+    except raycost_tables.TableError as e:
+        raise PlotError(str(e)) from None
 
 
 def spec_value(csv_path, key, row=None, default=None):

@@ -80,6 +80,20 @@ fn quick_bench_writes_every_engine_with_zero_mismatches_and_refuses_to_overwrite
         .expect("T_I");
     assert!(t_i > 0.0, "{meta:?}");
     assert!(meta.columns["main"].iter().any(|c| c.name == "rays_per_s"));
+    // Every table the bench wrote is declared, side tables included, with the header it has.
+    for (table, file) in [
+        ("main", "bench.csv"),
+        ("rounds", "bench.rounds.csv"),
+        ("infinite-rounds", "bench.infinite-rounds.csv"),
+    ] {
+        let text = std::fs::read_to_string(dir.join(file)).expect(file);
+        let header: Vec<&str> = text.lines().next().expect("a header").split(',').collect();
+        let declared: Vec<&str> = meta.columns[table]
+            .iter()
+            .map(|c| c.name.as_str())
+            .collect();
+        assert_eq!(header, declared, "{file}");
+    }
 
     // A second run without --force refuses (exit 2) and leaves every file as it was.
     let snapshot = || -> Vec<_> {

@@ -261,6 +261,16 @@ pub fn run(quick: bool, out: &Path, force: bool) -> anyhow::Result<()> {
         .chain(qs_rows.iter().map(|_| Vec::new()))
         .chain(lt_rows.iter().map(|_| Vec::new()));
     for (row, side) in table::union_columns(&rows).iter().zip(sides) {
+        // Every table the bench writes is declared in its metadata, side tables included, so a
+        // reader can check a header against what was written (the first row of each has every
+        // column: all rows of a side table carry the same ones).
+        for (name, side_rows) in &side {
+            if let Some(first) = side_rows.first() {
+                meta.columns
+                    .entry((*name).to_string())
+                    .or_insert_with(|| first.columns());
+            }
+        }
         sink.append(row, &side, &meta)
             .context("could not append to the bench table")?;
     }
