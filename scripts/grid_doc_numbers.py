@@ -240,14 +240,45 @@ def wall_times(results):
                   % (name, m.get("wall_s", float("nan")), m.get("threads"), m.get("other_cores")))
 
 
+def stream_change(before, after):
+    """Before → after over the infinite-scene tables, for a note on regenerated streams: the largest
+    |z| of N_S and t*, the points beyond 3 SE, the points inside the bands, KS rejections, and
+    (after − before)/√(SE² + SE²) of each mean (both runs estimate the same means)."""
+    head("before (%s) → after (%s)" % (before, after))
+    for name in ("quickstart", "grid-cell-width", "grid-first-hit", "grid-radius-classes"):
+        try:
+            old, new = rows_of(before, name), rows_of(after, name)
+        except (T.TableError, OSError):
+            continue
+        def summary(rows):
+            zn, zt = [abs(z(r, "n_s")) for r in rows], [abs(z(r, "t_hit")) for r in rows]
+            return ("%.2f, %.2f" % (max(zn), max(zt)),
+                    "%d, %d" % (sum(v > 3 for v in zn), sum(v > 3 for v in zt)),
+                    "%d, %d" % (sum(r["n_i_band"] == "inside" for r in rows),
+                                sum(r["n_i_mb_band"] == "inside" for r in rows)),
+                    "%d" % sum(r["t_hit_ks_p"] < 0.01 for r in rows))
+        b, a = summary(old), summary(new)
+        d = [(n[m + "_mean"] - o[m + "_mean"]) / math.hypot(n[m + "_se"], o[m + "_se"])
+             for o, n in zip(old, new) for m in ("n_i", "n_i_mb", "n_s", "t_hit")]
+        print("%s (%d): max |z| N_S, t* %s → %s; |z| > 3 %s → %s; inside the band (plain, "
+              "mailboxed) %s → %s; KS p < 0.01 %s → %s; new − old: rms %.2f, largest |·| %.2f"
+              % (name, len(new), b[0], a[0], b[1], a[1], b[2], a[2], b[3], a[3], rms(d),
+                 max(abs(v) for v in d)))
+
+
 def main(argv):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--results", default="results", help="the results folder (default: results)")
+    ap.add_argument("--before", metavar="DIR",
+                    help="also compare with the same tables in DIR (e.g. the previous commit's "
+                         "results extracted with git show), after new random streams")
     args = ap.parse_args(argv)
     try:
         for f in (cell_width, first_hit, radius_classes, pooled_first_hit, scaling, concentration, cost_model,
                   wall_times):
             f(args.results)
+        if args.before:
+            stream_change(args.before, args.results)
     except (T.TableError, OSError, KeyError) as e:
         print("error: %s" % e, file=sys.stderr)
         return 2
