@@ -193,12 +193,12 @@ pub struct FrameStats {
     pub segments_live: u64,
     /// Sample points on the dynamic objects: n_D (not added over photon shards: the same points).
     pub dynamic_points: u64,
-    /// f_R = n_R·Σ(r_D/r_0)² at this frame (eq. 11 with this frame's n_R): the segments expected
-    /// to meet the objects at one pose were the segments μ-random lines.
-    pub f_r_theory: f64,
-    /// The segments expected to meet an object at its old or its new pose were they μ-random
-    /// lines: n_R·Σ [`crate::theory::detp::union_lines_share`] (r_D/r_0, shift/r_0); 0 at frame 0.
-    pub union_theory: f64,
+    /// Σ(r_D/r_0)² over the movers at this frame's pose (not added over photon shards: the same
+    /// movers); f_R = `segments_live`·this ([`Self::f_r_theory`]).
+    pub ratio_sq: f64,
+    /// Σ over the movers of [`crate::theory::detp::union_lines_share`] (r_D/r_0, shift/r_0) from the
+    /// old pose to this one (not added over photon shards); 0 at frame 0.
+    pub union_share: f64,
     /// Static points: the disc index's traversal (box tests + DDA steps).
     pub static_traversal: u64,
     /// Static points: segments copied into the sphere cache's lists (sphere cache only).
@@ -453,20 +453,15 @@ impl QuasiStatic {
     /// at one pose (f_R) and at the old or the new pose (`old`: the poses before the frame; none
     /// at frame 0), as Theorem 2's proof and eq. 11 state them.
     fn proof_facts(&self, old: Option<&[(DVec3, f64)]>, stats: &mut FrameStats) {
-        let n_r = self.live_segments() as f64;
         let r0 = self.r0();
         stats.segments_live = self.live_segments() as u64;
         stats.dynamic_points = self.dynamic.iter().map(|dp| dp.discs.len() as u64).sum();
-        stats.f_r_theory = self
-            .spheres
-            .iter()
-            .map(|&(_, r)| crate::theory::detp::retraced_rays(n_r, r / r0))
-            .sum();
-        stats.union_theory = old.map_or(0.0, |old| {
+        stats.ratio_sq = self.spheres.iter().map(|&(_, r)| (r / r0).powi(2)).sum();
+        stats.union_share = old.map_or(0.0, |old| {
             old.iter()
                 .zip(&self.spheres)
                 .map(|(&(a, _), &(b, r))| {
-                    n_r * crate::theory::detp::union_lines_share(r / r0, (b - a).length() / r0)
+                    crate::theory::detp::union_lines_share(r / r0, (b - a).length() / r0)
                 })
                 .sum()
         });
@@ -1034,8 +1029,8 @@ impl FrameStats {
             dynamic_rays_reaching: self.dynamic_rays_reaching + o.dynamic_rays_reaching,
             segments_live: self.segments_live + o.segments_live,
             dynamic_points: self.dynamic_points,
-            f_r_theory: self.f_r_theory + o.f_r_theory,
-            union_theory: self.union_theory + o.union_theory,
+            ratio_sq: self.ratio_sq,
+            union_share: self.union_share,
             static_traversal: self.static_traversal + o.static_traversal,
             static_rays_copied: self.static_rays_copied + o.static_rays_copied,
             used: self.used.clone(),
@@ -1052,6 +1047,18 @@ impl FrameStats {
     /// DDA step (the feed's query and the copies are counted apart; `docs/detp-costs.md`).
     pub fn dynamic_counted_cost(&self) -> u64 {
         self.dynamic_disc_tests + self.dynamic_sphere_tests + self.dynamic_traversal
+    }
+
+    /// f_R = n_R·Σ(r_D/r_0)² (eq. 11) with this frame's n_R: the segments expected to meet the
+    /// objects at one pose were the segments μ-random lines.
+    pub fn f_r_theory(&self) -> f64 {
+        self.segments_live as f64 * self.ratio_sq
+    }
+
+    /// The segments expected to meet an object at its old or its new pose were they μ-random
+    /// lines: n_R·Σ union share; 0 at frame 0.
+    pub fn union_theory(&self) -> f64 {
+        self.segments_live as f64 * self.union_share
     }
 
     /// The static points' counted cost, same weights.

@@ -283,7 +283,7 @@ pub const PER_FRAME_VALUES: &[(Column, FrameValue)] = &[
     (RETRACED_RAYS, |s| s.affected_segments as f64),
     (RAYS_MEETING_OBJECT, |s| s.meeting_new as f64),
     (RAYS_AT_POSE, |s| s.meeting_pose as f64),
-    (RETRACED_RAYS_UNION_THEORY, |s| s.union_theory),
+    (RETRACED_RAYS_UNION_THEORY, FrameStats::union_theory),
     (RAYS_AT_POSE_PER_F_R, theorem2::rays_per_pose_share),
     (DYNAMIC_CACHE_WORK_PER_RAY, theorem2::cache_work_per_ray),
     (DYNAMIC_RAYS_REACHING, |s| s.dynamic_rays_reaching as f64),

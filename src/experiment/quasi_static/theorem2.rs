@@ -51,7 +51,7 @@ fn cache_work(s: &FrameStats) -> f64 {
 
 /// A1: rays meeting the objects at one pose ÷ f_R = n_R·Σ(r_D/r_0)².
 pub fn rays_per_pose_share(s: &FrameStats) -> f64 {
-    per(s.meeting_pose as f64, s.f_r_theory)
+    per(s.meeting_pose as f64, s.f_r_theory())
 }
 
 /// A2: the sphere cache's work per ray at the pose per ∛n_D (the proof: 8.08); NaN on a frame
@@ -138,7 +138,7 @@ pub fn cost_assuming(s: &FrameStats, a: Assumption) -> f64 {
     };
     match (used, a) {
         (Used::SphereCache, Assumption::RaysPerPose) => {
-            per(cache_work(s) * s.f_r_theory, s.meeting_pose as f64)
+            per(cache_work(s) * s.f_r_theory(), s.meeting_pose as f64)
         }
         (Used::SphereCache, Assumption::CacheConstant) => {
             PROOF_CACHE_CONSTANT * s.meeting_pose as f64 * cbrt_nd(s)
@@ -167,7 +167,7 @@ mod tests {
             used: vec![used],
             segments_live: 10_000,
             dynamic_points: 1000,
-            f_r_theory: 400.0,
+            ratio_sq: 0.04,
             meeting_pose: 380,
             dynamic_disc_tests: 20_000,
             dynamic_sphere_tests: 10_000,
