@@ -59,14 +59,26 @@ def kind_crossover(v, ctx):
         pts = [a["point"] for a, _ in pr.values()] + [b["point"] for _, b in pr.values()]
         cl = S.Clustered(per_replica(ctx.tables, v["source"], pts, t))
         ratio = S.paired_log_ratio(len(xs), cl)
-        c = S.crossover(xs, cl, ratio, degrees, alpha, ctx.draws, ctx.seed, ctx.level)
+        # x_scale = "log": the fit runs over log x (a cost ratio that goes as a power of x is a
+        # straight line there) and the root is read back in x.
+        to_fit, back = (math.log, math.exp) if v.get("x_scale") == "log" else (float, float)
+        fx = [to_fit(x) for x in xs]
+        c = S.crossover(fx, cl, ratio, degrees, alpha, ctx.draws, ctx.seed, ctx.level)
         iv, fit, k, roots, lo, hi = c
+        iv = iv._replace(value=back(iv.value) if iv.value == iv.value else iv.value,
+                         lo=back(iv.lo) if iv.lo == iv.lo else iv.lo, hi=back(iv.hi) if iv.hi == iv.hi else iv.hi)
+        roots, lo, hi = [back(r) for r in roots], back(lo), back(hi)
         ys = ratio(*cl.observed())[0]
-        j, why = crossover_judgement(iv, roots, lo, hi, band, tol, ctx, v["compare"], fit, xs)
-        text = "%s; log(%s/%s) %s at %s = %s; fit degree %d%s; %s" % (
+        if fit is None:
+            units.append(R.Unit(label(g[0], v["units"]), "no fit of log(%s/%s) over %d points" % (
+                v["compare"]["numerator"], v["compare"]["denominator"], len(xs)), R.UNDECIDED, "no fit"))
+            continue
+        j, why = crossover_judgement(iv, roots, lo, hi, band, tol, ctx, v["compare"], fit, fx)
+        text = "%s; log(%s/%s) %s at %s = %s; fit degree %d%s%s; %s" % (
             "crossing at " + est(iv.value, lo, hi, 3) if len(roots) == 1 else "%d crossings of the fit" % len(roots),
             v["compare"]["numerator"], v["compare"]["denominator"], ", ".join("%+.2f" % y for y in ys),
-            v["x"].split(".")[-1], ", ".join("%g" % x for x in xs), fit.degree,
+            v["x"].split(".")[-1], ", ".join("%g" % x for x in xs),
+            fit.degree, (" in log " + v["x"].split(".")[-1]) if v.get("x_scale") == "log" else "",
             ", misfit ×%.2f" % k if k > 1 else "", category_text(iv))
         units.append(R.Unit(label(g[0], v["units"]), text, j, why))
     return Measured(units, [], [])

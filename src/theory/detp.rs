@@ -110,6 +110,42 @@ pub fn retraced_rays(n_r: f64, ratio: f64) -> f64 {
     n_r * ratio * ratio
 }
 
+/// The share of μ-random lines through the unit ball that meet a ball of radius `r` at either of
+/// two poses whose centres are `shift` apart (both balls inside the unit ball; lengths in units of
+/// r_0): the expected union of the old and the new pose of eq. 11's count, over n_R.
+///
+/// Lines of one direction u meet a ball iff they cross its projection on the plane ⊥ u, a disc of
+/// radius r; the two poses project to discs whose centres are s = shift·sin θ apart (θ between u
+/// and the shift), whose union has area 2πr² − L(s) with the lens L(s) = 2r²·acos(s/2r) −
+/// (s/2)·√(4r² − s²) for s < 2r (0 beyond). μ-random lines are isotropic with a uniform foot in
+/// every direction's projected unit disc (area π), and cos θ is uniform on [0, 1], so
+///
+///   share = 2r² − (1/π)·∫₀¹ L(shift·√(1 − c²)) dc
+///
+/// (r² at shift 0; below 2r² at every shift, since lines nearly along the shift meet both poses).
+/// The integral is a composite Simpson sum over 4096
+/// intervals (the integrand is continuous; its one kink, at s = 2r, costs < 10⁻⁶ of the share).
+pub fn union_lines_share(r: f64, shift: f64) -> f64 {
+    let lens = |s: f64| {
+        if s >= 2.0 * r {
+            0.0
+        } else {
+            2.0 * r * r * (s / (2.0 * r)).acos() - 0.5 * s * (4.0 * r * r - s * s).max(0.0).sqrt()
+        }
+    };
+    let f = |c: f64| lens(shift * (1.0 - c * c).max(0.0).sqrt());
+    const N: usize = 4096;
+    let h = 1.0 / N as f64;
+    let inner: f64 = (1..N)
+        .map(|k| {
+            let w = if k % 2 == 1 { 4.0 } else { 2.0 };
+            w * f(k as f64 * h)
+        })
+        .sum();
+    let integral = (f(0.0) + inner + f(1.0)) * h / 3.0;
+    2.0 * r * r - integral / std::f64::consts::PI
+}
+
 /// Constant of the sphere cache's cost per ray and ∛n (eqs. 12–13): 1/(Q²(1−Q))·(∛n − 1)/∛n + 4/3,
 /// which at Q = 2/3 and large n is 6.75 + 4/3 = 8.08.
 pub fn sphere_cache_constant(q: f64, n: f64) -> f64 {
@@ -229,6 +265,53 @@ mod tests {
         let rn = crossover_ratio(OPTIMAL_Q, 1e4);
         let (sc, di) = dynamic_points_cost(1e6, rn, 1e4, OPTIMAL_Q);
         assert!((sc / di - 1.0).abs() < 1e-12);
+    }
+
+    /// The union's share against a Monte Carlo count of μ-random lines (the law the quasi-static
+    /// lines draw) meeting either of two balls inside the unit ball, for shifts from 0 to beyond
+    /// the two balls' overlap: within 4.5 binomial standard errors, and r² at shift 0 exactly.
+    #[test]
+    fn union_of_two_poses_matches_a_monte_carlo_count_of_lines() {
+        use crate::sample::lines::uniform_line;
+        use crate::sample::rng::{domain, stream};
+        let meets = |p: glam::DVec3, d: glam::DVec3, c: glam::DVec3, r: f64| {
+            let t = (c - p).dot(d);
+            (p + d * t).distance_squared(c) <= r * r
+        };
+        assert!((union_lines_share(0.3, 0.0) - 0.09).abs() < 1e-9);
+        // Far apart, only lines within ≈ 2r/shift of the shift's direction meet both.
+        let far = union_lines_share(0.05, 1.8);
+        assert!(far < 0.005 && far > 0.005 - 0.0025 * 0.1 / 1.8, "{far}");
+        let n = 200_000u64;
+        for (k, &(r, shift)) in [
+            (0.3, 0.35 * 2f64.sqrt()),
+            (0.1, 0.05),
+            (0.25, 0.3),
+            (0.4, 0.1),
+        ]
+        .iter()
+        .enumerate()
+        {
+            let a = glam::DVec3::new(-shift / 2.0, 0.1, 0.0);
+            let b = a + glam::DVec3::new(shift * 0.6, shift * 0.8, 0.0);
+            let mut rng = stream(&[domain::LINES, 99, k as u64]);
+            let hits = (0..n)
+                .filter(|_| {
+                    let (p, d) = uniform_line(&mut rng);
+                    meets(p, d, a, r) || meets(p, d, b, r)
+                })
+                .count() as f64;
+            let share = union_lines_share(r, shift);
+            let se = (share * (1.0 - share) / n as f64).sqrt();
+            let z = (hits / n as f64 - share) / se;
+            assert!(
+                z.abs() < 4.5,
+                "r {r}, shift {shift}: MC {} vs {share} (z {z:.2})",
+                hits / n as f64
+            );
+            // Neither one pose nor twice it: the union lies strictly between.
+            assert!(share > r * r && share < 2.0 * r * r, "r {r}, shift {shift}");
+        }
     }
 
     #[test]

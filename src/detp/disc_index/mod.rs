@@ -66,6 +66,10 @@ pub struct IndexStats {
     pub dda_steps: u64,
     /// Segment–disc tests, each distinct (segment, disc) pair once.
     pub ray_disc_tests: u64,
+    /// Segments that reached the index: entered one of its cells or nodes, or (an origin beyond
+    /// its reach) were tested against every disc. Theorem 2's proof charges every ray of the
+    /// scene as if it reached the index; this is the share that does.
+    pub segments_reaching: u64,
 }
 
 impl IndexStats {
@@ -75,6 +79,7 @@ impl IndexStats {
         self.box_tests += o.box_tests;
         self.dda_steps += o.dda_steps;
         self.ray_disc_tests += o.ray_disc_tests;
+        self.segments_reaching += o.segments_reaching;
         self
     }
 
@@ -200,8 +205,10 @@ where
                     st.nodes_visited += w.entered;
                     st.box_tests += w.box_tests;
                     st.dda_steps += w.steps;
+                    st.segments_reaching += u64::from(w.entered > 0);
                 } else {
                     cands.extend(0..nd as u32);
+                    st.segments_reaching += u64::from(nd > 0);
                 }
                 st.ray_disc_tests += cands.len() as u64;
                 test(&mut t, s, &cands);

@@ -155,6 +155,11 @@ pub struct FrameStats {
     pub affected_segments: u64,
     /// Of them, those meeting it at the new pose (the integral-geometry count n_R·(r_D/r_0)²).
     pub meeting_new: u64,
+    /// Segments meeting a mover at its new pose after the frame's re-trace (eq. 11's one-pose
+    /// count, per mover, summed): unlike `meeting_new`, counted on the re-traced paths, so a
+    /// segment the old pose cut short before the new one is counted as its re-trace meets it, and
+    /// with the bare radius (the search pads it); 0 at frame 0.
+    pub meeting_pose: u64,
     /// Photons re-traced.
     pub photons_retraced: u64,
     /// Segments removed: each re-traced photon's old path from its first changed segment on.
@@ -181,6 +186,19 @@ pub struct FrameStats {
     pub dynamic_spheres_built: u64,
     /// Dynamic points: the segment-index queries that fed them (cells read + segments tested).
     pub dynamic_feed: u64,
+    /// Dynamic points: segments that reached their disc index (entered a cell or node of it; 0
+    /// with the sphere cache). Theorem 2's proof charges every live segment as if it did.
+    pub dynamic_rays_reaching: u64,
+    /// Segments alive after the frame: n_R, the rays of the scene Theorem 2's proof charges.
+    pub segments_live: u64,
+    /// Sample points on the dynamic objects: n_D (not added over photon shards: the same points).
+    pub dynamic_points: u64,
+    /// Σ(r_D/r_0)² over the movers at this frame's pose (not added over photon shards: the same
+    /// movers); f_R = `segments_live`·this ([`Self::f_r_theory`]).
+    pub ratio_sq: f64,
+    /// Σ over the movers of [`crate::theory::detp::union_lines_share`] (r_D/r_0, shift/r_0) from the
+    /// old pose to this one (not added over photon shards); 0 at frame 0.
+    pub union_share: f64,
     /// Static points: the disc index's traversal (box tests + DDA steps).
     pub static_traversal: u64,
     /// Static points: segments copied into the sphere cache's lists (sphere cache only).
@@ -426,8 +444,27 @@ impl QuasiStatic {
         stats.dynamic_s = s;
         let aside = qs.time_traversal(&mut dynamic, &mut stats);
         qs.apply_dynamic(dynamic, &mut stats);
+        qs.proof_facts(None, &mut stats);
         stats.frame_s = t_all.elapsed().as_secs_f64() - aside;
         (qs, stats)
+    }
+
+    /// The frame's n_R, n_D and the μ-random-line expectations of the segments meeting the objects
+    /// at one pose (f_R) and at the old or the new pose (`old`: the poses before the frame; none
+    /// at frame 0), as Theorem 2's proof and eq. 11 state them.
+    fn proof_facts(&self, old: Option<&[(DVec3, f64)]>, stats: &mut FrameStats) {
+        let r0 = self.r0();
+        stats.segments_live = self.live_segments() as u64;
+        stats.dynamic_points = self.dynamic.iter().map(|dp| dp.discs.len() as u64).sum();
+        stats.ratio_sq = self.spheres.iter().map(|&(_, r)| (r / r0).powi(2)).sum();
+        stats.union_share = old.map_or(0.0, |old| {
+            old.iter()
+                .zip(&self.spheres)
+                .map(|(&(a, _), &(b, r))| {
+                    crate::theory::detp::union_lines_share(r / r0, (b - a).length() / r0)
+                })
+                .sum()
+        });
     }
 
     /// Photon or line `p` at the current pose.
@@ -664,6 +701,7 @@ impl QuasiStatic {
             stats.dynamic_rays_copied += k.rays_copied;
             stats.dynamic_spheres_built += k.spheres_built;
             stats.dynamic_feed += k.feed;
+            stats.dynamic_rays_reaching += k.reaching;
         }
     }
 
@@ -716,7 +754,7 @@ impl QuasiStatic {
         stats.photons_retraced = photons.len() as u64;
         // 2. Re-trace at the new pose.
         self.scene.set_tau(t_new);
-        self.spheres = new_spheres;
+        let old_spheres = std::mem::replace(&mut self.spheres, new_spheres);
         let (new_paths, s) = timed(|| {
             photons
                 .par_iter()
@@ -751,6 +789,14 @@ impl QuasiStatic {
             self.index.insert(id as u32, &self.store.segments[id]);
         }
         stats.segments_retraced = retraced as u64;
+        // Every segment meeting a new pose belongs to a re-traced photon (it met the old or the
+        // new pose before, or its photon's path changed): count them on the new paths.
+        stats.meeting_pose = self.spheres.iter().fold(0, |n, &(c, r)| {
+            n + self.store.segments[first_new..]
+                .iter()
+                .filter(|s| segment_index::meets_ball(s, c, r, 0.0))
+                .count() as u64
+        });
         stats.segments_removed = old.len() as u64;
         stats.segments_added = added.len() as u64;
         // 3. Static points: minus old, plus new.
@@ -771,6 +817,7 @@ impl QuasiStatic {
         // Before compaction moves the slots the walks list.
         let aside = self.time_traversal(&mut dynamic, &mut stats);
         self.apply_dynamic(dynamic, &mut stats);
+        self.proof_facts(Some(&old_spheres), &mut stats);
         if self.dead > self.live_segments() {
             self.compact();
         }
@@ -908,6 +955,8 @@ pub struct Counts {
     pub spheres_built: u64,
     /// Segment-index cells read + segments tested to feed the engine.
     pub feed: u64,
+    /// Segments that reached the disc index (disc index only; [`IndexStats::segments_reaching`]).
+    pub reaching: u64,
 }
 
 impl Counts {
@@ -925,6 +974,7 @@ impl Counts {
         Self {
             disc_tests: s.ray_disc_tests,
             traversal: s.traversal(),
+            reaching: s.segments_reaching,
             ..Self::default()
         }
     }
@@ -936,6 +986,7 @@ impl Counts {
         self.rays_copied += o.rays_copied;
         self.spheres_built += o.spheres_built;
         self.feed += o.feed;
+        self.reaching += o.reaching;
     }
 
     fn add_static(&self, st: &mut FrameStats) {
@@ -961,6 +1012,7 @@ impl FrameStats {
             frame: self.frame,
             affected_segments: self.affected_segments + o.affected_segments,
             meeting_new: self.meeting_new + o.meeting_new,
+            meeting_pose: self.meeting_pose + o.meeting_pose,
             photons_retraced: self.photons_retraced + o.photons_retraced,
             segments_removed: self.segments_removed + o.segments_removed,
             segments_added: self.segments_added + o.segments_added,
@@ -974,6 +1026,11 @@ impl FrameStats {
             dynamic_rays_copied: self.dynamic_rays_copied + o.dynamic_rays_copied,
             dynamic_spheres_built: self.dynamic_spheres_built + o.dynamic_spheres_built,
             dynamic_feed: self.dynamic_feed + o.dynamic_feed,
+            dynamic_rays_reaching: self.dynamic_rays_reaching + o.dynamic_rays_reaching,
+            segments_live: self.segments_live + o.segments_live,
+            dynamic_points: self.dynamic_points,
+            ratio_sq: self.ratio_sq,
+            union_share: self.union_share,
             static_traversal: self.static_traversal + o.static_traversal,
             static_rays_copied: self.static_rays_copied + o.static_rays_copied,
             used: self.used.clone(),
@@ -990,6 +1047,18 @@ impl FrameStats {
     /// DDA step (the feed's query and the copies are counted apart; `docs/detp-costs.md`).
     pub fn dynamic_counted_cost(&self) -> u64 {
         self.dynamic_disc_tests + self.dynamic_sphere_tests + self.dynamic_traversal
+    }
+
+    /// f_R = n_R·Σ(r_D/r_0)² (eq. 11) with this frame's n_R: the segments expected to meet the
+    /// objects at one pose were the segments μ-random lines.
+    pub fn f_r_theory(&self) -> f64 {
+        self.segments_live as f64 * self.ratio_sq
+    }
+
+    /// The segments expected to meet an object at its old or its new pose were they μ-random
+    /// lines: n_R·Σ union share; 0 at frame 0.
+    pub fn union_theory(&self) -> f64 {
+        self.segments_live as f64 * self.union_share
     }
 
     /// The static points' counted cost, same weights.

@@ -10,6 +10,7 @@
 
 use super::measure::{FrameRow, QsMeasured, QsPointRow};
 use super::spec::QuasiStaticConfig;
+use super::theorem2::{self, Assumption};
 use crate::detp::quasi_static::FrameStats;
 use crate::experiment::detp::columns as detp;
 use crate::output::column::{Class, Column, Shape};
@@ -96,6 +97,52 @@ pub const RAYS_MEETING_OBJECT: Column = Column::vs_prediction(
     "segments",
     "segments meeting an object at its new pose, per frame; theory f_R",
 );
+/// Segments meeting the pose after the re-trace: eq. 11's one-pose count.
+pub const RAYS_AT_POSE: Column = Column::vs_prediction(
+    "rays_at_pose",
+    "segments",
+    "segments meeting an object at its new pose after the frame's re-trace (eq. 11's one-pose count: unlike rays_meeting_object, a segment the old pose cut short is counted as re-traced, and the radius is not padded), per frame; theory f_R",
+);
+/// The union's expectation for μ-random lines.
+pub const RETRACED_RAYS_UNION_THEORY: Column = Column::estimate(
+    "retraced_rays_union_theory",
+    "segments",
+    "segments expected to meet an object at its old or new pose were they μ-random lines: n_R·Σ(2ρ² − (1/π)∫₀¹ L(δ√(1−c²)) dc), ρ = r_D/r_0, δ the pose's shift/r_0, L the lens of two discs of radius ρ (docs/theory.md), per frame; retraced_rays's own expectation",
+);
+/// A1 of Theorem 2's proof.
+pub const RAYS_AT_POSE_PER_F_R: Column = Column::estimate(
+    "rays_at_pose_per_f_r",
+    "1",
+    "Theorem 2's proof, A1: rays_at_pose ÷ f_R = n_R·Σ(r_D/r_0)² with the frame's n_R (the proof: 1), per frame",
+);
+/// A2 of Theorem 2's proof.
+pub const DYNAMIC_CACHE_WORK_PER_RAY: Column = Column::estimate(
+    "dynamic_cache_work_per_ray",
+    "1",
+    "Theorem 2's proof, A2: the dynamic points' sphere-cache ray–disc + ray–sphere tests ÷ (rays_at_pose·∛n_D) (the proof: 8.08; NaN with the disc index), per frame",
+)
+.decided_by_timing();
+/// Rays reaching the dynamic points' disc index.
+pub const DYNAMIC_RAYS_REACHING: Column = Column::estimate(
+    "dynamic_rays_reaching",
+    "segments",
+    "segments that reach the dynamic points' disc index: enter one of its cells or nodes, or start beyond its reach and test every disc (0 with the sphere cache), per frame",
+)
+.decided_by_timing();
+/// A3 of Theorem 2's proof.
+pub const DYNAMIC_REACH_SHARE: Column = Column::estimate(
+    "dynamic_reach_share",
+    "1",
+    "Theorem 2's proof, A3: dynamic_rays_reaching ÷ the frame's live segments n_R (the proof charges every ray: 1; NaN with the sphere cache), per frame",
+)
+.decided_by_timing();
+/// A4 of Theorem 2's proof.
+pub const DYNAMIC_INDEX_TESTS_PER_RAY: Column = Column::estimate(
+    "dynamic_index_tests_per_ray",
+    "1",
+    "Theorem 2's proof, A4: the dynamic points' disc-index ray–disc tests ÷ (dynamic_rays_reaching·∛n_D) (the proof: 1; NaN with the sphere cache), per frame",
+)
+.decided_by_timing();
 /// Photons re-traced.
 pub const PHOTONS_RETRACED: Column =
     Column::estimate("photons_retraced", "photons", "photons re-traced per frame");
@@ -235,6 +282,13 @@ pub type FrameValue = fn(&FrameStats) -> f64;
 pub const PER_FRAME_VALUES: &[(Column, FrameValue)] = &[
     (RETRACED_RAYS, |s| s.affected_segments as f64),
     (RAYS_MEETING_OBJECT, |s| s.meeting_new as f64),
+    (RAYS_AT_POSE, |s| s.meeting_pose as f64),
+    (RETRACED_RAYS_UNION_THEORY, FrameStats::union_theory),
+    (RAYS_AT_POSE_PER_F_R, theorem2::rays_per_pose_share),
+    (DYNAMIC_CACHE_WORK_PER_RAY, theorem2::cache_work_per_ray),
+    (DYNAMIC_RAYS_REACHING, |s| s.dynamic_rays_reaching as f64),
+    (DYNAMIC_REACH_SHARE, theorem2::reach_share),
+    (DYNAMIC_INDEX_TESTS_PER_RAY, theorem2::index_tests_per_ray),
     (PHOTONS_RETRACED, |s| s.photons_retraced as f64),
     (SEGMENTS_RETRACED, |s| s.segments_retraced as f64),
     (SEGMENTS_CHANGED, |s| s.segments_added as f64),
@@ -651,6 +705,39 @@ pub mod frame {
         "segments",
         "segments meeting an object at its new pose",
     );
+    /// Meeting the pose after the re-trace.
+    pub const RAYS_AT_POSE: Column = measured(
+        "rays_at_pose",
+        "segments",
+        "segments meeting an object at its new pose after the frame's re-trace (eq. 11's one-pose count; 0 at frame 0)",
+    );
+    /// The frame's n_R.
+    pub const SEGMENTS_LIVE: Column = measured(
+        "segments_live",
+        "segments",
+        "segments alive after the frame: n_R, the rays of the scene Theorem 2's proof charges",
+    );
+    /// Rays reaching the dynamic points' disc index.
+    pub const DYNAMIC_RAYS_REACHING: Column = measured(
+        "dynamic_rays_reaching",
+        "segments",
+        "segments that reach the dynamic points' disc index (0 with the sphere cache)",
+    )
+    .decided_by_timing();
+    /// Theorem 2's proof's accounting.
+    pub const DYNAMIC_PROOF_COST: Column = measured(
+        "dynamic_proof_cost",
+        "tests",
+        "Theorem 2's proof's charge for the dynamic points: the sphere cache its ray–disc + ray–sphere tests, the disc index ∛n_D for every live segment (n_R·∛n_D)",
+    )
+    .decided_by_timing();
+    /// The counted cost with one assumption of the proof in place of its measured factor.
+    pub const DYNAMIC_COST_ASSUMING: Column = measured(
+        "dynamic_cost_assuming_{}",
+        "tests",
+        "the dynamic points' ray–disc + ray–sphere tests with one of Theorem 2's proof's assumptions in place of the measured factor, the others measured (src/experiment/quasi_static/theorem2.rs): rays_per_pose (A1 = 1, the cache's work scaled to f_R rays), cache_constant (A2: 8.08·∛n_D per ray at the pose), every_ray (A3 = 1, the index's tests scaled to every live segment), cbrt_tests (A4 = 1: ∛n_D tests per reaching ray); the other engine's cost as counted",
+    )
+    .decided_by_timing();
     /// Photons re-traced.
     pub const PHOTONS_RETRACED: Column =
         measured("photons_retraced", "photons", "photons re-traced");
@@ -791,6 +878,7 @@ pub const FRAMES_TABLE: Table<QuasiStaticConfig, FrameRow> = Table::of(&[
     col(&frame::RAYS_MEETING_OBJECT, |_, r| {
         r.stats.meeting_new.into()
     }),
+    col(&frame::RAYS_AT_POSE, |_, r| r.stats.meeting_pose.into()),
     col(&frame::PHOTONS_RETRACED, |_, r| {
         r.stats.photons_retraced.into()
     }),
@@ -833,6 +921,20 @@ pub const FRAMES_TABLE: Table<QuasiStaticConfig, FrameRow> = Table::of(&[
     col(&frame::DYNAMIC_FEED, |_, r| r.stats.dynamic_feed.into()),
     col(&frame::DYNAMIC_COUNTED_COST, |_, r| {
         r.stats.dynamic_counted_cost().into()
+    }),
+    col(&frame::SEGMENTS_LIVE, |_, r| r.stats.segments_live.into()),
+    col(&frame::DYNAMIC_RAYS_REACHING, |_, r| {
+        r.stats.dynamic_rays_reaching.into()
+    }),
+    col(&frame::DYNAMIC_PROOF_COST, |_, r| {
+        theorem2::proof_cost(&r.stats).into()
+    }),
+    col(&frame::DYNAMIC_COST_ASSUMING, |_, r| {
+        Cell::members(
+            Assumption::ALL
+                .iter()
+                .map(|&a| (a.name().to_string(), theorem2::cost_assuming(&r.stats, a))),
+        )
     }),
     col(&ENGINE_USED, |_, r| {
         let used: Vec<&str> = r.stats.used.iter().map(|u| u.as_str()).collect();

@@ -39,6 +39,7 @@ pub mod measure;
 pub mod path_tracing;
 pub mod shards;
 pub mod spec;
+pub mod theorem2;
 
 use std::ops::Range;
 

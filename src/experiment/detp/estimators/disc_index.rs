@@ -176,6 +176,7 @@ impl Engine for Runs {
             box_tests,
             dda_steps,
             ray_disc_tests,
+            ..IndexStats::default()
         };
         self.runs.push(IndexRun {
             stats,
