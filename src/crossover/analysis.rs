@@ -90,6 +90,9 @@ pub struct CrossRow {
     pub extrapolated: bool,
     /// The n_P the sweep measured for this configuration (smallest, largest; NaN: none).
     pub measured_points: (f64, f64),
+    /// N* measured head to head (DETP at N_ε and path tracing at its paths on the same points,
+    /// [`super::confirm`]); NaN without such a run.
+    pub n_star_head_to_head: f64,
     /// Empty, or why something is missing or never.
     pub reason: String,
 }
@@ -177,6 +180,7 @@ fn base_row(inp: &Inputs, target: f64, config: Config, fit: &ErrorFit) -> CrossR
         n_star_model_hi: f64::NAN,
         extrapolated: false,
         measured_points: (f64::NAN, f64::NAN),
+        n_star_head_to_head: f64::NAN,
         reason: reason.join("; "),
     }
 }
@@ -385,6 +389,7 @@ fn path_row(inp: &Inputs, target: f64) -> CrossRow {
         n_star_model_hi: f64::NAN,
         extrapolated: false,
         measured_points: (f64::NAN, f64::NAN),
+        n_star_head_to_head: f64::NAN,
         reason: format!(
             "cv² from its prefix errors at fronts sweep point {} ({} replicas); s per path: median {:.3e} of {} rows (min {:.3e}, max {:.3e})",
             inp.pt_point,

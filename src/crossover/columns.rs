@@ -147,6 +147,8 @@ pub const N_STAR_MODEL_HI: Column = unbounded(
 );
 /// Extrapolated.
 pub const EXTRAPOLATED: Column = value("extrapolated", "", Class::Timing, "true where the value lies outside the n_P the sweep measured (crossover.csv: N*; best.csv: n_P), so it rests on a trend beyond the data, not on measured seconds");
+/// Head to head.
+pub const N_STAR_HEAD_TO_HEAD: Column = unbounded("n_star_head_to_head", "points", "N* measured head to head (with a confirmation run: DETP at N_ε and path tracing at its paths per point on the same points at a few n_P, log–log between them; their seconds are in reason); NaN without one, +inf: never there");
 /// Measured n_P.
 pub const SWEEP_POINTS_MIN: Column = value(
     "sweep_points_min",
@@ -281,6 +283,7 @@ pub fn crossover_row(r: &CrossRow) -> Row {
         .put(&EXTRAPOLATED, flag(r.extrapolated))
         .put(&SWEEP_POINTS_MIN, r.measured_points.0)
         .put(&SWEEP_POINTS_MAX, r.measured_points.1)
+        .put(&N_STAR_HEAD_TO_HEAD, r.n_star_head_to_head)
         .put(&REASON, r.reason.as_str());
     row
 }

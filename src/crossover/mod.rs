@@ -17,6 +17,7 @@
 
 pub mod analysis;
 pub mod columns;
+pub mod confirm;
 pub mod costs;
 pub mod frames;
 pub mod fronts;
@@ -42,6 +43,8 @@ pub struct Options {
     pub points: PathBuf,
     /// The frames run's result folder, if any.
     pub frames: Option<PathBuf>,
+    /// The head-to-head run's result folder, if any ([`confirm`]).
+    pub confirm: Option<PathBuf>,
     /// Target relative RMSEs.
     pub targets: Vec<f64>,
     /// Output folder.
@@ -75,6 +78,7 @@ pub fn run(o: &Options) -> crate::error::Result<Vec<PathBuf>> {
     }
     let mut reads: Vec<&Path> = vec![&o.fronts, &o.points];
     reads.extend(o.frames.as_deref());
+    reads.extend(o.confirm.as_deref());
     crate::output::location::refuse_inside(&o.out, "--out", &reads)?;
     refuse_existing(&o.out, o.force)?;
     let t0 = std::time::Instant::now();
@@ -272,7 +276,16 @@ fn compute(o: &Options) -> Result<Outputs, OutputError> {
         costs: costs::pooled(&runs),
         runs,
     };
-    let rows = analysis::crossover_rows(&inputs, &o.targets);
+    let mut rows = analysis::crossover_rows(&inputs, &o.targets);
+    let mut confirm = match &o.confirm {
+        Some(dir) => {
+            let mut src = Source::open(dir)?;
+            let table = src.main()?;
+            confirm::HeadToHead::read(&table)?.confirm(&mut rows);
+            Some(src)
+        }
+        None => None,
+    };
     // The fronts' own point count joins the grid: "at the points I measured, which is fastest?"
     let fronts_points = first_number(&main, "points", "the fronts' number of points")?;
     let best = analysis::best_rows(
@@ -285,6 +298,9 @@ fn compute(o: &Options) -> Result<Outputs, OutputError> {
     meta.run.seed = seed;
     fronts.record("fronts", &mut meta)?;
     record_sweep(&o.points, &sweeps, &mut meta)?;
+    if let Some(src) = confirm.as_mut() {
+        src.record("confirm", &mut meta)?;
+    }
     let frames = match &o.frames {
         Some(dir) => {
             let mut src = Source::open(dir)?;
