@@ -131,10 +131,16 @@ fn crossover_writes_its_tables_and_refuses_what_it_must() {
     let (ph, _) = read_csv(&fronts.join("fronts.points.csv"));
     for map in ["photon_map", "photon_map_growing"] {
         for k in 0..2 {
-            assert!(ph.contains(&format!("{map}_replica_{k}")), "{map} {k}: {ph:?}");
+            assert!(
+                ph.contains(&format!("{map}_replica_{k}")),
+                "{map} {k}: {ph:?}"
+            );
         }
     }
-    for r in rows.iter().filter(|r| r[col("method")].starts_with("photon-map")) {
+    for r in rows
+        .iter()
+        .filter(|r| r[col("method")].starts_with("photon-map"))
+    {
         assert!(!r[col("reason")].contains("no per-replica values"), "{r:?}");
     }
     // N* from the measured seconds: a row is extrapolated exactly when N* lies outside the
@@ -192,11 +198,11 @@ fn crossover_writes_its_tables_and_refuses_what_it_must() {
             .assert()
             .success();
     }
-    let y = dir.path().join("y");
-    crossover(&fronts, &repeated.join("points"), &y)
+    let by_run = dir.path().join("by-run");
+    crossover(&fronts, &repeated.join("points"), &by_run)
         .assert()
         .success();
-    let meta = std::fs::read_to_string(y.join("crossover.meta.toml")).expect("meta");
+    let meta = std::fs::read_to_string(by_run.join("crossover.meta.toml")).expect("meta");
     assert!(
         meta.contains("runs/0/points.csv") && meta.contains("runs/1/points.csv"),
         "{meta}"

@@ -6,10 +6,10 @@
 //! row's seconds per path), and where they cross ([`crossing`], log–log between the neighbouring
 //! n_P): the measured N* beside the predicted one.
 
+use super::analysis::CrossRow;
 use super::costs::run_timings;
 use super::input::Csv;
 use super::measured::{crossing, seconds_at, Form, Found};
-use super::analysis::CrossRow;
 use super::method::{Config, Method};
 use crate::error::OutputError;
 
@@ -95,7 +95,11 @@ impl HeadToHead {
                 .iter()
                 .map(|(p, d, t)| format!("n_P {p:.0}: {d:.3} s vs {t:.3} s"))
                 .collect();
-            let mark = if found.extrapolated { ", extrapolated" } else { "" };
+            let mark = if found.extrapolated {
+                ", extrapolated"
+            } else {
+                ""
+            };
             let why = format!(
                 "head to head at N = {:.0}, {k:.0} paths ({}){mark}",
                 self.configs
@@ -126,7 +130,9 @@ mod tests {
         );
         for (k, p) in [3e3, 1e4, 3e4].into_iter().enumerate() {
             let s = 2.0 * (1.0 + 1e-4 * p);
-            text.push_str(&format!("{k},photons,paper,5,2,50000,{p},{s},0,0,0,0,5e-5,4\n"));
+            text.push_str(&format!(
+                "{k},photons,paper,5,2,50000,{p},{s},0,0,0,0,5e-5,4\n"
+            ));
         }
         let h = HeadToHead::read(&Csv::from_text(&text)).expect("read");
         assert_eq!(h.paths, 4.0);

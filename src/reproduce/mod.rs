@@ -562,9 +562,14 @@ fn reproduce_crossover(o: &Options, meta_path: &Path) -> Result<Report, Error> {
     let confirm = input("confirm")?;
     let targets = crossover_targets(&meta, &o.dir)?;
     let mut forbidden: Vec<(&Path, &str)> = vec![(&o.dir, "the result folder")];
-    for d in [Some(&fronts), Some(&points), frames.as_ref(), confirm.as_ref()]
-        .into_iter()
-        .flatten()
+    for d in [
+        Some(&fronts),
+        Some(&points),
+        frames.as_ref(),
+        confirm.as_ref(),
+    ]
+    .into_iter()
+    .flatten()
     {
         forbidden.push((d, "an input folder"));
     }
