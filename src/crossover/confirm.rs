@@ -13,6 +13,9 @@ use super::measured::{crossing, seconds_at, Form, Found};
 use super::method::{Config, Method};
 use crate::error::OutputError;
 
+/// Seconds to the target at each n_P: (n_P, DETP's, path tracing's), increasing in n_P.
+pub type Curve = Vec<(f64, f64, f64)>;
+
 /// What the head-to-head run measured.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HeadToHead {
@@ -20,7 +23,7 @@ pub struct HeadToHead {
     pub paths: f64,
     /// Per configuration it timed, the photons it ran at and (n_P, DETP's seconds, path
     /// tracing's seconds), increasing in n_P.
-    pub configs: Vec<(Config, f64, Vec<(f64, f64, f64)>)>,
+    pub configs: Vec<(Config, f64, Curve)>,
 }
 
 impl HeadToHead {
@@ -60,7 +63,7 @@ impl HeadToHead {
         config: &Config,
         photons: f64,
         paths: f64,
-    ) -> Option<(Found, &[(f64, f64, f64)])> {
+    ) -> Option<(Found, &Curve)> {
         let near = |a: f64, b: f64| (a / b - 1.0).abs() <= 0.25;
         if !near(self.paths, paths) {
             return None;
@@ -68,7 +71,7 @@ impl HeadToHead {
         self.configs
             .iter()
             .find(|(c, n, curve)| config.matches(c) && near(*n, photons) && curve.len() >= 2)
-            .map(|(_, _, curve)| (crossing(curve, Form::LogLog), &curve[..]))
+            .map(|(_, _, curve)| (crossing(curve, Form::LogLog), curve))
     }
 
     /// Adds the measured crossing (and the seconds to the target of both methods at each n_P) to
