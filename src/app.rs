@@ -90,6 +90,7 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
                 fronts: c.fronts,
                 points: c.points,
                 frames: c.frames,
+                confirm: c.confirm,
                 targets: c.targets,
                 out: c.out,
                 force: c.force,

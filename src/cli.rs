@@ -164,6 +164,11 @@ pub struct CrossoverArgs {
     /// Target relative RMSEs, comma-separated.
     #[arg(long, value_delimiter = ',', required = true, value_name = "EPS,...")]
     pub targets: Vec<f64>,
+    /// A head-to-head run's results folder (kind detp: DETP at N_ε and path tracing at its paths
+    /// per point on the same points at a few n_P around N*): its measured crossing goes beside the
+    /// predicted one (n_star_head_to_head).
+    #[arg(long, value_name = "DIR")]
+    pub confirm: Option<PathBuf>,
     /// The output folder (crossover.csv, best.csv, frames.csv, crossover.meta.toml).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,

@@ -97,6 +97,14 @@ fn crossover_writes_its_tables_and_refuses_what_it_must() {
             "n_star_lo",
             "n_star_hi",
             "never_fraction",
+            "n_star_linear",
+            "n_star_model",
+            "n_star_model_lo",
+            "n_star_model_hi",
+            "extrapolated",
+            "sweep_points_min",
+            "sweep_points_max",
+            "n_star_head_to_head",
             "reason"
         ]
     );
@@ -118,6 +126,36 @@ fn crossover_writes_its_tables_and_refuses_what_it_must() {
             assert!((0.0..=1.0).contains(&never), "{r:?}");
         }
     }
+    // The photon maps are judged per replica (the fronts' points table has each replica's value),
+    // not from their mean over replicas.
+    let (ph, _) = read_csv(&fronts.join("fronts.points.csv"));
+    for map in ["photon_map", "photon_map_growing"] {
+        for k in 0..2 {
+            assert!(
+                ph.contains(&format!("{map}_replica_{k}")),
+                "{map} {k}: {ph:?}"
+            );
+        }
+    }
+    for r in rows
+        .iter()
+        .filter(|r| r[col("method")].starts_with("photon-map"))
+    {
+        assert!(!r[col("reason")].contains("no per-replica values"), "{r:?}");
+    }
+    // N* from the measured seconds: a row is extrapolated exactly when N* lies outside the
+    // measured n_P.
+    for r in &rows {
+        let n: f64 = r[col("n_star")].parse().expect("n_star");
+        let (lo, hi): (f64, f64) = (
+            r[col("sweep_points_min")].parse().expect("min"),
+            r[col("sweep_points_max")].parse().expect("max"),
+        );
+        if n.is_finite() && lo.is_finite() {
+            let outside = n < lo || n > hi;
+            assert_eq!(r[col("extrapolated")] == "true", outside, "{r:?}");
+        }
+    }
     let pt: Vec<&Vec<String>> = rows
         .iter()
         .filter(|r| r[col("method")] == "path-tracing")
@@ -135,7 +173,8 @@ fn crossover_writes_its_tables_and_refuses_what_it_must() {
             "best",
             "best_s",
             "runner_up",
-            "runner_up_s"
+            "runner_up_s",
+            "extrapolated"
         ]
     );
     // Per target the grid 10², …, 10⁶ and the fronts' own point count (once, if not on the grid).
@@ -149,6 +188,24 @@ fn crossover_writes_its_tables_and_refuses_what_it_must() {
     assert!(
         best.iter().any(|r| r[bp].parse::<f64>() == Ok(n_p)),
         "{best:?}"
+    );
+    // Separate runs of the sweep (runs/R): each run's seconds are read, the runs recorded.
+    let repeated = dir.path().join("repeated");
+    let points_spec = dir.path().join("points.toml");
+    for r in ["0", "1"] {
+        run_quiet(&points_spec, &repeated)
+            .args(["--run", r])
+            .assert()
+            .success();
+    }
+    let by_run = dir.path().join("by-run");
+    crossover(&fronts, &repeated.join("points"), &by_run)
+        .assert()
+        .success();
+    let meta = std::fs::read_to_string(by_run.join("crossover.meta.toml")).expect("meta");
+    assert!(
+        meta.contains("runs/0/points.csv") && meta.contains("runs/1/points.csv"),
+        "{meta}"
     );
     let meta = std::fs::read_to_string(out.join("crossover.meta.toml")).expect("meta");
     assert!(

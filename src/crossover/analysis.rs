@@ -1,11 +1,14 @@
-//! The analysis of issue 27 (docs/plans/issue27-wiring.md §4), pure: per target and method
-//! configuration the photons (or paths) it needs, its seconds once and per point, and N* — the
-//! points beyond which it beats per-point path tracing — with a percentile bootstrap over the
-//! fronts' replicas ([`points_crossover_interval`]); and per target and n_P the fastest
-//! configuration.
+//! The analysis (docs/plans/issue27-wiring.md §4), pure: per target and method configuration the
+//! photons (or paths) it needs, its seconds once and per point, and N* — the points beyond which
+//! it beats per-point path tracing — from the measured seconds of the n_P sweep
+//! ([`measured_star`]: interpolated between measured n_P, marked where extrapolated, a bootstrap
+//! over the fronts' replicas, the sweep's runs and path tracing's timings, widened to hold the
+//! other interpolation form and the global model), the global cost model's N* beside it with its
+//! own interval ([`points_crossover_interval`]); and per target and n_P the fastest configuration.
 
 use super::costs::{CostSamples, FittedCost, PathTiming};
 use super::fronts::{DetpErrors, MapErrors};
+use super::measured::{measured_star, MeasuredInputs, MeasuredStar, RunTimings};
 use super::method::{Config, Method};
 use crate::stats::crossover::{
     points_crossover, points_crossover_interval, Crossover, Never, PathTracingCost, ReplicaErrors,
@@ -38,8 +41,10 @@ pub struct Inputs {
     pub pt_point: u64,
     /// Path tracing's seconds per path (n_P sweep).
     pub timing: PathTiming,
-    /// Seconds per configuration (n_P sweep).
+    /// Seconds per configuration (n_P sweep, every run pooled: the global model's samples).
     pub costs: Vec<CostSamples>,
+    /// The n_P sweep's runs, each with its own seconds (the measured N*'s curves).
+    pub runs: Vec<RunTimings>,
 }
 
 /// One row of `crossover.csv`.
@@ -63,14 +68,31 @@ pub struct CrossRow {
     pub seconds_per_point: f64,
     /// The cost model, if the n_P sweep timed this configuration.
     pub cost: Option<FittedCost>,
-    /// N*, or NaN ("never": see `reason`).
+    /// N*, or NaN ("never": see `reason`): from the measured seconds (log–log between measured
+    /// n_P), else (no per-run timings) the global model's.
     pub n_star: f64,
-    /// Bootstrap bounds (+∞: unbounded; NaN: no bootstrap).
+    /// Bounds (+∞: unbounded; NaN: no bootstrap): the measured N*'s bootstrap widened to hold the
+    /// linear form's and the model's N*.
     pub n_star_lo: f64,
     /// Upper bound.
     pub n_star_hi: f64,
     /// Fraction of resamples that said "never".
     pub never_fraction: f64,
+    /// N* from the measured seconds interpolated linearly (NaN: not measured).
+    pub n_star_linear: f64,
+    /// The global cost model's N* and its bootstrap bounds (NaN: no model).
+    pub n_star_model: f64,
+    /// Lower bound.
+    pub n_star_model_lo: f64,
+    /// Upper bound.
+    pub n_star_model_hi: f64,
+    /// N* lies outside the n_P the sweep measured.
+    pub extrapolated: bool,
+    /// The n_P the sweep measured for this configuration (smallest, largest; NaN: none).
+    pub measured_points: (f64, f64),
+    /// N* measured head to head (DETP at N_ε and path tracing at its paths on the same points,
+    /// [`super::confirm`]); NaN without such a run.
+    pub n_star_head_to_head: f64,
     /// Empty, or why something is missing or never.
     pub reason: String,
 }
@@ -152,6 +174,13 @@ fn base_row(inp: &Inputs, target: f64, config: Config, fit: &ErrorFit) -> CrossR
         n_star_lo: f64::NAN,
         n_star_hi: f64::NAN,
         never_fraction: f64::NAN,
+        n_star_linear: f64::NAN,
+        n_star_model: f64::NAN,
+        n_star_model_lo: f64::NAN,
+        n_star_model_hi: f64::NAN,
+        extrapolated: false,
+        measured_points: (f64::NAN, f64::NAN),
+        n_star_head_to_head: f64::NAN,
         reason: reason.join("; "),
     }
 }
@@ -214,16 +243,89 @@ fn replica_rows(
                     LEVEL,
                     inp.seed,
                 );
-                (row.n_star_lo, row.n_star_hi) = (ci.lo, ci.hi);
-                row.never_fraction = ci.never_fraction;
-                match est {
-                    Crossover::At(x) => row.n_star = x,
-                    Crossover::Never(n) => add_reason(&mut row, never_reason(&n)),
+                (row.n_star_model_lo, row.n_star_model_hi) = (ci.lo, ci.hi);
+                row.n_star_model = est.value();
+                let m = MeasuredInputs {
+                    config: &row.config,
+                    photons,
+                    replicas: &replicas,
+                    runs: &inp.runs,
+                    target,
+                };
+                let measured = row
+                    .photons
+                    .is_finite()
+                    .then(|| measured_star(&m, DRAWS, LEVEL, inp.seed))
+                    .flatten();
+                match measured {
+                    Some(s) => put_measured(&mut row, &s),
+                    None if !row.photons.is_finite() => row.n_star = est.value(),
+                    None => {
+                        // No per-run timings: the model's N* and interval.
+                        (row.n_star_lo, row.n_star_hi) = (ci.lo, ci.hi);
+                        row.never_fraction = ci.never_fraction;
+                        row.n_star = est.value();
+                        add_reason(
+                            &mut row,
+                            "no per-run seconds at ≥ 2 n_P: N* from the global cost model".into(),
+                        );
+                    }
+                }
+                if let Crossover::Never(n) = est {
+                    add_reason(&mut row, format!("model: {}", never_reason(&n)));
+                }
+                if row.n_star.is_infinite() {
+                    row.n_star = f64::NAN;
+                }
+                if row.n_star_model.is_infinite() {
+                    row.n_star_model = f64::NAN;
                 }
             }
             row
         })
         .collect()
+}
+
+/// A row's N* from the measured seconds: the log–log estimate, its interval widened to hold the
+/// linear form's interval and the model's N* (their spread is the form error), extrapolated where
+/// it lies outside the measured n_P.
+fn put_measured(row: &mut CrossRow, s: &MeasuredStar) {
+    let (lo, hi) = s.range;
+    row.measured_points = s.range;
+    row.n_star = s.loglog.n_star;
+    row.n_star_linear = s.linear.n_star;
+    row.never_fraction = s.loglog_ci.never_fraction;
+    let forms = [s.loglog_ci.lo, s.linear_ci.lo, row.n_star_model];
+    let tops = [s.loglog_ci.hi, s.linear_ci.hi, row.n_star_model];
+    let finite_min = |v: &[f64]| {
+        v.iter()
+            .copied()
+            .filter(|x| !x.is_nan())
+            .fold(f64::INFINITY, f64::min)
+    };
+    let finite_max = |v: &[f64]| {
+        v.iter()
+            .copied()
+            .filter(|x| !x.is_nan())
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    row.n_star_lo = finite_min(&forms);
+    row.n_star_hi = finite_max(&tops);
+    row.extrapolated = s.loglog.extrapolated || !(lo..=hi).contains(&s.loglog.n_star);
+    if s.loglog.n_star.is_infinite() {
+        row.extrapolated = false;
+        add_reason(
+            row,
+            format!(
+                "never in the measured seconds over n_P {lo:.0}–{hi:.0} (the gap does not close)"
+            ),
+        );
+    } else if row.extrapolated {
+        add_reason(
+            row,
+            format!("N* extrapolated: outside the measured n_P {lo:.0}–{hi:.0}"),
+        );
+    }
 }
 
 /// A DETP configuration's rows (one per engine) at `target`, with the bootstrap CI of N*.
@@ -251,7 +353,7 @@ fn map_row(inp: &Inputs, e: &MapErrors, target: f64) -> CrossRow {
     if let Some(c) = row.cost {
         let pt = path_tracer(&inp.pt_cv2, inp.timing.median);
         match points_crossover(&pt, &fit, &c.model, target) {
-            Crossover::At(x) => row.n_star = x,
+            Crossover::At(x) => (row.n_star, row.n_star_model) = (x, x),
             Crossover::Never(n) => add_reason(&mut row, never_reason(&n)),
         }
     }
@@ -281,6 +383,13 @@ fn path_row(inp: &Inputs, target: f64) -> CrossRow {
         n_star_lo: f64::NAN,
         n_star_hi: f64::NAN,
         never_fraction: f64::NAN,
+        n_star_linear: f64::NAN,
+        n_star_model: f64::NAN,
+        n_star_model_lo: f64::NAN,
+        n_star_model_hi: f64::NAN,
+        extrapolated: false,
+        measured_points: (f64::NAN, f64::NAN),
+        n_star_head_to_head: f64::NAN,
         reason: format!(
             "cv² from its prefix errors at fronts sweep point {} ({} replicas); s per path: median {:.3e} of {} rows (min {:.3e}, max {:.3e})",
             inp.pt_point,
@@ -320,11 +429,19 @@ pub struct BestRow {
     pub best: Option<(String, f64)>,
     /// The runner-up and its seconds.
     pub runner_up: Option<(String, f64)>,
+    /// n_P lies outside the n_P the sweep measured: the seconds are the model's beyond its data.
+    pub extrapolated: bool,
 }
 
 /// Per target and n_P of [`BEST_POINTS`] and `more_points` (e.g. the fronts' own point count; in
-/// increasing order with them), the two fastest configurations that reach the target.
-pub fn best_rows(rows: &[CrossRow], targets: &[f64], more_points: &[f64]) -> Vec<BestRow> {
+/// increasing order with them), the two fastest configurations that reach the target, marked
+/// extrapolated where n_P lies outside `measured` (the sweep's smallest and largest n_P).
+pub fn best_rows(
+    rows: &[CrossRow],
+    targets: &[f64],
+    more_points: &[f64],
+    measured: (f64, f64),
+) -> Vec<BestRow> {
     let mut grid: Vec<f64> = BEST_POINTS.iter().chain(more_points).copied().collect();
     grid.sort_by(f64::total_cmp);
     grid.dedup();
@@ -345,6 +462,7 @@ pub fn best_rows(rows: &[CrossRow], targets: &[f64], more_points: &[f64]) -> Vec
                 points,
                 best: it.next(),
                 runner_up: it.next(),
+                extrapolated: !(measured.0..=measured.1).contains(&points),
             });
         }
     }
@@ -418,6 +536,7 @@ mod tests {
                 rows: 1,
             },
             costs: vec![CostSamples { config, samples }],
+            runs: Vec::new(),
         }
     }
 
@@ -465,6 +584,63 @@ mod tests {
         }
     }
 
+    /// One run of the n_P sweep timed exactly as the model, path tracing at 2·10⁻⁶ s per path on
+    /// every row.
+    fn run_at(n_p: &[f64]) -> RunTimings {
+        let inp = inputs();
+        let mut samples = Vec::new();
+        let mut path = Vec::new();
+        for &p in n_p {
+            for n in [1e4, 1e5] {
+                samples.push((n, p, MODEL.seconds(n, p)));
+            }
+            path.extend([(p, 2e-6), (p, 2e-6)]);
+        }
+        RunTimings {
+            costs: vec![CostSamples {
+                config: inp.costs[0].config.clone(),
+                samples,
+            }],
+            path,
+        }
+    }
+
+    /// With per-run seconds N* comes from them: between the measured n_P that bracket the
+    /// model's closed form (≈ 651), the linear form on it (seconds affine in N and in n_P: the
+    /// interpolation is exact), the model's N* beside it, the interval holding all three; a sweep that stops below N* marks the row and the best.csv rows beyond.
+    #[test]
+    fn n_star_comes_from_the_measured_seconds_and_says_when_it_is_extrapolated() {
+        let mut inp = inputs();
+        inp.runs = vec![run_at(&[1e2, 3e2, 1e3, 3e3, 1e4])];
+        let rows = crossover_rows(&inp, &[0.05]);
+        let sc = &rows[0];
+        let closed = sc.n_star_model;
+        assert!(closed > 600.0 && closed < 700.0, "{sc:?}");
+        assert!(sc.n_star > 3e2 && sc.n_star < 1e3, "{sc:?}");
+        assert!((sc.n_star_linear / closed - 1.0).abs() < 1e-9, "{sc:?}");
+        let all = [sc.n_star, sc.n_star_linear, sc.n_star_model];
+        assert!(
+            all.iter().all(|&x| sc.n_star_lo <= x && x <= sc.n_star_hi),
+            "{sc:?}"
+        );
+        assert!(
+            !sc.extrapolated && !sc.reason.contains("extrapolated"),
+            "{sc:?}"
+        );
+        assert_eq!(sc.measured_points, (1e2, 1e4));
+        inp.runs = vec![run_at(&[1e2, 2e2, 3e2])];
+        let rows = crossover_rows(&inp, &[0.05]);
+        let sc = &rows[0];
+        assert!(sc.n_star > 3e2, "{sc:?}");
+        assert!(
+            sc.extrapolated && sc.reason.contains("extrapolated"),
+            "{sc:?}"
+        );
+        let best = best_rows(&rows, &[0.05], &[], (1e2, 3e2));
+        assert!(best[0].points == 1e2 && !best[0].extrapolated);
+        assert!(best[1..].iter().all(|b| b.extrapolated), "{best:?}");
+    }
+
     #[test]
     fn n_star_is_the_closed_form_and_unmatched_configurations_say_why() {
         let inp = inputs();
@@ -488,7 +664,8 @@ mod tests {
                 && (sc.n_star_hi / closed - 1.0).abs() < 1e-5
         );
         assert_eq!(sc.never_fraction, 0.0);
-        assert!(sc.reason.is_empty(), "{}", sc.reason);
+        assert!(sc.reason.contains("global cost model"), "{}", sc.reason);
+        assert_eq!(sc.n_star_model, sc.n_star);
         assert!((sc.seconds_once - once).abs() < 1e-9);
         // The disc index has no cost sweep here; neither has d = 15.
         assert!(rows[1].reason.contains("no cost sweep") && rows[1].n_star.is_nan());
@@ -502,8 +679,14 @@ mod tests {
             rows[5]
         );
         // best.csv: path tracing at few points, DETP beyond N*.
-        let best = best_rows(&rows, &[0.05], &[]);
+        let best = best_rows(&rows, &[0.05], &[], (1e2, 1e5));
         assert_eq!(best.len(), 5);
+        let marked: Vec<bool> = best.iter().map(|b| b.extrapolated).collect();
+        assert_eq!(
+            marked,
+            [false, false, false, false, true],
+            "10⁶ is beyond the sweep"
+        );
         assert!(best[0].best.as_ref().is_some_and(|b| b.0 == "path-tracing"));
         assert!(best[4]
             .best

@@ -120,14 +120,48 @@ pub const COST_WORST_MISFIT: Column = value(
     "largest |model/measured − 1| of the cost model over the n_P sweep's samples",
 );
 /// N*.
-pub const N_STAR: Column = value("n_star", "points", Class::Timing, "N*: beyond this many points the configuration reaches the target faster than path tracing (NaN: never, see reason)");
+pub const N_STAR: Column = value("n_star", "points", Class::Timing, "N*: beyond this many points the configuration reaches the target faster than path tracing, from the n_P sweep's measured seconds at N_ε (linear in photons between the two measured counts, then log–log between the neighbouring measured n_P where the curves cross); without per-run seconds, the global model's (see reason). NaN: never");
 /// Lower bound.
-pub const N_STAR_LO: Column = unbounded("n_star_lo", "points", "2.5 % percentile of N* over 2000 bootstrap resamples of the fronts' replicas (+inf: never in that many; NaN: no bootstrap)");
+pub const N_STAR_LO: Column = unbounded("n_star_lo", "points", "lower bound of N*: the least of the 2.5 % percentiles of the log–log and linear forms over 2000 bootstrap resamples (the fronts' replicas, the sweep's runs when ≥ 2, path tracing's per-row timings) and the global model's N* (form error) (+inf: never in that many; NaN: no bootstrap)");
 /// Upper bound.
 pub const N_STAR_HI: Column = unbounded(
     "n_star_hi",
     "points",
-    "97.5 % percentile of N* (+inf: the data cannot exclude that it never wins)",
+    "upper bound of N*: the largest of the forms' 97.5 % percentiles and the model's N* (+inf: the data cannot exclude that it never wins)",
+);
+/// Linear form.
+pub const N_STAR_LINEAR: Column = unbounded(
+    "n_star_linear",
+    "points",
+    "N* from the measured seconds interpolated linearly in n_P (T_DETP − T_PT linear between neighbouring n_P); NaN: not measured; +inf: never",
+);
+/// The model's N*.
+pub const N_STAR_MODEL: Column = value("n_star_model", "points", Class::Timing, "N* of the global cost model seconds = fixed + a·N + b·N·n_P^γ + c·n_P fitted over every run of the sweep, with path tracing's median seconds per path (NaN: never or no model)");
+/// Its bounds.
+pub const N_STAR_MODEL_LO: Column = unbounded("n_star_model_lo", "points", "2.5 % percentile of the model's N* over 2000 resamples of the fronts' replicas and the model's residuals");
+/// Upper.
+pub const N_STAR_MODEL_HI: Column = unbounded(
+    "n_star_model_hi",
+    "points",
+    "97.5 % percentile of the model's N*",
+);
+/// Extrapolated.
+pub const EXTRAPOLATED: Column = value("extrapolated", "", Class::Timing, "true where the value lies outside the n_P the sweep measured (crossover.csv: N*; best.csv: n_P), so it rests on a trend beyond the data, not on measured seconds");
+/// Head to head.
+pub const N_STAR_HEAD_TO_HEAD: Column = unbounded("n_star_head_to_head", "points", "N* measured head to head (with a confirmation run: DETP at N_ε and path tracing at its paths per point on the same points at a few n_P, log–log between them; their seconds are in reason); NaN without one, +inf: never there");
+/// Measured n_P.
+pub const SWEEP_POINTS_MIN: Column = value(
+    "sweep_points_min",
+    "points",
+    Class::Parameter,
+    "the smallest n_P the sweep timed this configuration at (NaN: none)",
+);
+/// Measured n_P.
+pub const SWEEP_POINTS_MAX: Column = value(
+    "sweep_points_max",
+    "points",
+    Class::Parameter,
+    "the largest n_P the sweep timed this configuration at (NaN: none)",
 );
 /// Never fraction.
 pub const NEVER_FRACTION: Column = value(
@@ -147,7 +181,7 @@ pub const POINTS: Column = value(
     "n_P: points to compute",
 );
 /// Best.
-pub const BEST: Column = value("best", "", Class::Timing, "the fastest configuration reaching the target at n_P (its cost extrapolated by the fitted model)");
+pub const BEST: Column = value("best", "", Class::Timing, "the fastest configuration reaching the target at n_P (its seconds from the fitted model; extrapolated = true where n_P lies outside the sweep's measured n_P)");
 /// Its seconds.
 pub const BEST_S: Column = value("best_s", "s", Class::Timing, "its seconds");
 /// Runner-up.
@@ -242,6 +276,14 @@ pub fn crossover_row(r: &CrossRow) -> Row {
         .put(&N_STAR_LO, r.n_star_lo)
         .put(&N_STAR_HI, r.n_star_hi)
         .put(&NEVER_FRACTION, r.never_fraction)
+        .put(&N_STAR_LINEAR, r.n_star_linear)
+        .put(&N_STAR_MODEL, r.n_star_model)
+        .put(&N_STAR_MODEL_LO, r.n_star_model_lo)
+        .put(&N_STAR_MODEL_HI, r.n_star_model_hi)
+        .put(&EXTRAPOLATED, flag(r.extrapolated))
+        .put(&SWEEP_POINTS_MIN, r.measured_points.0)
+        .put(&SWEEP_POINTS_MAX, r.measured_points.1)
+        .put(&N_STAR_HEAD_TO_HEAD, r.n_star_head_to_head)
         .put(&REASON, r.reason.as_str());
     row
 }
@@ -261,8 +303,17 @@ pub fn best_row(r: &BestRow) -> Row {
         .put(&BEST, best)
         .put(&BEST_S, best_s)
         .put(&RUNNER_UP, runner)
-        .put(&RUNNER_UP_S, runner_s);
+        .put(&RUNNER_UP_S, runner_s)
+        .put(&EXTRAPOLATED, flag(r.extrapolated));
     row
+}
+
+fn flag(x: bool) -> &'static str {
+    if x {
+        "true"
+    } else {
+        "false"
+    }
 }
 
 /// A row of `frames.csv`.

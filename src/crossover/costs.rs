@@ -1,7 +1,7 @@
 //! What the n_P sweep (a kind-`detp` run over detp.points × detp.photons × detp.direct ×
 //! detp.edge at one d, no reference) says about seconds: per method configuration the samples
 //! (N, n_P, seconds of one replica) and [`CostModel::fit_best_gamma`] over them; path tracing's
-//! seconds per path.
+//! seconds per path, per row and run ([`run_timings`]).
 //!
 //! The main table's timings are summed over replicas (`trace_s`, `edge_s`, `direct_s`,
 //! `build_{}_s`, `cost_{}_s`: see their declarations), so a sample divides by `detp.replicas`:
@@ -11,6 +11,7 @@
 
 use super::fronts::settings;
 use super::input::Csv;
+use super::measured::RunTimings;
 use super::method::{Config, Method};
 use crate::error::OutputError;
 use crate::stats::fit::CostModel;
@@ -91,6 +92,43 @@ pub fn cost_samples(main: &Csv) -> Result<Vec<CostSamples>, OutputError> {
     Ok(out)
 }
 
+/// One run's timings: its seconds per configuration and path tracing's seconds per path on each
+/// row (n_P, seconds per path; each row times its own path tracing).
+pub fn run_timings(main: &Csv) -> Result<RunTimings, OutputError> {
+    let why = "path tracing's seconds per path on each row";
+    let points = main.numbers("points", why)?;
+    let spp = main.numbers("path_tracing_s_per_path", why)?;
+    Ok(RunTimings {
+        costs: cost_samples(main)?,
+        path: points.into_iter().zip(spp).collect(),
+    })
+}
+
+/// Every run's samples per configuration, pooled (the global model's fit).
+pub fn pooled(runs: &[RunTimings]) -> Vec<CostSamples> {
+    let mut out: Vec<CostSamples> = Vec::new();
+    for c in runs.iter().flat_map(|r| &r.costs) {
+        match out.iter_mut().find(|o| o.config == c.config) {
+            Some(o) => o.samples.extend_from_slice(&c.samples),
+            None => out.push(c.clone()),
+        }
+    }
+    out
+}
+
+/// The smallest and largest n_P the runs timed (NaN, NaN without any).
+pub fn measured_points(runs: &[RunTimings]) -> (f64, f64) {
+    let all = runs.iter().flat_map(|r| &r.costs).flat_map(|c| &c.samples);
+    let (lo, hi) = all.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
+        (lo.min(s.1), hi.max(s.1))
+    });
+    if lo <= hi {
+        (lo, hi)
+    } else {
+        (f64::NAN, f64::NAN)
+    }
+}
+
 /// Path tracing's seconds per path over the table's rows: median, least, largest, rows.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PathTiming {
@@ -104,16 +142,22 @@ pub struct PathTiming {
     pub rows: usize,
 }
 
-/// The median (and spread) of `path_tracing_s_per_path` over the rows.
-pub fn path_timing(main: &Csv) -> Result<PathTiming, OutputError> {
-    let mut v: Vec<f64> = main
-        .numbers("path_tracing_s_per_path", "path tracing's seconds per path")?
-        .into_iter()
-        .filter(|x| x.is_finite() && *x > 0.0)
-        .collect();
+/// The median (and spread) of `path_tracing_s_per_path` over the rows of every table.
+pub fn path_timing(mains: &[Csv]) -> Result<PathTiming, OutputError> {
+    let mut v: Vec<f64> = Vec::new();
+    for main in mains {
+        v.extend(
+            main.numbers("path_tracing_s_per_path", "path tracing's seconds per path")?
+                .into_iter()
+                .filter(|x| x.is_finite() && *x > 0.0),
+        );
+    }
     if v.is_empty() {
+        let path = mains
+            .first()
+            .map_or_else(Default::default, |m| m.path.clone());
         return Err(OutputError::new(
-            &main.path,
+            &path,
             "has no finite path_tracing_s_per_path: the n_P sweep must run engine path-tracing",
         ));
     }
@@ -182,7 +226,7 @@ mod tests {
         // is not its cost.
         let (n, p, sec) = s[1].samples[0];
         assert!((sec - (0.5 * 2.0 * truth.seconds(n, p) + 2.0) / 2.0).abs() < 1e-12);
-        let t = path_timing(&main).expect("timing");
+        let t = path_timing(std::slice::from_ref(&main)).expect("timing");
         assert_eq!((t.min, t.max, t.rows), (1e-6, 8e-6, 8));
         assert!((t.median - 4.5e-6).abs() < 1e-18);
     }

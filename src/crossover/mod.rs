@@ -17,10 +17,12 @@
 
 pub mod analysis;
 pub mod columns;
+pub mod confirm;
 pub mod costs;
 pub mod frames;
 pub mod fronts;
 pub mod input;
+pub mod measured;
 pub mod method;
 
 use std::path::{Path, PathBuf};
@@ -41,6 +43,8 @@ pub struct Options {
     pub points: PathBuf,
     /// The frames run's result folder, if any.
     pub frames: Option<PathBuf>,
+    /// The head-to-head run's result folder, if any ([`confirm`]).
+    pub confirm: Option<PathBuf>,
     /// Target relative RMSEs.
     pub targets: Vec<f64>,
     /// Output folder.
@@ -74,6 +78,7 @@ pub fn run(o: &Options) -> crate::error::Result<Vec<PathBuf>> {
     }
     let mut reads: Vec<&Path> = vec![&o.fronts, &o.points];
     reads.extend(o.frames.as_deref());
+    reads.extend(o.confirm.as_deref());
     crate::output::location::refuse_inside(&o.out, "--out", &reads)?;
     refuse_existing(&o.out, o.force)?;
     let t0 = std::time::Instant::now();
@@ -179,6 +184,62 @@ fn first_number(t: &Csv, column: &str, why: &str) -> Result<f64, OutputError> {
         .ok_or_else(|| OutputError::new(&t.path, "has no rows"))
 }
 
+/// The n_P sweep's runs: `DIR/runs/R` for every run R that `raycost run --run R` (or `--repeat`)
+/// wrote there, in run order; else the one run in `DIR`.
+fn sweep_runs(dir: &Path) -> Result<Vec<Source>, OutputError> {
+    let runs = dir.join("runs");
+    if !runs.is_dir() {
+        return Ok(vec![Source::open(dir)?]);
+    }
+    let entries = std::fs::read_dir(&runs)
+        .map_err(|e| OutputError::new(&runs, format!("cannot read the runs folder: {e}")))?;
+    let mut numbered: Vec<(u64, PathBuf)> = entries
+        .flatten()
+        .filter_map(|e| {
+            let r = e.file_name().to_string_lossy().parse::<u64>().ok()?;
+            e.path().is_dir().then(|| (r, e.path()))
+        })
+        .collect();
+    numbered.sort();
+    if numbered.is_empty() {
+        return Err(OutputError::new(
+            &runs,
+            "holds no run folder (runs/R, as raycost run --run R writes)",
+        ));
+    }
+    numbered.iter().map(|(_, d)| Source::open(d)).collect()
+}
+
+/// The sweep's provenance: every run's files under role `points`, and `[extra.points]` naming the
+/// folder given (so that `raycost reproduce` reruns on every run) with each run's machine in
+/// `[extra.points.runs.R]`.
+fn record_sweep(dir: &Path, sweeps: &[Source], meta: &mut Meta) -> Result<(), OutputError> {
+    if let [one] = sweeps {
+        if one.results.dir == dir {
+            return one.record("points", meta);
+        }
+    }
+    let mut runs = toml::Table::new();
+    for s in sweeps {
+        let mut m = Meta::begin("crossover", Default::default());
+        s.record("points", &mut m)?;
+        meta.inputs.extend(m.inputs);
+        if let Some(t) = m.extra.remove("points") {
+            let run = s
+                .results
+                .dir
+                .file_name()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+            runs.insert(run, t);
+        }
+    }
+    let mut t = toml::Table::new();
+    t.insert("dir".into(), toml::Value::String(dir.display().to_string()));
+    t.insert("runs".into(), toml::Value::Table(runs));
+    meta.extra.insert("points".into(), toml::Value::Table(t));
+    Ok(())
+}
+
 /// Reads every input and runs the analysis.
 fn compute(o: &Options) -> Result<Outputs, OutputError> {
     let mut fronts = Source::open(&o.fronts)?;
@@ -195,8 +256,15 @@ fn compute(o: &Options) -> Result<Outputs, OutputError> {
     let detp = fronts::detp_errors(&main, &points)?;
     let maps = fronts::map_errors(&main, &points, replicas)?;
     let (pt_point, pt_cv2) = fronts::path_tracing_cv2(&pt_side, &points)?;
-    let mut sweep = Source::open(&o.points)?;
-    let cost_table = sweep.main()?;
+    let mut sweeps = sweep_runs(&o.points)?;
+    let mut tables = Vec::new();
+    for s in &mut sweeps {
+        tables.push(s.main()?);
+    }
+    let runs = tables
+        .iter()
+        .map(costs::run_timings)
+        .collect::<Result<Vec<_>, _>>()?;
     let inputs = analysis::Inputs {
         scene: scene.clone(),
         seed,
@@ -204,17 +272,35 @@ fn compute(o: &Options) -> Result<Outputs, OutputError> {
         maps,
         pt_cv2,
         pt_point,
-        timing: costs::path_timing(&cost_table)?,
-        costs: costs::cost_samples(&cost_table)?,
+        timing: costs::path_timing(&tables)?,
+        costs: costs::pooled(&runs),
+        runs,
     };
-    let rows = analysis::crossover_rows(&inputs, &o.targets);
+    let mut rows = analysis::crossover_rows(&inputs, &o.targets);
+    let mut confirm = match &o.confirm {
+        Some(dir) => {
+            let mut src = Source::open(dir)?;
+            let table = src.main()?;
+            confirm::HeadToHead::read(&table)?.confirm(&mut rows);
+            Some(src)
+        }
+        None => None,
+    };
     // The fronts' own point count joins the grid: "at the points I measured, which is fastest?"
     let fronts_points = first_number(&main, "points", "the fronts' number of points")?;
-    let best = analysis::best_rows(&rows, &o.targets, &[fronts_points]);
+    let best = analysis::best_rows(
+        &rows,
+        &o.targets,
+        &[fronts_points],
+        costs::measured_points(&inputs.runs),
+    );
     let mut meta = Meta::begin("crossover", Default::default());
     meta.run.seed = seed;
     fronts.record("fronts", &mut meta)?;
-    sweep.record("points", &mut meta)?;
+    record_sweep(&o.points, &sweeps, &mut meta)?;
+    if let Some(src) = confirm.as_mut() {
+        src.record("confirm", &mut meta)?;
+    }
     let frames = match &o.frames {
         Some(dir) => {
             let mut src = Source::open(dir)?;

@@ -559,11 +559,17 @@ fn reproduce_crossover(o: &Options, meta_path: &Path) -> Result<Report, Error> {
     let fronts = input("fronts")?.ok_or_else(|| missing("fronts"))?;
     let points = input("points")?.ok_or_else(|| missing("points"))?;
     let frames = input("frames")?;
+    let confirm = input("confirm")?;
     let targets = crossover_targets(&meta, &o.dir)?;
     let mut forbidden: Vec<(&Path, &str)> = vec![(&o.dir, "the result folder")];
-    for d in [Some(&fronts), Some(&points), frames.as_ref()]
-        .into_iter()
-        .flatten()
+    for d in [
+        Some(&fronts),
+        Some(&points),
+        frames.as_ref(),
+        confirm.as_ref(),
+    ]
+    .into_iter()
+    .flatten()
     {
         forbidden.push((d, "an input folder"));
     }
@@ -581,6 +587,7 @@ fn reproduce_crossover(o: &Options, meta_path: &Path) -> Result<Report, Error> {
         ("fronts".into(), fronts.display().to_string()),
         ("points".into(), points.display().to_string()),
         ("frames".into(), show(&frames)),
+        ("confirm".into(), show(&confirm)),
         (
             "targets".into(),
             targets
@@ -597,6 +604,7 @@ fn reproduce_crossover(o: &Options, meta_path: &Path) -> Result<Report, Error> {
         fronts,
         points,
         frames,
+        confirm,
         targets,
         out: out.clone(),
         force: o.force,

@@ -7,7 +7,9 @@
 //! Engine columns are families, one member per engine (`tests_{}` → `tests_sphere_cache`).
 
 use super::config::DetpConfig;
-use super::estimators::ESTIMATORS;
+use super::estimators::photon_map::{PhotonMap, PHOTON_MAP_REPLICA};
+use super::estimators::photon_map_growing::{PhotonMapGrowing, PHOTON_MAP_GROWING_REPLICA};
+use super::estimators::{Estimator as _, ESTIMATORS};
 use super::measure::{DetpMeasured, PointRow};
 use crate::output::column::{Class, Column};
 use crate::output::table::{cells, col, Cell, Cells, Entry, Table};
@@ -345,6 +347,16 @@ fn baseline_cells(p: &DetpConfig, r: &PointRow) -> Vec<(&'static str, Cells)> {
         .collect()
 }
 
+/// A photon map's value per replica at a point (members named by the replica), absent where it did
+/// not run or ran with one replica.
+fn map_replicas(r: &PointRow, map: &str) -> Cell {
+    r.map_replicas
+        .iter()
+        .find(|(c, _)| *c == map)
+        .map(|(_, v)| Cell::members(v.iter().enumerate().map(|(k, &e)| (k.to_string(), e))))
+        .into()
+}
+
 /// `NAME.points.csv`: one row per sample point.
 pub const POINTS_TABLE: Table<DetpConfig, PointRow> = Table::of(&[
     col(&SAMPLE, |_, r| r.sample.into()),
@@ -368,6 +380,10 @@ pub const POINTS_TABLE: Table<DetpConfig, PointRow> = Table::of(&[
     }),
     col(&POINT_IRRADIANCE_EXACT, |_, r| r.exact.into()),
     Entry::Parts(baseline_cells, || BASELINE.columns()),
+    col(&PHOTON_MAP_REPLICA, |_, r| map_replicas(r, PhotonMap::COLUMN)),
+    col(&PHOTON_MAP_GROWING_REPLICA, |_, r| {
+        map_replicas(r, PhotonMapGrowing::COLUMN)
+    }),
     col(&POINT_PATH_TRACING_E, |_, r| {
         r.path_tracing
             .as_ref()

@@ -200,14 +200,13 @@ pub(super) fn errors(est: &[f64], exact: &[f64]) -> (f64, f64) {
 
 /// What a run computes once per point set and shares across its sweep points (other photon
 /// counts, d, k, engines): the path-traced reference, keyed by (scene, points, samples, seed); the
-/// path-tracing competitor and the NEE direct part, keyed by those and the replica. Values are a
-/// pure function of the key, so sharing them changes no measured column.
+/// NEE direct part, keyed by those and the replica. Values are a pure function of the key, so
+/// sharing them changes no measured column. (The path-tracing competitor is not shared: each row
+/// times its own, see `estimators/path_tracing.rs`.)
 #[derive(Clone, Default)]
 pub struct ReferenceCache {
     /// The reference per disc and its seconds.
     pub(super) reference: Memo<(Vec<Irradiance>, f64)>,
-    /// The competitor of one replica.
-    pub(super) path_tracing: Memo<super::path_tracing::PathTraced>,
     /// The NEE direct part of one replica.
     pub(super) direct: Memo<DirectPart>,
 }

@@ -13,6 +13,8 @@ use super::config::DetpConfig;
 use super::engines::{
     self, DirectPart, EngineMeasured, Law, Output, Pooled, ReferenceCache, Sizes,
 };
+use super::estimators::photon_map::PhotonMap;
+use super::estimators::photon_map_growing::PhotonMapGrowing;
 use super::estimators::sphere_cache::LevelRow;
 use super::estimators::Role;
 use super::spec::EngineChoice;
@@ -100,6 +102,10 @@ pub struct PointRow {
     pub exact: f64,
     /// Each baseline's (column stem, estimate, SE).
     pub baselines: Vec<(&'static str, f64, f64)>,
+    /// The photon maps' value in each replica (column stem, values; with ≥ 2 replicas): one
+    /// replica is one map of N photons, so an analysis judges a map by its replicas' own errors,
+    /// not by their mean's (a fixed-k map's variance goes as 1/k whatever N).
+    pub map_replicas: Vec<(&'static str, Vec<f64>)>,
     /// Engine `path-tracing` at this point (None where it did not run).
     pub path_tracing: Option<PathAtPoint>,
     /// `detp.direct = "nee"`: the direct part and its SE, mean over replicas (else 0, 0: the
@@ -620,6 +626,7 @@ fn replica_point_rows(r: &Replicated) -> Vec<PointRow> {
             replicas: Vec::new(),
             exact: set.exact[i],
             baselines: Vec::new(),
+            map_replicas: Vec::new(),
             path_tracing: None,
             direct: (0.0, 0.0),
         }));
@@ -640,6 +647,7 @@ fn point_rows(
     }
     let discs = &r.pts.discs;
     let path = path_tracing_points(r, discs.len());
+    let maps = map_replica_points(cfg, r);
     let edge = cfg.scene().map_or_else(
         || vec![f64::NAN; discs.len()],
         |s| {
@@ -668,12 +676,30 @@ fn point_rows(
                 .iter()
                 .map(|(c, v)| (c.column(), v[i].0, v[i].1))
                 .collect(),
+            map_replicas: maps
+                .iter()
+                .map(|(c, v)| (*c, v.iter().map(|e| e[i]).collect()))
+                .collect(),
             path_tracing: path.as_ref().map(|p| p[i].clone()),
             direct: {
                 let (mean, var) = r.direct_at(i);
                 (mean, var.sqrt())
             },
         })
+        .collect()
+}
+
+/// The photon maps' estimates per replica and disc (column stem, `[replica][disc]`), with ≥ 2
+/// replicas (one replica's value is the mean's, already in `{map}_e`).
+fn map_replica_points(cfg: &DetpConfig, r: &Replicated) -> Vec<(&'static str, Vec<Vec<f64>>)> {
+    if r.irr.len() < 2 {
+        return Vec::new();
+    }
+    cfg.engines
+        .iter()
+        .zip(&r.engines)
+        .filter(|(c, _)| c.is::<PhotonMap>() || c.is::<PhotonMapGrowing>())
+        .map(|(c, e)| (c.column(), e.replica_points()))
         .collect()
 }
 

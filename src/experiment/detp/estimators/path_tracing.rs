@@ -6,9 +6,10 @@
 //! One run of K = `detp.path_samples` paths per point gives the running mean at every checkpoint
 //! 1, 2, 4, …, K: the whole error-against-seconds front of the competitor from one run. It runs on
 //! `detp.path_points` of the points (the first of a keyed permutation of the point set, so a
-//! larger subset holds a smaller one), since its cost and error are per point; and, like the
-//! reference, once per (point set, replica) in a run, through the run's cache: every sweep point
-//! with these points shares its samples (common random numbers) and its seconds.
+//! larger subset holds a smaller one), since its cost and error are per point. Unlike the
+//! reference it is not cached across sweep points: every sweep point with these points draws the
+//! same samples (common random numbers, the same streams) but times them itself, so each row's
+//! `path_tracing_s_per_path` is its own measurement.
 //!
 //! What it writes: the main table's group (seconds, rays, cv, the points it ran on), its errors
 //! against the reference as every baseline's (`path_tracing_ref_*`), one row per replica and
@@ -25,7 +26,7 @@ use crate::output::column::{Class, Column};
 use crate::experiment::detp::columns::*;
 use crate::experiment::detp::config::DetpConfig;
 use crate::experiment::detp::engines::{
-    per_replica, point_set_key, Engine, EngineMeasured, EnginePart, Output, Pooled,
+    per_replica, Engine, EngineMeasured, EnginePart, Output, Pooled,
     ReferenceCache,
 };
 use crate::experiment::detp::spec::RawDetp;
@@ -91,59 +92,45 @@ impl Estimator for PathTracing {
         }
         Ok(())
     }
-    fn engine(refs: &ReferenceCache) -> Box<dyn Engine> {
-        Box::new(Runs::new(refs.clone()))
+    fn engine(_: &ReferenceCache) -> Box<dyn Engine> {
+        Box::new(Runs::new())
     }
 }
 
 /// The competitor over a point's replicas.
 pub(crate) struct Runs {
-    cache: ReferenceCache,
     /// One run per replica, in replica order.
     runs: Vec<Arc<PathTraced>>,
 }
 
 impl Runs {
-    /// A competitor that reads and fills the run's `cache`.
-    fn new(cache: ReferenceCache) -> Self {
-        Self {
-            cache,
-            runs: Vec::new(),
-        }
+    /// A competitor with no replica run yet.
+    fn new() -> Self {
+        Self { runs: Vec::new() }
     }
 
-    /// The next replica's run (replicas come in order), through the cache.
+    /// The next replica's run (replicas come in order), computed afresh at every sweep point:
+    /// its values are a pure function of (scene, points, seed, K, replica) and repeat bit for bit
+    /// wherever the point set repeats, but its seconds are this row's own, so an n_P sweep has
+    /// one path-tracing timing per row and replica (a crossover resamples them), not one per
+    /// point set copied to every row that shares it.
     fn compute(&mut self, cfg: &DetpConfig, pts: &PointSet) {
         let replica = self.runs.len() as u64;
         let Some(scene) = cfg.scene() else {
             unreachable!("configure refuses path-tracing without a scene")
         };
-        let key = point_set_key(
-            cfg,
-            pts,
-            &[
-                domain::PATH_TRACE,
-                cfg.seed,
-                cfg.path_samples,
-                cfg.path_points.unwrap_or(0),
-                replica,
-            ],
+        let discs = &pts.discs;
+        let subset = subset(cfg.seed, discs.len(), cfg.path_points);
+        let at = |v: &[DVec3]| subset.iter().map(|&i| v[i]).collect::<Vec<_>>();
+        let run = path_trace(
+            &scene.scene,
+            &at(&discs.centers),
+            &at(&discs.normals),
+            &powers_of_two(cfg.path_samples),
+            cfg.seed,
+            replica,
         );
-        let r = self.cache.path_tracing.get_or(key, || {
-            let discs = &pts.discs;
-            let subset = subset(cfg.seed, discs.len(), cfg.path_points);
-            let at = |v: &[DVec3]| subset.iter().map(|&i| v[i]).collect::<Vec<_>>();
-            let run = path_trace(
-                &scene.scene,
-                &at(&discs.centers),
-                &at(&discs.normals),
-                &powers_of_two(cfg.path_samples),
-                cfg.seed,
-                replica,
-            );
-            PathTraced { subset, run }
-        });
-        self.runs.push(r);
+        self.runs.push(Arc::new(PathTraced { subset, run }));
     }
 
     /// The runs, one per replica.

@@ -190,3 +190,11 @@ pub const PHOTON_MAP_BIAS: Column = Column::estimate(
     "W/m²",
     "photon map: mean error against the exact irradiance, one sample per replica",
 );
+
+/// A fixed-k photon map's value at a point in each replica.
+pub const PHOTON_MAP_REPLICA: Column = Column::value(
+    "photon_map_replica_{}",
+    "W/m²",
+    crate::output::column::Class::Measured,
+    "photon-map: its irradiance at the point in replica {} (with ≥ 2 replicas): one replica is one map of N photons, so its error is judged per replica (a fixed-k map's variance goes as 1/k whatever N), the replicas the units of a bootstrap",
+);

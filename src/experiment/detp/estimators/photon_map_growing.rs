@@ -44,3 +44,11 @@ pub const PHOTON_MAP_GROWING_K: Column = Column::value(
     Class::Measured,
     "photon-map-growing: the k it used at this photon count, photon_map_k·(photons/photon_map_k_photons)^photon_map_k_growth rounded (at least 1)",
 );
+
+/// A growing-k photon map's value at a point in each replica.
+pub const PHOTON_MAP_GROWING_REPLICA: Column = Column::value(
+    "photon_map_growing_replica_{}",
+    "W/m²",
+    Class::Measured,
+    "photon-map-growing: its irradiance at the point in replica {} (with ≥ 2 replicas), judged per replica as the fixed-k map's",
+);
