@@ -44,8 +44,16 @@ fn nearest_other_surface_sees_the_box_not_the_floor() {
         &[y, y],
         0.05,
         0.25,
+        1.0,
     );
     assert!((r[0] - 0.03).abs() < 1e-12 && r[1] == 0.0125, "{r:?}");
+    // κ = 0.5: half the distance (0.015), the floor of 0.25·d unchanged under the box; κ = 2 reaches
+    // d where 2·0.03 > 0.05.
+    let at = [DVec3::new(0.28, 0.0, 0.0), DVec3::new(0.1, 0.0, 0.0)];
+    let r = clamped_radii(&s, &at, &[y, y], 0.05, 0.25, 0.5);
+    assert!((r[0] - 0.015).abs() < 1e-12 && r[1] == 0.0125, "{r:?}");
+    let r = clamped_radii(&s, &at, &[y, y], 0.05, 0.25, 2.0);
+    assert!(r[0] == 0.05 && r[1] == 0.0125, "{r:?}");
 }
 
 #[test]
@@ -75,10 +83,19 @@ fn engines_agree_under_every_mode_and_first_hit_stops_the_leak() {
     }
     let n = vec![DVec3::Y; c.len()];
     let plain = Discs::new(c.clone(), n.clone(), d).unwrap();
-    let clamped = plain
-        .clone()
-        .with_radii(clamped_radii(&s, &c, &n, d, 0.25))
-        .unwrap();
+    let clamp = |d: f64, factor: f64| {
+        Discs::new(c.clone(), n.clone(), d)
+            .unwrap()
+            .with_radii(clamped_radii(&s, &c, &n, d, 0.25, factor))
+            .unwrap()
+    };
+    let clamped = clamp(d, 1.0);
+    // `detp.edge_radius_factor` κ below and above 1, and a scheduled d(N) below d with κ = 0.5:
+    // per-disc radii every engine must honour exactly.
+    let (narrow, wide) = (clamp(d, 0.5), clamp(d, 2.0));
+    let d_sched = raycost::theory::detp::scheduled_radius(d, 800_000.0, 200_000.0, 1.0 / 6.0);
+    let scheduled = clamp(d_sched, 0.5);
+    assert!(narrow.radii != clamped.radii && wide.radii != clamped.radii);
     let traced = trace_photons(&s, 200_000, 7);
     let mut cut = traced.clone();
     clip_to_first_hit(&mut cut, 0.05 * d);
@@ -88,6 +105,9 @@ fn engines_agree_under_every_mode_and_first_hit_stops_the_leak() {
         ("clamp-radius", &clamped, &traced),
         ("first-hit", &plain, &cut),
         ("clamp-first-hit", &clamped, &cut),
+        ("clamp-radius κ = 0.5", &narrow, &traced),
+        ("clamp-radius κ = 2", &wide, &traced),
+        ("clamp-first-hit κ = 0.5, d(N)", &scheduled, &cut),
     ] {
         let mut want = vec![0; discs.len()];
         brute::accumulate(st, discs, None, 1, &mut want);
@@ -104,9 +124,9 @@ fn engines_agree_under_every_mode_and_first_hit_stops_the_leak() {
         );
         assert_eq!(acc, want, "{label}: sphere cache");
         for ix in [
-            Box::new(Octree::build(discs, 8, d)) as Box<dyn DiscIndex>,
-            Box::new(GridIndex::build(discs, 2.0 * d)),
-            Box::new(GridIndex::build(discs, 0.3 * d)),
+            Box::new(Octree::build(discs, 8, discs.radius)) as Box<dyn DiscIndex>,
+            Box::new(GridIndex::build(discs, 2.0 * discs.radius)),
+            Box::new(GridIndex::build(discs, 0.3 * discs.radius)),
         ] {
             let mut acc = vec![0; discs.len()];
             ix.accumulate(st, None, 1, &mut acc);
@@ -117,15 +137,14 @@ fn engines_agree_under_every_mode_and_first_hit_stops_the_leak() {
             .filter(|&i| discs.centers[i].x == -0.2)
             .map(|i| want[i])
             .sum();
-        match label {
-            "paper" | "clamp-radius" => {
-                assert!(
-                    under > 0,
-                    "{label}: the second-intersection rule lets light through"
-                );
-                under_paper += under;
-            }
-            _ => assert_eq!(under, 0, "{label}: light under the box"),
+        if label.contains("first-hit") {
+            assert_eq!(under, 0, "{label}: light under the box");
+        } else {
+            assert!(
+                under > 0,
+                "{label}: the second-intersection rule lets light through"
+            );
+            under_paper += under;
         }
     }
     assert!(under_paper > 0);

@@ -9,6 +9,7 @@ mod crossover;
 mod detp_competitors;
 mod detp_edge;
 mod detp_engines;
+mod detp_radius;
 mod detp_runs;
 mod detp_surface_subsample;
 mod inputs;

@@ -14,13 +14,15 @@
 //! and both disc indexes still decide every (segment, disc) pair with the one exact
 //! [`crate::detp::disc::crosses`], and their integer sums stay equal bit for bit):
 //! - [`EdgeMode::Paper`]: the paper's method, unchanged (the default);
-//! - [`EdgeMode::ClampRadius`]: each disc's radius is the distance from its point to the nearest
-//!   *other* surface (any triangle or sphere that is not coplanar with the disc and facing the same
-//!   way: the floor's own triangles do not count, a box's bottom face does), clamped to
-//!   [r_min·d, d], and its power is divided by π r_i². A disc then reaches into no solid (unless
-//!   s < r_min·d): nothing is counted that did not arrive in free space. Culling bounds every disc by
-//!   d, which holds the smaller disc, so it stays conservative. Its price is noise: a disc of radius
-//!   r gathers (r/d)² of the photons, so the standard error grows as d/r;
+//! - [`EdgeMode::ClampRadius`]: each disc's radius is κ times the distance s from its point to the
+//!   nearest *other* surface (any triangle or sphere that is not coplanar with the disc and facing
+//!   the same way: the floor's own triangles do not count, a box's bottom face does), clamped to
+//!   [r_min·d, d], and its power is divided by π r_i². With κ ≤ 1 a disc reaches into no solid
+//!   (unless κ·s < r_min·d): nothing is counted that did not arrive in free space; κ < 1 keeps a
+//!   margin from the edge (the irradiance bends before the edge, not only past it), κ > 1 trades
+//!   some reach into the solid for less noise. Culling bounds every disc by d, which holds the
+//!   smaller disc, so it stays conservative. Its price is noise: a disc of radius r gathers (r/d)²
+//!   of the photons, so the standard error grows as d/r;
 //! - [`EdgeMode::FirstHit`]: a crossing counts only up to `gap·d` beyond the segment's first impact
 //!   (t_end := min(t_end, t_hit + gap·d) for every segment, before any engine runs). A photon that
 //!   enters a solid dies at its surface; the gap keeps the paper's concave-surface allowance for
@@ -43,11 +45,13 @@ use crate::lt::Scene;
 pub enum EdgeMode {
     /// The paper's method.
     Paper,
-    /// Per-disc radius = distance to the nearest other surface, clamped to [min·d, d] (`min`: the
-    /// fraction `detp.edge_min_radius`).
+    /// Per-disc radius = κ × the distance to the nearest other surface, clamped to [min·d, d]
+    /// (`min`: the fraction `detp.edge_min_radius`; κ: `detp.edge_radius_factor`).
     ClampRadius {
         /// r_min / d.
         min: f64,
+        /// κ.
+        factor: f64,
     },
     /// Crossings counted up to `gap·d` beyond the first impact (`gap`: `detp.edge_gap`).
     FirstHit {
@@ -58,6 +62,8 @@ pub enum EdgeMode {
     ClampFirstHit {
         /// r_min / d.
         min: f64,
+        /// κ.
+        factor: f64,
         /// The allowance beyond the first impact, over d.
         gap: f64,
     },
@@ -67,7 +73,17 @@ impl EdgeMode {
     /// r_min / d when discs get their own radius.
     pub fn clamp_min(self) -> Option<f64> {
         match self {
-            EdgeMode::ClampRadius { min } | EdgeMode::ClampFirstHit { min, .. } => Some(min),
+            EdgeMode::ClampRadius { min, .. } | EdgeMode::ClampFirstHit { min, .. } => Some(min),
+            _ => None,
+        }
+    }
+
+    /// κ, the factor on the edge distance, when discs get their own radius.
+    pub fn clamp_factor(self) -> Option<f64> {
+        match self {
+            EdgeMode::ClampRadius { factor, .. } | EdgeMode::ClampFirstHit { factor, .. } => {
+                Some(factor)
+            }
             _ => None,
         }
     }
@@ -81,13 +97,27 @@ impl EdgeMode {
     }
 }
 
-/// The radius of each disc under [`EdgeMode::ClampRadius`]: the distance from centre `c[i]` to the
-/// nearest surface of `scene` that is not the disc's own plane (see the module doc), clamped to
-/// [min·d, d]. Parallel over discs; each radius depends only on its own disc.
-pub fn clamped_radii(scene: &Scene, c: &[DVec3], n: &[DVec3], d: f64, min: f64) -> Vec<f64> {
+/// The radius of each disc under [`EdgeMode::ClampRadius`]: `factor` (κ > 0) times the distance s
+/// from centre `c[i]` to the nearest surface of `scene` that is not the disc's own plane (see the
+/// module doc), clamped to [min·d, d]. The search reaches d/κ, the farthest s that can still bind
+/// (κ·s ≥ d beyond it), so κ·min(s, d/κ) clamped is κ·s clamped. With κ = 1 this is the distance
+/// itself, bit for bit (d/1 = d, 1·s = s). Parallel over discs; each radius depends only on its own
+/// disc.
+pub fn clamped_radii(
+    scene: &Scene,
+    c: &[DVec3],
+    n: &[DVec3],
+    d: f64,
+    min: f64,
+    factor: f64,
+) -> Vec<f64> {
+    assert!(
+        factor > 0.0 && factor.is_finite(),
+        "κ = {factor} must be > 0"
+    );
     let lo = (min * d).min(d);
-    let mut r = edge_distances(scene, c, n, d);
-    r.iter_mut().for_each(|s| *s = s.clamp(lo, d));
+    let mut r = edge_distances(scene, c, n, d / factor);
+    r.iter_mut().for_each(|s| *s = (factor * *s).clamp(lo, d));
     r
 }
 
@@ -260,9 +290,27 @@ mod tests {
                 .fold(reach, f64::min);
             assert_eq!(*g, want, "{p}");
         }
-        let radii = clamped_radii(&s, &c, &n, reach, 0.25);
+        let radii = clamped_radii(&s, &c, &n, reach, 0.25, 1.0);
         for (r, g) in radii.iter().zip(&got) {
             assert_eq!(*r, g.clamp(0.25, reach));
+        }
+        // κ ≠ 1: κ·s clamped, s from the exhaustive search with no cap (a cap at d would be wrong
+        // for κ < 1, where s up to d/κ still binds).
+        for factor in [0.5, 0.8, 2.0] {
+            let radii = clamped_radii(&s, &c, &n, reach, 0.25, factor);
+            for ((p, nn), r) in c.iter().zip(&n).zip(&radii) {
+                let s_all = s
+                    .triangles
+                    .iter()
+                    .filter(|t| !own_plane(t, *p, *nn, tol))
+                    .map(|t| distance_to_triangle(*p, t))
+                    .fold(f64::INFINITY, f64::min);
+                let want = (factor * s_all).clamp(0.25, reach);
+                assert!(
+                    (r - want).abs() <= 1e-12,
+                    "κ = {factor}, {p}: {r} vs {want}"
+                );
+            }
         }
     }
 

@@ -555,12 +555,19 @@ fn edge(
     store: &SegmentStore,
     mode: EdgeMode,
 ) -> (Discs, Option<SegmentStore>) {
-    let discs = match mode.clamp_min() {
-        None => discs.clone(),
-        Some(min) => {
-            let r = clamped_radii(scene, &discs.centers, &discs.normals, discs.radius, min);
+    let discs = match (mode.clamp_min(), mode.clamp_factor()) {
+        (Some(min), Some(factor)) => {
+            let r = clamped_radii(
+                scene,
+                &discs.centers,
+                &discs.normals,
+                discs.radius,
+                min,
+                factor,
+            );
             discs.clone().with_radii(r).expect("radii in (0, d]")
         }
+        _ => discs.clone(),
     };
     let cut = mode.first_hit_gap().map(|g| {
         let mut s = store.clone();
@@ -573,12 +580,12 @@ fn edge(
 /// `--compare-edge MODE`: a remedy of `detp.edge`, with the default parameters (the spec's replace
 /// them in [`run`] when it gives them).
 pub fn edge_mode(name: &str) -> Result<EdgeMode, Error> {
-    use crate::experiment::detp::{EDGE_GAP, EDGE_MIN_RADIUS};
-    let (min, gap) = (EDGE_MIN_RADIUS, EDGE_GAP);
+    use crate::experiment::detp::{EDGE_GAP, EDGE_MIN_RADIUS, EDGE_RADIUS_FACTOR};
+    let (min, gap, factor) = (EDGE_MIN_RADIUS, EDGE_GAP, EDGE_RADIUS_FACTOR);
     match name {
-        "clamp-radius" => Ok(EdgeMode::ClampRadius { min }),
+        "clamp-radius" => Ok(EdgeMode::ClampRadius { min, factor }),
         "first-hit" => Ok(EdgeMode::FirstHit { gap }),
-        "clamp-first-hit" => Ok(EdgeMode::ClampFirstHit { min, gap }),
+        "clamp-first-hit" => Ok(EdgeMode::ClampFirstHit { min, factor, gap }),
         other => Err(Error::Usage(format!(
             "--compare-edge: got \"{other}\", expected a remedy of detp.edge: clamp-radius, first-hit or clamp-first-hit"
         ))),
@@ -588,16 +595,23 @@ pub fn edge_mode(name: &str) -> Result<EdgeMode, Error> {
 /// `mode` with the parameters the spec's own mode gives.
 fn with_spec_params(mode: EdgeMode, spec: EdgeMode) -> EdgeMode {
     let min = spec.clamp_min();
+    let factor = spec.clamp_factor();
     let gap = spec.first_hit_gap();
     match mode {
-        EdgeMode::ClampRadius { min: m } => EdgeMode::ClampRadius {
+        EdgeMode::ClampRadius { min: m, factor: k } => EdgeMode::ClampRadius {
             min: min.unwrap_or(m),
+            factor: factor.unwrap_or(k),
         },
         EdgeMode::FirstHit { gap: g } => EdgeMode::FirstHit {
             gap: gap.unwrap_or(g),
         },
-        EdgeMode::ClampFirstHit { min: m, gap: g } => EdgeMode::ClampFirstHit {
+        EdgeMode::ClampFirstHit {
+            min: m,
+            factor: k,
+            gap: g,
+        } => EdgeMode::ClampFirstHit {
             min: min.unwrap_or(m),
+            factor: factor.unwrap_or(k),
             gap: gap.unwrap_or(g),
         },
         EdgeMode::Paper => EdgeMode::Paper,

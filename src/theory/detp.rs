@@ -95,6 +95,16 @@ pub fn ball_spacing(r0: f64, n_p: f64) -> f64 {
     (4.0 * PI / 3.0 * r0.powi(3) / n_p).cbrt()
 }
 
+/// The radius schedule d(N) = d_ref·(N/N_ref)^(−β): the disc radius at N photons.
+///
+/// For a disc estimate of a smooth irradiance field E, the disc average is E + (d²/8)·ΔE + O(d⁴)
+/// (bias ∝ d²) and the count of crossings is Poisson with mean ∝ N·d² (relative variance
+/// ∝ 1/(N·d²)); MSE = a·d⁴ + b/(N·d²) is least at d⁶ = b/(2a·N), so β = 1/6 and the RMSE at that d
+/// falls as N^(−1/3). At N = N_ref the result is d_ref exactly.
+pub fn scheduled_radius(d_ref: f64, n: f64, n_ref: f64, beta: f64) -> f64 {
+    d_ref * (n / n_ref).powf(-beta)
+}
+
 /// Deepest level a sphere cache can reach: the last i with n_R·Q^(2(i−1)) ≥ threshold (its parent is
 /// subdivided) and r_0·Q^i ≥ d (it still holds the disc).
 pub fn deepest_level(n_r: f64, q: f64, threshold: f64, r0: f64, d: f64) -> u32 {
@@ -213,6 +223,31 @@ fn ln_factorial(x: u64) -> f64 {
 
 #[cfg(test)]
 mod tests {
+
+    /// d(N) at the reference count is d_ref exactly; each doubling of N divides d by 2^β; β = 0
+    /// keeps d; the MSE a·d⁴ + b/(N·d²) at the scheduled d with β = 1/6 falls as N^(−2/3).
+    #[test]
+    fn scheduled_radius_follows_the_power_law_and_minimises_the_mse() {
+        use super::scheduled_radius;
+        assert_eq!(scheduled_radius(0.05, 1e5, 1e5, 1.0 / 6.0), 0.05);
+        assert_eq!(scheduled_radius(0.05, 4e5, 1e5, 0.0), 0.05);
+        let (d1, d2) = (
+            scheduled_radius(0.05, 2e5, 1e5, 0.25),
+            scheduled_radius(0.05, 4e5, 1e5, 0.25),
+        );
+        assert!((d1 / d2 - 2f64.powf(0.25)).abs() < 1e-14, "{d1} {d2}");
+        assert!((scheduled_radius(0.05, 1e5 * 64.0, 1e5, 1.0 / 6.0) - 0.025).abs() < 1e-15);
+        // The MSE-optimal d of a·d⁴ + b/(N·d²) is (b/(2aN))^(1/6): a schedule through it at N_ref
+        // stays on it at every N, and a numerical minimum agrees.
+        let (a, b) = (3.0, 0.7);
+        let opt = |n: f64| (b / (2.0 * a * n)).powf(1.0 / 6.0);
+        let mse = |d: f64, n: f64| a * d.powi(4) + b / (n * d * d);
+        for n in [1e3, 1e5, 1e7] {
+            let d = scheduled_radius(opt(1e3), n, 1e3, 1.0 / 6.0);
+            assert!((d / opt(n) - 1.0).abs() < 1e-12, "{n}: {d} vs {}", opt(n));
+            assert!(mse(d, n) <= mse(d * 1.01, n) && mse(d, n) <= mse(d * 0.99, n));
+        }
+    }
 
     /// docs/theory.md §2's number, and a brute-force sum of the conditional mean.
     #[test]

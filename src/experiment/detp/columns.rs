@@ -67,6 +67,20 @@ pub const EDGE_RADIUS: Column = Column::value(
     Class::Measured,
     "mean disc radius over d across the points (1 unless detp.edge = \"clamp-radius\" shrinks discs near other surfaces)",
 );
+/// The disc radius the engines used, as the spec writes lengths.
+pub const DISC_RADIUS_USED: Column = Column::value(
+    "disc_radius_used",
+    "length",
+    Class::Measured,
+    "d the engines used, in detp.length_unit: detp.disc_radius, or with detp.radius_schedule_photons the schedule's d(N) = d_ref·(N/N_ref)^(−β) at this point's photons (an edge remedy clamps each disc below it)",
+);
+/// The same over r_s.
+pub const DISC_RADIUS_USED_ROOT: Column = Column::value(
+    "disc_radius_used_root",
+    "r_s",
+    Class::Measured,
+    "disc_radius_used over r_s, the radius of the sphere around the scene's bounds (1 for lines): the same d in root units whatever detp.length_unit",
+);
 /// An engine's counted tests.
 pub const TESTS: Column = Column::value(
     "tests_{}",
@@ -233,6 +247,8 @@ pub const MAIN: Table<DetpConfig, DetpMeasured> = Table::of(&[
     col(&TRACE_S, |_, m| m.trace_s.into()),
     col(&EDGE_S, |_, m| m.edge_s.into()),
     col(&EDGE_RADIUS, |_, m| m.edge_radius.into()),
+    col(&DISC_RADIUS_USED, |p, _| (p.disc_radius / p.length_scale).into()),
+    col(&DISC_RADIUS_USED_ROOT, |p, _| (p.disc_radius / p.root_radius).into()),
     col(&DIRECT_S, |_, m| m.direct_s.into()),
     col(&DIRECT_RAYS_SHADOW, |_, m| m.direct_rays_shadow.into()),
     Entry::Parts(engine_cells, engine_columns),
@@ -309,7 +325,7 @@ pub const POINT_DISC_RADIUS: Column = Column::value(
     "disc_radius",
     "length",
     Class::Measured,
-    "the point's disc radius: d, or with detp.edge = \"clamp-radius\" its own radius (distance to the nearest other surface, clamped to [edge_min_radius·d, d]); its sum is divided by π·disc_radius²",
+    "the point's disc radius: d (with a radius schedule d(N)), or with detp.edge = \"clamp-radius\" its own radius (edge_radius_factor κ times the distance to the nearest other surface, clamped to [edge_min_radius·d, d]); its sum is divided by π·disc_radius²",
 );
 /// The point's distance to an edge.
 pub const POINT_EDGE_DISTANCE: Column = Column::value(

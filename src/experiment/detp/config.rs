@@ -13,6 +13,7 @@ use glam::DVec3;
 use super::spec::{
     DirectChoice, DiscRadius, LengthUnit, EdgeChoice, EngineChoice, FilterChoice, IndexChoice, ListModeChoice, OrderChoice,
     PointSourceKind, PopRuleChoice, RawDetp, RaySource, EDGE_GAP, EDGE_MIN_RADIUS,
+    EDGE_RADIUS_FACTOR, RADIUS_SCHEDULE_EXPONENT,
 };
 use super::estimators::{self, Role};
 use crate::detp::disc_index::IndexKind;
@@ -23,6 +24,7 @@ use crate::detp::sphere_cache::{ListMode, PopRule, SphereCacheParams};
 use crate::experiment::inputs::{Inputs, PointsFile, SceneFile};
 use crate::experiment::kind::{refuse, ConfigError};
 use crate::geom::Aabb;
+use crate::theory::detp::scheduled_radius;
 
 /// The rays of a point.
 #[derive(Clone, Debug)]
@@ -69,8 +71,15 @@ pub struct DetpConfig {
     pub photons: u64,
     /// Point source.
     pub points: Points,
-    /// d.
+    /// d: `detp.disc_radius` in scene units, or with a radius schedule d(N) at this point's
+    /// photons (every engine's d; surface points keep the spacing of the unscheduled d).
     pub disc_radius: f64,
+    /// `detp.radius_schedule_photons` and `_exponent` (None: d is fixed).
+    pub radius_schedule: Option<RadiusSchedule>,
+    /// Scene units per unit of `detp.length_unit` (r_s for `"root"`, else 1).
+    pub length_scale: f64,
+    /// r_s: the radius of the sphere around the scene's bounds (1 for lines).
+    pub root_radius: f64,
     /// Point order of the sphere cache.
     pub order: Order,
     /// Key bits per axis of the order.
@@ -111,6 +120,17 @@ pub struct DetpConfig {
     pub spacing_given: bool,
     /// `detp.edge` with its parameter.
     pub edge: EdgeMode,
+}
+
+/// The radius schedule d(N) = d_ref·(N/N_ref)^(−β) ([`crate::theory::detp::scheduled_radius`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RadiusSchedule {
+    /// N_ref: photons at which d = d_ref.
+    pub photons: u64,
+    /// β.
+    pub exponent: f64,
+    /// d_ref, in scene units.
+    pub d_ref: f64,
 }
 
 /// `detp.direct`, with its sample count.
@@ -271,14 +291,31 @@ impl DetpConfig {
         let points = Points::from_raw(d, &rays, inputs)?;
         check_engines(d, &rays)?;
         check_sizes(d, &points)?;
-        let disc_radius = disc_radius(d, &points, &rays)?;
+        let d_ref = disc_radius(d, &points, &rays)?;
+        let radius_schedule = radius_schedule(d, d_ref)?;
+        let disc_radius = match radius_schedule {
+            None => d_ref,
+            Some(s) => {
+                let x = scheduled_radius(d_ref, d.photons as f64, s.photons as f64, s.exponent);
+                check_radius(&rays, x, "detp.radius_schedule_photons")?;
+                x
+            }
+        };
         let edge = edge_mode(d, &rays)?;
+        let root_radius = root_radius(&rays);
+        let length_scale = match d.length_unit {
+            LengthUnit::Root => root_radius,
+            LengthUnit::Scene => 1.0,
+        };
         let cfg = Self {
             seed,
             rays,
             photons: d.photons,
             points,
             disc_radius,
+            radius_schedule,
+            length_scale,
+            root_radius,
             order: match d.order {
                 OrderChoice::None => Order::None,
                 OrderChoice::Morton => Order::Morton,
@@ -449,9 +486,7 @@ impl Points {
 fn in_scene_units(d: &RawDetp, rays: &Rays) -> RawDetp {
     let r = match (d.length_unit, rays) {
         (LengthUnit::Scene, _) | (LengthUnit::Root, Rays::Lines) => return d.clone(),
-        (LengthUnit::Root, Rays::Scene(s)) => {
-            crate::detp::sphere_cache::root_sphere(&s.scene.bounds()).1
-        }
+        (LengthUnit::Root, Rays::Scene(_)) => root_radius(rays),
     };
     RawDetp {
         point_spacing: d.point_spacing.map(|x| x * r),
@@ -462,6 +497,41 @@ fn in_scene_units(d: &RawDetp, rays: &Rays) -> RawDetp {
         index_cell_width: d.index_cell_width.map(|x| x * r),
         ..d.clone()
     }
+}
+
+/// r_s: the radius of the sphere around the scene's bounds (1 for lines through the unit ball).
+fn root_radius(rays: &Rays) -> f64 {
+    match rays {
+        Rays::Lines => 1.0,
+        Rays::Scene(s) => crate::detp::sphere_cache::root_sphere(&s.scene.bounds()).1,
+    }
+}
+
+/// `detp.radius_schedule_photons` and `detp.radius_schedule_exponent`, checked: the exponent
+/// belongs to a schedule and is a finite number ≥ 0 (a negative one would grow the disc with the
+/// photons, and its bias with it).
+fn radius_schedule(d: &RawDetp, d_ref: f64) -> Result<Option<RadiusSchedule>, ConfigError> {
+    let Some(photons) = d.radius_schedule_photons else {
+        if d.radius_schedule_exponent.is_some() {
+            return refuse(
+                "detp.radius_schedule_exponent",
+                "belongs to a radius schedule: give detp.radius_schedule_photons (N_ref) too",
+            );
+        }
+        return Ok(None);
+    };
+    let exponent = d.radius_schedule_exponent.unwrap_or(RADIUS_SCHEDULE_EXPONENT);
+    if !(exponent.is_finite() && exponent >= 0.0) {
+        return refuse(
+            "detp.radius_schedule_exponent",
+            format!("got {exponent}, expected a finite exponent ≥ 0 (1/6 minimises the mean square error; 0 keeps d)"),
+        );
+    }
+    Ok(Some(RadiusSchedule {
+        photons,
+        exponent,
+        d_ref,
+    }))
 }
 
 /// How much finer than √(area/n) the lattice of a subsample is by default: a lattice of spacing
@@ -568,6 +638,14 @@ fn disc_radius(d: &RawDetp, points: &Points, rays: &Rays) -> Result<f64, ConfigE
             )
         }
     };
+    let key = if matches!(d.disc_radius, DiscRadius::Spacing) { "detp.point_spacing" } else { "detp.disc_radius" };
+    check_radius(rays, disc_radius, key)?;
+    Ok(disc_radius)
+}
+
+/// A disc radius (given, or scheduled) small against the scene and representable at its
+/// coordinates; refused at `key` otherwise.
+fn check_radius(rays: &Rays, disc_radius: f64, key: &str) -> Result<(), ConfigError> {
     // A disc must be small against the space the rays cover: d ≤ 1 for lines through the unit
     // ball (each line is a segment reaching 1 beyond the ball), d ≤ the scene's diagonal for
     // photons. Larger discs lose precision in the crossing test (d² at 1e200 overflows).
@@ -584,7 +662,7 @@ fn disc_radius(d: &RawDetp, points: &Points, rays: &Rays) -> Result<f64, ConfigE
     };
     if !(disc_radius * disc_radius).is_finite() || disc_radius > reach.0 {
         return refuse(
-            if matches!(d.disc_radius, DiscRadius::Spacing) { "detp.point_spacing" } else { "detp.disc_radius" },
+            key,
             format!("d = {disc_radius:e} is larger than {}: a tangent disc must be small against the scene", reach.1),
         );
     }
@@ -595,7 +673,7 @@ fn disc_radius(d: &RawDetp, points: &Points, rays: &Rays) -> Result<f64, ConfigE
             .check(disc_radius)
             .or_else(|m| refuse("detp.scene", m))?;
     }
-    Ok(disc_radius)
+    Ok(())
 }
 
 /// The sphere cache's parameters (its `law_ball` is set per replica).
@@ -653,6 +731,19 @@ fn edge_mode(d: &RawDetp, rays: &Rays) -> Result<EdgeMode, ConfigError> {
             "belongs to detp.edge = \"first-hit\" or \"clamp-first-hit\"",
         );
     }
+    if d.edge_radius_factor.is_some() && !clamps {
+        return refuse(
+            "detp.edge_radius_factor",
+            "belongs to detp.edge = \"clamp-radius\" or \"clamp-first-hit\"",
+        );
+    }
+    let factor = d.edge_radius_factor.unwrap_or(EDGE_RADIUS_FACTOR);
+    if !(factor > 0.0 && factor.is_finite()) {
+        return refuse(
+            "detp.edge_radius_factor",
+            format!("got {factor}, expected a finite factor κ > 0 on the distance to the nearest other surface"),
+        );
+    }
     let min = d.edge_min_radius.unwrap_or(EDGE_MIN_RADIUS);
     if !(min > 0.0 && min <= 1.0) {
         return refuse(
@@ -669,8 +760,8 @@ fn edge_mode(d: &RawDetp, rays: &Rays) -> Result<EdgeMode, ConfigError> {
     }
     Ok(match d.edge {
         EdgeChoice::Paper => EdgeMode::Paper,
-        EdgeChoice::ClampRadius => EdgeMode::ClampRadius { min },
+        EdgeChoice::ClampRadius => EdgeMode::ClampRadius { min, factor },
         EdgeChoice::FirstHit => EdgeMode::FirstHit { gap },
-        EdgeChoice::ClampFirstHit => EdgeMode::ClampFirstHit { min, gap },
+        EdgeChoice::ClampFirstHit => EdgeMode::ClampFirstHit { min, factor, gap },
     })
 }

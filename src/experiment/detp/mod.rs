@@ -55,7 +55,10 @@ pub mod spec;
 // the edge remedies.
 pub use self::config::{lattice_spacing, DetpConfig, Points, Rays, SurfacePoints};
 pub use self::estimators::path_tracing;
-pub use self::spec::{DynamicEngine, EngineChoice, RawDetp, EDGE_GAP, EDGE_MIN_RADIUS};
+pub use self::spec::{
+    DynamicEngine, EngineChoice, RawDetp, EDGE_GAP, EDGE_MIN_RADIUS, EDGE_RADIUS_FACTOR,
+    RADIUS_SCHEDULE_EXPONENT,
+};
 
 use self::columns as col;
 use self::engines::ReferenceCache;

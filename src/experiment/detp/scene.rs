@@ -43,8 +43,9 @@ pub(super) fn points(cfg: &DetpConfig, scene: &Scene) -> Result<PointSet, Error>
     }
     let mut discs = Discs::new(centers, normals, cfg.disc_radius).map_err(Error::internal)?;
     let start = Instant::now();
-    if let Some(min) = cfg.edge.clamp_min() {
-        let radii = clamped_radii(scene, &discs.centers, &discs.normals, discs.radius, min);
+    if let (Some(min), Some(factor)) = (cfg.edge.clamp_min(), cfg.edge.clamp_factor()) {
+        let (c, n) = (&discs.centers, &discs.normals);
+        let radii = clamped_radii(scene, c, n, discs.radius, min, factor);
         discs = discs.with_radii(radii).map_err(Error::internal)?;
     }
     let edge_s = start.elapsed().as_secs_f64();

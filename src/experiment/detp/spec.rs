@@ -164,6 +164,23 @@ crate::spec_table! {
         /// How far past a segment's first impact a cutting remedy still counts crossings, as a
         /// fraction of d.
         edge_gap: Option<f64> = {absent "0.05 with a cutting remedy"}, "number", "× d", "> 0";
+        /// κ of a clamping remedy: each disc's radius is κ·s (s: its distance to the nearest
+        /// other surface), clamped to [`edge_min_radius`·d, d]. Below 1 a disc keeps a margin
+        /// from the edge; above 1 it reaches past it for less noise.
+        edge_radius_factor: Option<f64> = {absent "1 with a clamping remedy"}, "number", "",
+            "> 0";
+        /// N_ref of the radius schedule d(N) = d_ref·(N/N_ref)^(−β), d_ref = `disc_radius`, N =
+        /// `photons`: the disc radius shrinks as photons are added, so the disc's bias (∝ d²) and
+        /// its variance (∝ 1/(N·d²)) both vanish (`docs/theory.md`, "A disc radius per point and
+        /// per photon count"). Surface points keep the spacing of d_ref. An edge remedy then
+        /// clamps per point under d(N).
+        radius_schedule_photons: Option<u64> = {absent "none: d is fixed"} read opt_count,
+            "integer", "photons", "≥ 1";
+        /// β of the radius schedule (with `radius_schedule_photons`): 1/6 minimises the mean
+        /// square error of a disc estimate of a smooth field (its RMSE then falls as N^(−1/3)); 0
+        /// keeps d.
+        radius_schedule_exponent: Option<f64> = {absent "1/6 with a schedule"}, "number", "",
+            "≥ 0";
     }
 }
 
@@ -171,6 +188,10 @@ crate::spec_table! {
 pub const EDGE_MIN_RADIUS: f64 = 0.25;
 /// Default `detp.edge_gap`.
 pub const EDGE_GAP: f64 = 0.05;
+/// Default `detp.edge_radius_factor` (κ): the disc reaches exactly to the nearest other surface.
+pub const EDGE_RADIUS_FACTOR: f64 = 1.0;
+/// Default `detp.radius_schedule_exponent` (β): the mean-square-optimal 1/6.
+pub const RADIUS_SCHEDULE_EXPONENT: f64 = 1.0 / 6.0;
 
 use crate::choice;
 
