@@ -394,6 +394,8 @@ fn timings_comparable(old: &Side, new: &Side) -> Result<(), String> {
     Ok(())
 }
 
+/// One table against its rerun: the structure first, then every counted column cell by cell and
+/// every timing column against the two runs' intervals.
 fn compare_table(
     c: &mut TableComparison,
     a: &Cells,
@@ -401,60 +403,9 @@ fn compare_table(
     classes: &[ColumnInfo],
     new_classes: &[ColumnInfo],
 ) {
-    c.columns = a.header.len();
-    c.rows = a.rows.len();
-    if a.header != b.header {
-        let only = |x: &Cells, y: &Cells| -> Vec<String> {
-            x.header
-                .iter()
-                .filter(|h| !y.header.contains(h))
-                .cloned()
-                .collect()
-        };
-        let (gone, added) = (only(a, b), only(b, a));
-        c.problems.push(if gone.is_empty() && added.is_empty() {
-            "headers differ: the same names in another order (cells compared by name)".into()
-        } else {
-            format!(
-                "headers differ: only in the result [{}], only in the rerun [{}] (the other columns compared by name)",
-                gone.join(", "),
-                added.join(", ")
-            )
-        });
-    }
+    structure_problems(c, a, b, classes, new_classes);
     let class_of =
         |cols: &[ColumnInfo], name: &str| cols.iter().find(|c| c.name == name).map(|c| c.class);
-    let undeclared: Vec<&str> = a
-        .header
-        .iter()
-        .filter(|h| class_of(classes, h).is_none())
-        .map(String::as_str)
-        .collect();
-    if !undeclared.is_empty() {
-        c.problems.push(format!(
-            "columns without a class in the metadata (compared as measured): [{}]",
-            undeclared.join(", ")
-        ));
-    }
-    let reclassed: Vec<String> = a
-        .header
-        .iter()
-        .filter_map(|h| match (class_of(classes, h), class_of(new_classes, h)) {
-            (Some(x), Some(y)) if x != y => Some(format!("{h} {} → {}", x.as_str(), y.as_str())),
-            _ => None,
-        })
-        .collect();
-    if !reclassed.is_empty() {
-        c.problems
-            .push(format!("classes differ: {}", reclassed.join(", ")));
-    }
-    if a.rows.len() != b.rows.len() {
-        c.problems.push(format!(
-            "{} rows in the result, {} in the rerun",
-            a.rows.len(),
-            b.rows.len()
-        ));
-    }
     let timing = |h: &str| class_of(classes, h) == Some(Class::Timing);
     let at = |x: &Cells, name: &str| x.header.iter().position(|h| h == name);
     let point = at(a, "point");
@@ -524,6 +475,71 @@ fn compare_table(
         }
     }
     c.timings.ratios = summary(&mut ratios);
+}
+
+/// The table's shape against the rerun's: headers, columns without a class, classes that moved,
+/// row counts (each a problem, none stopping the cell comparison).
+fn structure_problems(
+    c: &mut TableComparison,
+    a: &Cells,
+    b: &Cells,
+    classes: &[ColumnInfo],
+    new_classes: &[ColumnInfo],
+) {
+    c.columns = a.header.len();
+    c.rows = a.rows.len();
+    if a.header != b.header {
+        let only = |x: &Cells, y: &Cells| -> Vec<String> {
+            x.header
+                .iter()
+                .filter(|h| !y.header.contains(h))
+                .cloned()
+                .collect()
+        };
+        let (gone, added) = (only(a, b), only(b, a));
+        c.problems.push(if gone.is_empty() && added.is_empty() {
+            "headers differ: the same names in another order (cells compared by name)".into()
+        } else {
+            format!(
+                "headers differ: only in the result [{}], only in the rerun [{}] (the other columns compared by name)",
+                gone.join(", "),
+                added.join(", ")
+            )
+        });
+    }
+    let class_of =
+        |cols: &[ColumnInfo], name: &str| cols.iter().find(|c| c.name == name).map(|c| c.class);
+    let undeclared: Vec<&str> = a
+        .header
+        .iter()
+        .filter(|h| class_of(classes, h).is_none())
+        .map(String::as_str)
+        .collect();
+    if !undeclared.is_empty() {
+        c.problems.push(format!(
+            "columns without a class in the metadata (compared as measured): [{}]",
+            undeclared.join(", ")
+        ));
+    }
+    let reclassed: Vec<String> = a
+        .header
+        .iter()
+        .filter_map(|h| match (class_of(classes, h), class_of(new_classes, h)) {
+            (Some(x), Some(y)) if x != y => Some(format!("{h} {} → {}", x.as_str(), y.as_str())),
+            _ => None,
+        })
+        .collect();
+    if !reclassed.is_empty() {
+        c.problems
+            .push(format!("classes differ: {}", reclassed.join(", ")));
+    }
+    if a.rows.len() != b.rows.len() {
+        c.problems.push(format!(
+            "{} rows in the result, {} in the rerun",
+            a.rows.len(),
+            b.rows.len()
+        ));
+    }
 }
 
 /// A finite number, or `None`.

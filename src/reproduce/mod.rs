@@ -374,38 +374,7 @@ fn reproduce_run(
     sets.extend(run.map(|r| format!("experiment.run={r}")));
     let run_folder = run;
     let plan = Plan::load(&spec, &sets, o.threads)?;
-    if plan.hash != meta.run.spec_hash {
-        let keys = spec_differences(&meta.spec, &plan.normalized);
-        return Err(OutputError::new(
-            &spec,
-            format!(
-                "spec hash {} recorded in {}, {} now: the spec (or the defaults of its keys) changed since the result was made{}",
-                meta.run.spec_hash,
-                meta_path.display(),
-                plan.hash,
-                if keys.is_empty() { String::new() } else { format!(" ({})", keys.join("; ")) }
-            ),
-        )
-        .into());
-    }
-    if let Some(f) = changed_input(&meta.inputs, &plan.inputs) {
-        return Err(OutputError::new(
-            meta_path,
-            format!("an input changed since the result was made: {f}"),
-        )
-        .into());
-    }
-    if meta.run.points_total != 0 && meta.run.points_total != plan.points.len() {
-        return Err(OutputError::new(
-            meta_path,
-            format!(
-                "records {} point(s), the spec has {} now",
-                meta.run.points_total,
-                plan.points.len()
-            ),
-        )
-        .into());
-    }
+    check_unchanged(&meta, &plan, &spec, meta_path)?;
     // A merged shard set reruns unsplit: the same counted columns, by the runner's guarantee.
     let shard = match meta.run.shard.as_str() {
         s if meta.run.command == "merge" || s == "all" => None,
@@ -448,7 +417,74 @@ fn reproduce_run(
         )
         .into());
     }
-    let mut rerun = vec![
+    let mut rerun = rerun_rows(&meta, &plan, &spec, run, shard, o.threads);
+    let mut notes = Vec::new();
+    build_notes("the result", &meta.raycost, &mut notes);
+    for s in &meta.shards {
+        if s.raycost != meta.raycost {
+            build_notes(&format!("shard {}", s.file), &s.raycost, &mut notes);
+        }
+    }
+    let outcome = runner::run(&plan, &opts);
+    let outcome = outcome.and_then(|_| {
+        let stem = runner::stem(&name, shard);
+        let new_meta = Meta::read(&new_dir.join(format!("{stem}.meta.toml")))?;
+        let old = Side::of_run(&o.dir, &results.name, meta.clone())?;
+        let new = Side::of_run(&new_dir, &stem, new_meta)?;
+        Ok(compare(&old, &new, o.judge_timings)?)
+    });
+    rerun.push(("rerun".into(), new_dir.display().to_string()));
+    finish(o, out, temporary, rerun, notes, outcome)
+}
+
+/// Refuses a rerun that could not reproduce the result: the spec (or its keys' defaults), an input
+/// file or the point count changed since the result was made.
+fn check_unchanged(meta: &Meta, plan: &Plan, spec: &Path, meta_path: &Path) -> Result<(), Error> {
+    if plan.hash != meta.run.spec_hash {
+        let keys = spec_differences(&meta.spec, &plan.normalized);
+        return Err(OutputError::new(
+            spec,
+            format!(
+                "spec hash {} recorded in {}, {} now: the spec (or the defaults of its keys) changed since the result was made{}",
+                meta.run.spec_hash,
+                meta_path.display(),
+                plan.hash,
+                if keys.is_empty() { String::new() } else { format!(" ({})", keys.join("; ")) }
+            ),
+        )
+        .into());
+    }
+    if let Some(f) = changed_input(&meta.inputs, &plan.inputs) {
+        return Err(OutputError::new(
+            meta_path,
+            format!("an input changed since the result was made: {f}"),
+        )
+        .into());
+    }
+    if meta.run.points_total != 0 && meta.run.points_total != plan.points.len() {
+        return Err(OutputError::new(
+            meta_path,
+            format!(
+                "records {} point(s), the spec has {} now",
+                meta.run.points_total,
+                plan.points.len()
+            ),
+        )
+        .into());
+    }
+    Ok(())
+}
+
+/// The rerun's header rows: what was rerun (spec, seed, sets, run, shard, points, threads, inputs).
+fn rerun_rows(
+    meta: &Meta,
+    plan: &Plan,
+    spec: &Path,
+    run: Option<u64>,
+    shard: Option<Shard>,
+    threads: usize,
+) -> Vec<(String, String)> {
+    vec![
         (
             "spec".to_string(),
             format!("{} (hash {}, unchanged)", spec.display(), &plan.hash[..16]),
@@ -474,30 +510,13 @@ fn reproduce_run(
         ("points".into(), plan.points.len().to_string()),
         (
             "threads".into(),
-            format!("{} (the result: {})", o.threads, meta.run.threads),
+            format!("{} (the result: {})", threads, meta.run.threads),
         ),
         (
             "inputs".into(),
             format!("{} file(s), content unchanged", meta.inputs.len()),
         ),
-    ];
-    let mut notes = Vec::new();
-    build_notes("the result", &meta.raycost, &mut notes);
-    for s in &meta.shards {
-        if s.raycost != meta.raycost {
-            build_notes(&format!("shard {}", s.file), &s.raycost, &mut notes);
-        }
-    }
-    let outcome = runner::run(&plan, &opts);
-    let outcome = outcome.and_then(|_| {
-        let stem = runner::stem(&name, shard);
-        let new_meta = Meta::read(&new_dir.join(format!("{stem}.meta.toml")))?;
-        let old = Side::of_run(&o.dir, &results.name, meta.clone())?;
-        let new = Side::of_run(&new_dir, &stem, new_meta)?;
-        Ok(compare(&old, &new, o.judge_timings)?)
-    });
-    rerun.push(("rerun".into(), new_dir.display().to_string()));
-    finish(o, out, temporary, rerun, notes, outcome)
+    ]
 }
 
 /// The targets of a crossover result: recorded in its metadata, else the `target` column of its
