@@ -7,10 +7,13 @@ runs for seconds), compute its statistic on every unit listed (claims_measures, 
 claims_engines), judge each unit and the claim by the registered rule (claims_rules), compute what
 goes beside (other accountings, variants, derived figures) and write
 
-  results/claims.toml      the engine's version, then one [[claim]] per claim: measured, verdict
+  results/claims.toml      the engine's version, then one [[claim]] per claim: headline, measured, units, verdict
                            (text), outcome (one of holds, holds-in-part, differs, refuted,
                            inconclusive), rule, accounting
-  README.md                the claims table between <!-- claims:begin --> and <!-- claims:end -->
+  README.md                the claims table between <!-- claims:begin --> and <!-- claims:end -->:
+                           one line a claim (its headline: the number held against the paper's)
+  docs/claims.md           one section a claim: the verdict's reason, the rule, what is beside,
+                           every judged unit (the `units` of results/claims.toml)
   claims/engine-versions.toml  the engine's versions and every claim's outcome under each
                            (claims_version.py): a version whose outcome differs from the one before
                            it under the same rule needs that claim's history entry, else nothing is
@@ -20,7 +23,7 @@ This file holds no verdict, window or claim-specific number: they are all in the
 (scripts/tests/test_claims.py checks it).
 
 Usage:
-  python3 scripts/claims.py            # rewrite results/claims.toml and README's table
+  python3 scripts/claims.py            # rewrite results/claims.toml, README's table, docs/claims.md
   python3 scripts/claims.py --check    # exit 1 if any differs from what the tables give, if the
                                        # engine changed without a recorded version, or if a
                                        # verdict changed without a history entry (CI)
@@ -43,6 +46,7 @@ from claims_derived import DERIVED
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 BEGIN, END = "<!-- claims:begin -->", "<!-- claims:end -->"
+DOC = "docs/claims.md"  # every claim's section with every unit (README's rows link to it)
 BUSY_CORES = 0.25  # raycost's own busy-machine threshold (src/output/meta.rs)
 UNITS_LISTED = 8   # longer unit lists are summarised: counts, then the units that are not inside
 SHORT_HASH = 7     # a commit is shown by its first 7 hex digits, as git does
@@ -167,12 +171,22 @@ def measure(v, ctx):
     return m
 
 
+MARK = {R.INSIDE: "", R.OUTSIDE: " (outside)", R.UNDECIDED: " (undecided)"}
+
+
+def one_unit(u):
+    """A judged unit's text: label, measurement, and whether it lies outside or is undecided."""
+    return "%s%s%s" % (u.label + ": " if u.label else "", u.text, MARK[u.judgement])
+
+
+def every_unit(units, prefix=""):
+    """One text per judged unit, each with its judgement and reason (results/claims.toml `units`)."""
+    return ["%s%s%s" % (prefix, one_unit(u), " — " + u.reason if u.reason else "") for u in units]
+
+
 def units_text(units):
     """The measured text of judged units: every unit when few, else counts and those not inside."""
-    mark = {R.INSIDE: "", R.OUTSIDE: " (outside)", R.UNDECIDED: " (undecided)"}
-
-    def one(u):
-        return "%s%s%s" % (u.label + ": " if u.label else "", u.text, mark[u.judgement])
+    one = one_unit
     if len(units) <= UNITS_LISTED:
         return "; ".join(one(u) for u in units)
     inside = [u for u in units if u.judgement == R.INSIDE]
@@ -186,8 +200,9 @@ def units_text(units):
 
 
 def beside_text(claim, ctx, shown):
-    """Each [[claim.beside]] variant's units, and what it needs beyond the needs already `shown`."""
-    parts = []
+    """Each [[claim.beside]] variant's units, and what it needs beyond the needs already `shown`;
+    and every unit of every variant, one text each, named by the variant."""
+    parts, lines = [], []
     for b in claim.get("beside", []):
         v = variant(claim, b)
         needs = needs_of(v, ctx)
@@ -196,7 +211,8 @@ def beside_text(claim, ctx, shown):
         lack = [n for n in dict.fromkeys(needs + m.needs) if n not in shown]
         tail = ("needs " + "; needs ".join(lack)) if lack else ""
         parts.append("%s — %s" % (b["label"], "; ".join(x for x in (body, tail) if x)))
-    return parts
+        lines += every_unit(m.units, "beside: %s — " % b["label"])
+    return parts, lines
 
 
 def timing_text(claim, ctx):
@@ -243,7 +259,8 @@ def judge(claim, ctx):
                               claim.get("select"))
     if absent:
         measured.append("not in the tables (optional): " + "; ".join(absent))
-    measured += ["beside: " + t for t in beside_text(claim, ctx, needs + m.needs)]
+    beside, beside_units = beside_text(claim, ctx, needs + m.needs)
+    measured += ["beside: " + t for t in beside]
     for d in claim.get("derived", []):
         try:
             measured.append(DERIVED[d["kind"]](d, ctx))
@@ -252,7 +269,8 @@ def judge(claim, ctx):
     srcs = [s for s in claims_measures.sources_of(claim) if ctx.tables.exists(s)] or claims_measures.sources_of(claim)
     note = "; ".join(x for x in (claim["note"], timing_text(claim, ctx)) if x)
     return dict(id=claim["id"], claim=claim["claim"], reference=claim["reference"], paper=claim["paper"],
-                source="%s/%s.csv" % (srcs[0], srcs[0]), measured=" · ".join(measured),
+                source="%s/%s.csv" % (srcs[0], srcs[0]), headline=m.headline or "nothing measured",
+                measured=" · ".join(measured), units=every_unit(m.units) + beside_units,
                 verdict="%s: %s" % (outcome, reason), outcome=outcome, rule=claim["rule"],
                 registered=registered_text(claim, ctx), accounting=claim["accounting"], earlier=earlier_text(claim),
                 note=note)
@@ -275,26 +293,89 @@ def render_toml(records, engine=None):
                   "engine = %d" % engine, ""]
     for c in records:
         lines.append("[[claim]]")
-        for k in ("claim", "reference", "paper", "source", "measured", "verdict", "outcome", "rule",
+        for k in ("claim", "reference", "paper", "source", "headline", "measured", "verdict", "outcome", "rule",
                   "accounting", "earlier", "note"):
             if c[k]:
                 lines.append("%s = %s" % (k, toml_str(c[k])))
+        if c["units"]:
+            lines.append("units = [")
+            lines += ["  %s," % toml_str(u) for u in c["units"]]
+            lines.append("]")
         lines.append("")
     return "\n".join(lines)
 
 
+def cell(text):
+    return text.replace("|", "\\|")
+
+
 def render_table(records):
-    rows = ["| claim | paper says | raycost measured (95 % CI) | verdict | rule · accounting | table |",
-            "|---|---|---|---|---|---|"]
+    """README's claims table: one line a claim — the claim (linked to its section of DOC) and its
+    source in the paper, the paper's number, the measured headline, the verdict, the table."""
+    rows = ["| claim (source) | paper says | raycost measured (95 % CI) | verdict | table |",
+            "|---|---|---|---|---|"]
     for c in records:
-        cells = [c["claim"] + " (" + c["reference"] + ")", c["paper"], c["measured"],
-                 "**%s** — %s" % (c["outcome"], c["verdict"].split(": ", 1)[1]),
-                 "%s (%s) · %s%s" % (c["rule"], c["registered"], c["accounting"],
-                                     "; earlier: " + c["earlier"] if c["earlier"] else "")]
-        cells = [x.replace("|", "\\|") for x in cells]
         name = c["source"].split("/")[0]
-        rows.append("| %s | %s | %s | %s | %s | [%s](results/%s) |" % (*cells, name, c["source"]))
+        rows.append("| [%s](%s#%s) (%s) | %s | %s | **%s** | [%s](results/%s) |" % (
+            cell(c["claim"]), DOC, c["id"], cell(c["reference"]), cell(c["paper"]), cell(c["headline"]),
+            c["outcome"], name, c["source"]))
     return "\n".join(rows)
+
+
+def md(text):
+    """A text from the tables as Markdown shows it literally (no emphasis, no HTML)."""
+    return text.replace("\\", "\\\\").replace("*", "\\*").replace("<", "&lt;").replace("|", "\\|")
+
+
+def render_doc(records):
+    """DOC: one section per claim (its id the heading, README's rows link to it) with the verdict's
+    reason, the rule, what is shown beside, and every judged unit."""
+    out = ["# The claims of both papers: every unit", "",
+           "<!-- Written by scripts/claims.py from results/claims.toml; do not edit by hand: "
+           "python3 scripts/claims.py --check (CI) fails on any change. -->", "",
+           "README.md's claims table gives one line a claim: the paper's number, the measured headline "
+           "and the verdict. This page gives, for each claim, the verdict's reason, the rule that decided it "
+           "(registered before the data in [claims/preregistered.toml](../claims/preregistered.toml); "
+           "[claims/README.md](../claims/README.md) explains the statistics and outcomes), what is measured "
+           "beside it, and every judged unit with its 95 % interval. Machine-readable: "
+           "[results/claims.toml](../results/claims.toml).", ""]
+    for c in records:
+        out += ["## %s" % c["id"], "", "**%s** (%s)" % (md(c["claim"]), md(c["reference"])), "",
+                "- paper: %s" % md(c["paper"]),
+                "- measured: %s" % md(c["headline"]),
+                "- verdict: **%s** — %s" % (c["outcome"], md(c["verdict"].split(": ", 1)[1])),
+                "- rule: %s (%s) · accounting %s" % (c["rule"], md(c["registered"]), c["accounting"])]
+        if c["earlier"]:
+            out.append("- earlier: %s" % md(c["earlier"]))
+        out += ["- table: [%s](../results/%s)" % (c["source"].split("/")[0], c["source"]),
+                "- method: %s" % md(c["note"]), "", "Measured (as the report shows it):", ""]
+        out += ["- %s" % md(p) for p in c["measured"].split(" · ")]
+        if c["units"]:
+            out += ["", "Every unit (%d):" % len(c["units"]), ""]
+            out += ["%d. %s" % (i + 1, md(u)) for i, u in enumerate(c["units"])]
+        out.append("")
+    return "\n".join(out)
+
+
+def records_of(toml_path, pre):
+    """The records as results/claims.toml holds them, with what the pre-registration adds (the
+    claim's id from its rule, the rule's date and commit): README's table and DOC are rendered
+    from them, so a test can hold both against the committed file without judging anything."""
+    with open(toml_path, "rb") as f:
+        stored = tomllib.load(f).get("claim", [])
+    by_id = {c["id"]: c for c in pre["claim"]}
+    commits = pre.get("commits", {})
+    out = []
+    for c in stored:
+        cid = c["rule"].split("/")[0]
+        p = by_id.get(cid)
+        reg = p["registered"] if p else ""
+        rec = {k: c.get(k, "") for k in ("claim", "reference", "paper", "source", "headline", "measured", "verdict",
+                                          "outcome", "rule", "accounting", "earlier", "note")}
+        rec.update(id=cid, units=c.get("units", []),
+                   registered=reg + (", " + commits[reg][:SHORT_HASH] if reg in commits else ""))
+        out.append(rec)
+    return out
 
 
 def collect(results, prereg_path):
@@ -333,6 +414,9 @@ def main():
     a, rest = readme.split(BEGIN, 1)
     _, b = rest.split(END, 1)
     new_readme = a + BEGIN + "\n" + render_table(records) + "\n" + END + b
+    doc_path = os.path.join(ROOT, DOC)
+    doc_text = render_doc(records)
+    old_doc = open(doc_path).read() if os.path.exists(doc_path) else ""
     toml_path = os.path.join(args.results, "claims.toml")
     old_toml = open(toml_path).read() if os.path.exists(toml_path) else ""
     for p in problems:
@@ -346,6 +430,7 @@ def main():
         old_ledger = open(V.LEDGER).read()
         bad = [n for n, old, new in (("results/claims.toml", old_toml, toml_text),
                                      ("README.md's claims table", readme, new_readme),
+                                     (DOC, old_doc, doc_text),
                                      (os.path.relpath(V.LEDGER, ROOT), old_ledger, ledger_text)) if old != new]
         if bad:
             print("error: %s differ(s) from the committed tables: run python3 scripts/claims.py" % " and ".join(bad),
@@ -363,6 +448,7 @@ def main():
     open(V.LEDGER, "w").write(ledger_text)
     open(toml_path, "w").write(toml_text)
     open(readme_path, "w").write(new_readme)
+    open(doc_path, "w").write(doc_text)
     for c in records:
         print("%-24s %s" % (c["id"], c["outcome"]))
     return 0

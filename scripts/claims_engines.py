@@ -13,7 +13,7 @@ import math
 import claims_rules as R
 import raycost_stats as S
 from claims_data import Missing, group, label, matches, per_replica, quantity, show
-from claims_measures import Measured, est, fmt, rows_of, series_of, terms
+from claims_measures import Measured, est, fmt, headline, rows_of, series_of, series_groups, terms
 
 
 def pairs(rows, cmp, x=None):
@@ -71,7 +71,7 @@ def kind_crossover(v, ctx):
         ys = ratio(*cl.observed())[0]
         if fit is None:
             units.append(R.Unit(label(g[0], v["units"]), "no fit of log(%s/%s) over %d points" % (
-                v["compare"]["numerator"], v["compare"]["denominator"], len(xs)), R.UNDECIDED, "no fit"))
+                v["compare"]["numerator"], v["compare"]["denominator"], len(xs)), R.UNDECIDED, "no fit", "no fit"))
             continue
         j, why = crossover_judgement(iv, roots, lo, hi, band, tol, ctx, v["compare"], fit, fx)
         text = "%s; log(%s/%s) %s at %s = %s; fit degree %d%s%s; %s" % (
@@ -80,8 +80,11 @@ def kind_crossover(v, ctx):
             v["x"].split(".")[-1], ", ".join("%g" % x for x in xs),
             fit.degree, (" in log " + v["x"].split(".")[-1]) if v.get("x_scale") == "log" else "",
             ", misfit ×%.2f" % k if k > 1 else "", category_text(iv))
-        units.append(R.Unit(label(g[0], v["units"]), text, j, why))
-    return Measured(units, [], [])
+        one = len(roots) == 1
+        brief = "crossing %s" % est(iv.value, lo, hi, 3) if one else (
+            "no crossing" if not roots else "%d crossings" % len(roots))
+        units.append(R.Unit(label(g[0], v["units"]), text, j, why, brief, iv.value if one else None))
+    return Measured(units, [], [], headline(units))
 
 
 def crossover_judgement(iv, roots, lo, hi, band, tol, ctx, cmp, fit, xs):
@@ -121,16 +124,18 @@ def kind_optimum(v, ctx):
         text = "x* = %s over %s = %s … %s (%d values); fit degree %d%s; %s" % (
             est(iv.value, lo, hi, 3), v["x"].split(".")[-1], show(xs[0]), show(xs[-1]), len(xs), fit.degree,
             ", misfit ×%.2f" % k if k > 1 else "", category_text(iv))
-        units.append(R.Unit(label(g[0], v["units"]), text, j, why))
-    return Measured(units, [], [])
+        brief = "minimum at %s = %s" % (v["x"].split(".")[-1], est(iv.value, lo, hi, 3))
+        units.append(R.Unit(label(g[0], v["units"]), text, j, why, brief, iv.value))
+    return Measured(units, [], [], headline(units))
 
 
 def kind_engine_ratio(v, ctx):
     """Per unit of every series: mean cost of the numerator engine ÷ the denominator's per frame
     (frames ≥ 1), percentile interval of the cluster bootstrap."""
-    units, needs = [], []
+    units, needs, per_series = [], [], []
     band = R.band_of(v["tolerance"])
     for s in series_of(v):
+        per_series.append([])
         try:
             t = terms(ctx, v, s)
             for _, g in group(rows_of(ctx, s), s["units"]):
@@ -138,10 +143,12 @@ def kind_engine_ratio(v, ctx):
                 cl = S.Clustered(per_replica(ctx.tables, s["source"], [a["point"], b["point"]], t))
                 iv = S.bootstrap(lambda m, _v: m[0] / m[1] if m[1] > 0 else math.nan, cl, ctx.draws, ctx.seed, ctx.level)
                 j, why = R.interval_judgement(iv.lo, iv.hi, band)
-                units.append(R.Unit(label(a, s["units"], s.get("label", "")), est(iv.value, iv.lo, iv.hi, 3), j, why))
+                units.append(R.Unit(label(a, s["units"], s.get("label", "")), est(iv.value, iv.lo, iv.hi, 3), j, why,
+                                    est(iv.value, iv.lo, iv.hi, 3), iv.value))
+                per_series[-1].append(units[-1])
         except Missing as e:
             needs.append(str(e))
-    return Measured(units, needs, [])
+    return Measured(units, needs, [], headline(units, series_groups(v, per_series)))
 
 
 def kind_break_even(v, ctx):
@@ -177,8 +184,9 @@ def kind_break_even(v, ctx):
             j, why = R.interval_judgement(lo, hi, band)
         text = "%s frames (build %s s, saving %s ± %s s per frame)" % (
             est(ratio, lo, hi, 3), fmt(mbuild, 3), fmt(saving, 3), fmt(tq * math.sqrt(vsave), 2))
-        units.append(R.Unit(label(b, v["units"]), text, j, why))
-    return Measured(units, needs, [])
+        units.append(R.Unit(label(b, v["units"]), text, j, why, "%s frames" % est(ratio, lo, hi, 3),
+                            ratio if bounded else None))
+    return Measured(units, needs, [], headline(units))
 
 
 def region_bias(points, replicas, keep):
@@ -232,8 +240,9 @@ def kind_bias(v, ctx):
             h2 = S.t_for_level(ctx.level, dof2) * se2 if n2 and not math.isnan(m2) else math.nan
             text = "s ≥ d (%d points): %+.1f %% [%+.1f, %+.1f]; s < d (%d points): %+.1f ± %.1f %%" % (
                 n, 100 * m, 100 * lo, 100 * hi, n2, 100 * m2, 100 * h2)
-            units.append(R.Unit(label(r, v["units"]), text, j, why))
-    return Measured(units, needs, [])
+            units.append(R.Unit(label(r, v["units"]), text, j, why,
+                                "bias %+.1f %% [%+.1f, %+.1f]" % (100 * m, 100 * lo, 100 * hi), m))
+    return Measured(units, needs, [], headline(units))
 
 
 def all_points_text(r):
@@ -287,5 +296,6 @@ def kind_predictor(v, ctx):
         per = "; ".join("%g: %d of %d" % c for c in counts)
         text = "right picks at decisive ratios — %s; pooled %d of %d [%.0f, %.0f] %%" % (
             per, right, total, 100 * lo, 100 * hi) if total else "right picks at decisive ratios — none"
-        units.append(R.Unit(label(g[0], v["units"]), text, j, why))
-    return Measured(units, needs, [])
+        brief = "%d/%d right [%.0f, %.0f] %%" % (right, total, 100 * lo, 100 * hi) if total else "no decisive ratio"
+        units.append(R.Unit(label(g[0], v["units"]), text, j, why, brief, right / total if total else None))
+    return Measured(units, needs, [], headline(units))

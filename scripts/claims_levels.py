@@ -10,7 +10,7 @@ import random
 import claims_rules as R
 import raycost_stats as S
 from claims_data import Missing, group, label, matches, show
-from claims_measures import Measured, est, fmt, sources_of, t_ci
+from claims_measures import Measured, est, fmt, headline, sources_of, t_ci
 
 
 def levels_by_point(ctx, name):
@@ -66,8 +66,13 @@ def kind_level_law(v, ctx):
                     sum(u.judgement == R.OUTSIDE for u in per), min(errs, default=math.nan),
                     max(errs, default=math.nan), "" if len(errs) == len(per) else
                     "; %d levels without a measurement" % (len(per) - len(errs)))
-                units.append(R.Unit(label(row, v["units"]), text, j, why))
-    return Measured(units, needs, [])
+                inside = sum(u.judgement == R.INSIDE for u in per)
+                units.append(R.Unit(label(row, v["units"]), text, j, why, "%d/%d" % (inside, len(per)),
+                                    inside / len(per) if per else None))
+    # Every unit by name: how many of its levels lie within the band.
+    head = "levels within %s: %s" % (R.band_text(band), ", ".join(
+        "%s %s" % (u.label, u.brief) if u.label else u.brief for u in units)) if units else ""
+    return Measured(units, needs, [], head)
 
 
 def level_means(levels, metric):
@@ -112,8 +117,9 @@ def kind_peak_level(v, ctx):
             j, why = R.UNDECIDED, "peak at level %d in %.0f %% of draws" % (target, 100 * share)
         text = "peak at level %d (%s per replica; level %d in %.0f %% of draws); next level / peak %s" % (
             names[i], fmt(means[i]), target, 100 * share, est(drop, dlo, dhi, 3))
-        units.append(R.Unit(label(row, v["units"]), text, j, why))
-    return Measured(units, [], [])
+        brief = "peak at level %d, next / peak %s" % (names[i], est(drop, dlo, dhi, 3))
+        units.append(R.Unit(label(row, v["units"]), text, j, why, brief, drop))
+    return Measured(units, [], [], headline(units))
 
 
 def radius_levels(levels, min_spheres, count="rays_level"):
@@ -159,5 +165,6 @@ def kind_level_ratio(v, ctx):
             ratio, lo, hi, bounded = S.fieller(a, sa * sa, b, sb * sb, 0.0, S.t_for_level(ctx.level, dof))
             j, why = R.interval_judgement(lo, hi, band) if bounded else (R.UNDECIDED, "unbounded ratio")
             units.append(R.Unit("%s, level %d" % (label(num[0], v["units"]), r["level"]),
-                                est(ratio, lo, hi, 3), j, why))
-    return Measured(units, [], [])
+                                est(ratio, lo, hi, 3), j, why, "%s at level %d" % (est(ratio, lo, hi, 3), r["level"]),
+                                ratio if bounded else None))
+    return Measured(units, [], [], headline(units))

@@ -9,15 +9,20 @@ as `needs` (the claim is then inconclusive), with whatever could still be measur
 """
 
 import math
+import re
 from collections import namedtuple
 
 import claims_rules as R
 import raycost_stats as S
 from claims_data import Missing, group, label, matches, quantity, show, short, terms_of
 
-Measured = namedtuple("Measured", "units needs notes")
-Measured.__doc__ = """A kind's result: judged units, what the tables lack ("needs …" texts) and notes
-(fit, share of undefined draws, derived figures) for the measured column."""
+Measured = namedtuple("Measured", "units needs notes headline", defaults=("",))
+Measured.__doc__ = """A kind's result: judged units, what the tables lack ("needs …" texts), notes
+(fit, share of undefined draws, derived figures) for the measured column, and the headline: the
+number (or interval) a reader compares with the paper's, with the unit count — presentation only,
+written by each kind from its units (`headline`), never judged."""
+
+HEADLINE_UNITS = 2  # a headline names up to this many units; more are counted and spanned
 
 
 def fmt(x, digits=4):
@@ -35,6 +40,55 @@ def fmt(x, digits=4):
 
 def est(value, lo, hi, digits=4):
     return "%s [%s, %s]" % (fmt(value, digits), fmt(lo, digits), fmt(hi, digits))
+
+
+def inside_count(units, what=""):
+    """"k/n inside" (`what` after it) and how many are undecided, if any."""
+    k = sum(u.judgement == R.INSIDE for u in units)
+    u = sum(u.judgement == R.UNDECIDED for u in units)
+    return "%d/%d inside%s%s" % (k, len(units), what, ", %d undecided" % u if u else "")
+
+
+def span(units):
+    """The briefs of the units of smallest and largest value (one when they coincide); "" when no
+    unit has a value."""
+    valued = [u for u in units if u.value is not None and u.value == u.value]
+    if not valued:
+        return ""
+    a = min(valued, key=lambda u: u.value)
+    b = max(valued, key=lambda u: u.value)
+    if a.brief == b.brief:
+        return a.brief
+    # The words before the number ("share ", "drift slope ") once: "share 0.05 […] … 0.67 […]".
+    words = re.match(r"[^\d+\-−]*", a.brief).group(0)
+    return "%s … %s" % (a.brief, b.brief[len(words):] if b.brief.startswith(words) else b.brief)
+
+
+def counted_span(units):
+    return "; ".join(x for x in (inside_count(units), span(units)) if x)
+
+
+def headline(units, groups=None):
+    """A kind's headline from its judged units: up to HEADLINE_UNITS units each by label and brief;
+    more as the count inside and the span of their values. With `groups` ([(name, units)], e.g. a
+    claim's series) each group so, named: one unit by its brief, several counted and spanned."""
+    if groups is not None:
+        parts = []
+        for name, us in groups:
+            if us:
+                body = us[0].brief or us[0].text if len(us) == 1 else counted_span(us)
+                parts.append("%s: %s" % (name, body) if name else body)
+        return "; ".join(parts)
+    if len(units) <= HEADLINE_UNITS:
+        return "; ".join("%s: %s" % (u.label, u.brief or u.text) if u.label else u.brief or u.text for u in units)
+    return counted_span(units)
+
+
+def series_groups(v, per_series):
+    """The groups a headline shows: one per registered series (by its label), none without series."""
+    if "series" not in v:
+        return None
+    return [(s.get("label", ""), us) for s, us in zip(v["series"], per_series)]
 
 
 def sources_of(v):
@@ -88,7 +142,7 @@ def kind_band(v, ctx):
             j, why = R.interval_judgement(lo, hi, band)
             units.append(R.Unit(label(r, v.get("units", [])) + " " + m, "%s in %s" % (
                 est(mean, lo, hi), R.band_text(band)), j, why))
-    return Measured(units, [], [])
+    return Measured(units, [], [], inside_count(units, " their bands"))
 
 
 def kind_z_gof(v, ctx):
@@ -104,7 +158,9 @@ def kind_z_gof(v, ctx):
     j, why = R.p_judgement(p, tol["alpha_hold"], tol["alpha_reject"])
     text = "%d points: Σz² = %.1f on %d dof, p = %.2g; rms z = %.2f, largest |z| = %.2f" % (
         len(zs), chi2, len(zs), p, math.sqrt(chi2 / len(zs)), max(abs(z) for z in zs))
-    return Measured([R.Unit(m, text, j, why)], [], [])
+    brief = "p = %.2g (Σz² = %.1f on %d points)" % (p, chi2, len(zs))
+    units = [R.Unit(m, text, j, why, brief, p)]
+    return Measured(units, [], [], headline(units))
 
 
 def kind_p_values(v, ctx):
@@ -115,7 +171,8 @@ def kind_p_values(v, ctx):
     j, why = R.p_judgement(p, tol["alpha_hold"], tol["alpha_reject"])
     text = "p = %s at %d points; Bonferroni k·min p = %.2g" % (
         ", ".join("%.2g" % x for x in ps), len(ps), p)
-    return Measured([R.Unit(v["column"], text, j, why)], [], [])
+    units = [R.Unit(v["column"], text, j, why, "Bonferroni p = %.2g over %d points" % (p, len(ps)), p)]
+    return Measured(units, [], [], headline(units))
 
 
 # ----------------------------------------------------------------------------------------------
@@ -156,9 +213,10 @@ def slope_unit(xs, q, fit, ctx):
 def kind_slope(v, ctx):
     """Per unit, the slope of log(quantity) — or of log(quantity ÷ theory), the drift from a closed
     form — against log(x) over the rows in the domain, judged against the band."""
-    units = []
+    units, per_series = [], []
     band = R.band_of(v["tolerance"])
     for s in series_of(v):
+        per_series.append([])
         rows = [r for r in rows_of(ctx, s) if in_domain(r, v.get("domain"))]
         t = {v["metric"]: 1} if v.get("metric") else terms(ctx, v, s)
         for key, g in group(rows, s.get("units", v.get("units", []))):
@@ -166,7 +224,9 @@ def kind_slope(v, ctx):
             name = label(g[0], s.get("units", v.get("units", [])), s.get("label", ""))
             xs = [r[v["x"]] for r in g]
             if len(xs) < 3:
-                units.append(R.Unit(name, "fewer than 3 points", R.UNDECIDED, "fewer than 3 points"))
+                units.append(R.Unit(name, "fewer than 3 points", R.UNDECIDED, "fewer than 3 points",
+                                    "fewer than 3 points"))
+                per_series[-1].append(units[-1])
                 continue
             q = [quantity(r, t, s["source"]) for r in g]
             extra = ""
@@ -181,8 +241,10 @@ def kind_slope(v, ctx):
             text = "%sslope %s over %s = %s … %s%s%s" % (
                 "drift from the closed form: " if s.get("theory") else "", est(val, lo, hi, 3),
                 short(v["x"]), show(xs[0]), show(xs[-1]), extra, note)
-            units.append(R.Unit(name, text, j, why))
-    return Measured(units, [], [])
+            brief = "%sslope %s" % ("drift " if s.get("theory") else "", est(val, lo, hi, 3))
+            units.append(R.Unit(name, text, j, why, brief, val))
+            per_series[-1].append(units[-1])
+    return Measured(units, [], [], headline(units, series_groups(v, per_series)))
 
 
 def theory_value(r, s, source):
@@ -194,9 +256,10 @@ def theory_value(r, s, source):
 
 def kind_value(v, ctx):
     """Per row of every series: the quantity (÷ its theory, if given) against the band."""
-    units, needs = [], []
+    units, needs, per_series = [], [], []
     band = R.band_of(v["tolerance"])
     for s in series_of(v):
+        per_series.append([])
         try:
             rows = rows_of(ctx, s)
             t = terms(ctx, v, s)
@@ -207,19 +270,22 @@ def kind_value(v, ctx):
                 val, lo, hi = mean / th, lo / th, hi / th
                 j, why = R.interval_judgement(lo, hi, band)
                 text = est(val, lo, hi, 3) + ("" if se == se else " (no SE in the table)")
-                units.append(R.Unit(label(r, s.get("units", []), s.get("label", "")), text, j, why))
+                units.append(R.Unit(label(r, s.get("units", []), s.get("label", "")), text, j, why,
+                                    est(val, lo, hi, 3), val))
+                per_series[-1].append(units[-1])
             if not rows:
                 needs.append("rows %s in %s" % (s.get("select", {}), s["source"]))
         except Missing as e:
             needs.append(str(e))
-    return Measured(units, needs, [])
+    return Measured(units, needs, [], headline(units, series_groups(v, per_series)))
 
 
 def kind_share(v, ctx):
     """Per row: part ÷ whole (e.g. traversal's share of the counted cost), against the band."""
-    units, needs = [], []
+    units, needs, per_series = [], [], []
     band = R.band_of(v["tolerance"])
     for s in series_of(v):
+        per_series.append([])
         try:
             for r in rows_of(ctx, s):
                 a, sa, da = quantity(r, s["part"], s["source"])
@@ -233,15 +299,17 @@ def kind_share(v, ctx):
                     note = " (no SE in the table)"
                 j, why = R.interval_judgement(lo, hi, band)
                 units.append(R.Unit(label(r, s.get("units", []), s.get("label", "")),
-                                    est(val, lo, hi, 3) + note, j, why))
+                                    est(val, lo, hi, 3) + note, j, why, "share " + est(val, lo, hi, 3), val))
+                per_series[-1].append(units[-1])
         except Missing as e:
             needs.append(str(e))
-    return Measured(units, needs, [])
+    return Measured(units, needs, [], headline(units, series_groups(v, per_series)))
 
 
 def kind_zero_count(v, ctx):
     """Per table: Σ count over Σ checked; 0 of > 0 checked is inside, any count outside."""
     units, needs = [], []
+    differing = all_checked = 0
     for name in sources_of(v):
         try:
             rows = ctx.tables.rows(name)
@@ -250,9 +318,10 @@ def kind_zero_count(v, ctx):
             continue
         n = sum(r[v["count"]] for r in rows)
         checked = sum(r[v["checked"]] for r in rows)
+        differing, all_checked = differing + n, all_checked + checked
         if checked <= 0:
             j, why = R.UNDECIDED, "nothing checked"
         else:
             j, why = (R.INSIDE, "") if n == 0 else (R.OUTSIDE, "%d differ" % n)
         units.append(R.Unit(name, "%d differing of %d checked" % (n, checked), j, why))
-    return Measured(units, needs, [])
+    return Measured(units, needs, [], "%d differing of %d checked in %d tables" % (differing, all_checked, len(units)))

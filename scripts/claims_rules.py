@@ -19,9 +19,11 @@ OUTCOMES = HOLDS, HOLDS_IN_PART, DIFFERS, REFUTED, INCONCLUSIVE = (
 # the band, outside it, or neither (it straddles an edge, is too wide, or is undefined).
 INSIDE, OUTSIDE, UNDECIDED = "inside", "outside", "undecided"
 
-Unit = namedtuple("Unit", "label text judgement reason")
+Unit = namedtuple("Unit", "label text judgement reason brief value", defaults=("", None))
 Unit.__doc__ = """One judged unit: its label (e.g. "octree, r_D/r_0 …"), the measured text (value
-and interval), its judgement (INSIDE, OUTSIDE, UNDECIDED) and why (for UNDECIDED and OUTSIDE)."""
+and interval), its judgement (INSIDE, OUTSIDE, UNDECIDED) and why (for UNDECIDED and OUTSIDE); for
+the claim's headline (presentation only, never judged) its value and interval in a few words
+(`brief`) and the number that orders units (`value`, None when it has no defined interval)."""
 
 
 def bound(v):

@@ -1,6 +1,6 @@
 """Theorem 2 in its proof's setting and eq. 11's one-pose count: the registered rules judged on
-synthetic tables whose truth is known, and the findings' verdict sentences held against
-results/claims.toml.
+synthetic tables whose truth is known (the findings' verdict sentences are held against
+results/claims.toml by test_findings_verdicts.py).
 
 Run: python3 -m unittest discover -s scripts/tests (from the repository root; .ci/run does).
 """
@@ -9,14 +9,11 @@ import copy
 import math
 import os
 import random
-import re
 import sys
 import tempfile
-import tomllib
 import unittest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.join(HERE, "..", "..")
 sys.path.insert(0, os.path.join(HERE, ".."))
 sys.path.insert(0, HERE)
 import claims  # noqa: E402
@@ -137,60 +134,6 @@ class RetracedRaysOnePose(unittest.TestCase):
         old = [h for h in c.get("history", []) if h["rule"] == "retraced-rays/2"]
         self.assertEqual(len(old), 1)
         self.assertEqual(old[0]["verdict"], "differs")
-
-
-# ----------------------------------------------------------------------------------------------
-# the findings' verdict sentences
-
-MARK = re.compile(r"<!-- verdict: ([a-z0-9-]+) -->")
-FINDINGS = os.path.join(ROOT, "docs", "findings-detp.md")
-
-
-def verdict_lines(text):
-    """(claim id, the line after its marker) for every `<!-- verdict: ID -->` in `text`."""
-    lines = text.splitlines()
-    return [(m.group(1), lines[i + 1]) for i, line in enumerate(lines) for m in [MARK.search(line)] if m]
-
-
-def committed_claims():
-    with open(os.path.join(ROOT, "results", "claims.toml"), "rb") as f:
-        return {c["rule"].split("/")[0]: c for c in tomllib.load(f)["claim"]}
-
-
-def disagreements(text, by_id):
-    """Every verdict line whose outcome or rule is not the committed one, and every line that says
-    Theorem 2 holds without being a verdict line."""
-    out = []
-    marked = set()
-    for cid, line in verdict_lines(text):
-        marked.add(line)
-        c = by_id.get(cid)
-        if c is None:
-            out.append("%s: no such claim in results/claims.toml" % cid)
-            continue
-        if "**%s**" % c["outcome"] not in line or c["rule"] not in line:
-            out.append("%s: the findings say %r, results/claims.toml %s under %s" % (
-                cid, line.strip(), c["outcome"], c["rule"]))
-    for line in text.splitlines():
-        if line not in marked and re.search(r"Theorem 2[^.]*\bholds\b|\bholds in seconds\b", line):
-            out.append("a verdict outside a verdict line: %r" % line.strip())
-    return out
-
-
-class FindingsAgreeWithTheVerdicts(unittest.TestCase):
-    def test_every_verdict_sentence_states_the_committed_outcome(self):
-        with open(FINDINGS) as f:
-            text = f.read()
-        self.assertGreaterEqual(len(verdict_lines(text)), 7)
-        self.assertEqual(disagreements(text, committed_claims()), [])
-
-    def test_a_stale_sentence_is_caught(self):
-        by_id = {"theorem-2": {"outcome": "differs", "rule": "theorem-2/2"}}
-        text = "<!-- verdict: theorem-2 -->\n- theorem-2 (theorem-2/2): **holds**\n"
-        self.assertEqual(len(disagreements(text, by_id)), 1)
-        text = "<!-- verdict: theorem-2 -->\n- theorem-2 (theorem-2/2): **differs**\n"
-        self.assertEqual(disagreements(text, by_id), [])
-        self.assertEqual(len(disagreements(text + "the theorem holds in seconds here\n", by_id)), 1)
 
 
 if __name__ == "__main__":

@@ -11,6 +11,8 @@
 //! point = 0                            # … in the row whose `point` is this
 //! # or, instead of column/point: measured = 190.6, ci = 0.58 (95 % half-width),
 //! # or a text that states its own uncertainty: measured = "40 of 40 points inside"
+//! headline = "crossing 0.163 [0.129, 0.210]"   # optional: the one number to hold against `paper`
+//! units = ["lines: crossing 0.163 [0.129, 0.210] (undecided: …)"]  # optional: every judged unit
 //! unit = "steps"                       # optional
 //! verdict = "ok (99% CI)"              # optional with `column` and a numeric `paper`
 //! outcome = "holds"                    # optional: holds, holds-in-part, differs, refuted, inconclusive
@@ -78,6 +80,10 @@ struct Entry {
     #[serde(default)]
     measured: Option<NumberOrText>,
     #[serde(default)]
+    headline: Option<String>,
+    #[serde(default)]
+    units: Vec<String>,
+    #[serde(default)]
     ci: Option<f64>,
     #[serde(default)]
     unit: Option<String>,
@@ -114,6 +120,11 @@ pub struct PaperClaim {
     pub reference: String,
     /// The paper's number, as given.
     pub paper: String,
+    /// The one measured number (or interval) a reader holds against the paper's, with its unit
+    /// count (empty if not given); `units` holds every unit.
+    pub headline: String,
+    /// Every judged unit, one text each (empty if not given): `measured` lists the first few.
+    pub units: Vec<String>,
     /// Measured ± 95 % CI (with the unit, if given).
     pub measured: String,
     /// The verdict.
@@ -264,6 +275,8 @@ fn resolve(e: Entry, results: &Path) -> Result<PaperClaim, (&'static str, String
         claim: e.claim,
         reference: e.reference.unwrap_or_default(),
         paper,
+        headline: e.headline.unwrap_or_default(),
+        units: e.units,
         measured: measured_text,
         tone: claim_tone(outcome, &verdict),
         verdict,
@@ -377,6 +390,15 @@ verdict = "agrees"
         let c = parse(t, d.path()).expect("text");
         assert_eq!(c[0].measured, "0.12 [0.10, 0.15]");
         let e = parse(&format!("{t}ci = 0.1\n"), d.path()).expect_err("ci with text");
+        // The headline and every unit, as claims.py writes them beside `measured`.
+        let c = parse(
+            &format!("{t}headline = \"crossing 0.12\"\nunits = [\"a: 1\", \"b: 2\"]\n"),
+            d.path(),
+        )
+        .expect("headline and units");
+        assert_eq!(c[0].headline, "crossing 0.12");
+        assert_eq!(c[0].units, ["a: 1", "b: 2"]);
+        assert!(parse(t, d.path()).expect("without")[0].units.is_empty());
         assert_eq!(e.1.as_deref(), Some("claim[0].measured"));
     }
 

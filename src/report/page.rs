@@ -30,6 +30,8 @@ td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: now
 table.claims { width: 100%; table-layout: fixed; }
 table.claims td { overflow-wrap: anywhere; }
 table.claims td.measured div + div { margin-top: .35em; }
+table.claims td.measured div.headline { font-weight: bold; }
+table.claims td.measured details { margin-top: .35em; }
 col.c-claim { width: 17%; } col.c-paper { width: 12%; } col.c-measured { width: 43%; }
 col.c-verdict { width: 16%; } col.c-rule { width: 12%; }
 .outcome-holds { background: #dcf1d8; } .outcome-holds-in-part { background: #f6efc8; }
@@ -137,12 +139,14 @@ fn claims(s: &mut String, claims: Option<&[PaperClaim]>) {
     for c in claims {
         let _ = writeln!(
             s,
-            "<tr><td>{}<div class=\"note\">{}</div></td><td>{}</td><td class=\"measured\">{}{}</td>\
+            "<tr><td>{}<div class=\"note\">{}</div></td><td>{}</td><td class=\"measured\">{}{}{}{}</td>\
              {}<td>{}<a href=\"{}\">{}</a></td></tr>",
             text(&c.claim),
             text(&c.reference),
             text(&c.paper),
+            headline_div(&c.headline),
             parts(&c.measured),
+            every_unit(&c.units),
             note_div(&c.note),
             verdict_cell(c),
             rule_text(c),
@@ -159,6 +163,31 @@ fn parts(measured: &str) -> String {
         .split(" · ")
         .map(|p| format!("<div>{}</div>", text(p)))
         .collect()
+}
+
+/// The headline (the one number held against the paper's) in bold above every unit's details
+/// (nothing when empty).
+fn headline_div(headline: &str) -> String {
+    if headline.is_empty() {
+        String::new()
+    } else {
+        format!("<div class=\"headline\">{}</div>", text(headline))
+    }
+}
+
+/// Every judged unit, folded (`measured` shows the first few): nothing when the file lists none.
+fn every_unit(units: &[String]) -> String {
+    if units.is_empty() {
+        return String::new();
+    }
+    let items: String = units
+        .iter()
+        .map(|u| format!("<li>{}</li>", text(u)))
+        .collect();
+    format!(
+        "<details><summary>every unit ({})</summary><ul>{items}</ul></details>",
+        units.len()
+    )
 }
 
 /// The claim's note as a block under its measurement (nothing when empty).
@@ -422,6 +451,8 @@ mod tests {
             claim: "Theorem 2".into(),
             reference: "DETP".into(),
             paper: "0.35".into(),
+            headline: "crossing 0.29 [0.28, 0.44] <a>".into(),
+            units: vec!["octree: 0.29 [0.28, 0.44]".into(), "grid: <none>".into()],
             measured: "0.29 [0.28, 0.44] · beside: seconds <3>".into(),
             verdict: verdict.into(),
             tone: super::super::verdicts::claim_tone(outcome.and_then(|o| o.parse().ok()), verdict),
@@ -458,7 +489,15 @@ mod tests {
         ));
         // Without an outcome, the verdict text's tone, as before.
         assert!(s.contains("<td class=\"verdict agrees\">ok (99% CI)</td>"));
-        // The measurement in parts, escaped; the rule and accounting beside the source.
+        // The headline first, escaped, then the measurement in parts, escaped; the rule and
+        // accounting beside the source.
+        assert!(s.contains(
+            "<td class=\"measured\"><div class=\"headline\">crossing 0.29 [0.28, 0.44] &lt;a&gt;</div><div>0.29"
+        ));
+        assert!(s.contains(
+            "<details><summary>every unit (2)</summary><ul><li>octree: 0.29 [0.28, 0.44]</li>\
+             <li>grid: &lt;none&gt;</li></ul></details>"
+        ));
         assert!(s.contains("<div>0.29 [0.28, 0.44]</div><div>beside: seconds &lt;3&gt;</div>"));
         assert!(s.contains("theorem-2/2 · paper · <a href="));
         assert!(s.contains("earlier: theorem-2/1: holds in seconds"));
