@@ -27,7 +27,11 @@ import raycost_stats as S  # noqa: E402
 import raycost_tables as T  # noqa: E402
 
 NAME = "detp-radius-schedule-cornell"
+FLOORS = "detp-radius-floor-cornell"
 DRAWS = 4000
+# The rule detp-radius-floor-cornell.toml states: the slope of log √B against log d inside this band
+# means the smooth-field law (√B ∝ d²) holds; wholly below it, it differs.
+SMOOTH_BAND = (1.6, 2.4)
 
 
 def num(v):
@@ -37,12 +41,12 @@ def num(v):
         return v
 
 
-def configurations(results):
-    """{(d_ref, β): [(N, rmse, se), …]} in photon order."""
-    rows = T.read_rows(os.path.join(results, NAME, NAME + ".csv"), num)[1]
+def configurations(results, name=NAME):
+    """{(d_ref, β): [(N, rmse, se), …]} in photon order (β = 0 where the table has no schedule)."""
+    rows = T.read_rows(os.path.join(results, name, name + ".csv"), num)[1]
     out = {}
     for r in rows:
-        key = (r["detp.disc_radius"], r["detp.radius_schedule_exponent"])
+        key = (r["detp.disc_radius"], r.get("detp.radius_schedule_exponent", 0.0))
         out.setdefault(key, []).append(
             (r["detp.photons"], r["irradiance_ref_rmse_mean"], r["irradiance_ref_rmse_se"]))
     return {k: sorted(v) for k, v in out.items()}
@@ -69,10 +73,70 @@ def floor(points):
     return math.sqrt(b), math.sqrt(max(lo, 0.0)), math.sqrt(max(hi, 0.0))
 
 
+def floor_fit(points):
+    """B of RMSE² = c/N + B, non-negative least squares on relative residuals (None: no fit)."""
+    best = S.fit_costs([[1.0 / p[0] for p in points], [1.0] * len(points)], [p[1] ** 2 for p in points])
+    return None if best is None else best[0][1]
+
+
+def floor_slope(configs):
+    """The slope of log √B against log d over the fixed-d configurations, and its 95 % interval from
+    the parametric bootstrap: every RMSE drawn within its SE, every floor refitted. A draw whose
+    floor fits to 0 at the smallest d has the slope +∞ (at the largest, −∞), so it stays in the
+    percentiles; a zero floor in between has no slope and is counted as undefined, not dropped."""
+    keys = sorted(k for k in configs if k[1] == 0)
+    ds = [k[0] for k in keys]
+    flat = [p for k in keys for p in configs[k]]
+    sizes = [len(configs[k]) for k in keys]
+
+    def slope_of(means, _variances):
+        at, floors = 0, []
+        for i, n in enumerate(sizes):
+            pts = [(p[0], m, 0.0) for p, m in zip(flat[at:at + n], means[at:at + n])]
+            at += n
+            b = floor_fit(pts)
+            if b is None or b <= 0:
+                if i == 0:
+                    return math.inf
+                if i == len(sizes) - 1:
+                    return -math.inf
+                return ("a floor between fits to 0", math.nan)
+            floors.append(math.sqrt(b))
+        lx = [math.log(d) for d in ds]
+        ly = [math.log(f) for f in floors]
+        return S.wls_line(lx, ly, [1.0] * len(ly))[1]
+
+    sampler = S.Parametric([p[1] for p in flat], [p[2] for p in flat])
+    return ds, S.bootstrap(slope_of, sampler, draws=DRAWS)
+
+
+def print_floors(results):
+    configs = {k: v for k, v in configurations(results, FLOORS).items() if k[1] == 0}
+    for (d, _), pts in sorted(configs.items()):
+        print("d %g mm, fixed: " % d + "; ".join("%d: %.5f ± %.5f" % p for p in pts))
+        print("  floor sqrt(B) %.5f [%.5f, %.5f]" % floor(pts))
+    ds, iv = floor_slope(configs)
+    lo, hi = SMOOTH_BAND
+    if iv.lo >= lo and iv.hi <= hi:
+        verdict = "holds (the smooth-field law)"
+    elif iv.hi < lo:
+        verdict = "differs (the floor grows slower than d²)"
+    else:
+        verdict = "inconclusive"
+    print("floor slope, log sqrt(B) against log d over %s mm: %.2f [%.2f, %.2f] (undefined in %.1f %% of draws);"
+          " band [%.1f, %.1f]: %s" % ("/".join("%g" % d for d in ds), iv.value, iv.lo, iv.hi,
+                                       100 * iv.undefined, lo, hi, verdict))
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--results", default="results")
+    ap.add_argument("--floors", action="store_true",
+                    help="the floor-against-d test of %s instead" % FLOORS)
     a = ap.parse_args(argv)
+    if a.floors:
+        print_floors(a.results)
+        return
     floors = {}
     for (d, beta), pts in sorted(configurations(a.results).items(), key=lambda kv: (kv[0][1], kv[0][0])):
         rule = "fixed" if beta == 0 else "N^(-%.3g)" % beta
