@@ -9,7 +9,8 @@ For each (d_ref, β) it prints the RMSE against the reference (± SE) at every p
   SEs; interval: percentile bootstrap drawing every mean within its SE), with its χ²;
 - for a fixed d (β = 0), the bias floor B of the model RMSE² = c/N + B (the crossover's error
   model), fitted by non-negative least squares on relative residuals, with its bootstrap interval;
-- from the floors at two d_ref, the exponent α of the floor's growth, √B ∝ d^α (2 for a smooth
+- from the fixed floors, the exponent α of the floor's growth, √B ∝ d^α (the slope of log √B
+  against log d, `floor_slope`) (2 for a smooth
   field, whose disc average is off by (d²/8)·ΔE; 1/2 where the disc crosses a discontinuity, which a
   share ∝ d of the points does with an O(1) error), and what α implies for β (docs/theory.md).
 
@@ -137,8 +138,8 @@ def main(argv=None):
     if a.floors:
         print_floors(a.results)
         return
-    floors = {}
-    for (d, beta), pts in sorted(configurations(a.results).items(), key=lambda kv: (kv[0][1], kv[0][0])):
+    configs = configurations(a.results)
+    for (d, beta), pts in sorted(configs.items(), key=lambda kv: (kv[0][1], kv[0][0])):
         rule = "fixed" if beta == 0 else "N^(-%.3g)" % beta
         print("d_ref %g mm, %s:" % (d, rule))
         print("  " + "; ".join("%d: %.5f ± %.5f" % p for p in pts))
@@ -148,19 +149,14 @@ def main(argv=None):
                            S.Parametric([p[1] for p in pts[-2:]], [p[2] for p in pts[-2:]]), draws=DRAWS)
         print("  last octave pair %.3f [%.3f, %.3f]" % (last.value, last.lo, last.hi))
         if beta == 0:
-            floors[d] = floor(pts)
-            print("  floor sqrt(B) %.5f [%.5f, %.5f]" % floors[d])
-    if len(floors) == 2:
-        (d1, f1), (d2, f2) = sorted(floors.items())
-        r = math.log(d2 / d1)
-        alpha = math.log(f2[0] / f1[0]) / r
-        lo = math.log(f2[1] / f1[2]) / r if f1[2] > 0 and f2[1] > 0 else math.nan
-        hi = math.log(f2[2] / f1[1]) / r if f1[1] > 0 else math.inf
-        print("floor exponent alpha (sqrt(B) ∝ d^alpha, from %g and %g mm): %.2f [%.2f, %.2f] "
-              "(ends from the floors' interval ends)" % (d1, d2, alpha, lo, hi))
-        print("  MSE-optimal beta = 1/(2·alpha + 2) = %.3f; its RMSE slope −alpha/(2·alpha + 2) = %.3f;"
-              " at beta = 1/6 a bias-bound RMSE falls as N^(−alpha/6) = N^(%.3f)"
-              % (1 / (2 * alpha + 2), -alpha / (2 * alpha + 2), -alpha / 6))
+            print("  floor sqrt(B) %.5f [%.5f, %.5f]" % floor(pts))
+    ds, iv = floor_slope({k: v for k, v in configs.items() if k[1] == 0})
+    alpha = iv.value
+    print("floor exponent alpha (sqrt(B) ∝ d^alpha, from %s mm): %.2f [%.2f, %.2f]"
+          % (" and ".join("%g" % d for d in ds), alpha, iv.lo, iv.hi))
+    print("  MSE-optimal beta = 1/(2·alpha + 2) = %.3f; its RMSE slope −alpha/(2·alpha + 2) = %.3f;"
+          " at beta = 1/6 a bias-bound RMSE falls as N^(−alpha/6) = N^(%.3f)"
+          % (1 / (2 * alpha + 2), -alpha / (2 * alpha + 2), -alpha / 6))
 
 
 if __name__ == "__main__":
