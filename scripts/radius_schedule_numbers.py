@@ -47,7 +47,8 @@ def configurations(results, name=NAME):
     rows = T.read_rows(os.path.join(results, name, name + ".csv"), num)[1]
     out = {}
     for r in rows:
-        key = (r["detp.disc_radius"], r.get("detp.radius_schedule_exponent", 0.0))
+        beta = r.get("detp.radius_schedule_exponent", math.nan)
+        key = (r["detp.disc_radius"], beta if beta == beta else 0.0)  # NaN: no schedule, d fixed
         out.setdefault(key, []).append(
             (r["detp.photons"], r["irradiance_ref_rmse_mean"], r["irradiance_ref_rmse_se"]))
     return {k: sorted(v) for k, v in out.items()}

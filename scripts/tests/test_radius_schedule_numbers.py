@@ -1,5 +1,5 @@
 """radius_schedule_numbers: every RMSE, slope and floor docs/findings-detp.md quotes for the radius
-schedule is what the script prints from the committed table.
+schedule and the floor against d is what the script prints from the committed tables.
 
 Run: python3 -m unittest discover -s scripts/tests (from the repository root; .ci/run does).
 """
@@ -31,20 +31,26 @@ class RadiusScheduleNumbers(unittest.TestCase):
         out = io.StringIO()
         with contextlib.redirect_stdout(out):
             R.main(["--results", os.path.join(ROOT, "results")])
+            R.main(["--results", os.path.join(ROOT, "results"), "--floors"])
         self.printed = out.getvalue()
         self.doc = section()
 
     def test_every_rmse_in_the_table_is_printed(self):
         """Each 'mean ± se' cell of the findings' table appears in the script's output."""
         cells = re.findall(r"0\.\d{5} ± 0\.\d{5}", self.doc)
-        self.assertGreaterEqual(len(cells), 20)
+        self.assertGreaterEqual(len(cells), 32)
         for c in cells:
             self.assertIn(c, self.printed)
+
+    def test_the_floor_rule_is_judged_as_the_findings_say(self):
+        """The verdict the spec's rule gives on the committed table is the one the findings state."""
+        verdict = re.search(r"band \[1\.6, 2\.4\]: (\w+)", self.printed).group(1)
+        self.assertIn("**%s** from the smooth field's 2" % verdict, self.doc)
 
     def test_every_slope_and_interval_is_printed(self):
         """Each 'slope [lo, hi]' the findings quote is printed, to the digits the findings give."""
         quoted = re.findall(r"(-?0\.\d+) \[(-?0\.\d+), (-?0\.\d+)\]", self.doc)
-        self.assertGreaterEqual(len(quoted), 8)
+        self.assertGreaterEqual(len(quoted), 12)
         printed = [tuple(float(x) for x in m) for m in
                    re.findall(r"(-?0\.\d+) \[(-?0\.\d+), (-?0\.\d+)\]", self.printed)]
         for q in quoted:
