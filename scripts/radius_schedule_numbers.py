@@ -33,6 +33,10 @@ DRAWS = 4000
 # The rule detp-radius-floor-cornell.toml states: the slope of log √B against log d inside this band
 # means the smooth-field law (√B ∝ d²) holds; wholly below it, it differs.
 SMOOTH_BAND = (1.6, 2.4)
+BETA = "detp-radius-beta-cornell"
+# The rule detp-radius-beta-cornell.toml states: the log-log slope at β = 0.3 inside this band means
+# the derivation corrected for the measured floor (RMSE ∝ N^(−α/(2α+2))) holds; wholly outside, differs.
+BETA_RULE = (0.3, (-0.25, -0.15))
 
 
 def num(v):
@@ -130,12 +134,38 @@ def print_floors(results):
                                        100 * iv.undefined, lo, hi, verdict))
 
 
+def print_beta(results):
+    configs = configurations(results, BETA)
+    beta, (lo, hi) = BETA_RULE
+    judged = None
+    for (d, b), pts in sorted(configs.items(), key=lambda kv: kv[0][1]):
+        print("d_ref %g mm, N^(-%.3g): " % (d, b) + "; ".join("%d: %.5f ± %.5f" % p for p in pts))
+        iv, chi2, dof = slope(pts)
+        print("  slope %.3f [%.3f, %.3f], chi2 %.1f on %d" % (iv.value, iv.lo, iv.hi, chi2, dof))
+        if abs(b - beta) < 1e-9:
+            judged = iv
+    if judged is None:
+        raise SystemExit("error: %s has no row at beta = %g" % (BETA, beta))
+    if judged.lo >= lo and judged.hi <= hi:
+        verdict = "holds"
+    elif judged.hi < lo or judged.lo > hi:
+        verdict = "differs"
+    else:
+        verdict = "inconclusive"
+    print("beta %g: slope band [%.2f, %.2f]: %s" % (beta, lo, hi, verdict))
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--results", default="results")
     ap.add_argument("--floors", action="store_true",
                     help="the floor-against-d test of %s instead" % FLOORS)
+    ap.add_argument("--beta", action="store_true",
+                    help="the schedule-exponent test of %s instead" % BETA)
     a = ap.parse_args(argv)
+    if a.beta:
+        print_beta(a.results)
+        return
     if a.floors:
         print_floors(a.results)
         return
