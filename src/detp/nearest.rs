@@ -31,6 +31,20 @@ use super::tally::Tally;
 /// The smallest k: the k-th crossing only sets the radius, so k = 1 would count nothing.
 pub const MIN_K: usize = 2;
 
+/// The exponent of k(N): MSE ∝ (k/N)² + 1/k is least at k ∝ N^(2/3) (`docs/theory.md`).
+pub const K_EXPONENT: f64 = 2.0 / 3.0;
+
+/// k(N) = max([`MIN_K`], round(k_ref·(N/N_ref)^(2/3))): the crossings a disc keeps at `photons`
+/// photons, for `k_ref` at `photons_ref` (k_ref at every N when `photons_ref` is None). Rounded
+/// half away from zero, so the value is a fixed function of the three integers.
+pub fn k_for(k_ref: u64, photons: u64, photons_ref: Option<u64>) -> usize {
+    let k = match photons_ref {
+        None => k_ref as f64,
+        Some(n_ref) => k_ref as f64 * (photons as f64 / n_ref as f64).powf(K_EXPONENT),
+    };
+    (k.round() as usize).max(MIN_K)
+}
+
 /// |x − c|² for the point x where segment `s` meets the plane of the disc (c, n), computed as
 /// [`crate::detp::disc::crosses`] computes it (glam's operations in its order). Meaningful for a
 /// pair `crosses` accepted.

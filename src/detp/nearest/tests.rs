@@ -206,3 +206,18 @@ fn in_a_uniform_field_the_estimate_is_unbiased() {
     );
     assert!(se < 0.02 * truth, "the test has power: se {se} vs {truth}");
 }
+
+#[test]
+fn k_grows_as_the_two_thirds_power_of_the_photons() {
+    assert_eq!(k_for(16, 1_000, None), 16);
+    assert_eq!(k_for(16, 1_000, Some(1_000)), 16);
+    // 8× the photons: 4× the crossings; 1/8: a quarter.
+    assert_eq!(k_for(16, 8_000, Some(1_000)), 64);
+    assert_eq!(k_for(16, 125, Some(1_000)), 4);
+    // 27×: 9×; 1000×: 100×.
+    assert_eq!(k_for(10, 27_000, Some(1_000)), 90);
+    assert_eq!(k_for(3, 1_000_000, Some(1_000)), 300);
+    // 10 · 2^(2/3) = 15.87 rounds to 16; never below the smallest k.
+    assert_eq!(k_for(10, 2_000, Some(1_000)), 16);
+    assert_eq!(k_for(16, 1, Some(1_000_000)), MIN_K);
+}
