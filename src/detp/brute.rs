@@ -40,7 +40,7 @@ pub fn accumulate_with<T: Tally>(
         let (c, n) = (discs.centers[i], discs.normals[i]);
         for (k, s) in store.segments.iter().enumerate() {
             if discs.crossed_by(s, i) {
-                tally.offer(&mut a, s, k as u32, c, n);
+                tally.offer(&mut a, s, k as u32, || (c, n));
             }
         }
         a

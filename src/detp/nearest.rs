@@ -159,7 +159,14 @@ impl Tally for Nearest {
     }
 
     #[inline]
-    fn offer(&self, state: &mut Kept, s: &Segment, seg: u32, c: DVec3, n: DVec3) {
+    fn offer(
+        &self,
+        state: &mut Kept,
+        s: &Segment,
+        seg: u32,
+        disc: impl FnOnce() -> (DVec3, DVec3),
+    ) {
+        let (c, n) = disc();
         let rho_sq = crossing_distance_sq(s, c, n);
         state.offer(
             self.k,

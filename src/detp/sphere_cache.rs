@@ -455,7 +455,7 @@ impl<'a> Ctx<'a> {
             if !stack[0].contains(c, d) {
                 for (k, s) in segs.iter().enumerate() {
                     if self.discs.crossed_by(s, p) {
-                        tally.offer(sum, s, k as u32, c, n);
+                        tally.offer(sum, s, k as u32, || (c, n));
                     }
                 }
                 stats.ray_disc_tests += segs.len() as u64;
@@ -541,7 +541,7 @@ impl<'a> Ctx<'a> {
             // `Discs::crossed_by`'s decisions, four or eight segments at a time.
             let disc = (c, n, self.discs.radius_of(p));
             crossing_segments(self.simd, segs, deepest.indices(), disc, &mut |s| {
-                tally.offer(sum, &segs[s as usize], s, c, n);
+                tally.offer(sum, &segs[s as usize], s, || (c, n));
             });
             stats.ray_disc_tests += deepest.len() as u64;
         }

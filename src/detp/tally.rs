@@ -18,8 +18,16 @@ pub trait Tally: Sync {
     /// A disc's state before any crossing.
     fn empty(&self) -> Self::State;
 
-    /// Segment `s` (number `seg` in its store) crosses the disc (centre `c`, normal `n`).
-    fn offer(&self, state: &mut Self::State, s: &Segment, seg: u32, c: DVec3, n: DVec3);
+    /// Segment `s` (number `seg` in its store) crosses the disc whose (centre, normal) `disc`
+    /// returns: a closure, so that a tally that does not need them (the power sum, in the
+    /// engines' innermost loops) never loads them.
+    fn offer(
+        &self,
+        state: &mut Self::State,
+        s: &Segment,
+        seg: u32,
+        disc: impl FnOnce() -> (DVec3, DVec3),
+    );
 
     /// Adds `from`'s crossings to `into` (the two saw disjoint sets of segments).
     fn merge(&self, into: &mut Self::State, from: Self::State);
@@ -46,7 +54,7 @@ impl Tally for Power {
     }
 
     #[inline]
-    fn offer(&self, state: &mut Acc, s: &Segment, _: u32, _: DVec3, _: DVec3) {
+    fn offer(&self, state: &mut Acc, s: &Segment, _: u32, _: impl FnOnce() -> (DVec3, DVec3)) {
         add(state, s.power, self.sign);
     }
 

@@ -179,7 +179,9 @@ where
         |states, k, s, cands| {
             cross::crossed(ix.path(), s, discs, cands, &mut |i| {
                 let i = i as usize;
-                tally.offer(&mut states[i], s, k, local.centers[i], local.normals[i]);
+                tally.offer(&mut states[i], s, k, || {
+                    (local.centers[i], local.normals[i])
+                });
             });
         },
         |a, b| a.iter_mut().zip(b).for_each(|(x, y)| tally.merge(x, y)),
