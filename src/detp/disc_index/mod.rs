@@ -38,6 +38,7 @@ use super::fixed::Acc;
 use super::order::{permutation, Order};
 use super::store::{Segment, SegmentStore};
 use super::tally::{Power, Tally};
+use super::nearest::{Kept, Nearest};
 use crate::geom::Aabb;
 
 pub use grid::GridIndex;
@@ -133,6 +134,19 @@ pub trait DiscIndex: Sync {
         acc: &mut [Acc],
     ) -> IndexStats {
         accumulate_with(self, store, segments, &Power { sign }, acc)
+    }
+
+    /// Offers each segment (all, or those listed in `segments`) to the k-nearest-crossings state
+    /// of every disc it crosses: [`accumulate_with`] for [`Nearest`], compiled per index (a
+    /// boxed index pays one dynamic call, not one per candidate).
+    fn accumulate_nearest(
+        &self,
+        store: &SegmentStore,
+        segments: Option<&[u32]>,
+        tally: &Nearest,
+        acc: &mut [Kept],
+    ) -> IndexStats {
+        accumulate_with(self, store, segments, tally, acc)
     }
 
     /// **Traversal alone**, for timing it (eq. 8 assumes it negligible): walks the index for every
