@@ -86,14 +86,14 @@ pub const RADIUS_CROSSINGS_K: Column = Column::value(
     "radius_crossings_k",
     "crossings",
     Class::Measured,
-    "with detp.radius_crossings: k, the crossings each disc keeps at this point's photons, max(2, round(k_ref·(photons/N_ref)^(2/3))) (k_ref without radius_crossings_photons); empty without the rule",
+    "with detp.radius_crossings: k, the crossings each disc keeps at this point's photons, max(2, round(k_ref·(photons/N_ref)^(2/3))) (k_ref without radius_crossings_photons); NaN without the rule (and absent from a table none of whose points uses it)",
 );
 /// The mean k-nearest radius over the cap.
 pub const RADIUS_CROSSINGS_RATIO: Column = Column::value(
     "radius_crossings_ratio",
     "1",
     Class::Measured,
-    "with detp.radius_crossings: the mean over points and replicas of r_i (the k-th nearest crossing's distance, which the estimate's power is divided by π·r_i² of) over the disc's own radius (disc_radius_used, or an edge remedy's clamp below it); 1 where fewer than k crossings fell within the disc, which then counts them all as the paper does; empty without the rule",
+    "with detp.radius_crossings: the mean over points and replicas of r_i (the k-th nearest crossing's distance, which the estimate's power is divided by π·r_i² of) over the disc's own radius (disc_radius_used, or an edge remedy's clamp below it); 1 where fewer than k crossings fell within the disc, which then counts them all as the paper does; NaN without the rule (and absent from a table none of whose points uses it)",
 );
 /// An engine's counted tests.
 pub const TESTS: Column = Column::value(
