@@ -102,11 +102,18 @@ fn the_k_nearest_radius_is_the_same_in_every_engine_and_on_any_thread_count() {
         let (ph, prow) = read_csv(&out.join(format!("{name}/{name}.points.csv")));
         let radii: Vec<f64> = prow.iter().map(|r| number(&ph, r, "disc_radius")).collect();
         assert!(radii.iter().all(|&r| r > 0.0 && r <= 0.15), "{name}");
-        assert!(radii.iter().any(|&r| r < 0.15 * 0.9), "{name}: no disc found k crossings");
+        assert!(
+            radii.iter().any(|&r| r < 0.15 * 0.9),
+            "{name}: no disc found k crossings"
+        );
         outcomes.push((name, shared_outcome(&out, name)));
     }
     let (first, rest) = outcomes.split_first().unwrap();
-    assert!(first.1.iter().flatten().any(|(c, _)| c == "irradiance_mean"));
+    assert!(first
+        .1
+        .iter()
+        .flatten()
+        .any(|(c, _)| c == "irradiance_mean"));
     for other in rest {
         assert_eq!(
             first.1, other.1,
@@ -123,7 +130,7 @@ fn the_k_nearest_estimate_of_a_uniform_field_is_unbiased_within_its_standard_err
     let spec = write_spec(
         dir.path(),
         "uniform",
-        &(r#"[experiment]
+        r#"[experiment]
 name = "uniform"
 kind = "detp"
 seed = 23
@@ -135,7 +142,7 @@ disc_radius = 0.1
 radius_crossings = 8
 engines = ["disc-index"]
 replicas = 6
-"#),
+"#,
     );
     let out = dir.path().join("out");
     run_quiet(&spec, &out).assert().success();
@@ -148,7 +155,10 @@ replicas = 6
     // Every disc holds k crossings well within d (E ≈ 3200 crossings per unit area: r_k ≈ 0.03).
     let ratio = number(&h, row, "radius_crossings_ratio");
     assert!(ratio < 0.5, "{ratio}");
-    assert!(se > 0.0 && se < 0.01 * exact, "SE {se} too large to judge a bias");
+    assert!(
+        se > 0.0 && se < 0.01 * exact,
+        "SE {se} too large to judge a bias"
+    );
     assert!(
         (mean - exact).abs() <= 4.0 * se,
         "biased: {mean} ± {se} against {exact}"
@@ -163,7 +173,10 @@ replicas = 6
     // discs is E/√(k − 2) within 10 %.
     let rmse = number(&h, row, "irradiance_rmse_mean");
     let want = exact / (k - 2.0).sqrt();
-    assert!((rmse / want - 1.0).abs() < 0.1, "RMSE {rmse} against {want}");
+    assert!(
+        (rmse / want - 1.0).abs() < 0.1,
+        "RMSE {rmse} against {want}"
+    );
 }
 
 #[test]

@@ -35,10 +35,10 @@ use rayon::prelude::*;
 
 use super::disc::Discs;
 use super::fixed::Acc;
+use super::nearest::{Kept, Nearest};
 use super::order::{permutation, Order};
 use super::store::{Segment, SegmentStore};
 use super::tally::{Power, Tally};
-use super::nearest::{Kept, Nearest};
 use crate::geom::Aabb;
 
 pub use grid::GridIndex;
