@@ -204,3 +204,40 @@ fn photon_shards_refuse_the_k_nearest_radius() {
     );
     assert!(!out.exists() || crate::common::files_below(&out).is_empty());
 }
+
+/// With one replica a disc's standard error is the k-nearest estimator's own: a disc that found
+/// its k crossings has relative SE 1/√(k − 2) (1 W lines: w̄ = 1 W), a disc that did not the
+/// paper's Poisson SE over its whole radius.
+#[test]
+fn one_replica_standard_errors_are_the_k_nearest_estimators() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = write_spec(
+        dir.path(),
+        "one",
+        "[experiment]\nname = \"one\"\nkind = \"detp\"\nseed = 29\n[detp]\nphotons = 20000\npoints = 400\ndisc_radius = 0.03\nradius_crossings = 6\nengines = [\"disc-index\"]\nwrite_points = true\n",
+    );
+    let out = dir.path().join("out");
+    run_quiet(&spec, &out).assert().success();
+    let (h, rows) = read_csv(&out.join("one/one.points.csv"));
+    let (mut full, mut open) = (0, 0);
+    for r in &rows {
+        let (e, se, radius) = (
+            number(&h, r, "irradiance_mean"),
+            number(&h, r, "irradiance_se"),
+            number(&h, r, "disc_radius"),
+        );
+        if radius < 0.03 {
+            full += 1;
+            assert!(
+                (se / e * 2.0 - 1.0).abs() < 1e-6,
+                "{se} / {e}: not 1/√(6 − 2)"
+            );
+        } else if e > 0.0 {
+            open += 1;
+            // The paper's sum over the whole disc: √(E·w̄/(π d²)).
+            let want = (e / (std::f64::consts::PI * 0.03 * 0.03)).sqrt();
+            assert!((se / want - 1.0).abs() < 1e-6, "{se} against {want}");
+        }
+    }
+    assert!(full > 50 && open > 10, "{full} full and {open} open discs");
+}
