@@ -3,7 +3,8 @@
 //! run fails on a mismatch), `disc_radius_used` is the schedule's d(N), the keys are absent from
 //! the normalised spec when not given (old spec hashes stay), and in kind quasi-static a schedule is
 //! the fixed d it computes: incremental = full in every checked frame, and the measured columns of a
-//! spec that writes d(N) directly.
+//! spec that writes d(N) directly. The k-nearest-crossings rule (engine level, no spec key yet)
+//! keeps the same crossings in every engine on traced photons.
 
 use crate::common::{read_csv, root, run_quiet, write_spec};
 use raycost::theory::detp::scheduled_radius;
@@ -180,4 +181,86 @@ fn a_quasi_static_schedule_is_exact_per_frame_and_equals_its_fixed_d() {
         tables[0], tables[1],
         "a schedule is the fixed d(N) it computes"
     );
+}
+
+/// The k-nearest-crossings rule on traced photons: brute force, both disc indexes (a coarse and a
+/// fine grid, an octree) and the sphere cache keep the same k crossings of every disc, bit for
+/// bit, on the paper's segments and on segments cut at their first impact, for a small and a
+/// large k; and the selection's radius is the k-th distance, below d, where k crossings are found.
+#[test]
+fn k_nearest_crossings_agree_bit_for_bit_across_engines_on_a_scene() {
+    use glam::DVec3;
+    use raycost::detp::disc::Discs;
+    use raycost::detp::disc_index::{self, DiscIndex, GridIndex, Octree};
+    use raycost::detp::nearest::{k_for, Kept, Nearest};
+    use raycost::detp::order::{permutation, Order};
+    use raycost::detp::sphere_cache::{filter::FilterPath, root_sphere, run_tally};
+    use raycost::detp::tally::Tally;
+    use raycost::detp::{brute, edge::clip_to_first_hit, photon::trace_photons};
+
+    let s = raycost::lt::Scene::load(&root().join("experiments/scenes/hard/hard-cases.toml"))
+        .expect("vendored scene");
+    let d = 0.1;
+    // Floor points around the box (some under it, some beside its faces) and on its top.
+    let mut c = Vec::new();
+    for i in 0..24 {
+        for j in 0..24 {
+            c.push(DVec3::new(
+                -1.15 + 0.1 * f64::from(i),
+                0.0,
+                -1.15 + 0.1 * f64::from(j),
+            ));
+        }
+    }
+    for z in [-0.15, 0.0, 0.15] {
+        c.push(DVec3::new(0.24, 0.5, z));
+    }
+    let n = vec![DVec3::Y; c.len()];
+    let discs = Discs::new(c, n, d).unwrap();
+    let traced = trace_photons(&s, 100_000, 3);
+    let mut cut = traced.clone();
+    clip_to_first_hit(&mut cut, 0.05 * d);
+    let perm = permutation(&discs.centers, Order::Hilbert, 10);
+    let root = root_sphere(&s.bounds());
+    for (label, st) in [("paper", &traced), ("first-hit", &cut)] {
+        for k in [k_for(3, 100_000, None), k_for(8, 100_000, Some(12_500))] {
+            let t = Nearest::new(k);
+            let sorted = |acc: &[Kept]| acc.iter().map(Kept::sorted).collect::<Vec<_>>();
+            let mut want = t.empties(discs.len());
+            brute::accumulate_with(st, &discs, None, &t, &mut want);
+            let full = want.iter().filter(|w| w.len() == k).count();
+            assert!(
+                full > 100 && full < discs.len(),
+                "{label} k {k}: {full} full"
+            );
+            for w in &want {
+                let sel = w.select(k, d);
+                assert_eq!(sel.full, w.len() == k);
+                assert!(sel.radius <= d && (sel.full || sel.radius == d));
+            }
+            let want = sorted(&want);
+            let mut acc = t.empties(discs.len());
+            let params = raycost::detp::sphere_cache::SphereCacheParams::default();
+            run_tally(
+                st,
+                &discs,
+                &perm,
+                root,
+                &params,
+                &t,
+                &mut acc,
+                FilterPath::detect(),
+            );
+            assert!(sorted(&acc) == want, "{label} k {k}: sphere cache");
+            for ix in [
+                Box::new(Octree::build(&discs, 8, d)) as Box<dyn DiscIndex>,
+                Box::new(GridIndex::build(&discs, 2.0 * d)),
+                Box::new(GridIndex::build(&discs, 0.3 * d)),
+            ] {
+                let mut acc = t.empties(discs.len());
+                disc_index::accumulate_with(ix.as_ref(), st, None, &t, &mut acc);
+                assert!(sorted(&acc) == want, "{label} k {k}: disc index");
+            }
+        }
+    }
 }

@@ -10,6 +10,7 @@ mod detp_competitors;
 mod detp_edge;
 mod detp_engines;
 mod detp_radius;
+mod detp_radius_crossings;
 mod detp_runs;
 mod detp_surface_subsample;
 mod inputs;

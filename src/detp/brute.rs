@@ -6,8 +6,9 @@
 use rayon::prelude::*;
 
 use super::disc::Discs;
-use super::fixed::{add, Acc};
+use super::fixed::Acc;
 use super::store::SegmentStore;
+use super::tally::{Power, Tally};
 
 /// Adds `sign ×` the power of every segment that crosses disc `i` to `acc[i]`, for every disc `i`
 /// (or only the discs listed in `subset`). Returns the number of ray–disc tests made
@@ -22,12 +23,24 @@ pub fn accumulate(
     sign: i8,
     acc: &mut [Acc],
 ) -> u64 {
+    accumulate_with(store, discs, subset, &Power { sign }, acc)
+}
+
+/// [`accumulate`] for any [`Tally`]: offers every crossing of disc `i` to `acc[i]`.
+pub fn accumulate_with<T: Tally>(
+    store: &SegmentStore,
+    discs: &Discs,
+    subset: Option<&[u32]>,
+    tally: &T,
+    acc: &mut [T::State],
+) -> u64 {
     assert!(acc.len() >= discs.len(), "one accumulator per disc");
-    let sum = |i: usize| -> Acc {
-        let mut a: Acc = 0;
-        for s in &store.segments {
+    let sum = |i: usize| -> T::State {
+        let mut a = tally.empty();
+        let (c, n) = (discs.centers[i], discs.normals[i]);
+        for (k, s) in store.segments.iter().enumerate() {
             if discs.crossed_by(s, i) {
-                add(&mut a, s.power, sign);
+                tally.offer(&mut a, s, k as u32, || (c, n));
             }
         }
         a
@@ -37,13 +50,13 @@ pub fn accumulate(
             acc[..discs.len()]
                 .par_iter_mut()
                 .enumerate()
-                .for_each(|(i, a)| *a += sum(i));
+                .for_each(|(i, a)| tally.merge(a, sum(i)));
             discs.len()
         }
         Some(ids) => {
-            let sums: Vec<Acc> = ids.par_iter().map(|&i| sum(i as usize)).collect();
+            let sums: Vec<T::State> = ids.par_iter().map(|&i| sum(i as usize)).collect();
             for (&i, s) in ids.iter().zip(sums) {
-                acc[i as usize] += s;
+                tally.merge(&mut acc[i as usize], s);
             }
             ids.len()
         }

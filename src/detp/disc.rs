@@ -97,8 +97,7 @@ impl Discs {
 
     /// The area π r_i² that disc `i`'s power sum is divided by.
     pub fn area(&self, i: usize) -> f64 {
-        let r = self.radius_of(i);
-        std::f64::consts::PI * r * r
+        disc_area(self.radius_of(i))
     }
 
     /// `n` discs of radius `d` centred uniformly in the ball (`center`, `rad`) with uniform normals:
@@ -164,6 +163,12 @@ impl Discs {
     pub fn irradiance(&self, i: usize, watts: f64) -> f64 {
         watts / self.area(i)
     }
+}
+
+/// π r²: the area a disc of radius r divides its power sum by.
+#[inline]
+pub fn disc_area(r: f64) -> f64 {
+    std::f64::consts::PI * r * r
 }
 
 /// The exact crossing test of a segment (o, v, t ∈ (0, t_end]) with the disc (c, n, d).

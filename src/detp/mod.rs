@@ -15,6 +15,8 @@
 //! - [`disc`]: sample points with normals, their discs, the exact crossing test;
 //! - [`edge`]: `detp.edge`, what a disc does where it reaches past an edge (the paper's method or a
 //!   remedy: per-disc radii, or crossings cut at the first impact);
+//! - [`tally`]: what an engine does with a crossing (add its power, or keep the k nearest);
+//! - [`nearest`]: a disc radius from its k nearest crossings (exact, order-free selection);
 //! - [`brute`]: every segment against every disc (the oracle);
 //! - [`order`]: point orderings (none, Morton/Lebesgue, Hilbert);
 //! - [`sphere_cache`]: the hierarchy of spheres with ratio Q;
@@ -32,6 +34,7 @@ pub mod disc_index;
 pub mod edge;
 pub mod fixed;
 pub mod indirect;
+pub mod nearest;
 pub mod order;
 pub mod photon;
 pub mod photon_map;
@@ -40,3 +43,4 @@ pub mod sphere_cache;
 pub mod stability;
 pub mod store;
 pub mod surface_points;
+pub mod tally;

@@ -56,8 +56,9 @@ use self::filter::{filter, kappa, FilterPath, Probe, RayList, MAX_LEVEL};
 use super::disc::Discs;
 use super::disc_index::cross::crossing_segments;
 use super::disc_index::SimdPath;
-use super::fixed::{add, Acc};
+use super::fixed::Acc;
 use super::store::SegmentStore;
+use super::tally::{Power, Tally};
 use crate::geom::Aabb;
 
 /// Where a new level takes its list from.
@@ -285,6 +286,24 @@ pub fn run_with(
     run_capped(store, discs, perm, root, params, acc, path, MAX_LEVEL)
 }
 
+/// [`run_with`] for any [`Tally`]: offers each disc's crossings to `acc[disc]` (the power sums
+/// are [`run_with`]; the k-nearest crossings are [`crate::detp::nearest::Nearest`]).
+#[allow(clippy::too_many_arguments)]
+pub fn run_tally<T: Tally>(
+    store: &SegmentStore,
+    discs: &Discs,
+    perm: &[u32],
+    root: (DVec3, f64),
+    params: &SphereCacheParams,
+    tally: &T,
+    acc: &mut [T::State],
+    path: FilterPath,
+) -> CacheStats {
+    run_generic(
+        store, discs, perm, root, params, tally, acc, path, MAX_LEVEL,
+    )
+}
+
 /// [`run_with`] building no level deeper than `max_level` (at most [`MAX_LEVEL`]).
 #[allow(clippy::too_many_arguments)]
 fn run_capped(
@@ -294,6 +313,25 @@ fn run_capped(
     root: (DVec3, f64),
     params: &SphereCacheParams,
     acc: &mut [Acc],
+    path: FilterPath,
+    max_level: usize,
+) -> CacheStats {
+    let tally = Power { sign: 1 };
+    run_generic(
+        store, discs, perm, root, params, &tally, acc, path, max_level,
+    )
+}
+
+/// The cache's one driver, for any [`Tally`].
+#[allow(clippy::too_many_arguments)]
+fn run_generic<T: Tally>(
+    store: &SegmentStore,
+    discs: &Discs,
+    perm: &[u32],
+    root: (DVec3, f64),
+    params: &SphereCacheParams,
+    tally: &T,
+    acc: &mut [T::State],
     path: FilterPath,
     max_level: usize,
 ) -> CacheStats {
@@ -329,13 +367,13 @@ fn run_capped(
     };
     // One set of level lists per worker, reused by every chunk it runs (the lists' contents never
     // carry over: each build rewrites its level's list), so a steady-state run allocates nothing.
-    let chunks: Vec<(Vec<Acc>, CacheStats)> = perm
+    let chunks: Vec<(Vec<T::State>, CacheStats)> = perm
         .par_chunks(params.chunk_points)
-        .map_init(Vec::new, |lists, points| ctx.chunk(points, lists))
+        .map_init(Vec::new, |lists, points| ctx.chunk(tally, points, lists))
         .collect();
     for (points, (sums, s)) in perm.chunks(params.chunk_points).zip(chunks) {
         for (&p, v) in points.iter().zip(sums) {
-            acc[p as usize] += v;
+            tally.merge(&mut acc[p as usize], v);
         }
         stats.merge(&s);
     }
@@ -395,11 +433,16 @@ impl<'a> Ctx<'a> {
 
     /// One chunk: its own cache, its points' sums in chunk order, its counters. `lists[i]` holds
     /// level i's list (i ≥ 1); the buffers are the caller's, reused from chunk to chunk.
-    fn chunk(&self, points: &[u32], lists: &mut Vec<RayList>) -> (Vec<Acc>, CacheStats) {
+    fn chunk<T: Tally>(
+        &self,
+        tally: &T,
+        points: &[u32],
+        lists: &mut Vec<RayList>,
+    ) -> (Vec<T::State>, CacheStats) {
         let d = self.discs.radius;
         let segs = &self.store.segments;
         let mut stats = CacheStats::default();
-        let mut sums = vec![0; points.len()];
+        let mut sums = tally.empties(points.len());
         let mut stack: Vec<Level> = vec![Level {
             center: self.center,
             radius: self.r0,
@@ -408,10 +451,11 @@ impl<'a> Ctx<'a> {
         for (k, (&p, sum)) in points.iter().zip(&mut sums).enumerate() {
             let p = p as usize;
             let c = self.discs.centers[p];
+            let n = self.discs.normals[p];
             if !stack[0].contains(c, d) {
-                for s in segs {
+                for (k, s) in segs.iter().enumerate() {
                     if self.discs.crossed_by(s, p) {
-                        add(sum, s.power, 1);
+                        tally.offer(sum, s, k as u32, || (c, n));
                     }
                 }
                 stats.ray_disc_tests += segs.len() as u64;
@@ -495,9 +539,9 @@ impl<'a> Ctx<'a> {
             }
             let deepest = self.list(lists, stack.len() - 1);
             // `Discs::crossed_by`'s decisions, four or eight segments at a time.
-            let disc = (c, self.discs.normals[p], self.discs.radius_of(p));
+            let disc = (c, n, self.discs.radius_of(p));
             crossing_segments(self.simd, segs, deepest.indices(), disc, &mut |s| {
-                add(sum, segs[s as usize].power, 1);
+                tally.offer(sum, &segs[s as usize], s, || (c, n));
             });
             stats.ray_disc_tests += deepest.len() as u64;
         }

@@ -34,9 +34,11 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::disc::Discs;
-use super::fixed::{add, Acc};
+use super::fixed::Acc;
+use super::nearest::{Kept, Nearest};
 use super::order::{permutation, Order};
 use super::store::{Segment, SegmentStore};
+use super::tally::{Power, Tally};
 use crate::geom::Aabb;
 
 pub use grid::GridIndex;
@@ -131,25 +133,20 @@ pub trait DiscIndex: Sync {
         sign: i8,
         acc: &mut [Acc],
     ) -> IndexStats {
-        let discs = self.discs();
-        assert!(acc.len() >= discs.len(), "one accumulator per disc");
-        let (sums, stats) = walk_segments(
-            self,
-            store,
-            segments,
-            || vec![0 as Acc; discs.len()],
-            // `crosses` on exact copies of the discs' values: `Discs::crossed_by`'s decisions.
-            |sums, s, cands| {
-                cross::crossed(self.path(), s, discs, cands, &mut |i| {
-                    add(&mut sums[i as usize], s.power, sign);
-                });
-            },
-            |a, b| a.iter_mut().zip(b).for_each(|(x, y)| *x += y),
-        );
-        for (&i, s) in discs.original.iter().zip(sums) {
-            acc[i as usize] += s;
-        }
-        stats
+        accumulate_with(self, store, segments, &Power { sign }, acc)
+    }
+
+    /// Offers each segment (all, or those listed in `segments`) to the k-nearest-crossings state
+    /// of every disc it crosses: [`accumulate_with`] for [`Nearest`], compiled per index (a
+    /// boxed index pays one dynamic call, not one per candidate).
+    fn accumulate_nearest(
+        &self,
+        store: &SegmentStore,
+        segments: Option<&[u32]>,
+        tally: &Nearest,
+        acc: &mut [Kept],
+    ) -> IndexStats {
+        accumulate_with(self, store, segments, tally, acc)
     }
 
     /// **Traversal alone**, for timing it (eq. 8 assumes it negligible): walks the index for every
@@ -163,11 +160,50 @@ pub trait DiscIndex: Sync {
             store,
             segments,
             || 0u64,
-            |n, _, c| *n += c.len() as u64,
+            |n, _, _, c| *n += c.len() as u64,
             |a, b| *a += b,
         )
         .1
     }
+}
+
+/// [`DiscIndex::accumulate`] for any [`Tally`]: offers each segment (all, or those listed in
+/// `segments`) to every disc it crosses, `acc` indexed by the caller's disc numbers. Parallel over
+/// segments; each worker's states are merged by the tally, so the result is order-free.
+pub fn accumulate_with<I, T>(
+    ix: &I,
+    store: &SegmentStore,
+    segments: Option<&[u32]>,
+    tally: &T,
+    acc: &mut [T::State],
+) -> IndexStats
+where
+    I: DiscIndex + ?Sized,
+    T: Tally,
+{
+    let discs = ix.discs();
+    assert!(acc.len() >= discs.len(), "one accumulator per disc");
+    let local = &discs.discs;
+    let (states, stats) = walk_segments(
+        ix,
+        store,
+        segments,
+        || tally.empties(discs.len()),
+        // `crosses` on exact copies of the discs' values: `Discs::crossed_by`'s decisions.
+        |states, k, s, cands| {
+            cross::crossed(ix.path(), s, discs, cands, &mut |i| {
+                let i = i as usize;
+                tally.offer(&mut states[i], s, k, || {
+                    (local.centers[i], local.normals[i])
+                });
+            });
+        },
+        |a, b| a.iter_mut().zip(b).for_each(|(x, y)| tally.merge(x, y)),
+    );
+    for (&i, s) in discs.original.iter().zip(states) {
+        tally.merge(&mut acc[i as usize], s);
+    }
+    stats
 }
 
 /// The per-segment driver shared by [`DiscIndex::accumulate`] and [`DiscIndex::traversal_only`]:
@@ -186,19 +222,20 @@ where
     I: DiscIndex + ?Sized,
     T: Send,
     N: Fn() -> T + Sync + Send,
-    F: Fn(&mut T, &Segment, &[u32]) + Sync + Send,
+    F: Fn(&mut T, u32, &Segment, &[u32]) + Sync + Send,
     M: Fn(&mut T, T) + Sync + Send,
 {
     let nd = ix.discs().len();
     let n = segments.map_or(store.len(), <[u32]>::len);
-    let seg_at = |k: usize| &store.segments[segments.map_or(k, |s| s[k] as usize)];
+    let seg_no = |k: usize| segments.map_or(k, |s| s[k] as usize);
     let (state, stats, _, _) = (0..n)
         .into_par_iter()
         .with_min_len(1 << 12)
         .fold(
             || (init(), IndexStats::default(), Mailbox::new(nd), Vec::new()),
             |(mut t, mut st, mut mb, mut cands), k| {
-                let s = seg_at(k);
+                let no = seg_no(k);
+                let s = &store.segments[no];
                 cands.clear();
                 if ix.reach().holds(s.o()) {
                     let w = ix.candidates(s, &mut mb, &mut cands);
@@ -211,7 +248,7 @@ where
                     st.segments_reaching += u64::from(nd > 0);
                 }
                 st.ray_disc_tests += cands.len() as u64;
-                test(&mut t, s, &cands);
+                test(&mut t, no as u32, s, &cands);
                 (t, st, mb, cands)
             },
         )

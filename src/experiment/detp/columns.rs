@@ -72,7 +72,7 @@ pub const DISC_RADIUS_USED: Column = Column::value(
     "disc_radius_used",
     "length",
     Class::Measured,
-    "d the engines used, in detp.length_unit: detp.disc_radius, or with detp.radius_schedule_photons the schedule's d(N) = d_ref·(N/N_ref)^(−β) at this point's photons (an edge remedy clamps each disc below it)",
+    "d the engines used, in detp.length_unit: detp.disc_radius, or with detp.radius_schedule_photons the schedule's d(N) = d_ref·(N/N_ref)^(−β) at this point's photons (an edge remedy clamps each disc below it; with detp.radius_crossings it is the largest radius a disc's k-th crossing may have, see radius_crossings_ratio)",
 );
 /// The same over r_s.
 pub const DISC_RADIUS_USED_ROOT: Column = Column::value(
@@ -80,6 +80,20 @@ pub const DISC_RADIUS_USED_ROOT: Column = Column::value(
     "r_s",
     Class::Measured,
     "disc_radius_used over r_s, the radius of the sphere around the scene's bounds (1 for lines): the same d in root units whatever detp.length_unit",
+);
+/// k of the k-nearest-crossings radius at this point.
+pub const RADIUS_CROSSINGS_K: Column = Column::value(
+    "radius_crossings_k",
+    "crossings",
+    Class::Measured,
+    "with detp.radius_crossings: k, the crossings each disc keeps at this point's photons, max(2, round(k_ref·(photons/N_ref)^(2/3))) (k_ref without radius_crossings_photons); NaN without the rule (and absent from a table none of whose points uses it)",
+);
+/// The mean k-nearest radius over the cap.
+pub const RADIUS_CROSSINGS_RATIO: Column = Column::value(
+    "radius_crossings_ratio",
+    "1",
+    Class::Measured,
+    "with detp.radius_crossings: the mean over points and replicas of r_i (the k-th nearest crossing's distance, which the estimate's power is divided by π·r_i² of) over the disc's own radius (disc_radius_used, or an edge remedy's clamp below it); 1 where fewer than k crossings fell within the disc, which then counts them all as the paper does; NaN without the rule (and absent from a table none of whose points uses it)",
 );
 /// An engine's counted tests.
 pub const TESTS: Column = Column::value(
@@ -249,6 +263,10 @@ pub const MAIN: Table<DetpConfig, DetpMeasured> = Table::of(&[
     col(&EDGE_RADIUS, |_, m| m.edge_radius.into()),
     col(&DISC_RADIUS_USED, |p, _| (p.disc_radius / p.length_scale).into()),
     col(&DISC_RADIUS_USED_ROOT, |p, _| (p.disc_radius / p.root_radius).into()),
+    col(&RADIUS_CROSSINGS_K, |p, _| {
+        p.radius_crossings.map(|r| r.k as u64).into()
+    }),
+    col(&RADIUS_CROSSINGS_RATIO, |_, m| m.radius_crossings_ratio.into()),
     col(&DIRECT_S, |_, m| m.direct_s.into()),
     col(&DIRECT_RAYS_SHADOW, |_, m| m.direct_rays_shadow.into()),
     Entry::Parts(engine_cells, engine_columns),
@@ -303,7 +321,7 @@ pub const POINT_IRRADIANCE_SE: Column = Column::value(
     "irradiance_se",
     "W/m²",
     Class::Measured,
-    "its standard error: across replicas, or with one replica the Poisson SE √(E·w̄/πd²)",
+    "its standard error: across replicas, or with one replica the Poisson SE √(E·w̄/πd²) (d: the point's disc_radius; with detp.radius_crossings, a disc that found its k crossings: √(E·w̄/πr_i²·(k − 1)/(k − 2)), NaN at k = 2, whose variance is infinite)",
 );
 /// Its value in each replica.
 pub const POINT_IRRADIANCE_REPLICA: Column = Column::value(
@@ -325,7 +343,7 @@ pub const POINT_DISC_RADIUS: Column = Column::value(
     "disc_radius",
     "length",
     Class::Measured,
-    "the point's disc radius: d (with a radius schedule d(N)), or with detp.edge = \"clamp-radius\" its own radius (edge_radius_factor κ times the distance to the nearest other surface, clamped to [edge_min_radius·d, d]); its sum is divided by π·disc_radius²",
+    "the point's disc radius: d (with a radius schedule d(N)), or with detp.edge = \"clamp-radius\" its own radius (edge_radius_factor κ times the distance to the nearest other surface, clamped to [edge_min_radius·d, d]); its sum is divided by π·disc_radius². With detp.radius_crossings: r_i, the distance of its k-th nearest crossing within that radius (the radius itself where fewer than k cross), mean over replicas (each replica divides by its own r_i²)",
 );
 /// The point's distance to an edge.
 pub const POINT_EDGE_DISTANCE: Column = Column::value(

@@ -120,6 +120,21 @@ pub struct DetpConfig {
     pub spacing_given: bool,
     /// `detp.edge` with its parameter.
     pub edge: EdgeMode,
+    /// `detp.radius_crossings` (None: each disc keeps its radius).
+    pub radius_crossings: Option<RadiusCrossings>,
+}
+
+/// The k-nearest-crossings radius: `detp.radius_crossings` (k_ref) and
+/// `detp.radius_crossings_photons` (N_ref), with the k they give at this point's photons
+/// ([`crate::detp::nearest::k_for`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RadiusCrossings {
+    /// k_ref.
+    pub k_ref: u64,
+    /// N_ref (None: k = k_ref at every photon count).
+    pub photons: Option<u64>,
+    /// k at this point's photons: the crossings each disc keeps.
+    pub k: usize,
 }
 
 /// The radius schedule d(N) = d_ref·(N/N_ref)^(−β) ([`crate::theory::detp::scheduled_radius`]).
@@ -352,6 +367,7 @@ impl DetpConfig {
             photon_batches: d.photon_batches.forced(),
             spacing_given: d.point_spacing.is_some(),
             edge,
+            radius_crossings: radius_crossings(d)?,
         };
         cfg.check_grid_cells(d)?;
         cfg.check_path_points()?;
@@ -531,6 +547,25 @@ fn radius_schedule(d: &RawDetp, d_ref: f64) -> Result<Option<RadiusSchedule>, Co
         photons,
         exponent,
         d_ref,
+    }))
+}
+
+/// `detp.radius_crossings` and `detp.radius_crossings_photons`, checked: N_ref belongs to the rule.
+/// (k ≥ 2 is checked where the key is read.)
+fn radius_crossings(d: &RawDetp) -> Result<Option<RadiusCrossings>, ConfigError> {
+    let Some(k_ref) = d.radius_crossings else {
+        if d.radius_crossings_photons.is_some() {
+            return refuse(
+                "detp.radius_crossings_photons",
+                "belongs to the k-nearest-crossings radius: give detp.radius_crossings (k_ref) too",
+            );
+        }
+        return Ok(None);
+    };
+    Ok(Some(RadiusCrossings {
+        k_ref,
+        photons: d.radius_crossings_photons,
+        k: crate::detp::nearest::k_for(k_ref, d.photons, d.radius_crossings_photons),
     }))
 }
 

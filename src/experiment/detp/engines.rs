@@ -10,20 +10,26 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+use rayon::prelude::*;
+
 use super::config::DetpConfig;
 pub use super::estimators::EngineMeasured;
 use super::estimators::path_tracing;
 use super::estimators::sphere_cache::LevelRow;
 use super::{PointSet, RaySet};
+use crate::detp::disc::Discs;
 use crate::detp::fixed::Acc;
+use crate::detp::nearest::{Kept, Nearest};
+use crate::detp::tally::Tally;
 use crate::lt::reference::{self, Irradiance};
 use crate::sample::rng::{domain, hash_key, mix64};
 use crate::stats::{ClusteredMean, Estimate};
 
 /// What one replica's engine returned.
 pub(crate) enum Output {
-    /// Integer sums per disc (a DETP engine: must equal every other DETP engine's, bit for bit).
-    Sums(Vec<Acc>),
+    /// Integer sums per disc and, with the k-nearest-crossings radius, each disc's radius (a DETP
+    /// engine: must equal every other DETP engine's, bit for bit).
+    Sums(Gathered),
     /// A baseline's estimates (kept by the engine for its own columns; not compared).
     Baseline,
 }
@@ -162,6 +168,70 @@ pub(crate) trait Engine: Send {
     }
 }
 
+
+/// What a DETP engine found on one replica's discs: the power units each disc counts and, with
+/// `detp.radius_crossings`, the radius r_i its sum is divided by (as IEEE bits: compared bit for
+/// bit across engines; empty: each disc's own radius, [`Discs::radius_of`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct Gathered {
+    /// Power units per disc (or per disc of a check subset).
+    pub units: Vec<Acc>,
+    /// r_i's bits per disc, with the k-nearest-crossings radius (else empty).
+    pub radii: Vec<u64>,
+}
+
+/// A DETP engine's pass over a replica's segments, for the two tallies an engine runs: the
+/// paper's power sums, or each disc's k nearest crossings ([`crate::detp::tally`]).
+pub(crate) trait Pass {
+    /// The engine's counts.
+    type Stats;
+    /// The power sums of every disc into `acc`.
+    fn sums(&self, acc: &mut [Acc]) -> Self::Stats;
+    /// Each disc's k nearest crossings into `kept`.
+    fn nearest(&self, tally: &Nearest, kept: &mut [Kept]) -> Self::Stats;
+}
+
+/// The pass with the tally the point asks for, timed as one: with `detp.radius_crossings` finding
+/// each disc's k nearest crossings and selecting its radius and counted power ([`select`]) is the
+/// engine's cost, in its seconds.
+pub(crate) fn gather<P: Pass>(cfg: &DetpConfig, discs: &Discs, pass: &P) -> (Gathered, P::Stats, f64) {
+    let n = discs.len();
+    let ((g, stats), s) = timed(|| match cfg.radius_crossings {
+        None => {
+            let mut acc = vec![0; n];
+            let stats = pass.sums(&mut acc);
+            (
+                Gathered {
+                    units: acc,
+                    radii: Vec::new(),
+                },
+                stats,
+            )
+        }
+        Some(rc) => {
+            let tally = Nearest::new(rc.k);
+            let mut kept = tally.empties(n);
+            let stats = pass.nearest(&tally, &mut kept);
+            let all: Vec<u32> = (0..n as u32).collect();
+            (select(&kept, &all, rc.k, discs), stats)
+        }
+    });
+    (g, stats, s)
+}
+
+/// The radius and counted power of the discs `which` (`kept` indexed by disc number), in that
+/// order ([`Kept::select`], capped at each disc's own radius).
+pub(crate) fn select(kept: &[Kept], which: &[u32], k: usize, discs: &Discs) -> Gathered {
+    let (units, radii) = which
+        .par_iter()
+        .map(|&i| {
+            let i = i as usize;
+            let s = kept[i].select(k, discs.radius_of(i));
+            (s.units, s.radius.to_bits())
+        })
+        .unzip();
+    Gathered { units, radii }
+}
 
 pub(super) fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
     let s = Instant::now();

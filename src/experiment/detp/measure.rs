@@ -20,6 +20,7 @@ use super::estimators::Role;
 use super::spec::EngineChoice;
 use super::shards::ReplicaPart;
 use super::{agree, check_sums, points, rays, PointSet};
+use crate::detp::disc::disc_area;
 use crate::error::Error;
 use crate::stats::Estimate;
 
@@ -42,6 +43,9 @@ pub struct DetpMeasured {
     pub edge_s: f64,
     /// Mean disc radius over d.
     pub edge_radius: f64,
+    /// With `detp.radius_crossings`: the mean over discs and replicas of r_i over the disc's own
+    /// radius (1 where fewer than k crossings fell within it).
+    pub radius_crossings_ratio: Option<f64>,
     /// Each engine's measurement, in the point's engine order.
     pub engines: Vec<EngineMeasured>,
     /// Discs where the DETP engines or brute force disagree.
@@ -134,6 +138,9 @@ pub(super) struct Replicated {
     engines: Vec<Box<dyn engines::Engine>>,
     /// DETP's irradiance per disc, per replica.
     irr: Vec<Vec<f64>>,
+    /// With `detp.radius_crossings`: each disc's radius r_i per replica (else empty: each disc
+    /// keeps its own, [`crate::detp::disc::Discs::radius_of`]).
+    radii: Vec<Vec<f64>>,
     law_radius: f64,
     root_radius: f64,
     mean_segment_watts: f64,
@@ -155,6 +162,7 @@ impl Replicated {
                 .map(|&e| e.estimator().engine(refs))
                 .collect(),
             irr: Vec::with_capacity(cfg.replicas as usize),
+            radii: Vec::new(),
             law_radius: 1.0,
             root_radius: 1.0,
             mean_segment_watts: 0.0,
@@ -215,23 +223,61 @@ impl Replicated {
                 part.power_units() as f64 * scale.watts_per_unit / part.segments as f64;
         }
         let n = self.pts.discs.len();
-        let a = agree(cfg, point, replica, n, &part.sums, &part.bf);
+        let a = agree(cfg, point, replica, n, part);
         self.mismatches += a.mismatches;
         self.bf_checked += a.bf_checked;
         let discs = &self.pts.discs;
         let direct = engines::direct_part(cfg, &self.pts, replica, &self.refs);
+        // The k-nearest rule's r_i, or each disc's own radius: the one area its sum is divided by.
+        let radii: Vec<f64> = if a.radii.is_empty() {
+            (0..n).map(|i| discs.radius_of(i)).collect()
+        } else {
+            a.radii.iter().map(|&b| f64::from_bits(b)).collect()
+        };
         self.irr.push(
             a.sums
                 .iter()
+                .zip(&radii)
                 .enumerate()
-                .map(|(i, &s)| {
-                    let e = discs.irradiance(i, scale.watts(s));
+                .map(|(i, (&s, &r))| {
+                    let e = scale.watts(s) / disc_area(r);
                     direct.as_ref().map_or(e, |d| e + d.values[i].mean)
                 })
                 .collect(),
         );
+        if !a.radii.is_empty() {
+            self.radii.push(radii);
+        }
         self.direct.extend(direct);
         self.exact.push(self.pts.exact.clone());
+    }
+
+    /// Disc `i`'s radius in replica `replica` (the k-nearest rule's r_i, else its own).
+    fn radius(&self, replica: usize, i: usize) -> f64 {
+        self.radii
+            .get(replica)
+            .map_or_else(|| self.pts.discs.radius_of(i), |r| r[i])
+    }
+
+    /// The Poisson variance of DETP's estimate `e` (its part without the direct light) at disc `i`
+    /// in replica `replica`: e·w̄/(π r²) for a sum over a disc of radius r. With the k-nearest rule
+    /// a disc that found its k crossings counts k − 1 of them over a random area, whose variance
+    /// is (k − 1)/(k − 2) times that (λ²/(k − 2) for a Poisson field; infinite at k = 2, written
+    /// NaN); a disc that did not (r_i = its own radius) is a plain sum.
+    fn poisson_var(&self, cfg: &DetpConfig, replica: usize, i: usize, e: f64) -> f64 {
+        let r = self.radius(replica, i);
+        let var = e * self.mean_segment_watts / disc_area(r);
+        match cfg.radius_crossings {
+            Some(rc) if r < self.pts.discs.radius_of(i) => {
+                let k = rc.k as f64;
+                if rc.k > 2 {
+                    var * (k - 1.0) / (k - 2.0)
+                } else {
+                    f64::NAN
+                }
+            }
+            _ => var,
+        }
     }
 
     /// The mean over replicas of the direct part at disc `i` and its variance (0, 0 without one).
@@ -277,7 +323,7 @@ pub(super) fn trace_replica(
     if let Tracing::Whole(direct) = tracing {
         rays.direct = direct;
     }
-    let sums: Vec<Vec<_>> = engines
+    let sums: Vec<_> = engines
         .iter_mut()
         .zip(&cfg.engines)
         .filter(|(_, &c)| !shard || c.reads_photons())
@@ -412,7 +458,7 @@ pub(super) fn measure(
     let detp_points = if cfg.points_per_replica() {
         Vec::new()
     } else {
-        per_disc(r)
+        per_disc(cfg, r)
     };
     // Baselines' estimates per disc, and every engine against the reference where it runs.
     let baselines: Vec<(EngineChoice, Vec<(f64, f64)>)> = cfg
@@ -426,7 +472,7 @@ pub(super) fn measure(
         .find(|(c, _)| is_reference(*c))
         .map(|(_, v)| v.as_slice());
     let reference = against_reference(cfg, r, &detp_points, &baselines);
-    let (irradiance, exact_mean) = mean_irradiance(r);
+    let (irradiance, exact_mean) = mean_irradiance(cfg, r);
     let errs: Vec<(f64, f64)> = r
         .irr
         .iter()
@@ -470,6 +516,13 @@ pub(super) fn measure(
             .map(|i| discs.radius_of(i) / discs.radius)
             .sum::<f64>()
             / discs.len().max(1) as f64,
+        radius_crossings_ratio: (!r.radii.is_empty()).then(|| {
+            let ratios = r
+                .radii
+                .iter()
+                .flat_map(|v| v.iter().enumerate().map(|(i, &x)| x / discs.radius_of(i)));
+            ratios.sum::<f64>() / (r.radii.len() * discs.len()).max(1) as f64
+        }),
         engines: r.engines.iter().map(|e| e.measured(&pooled)).collect(),
         mismatches: r.mismatches,
         bf_checked: r.bf_checked,
@@ -486,7 +539,7 @@ pub(super) fn measure(
 
 /// DETP's estimate per disc: mean over replicas, SE across them (or, with one replica, the Poisson
 /// SE of a sum of segments of the mean segment power: √(E·w̄/πd²)).
-fn per_disc(r: &Replicated) -> Vec<(f64, f64)> {
+fn per_disc(cfg: &DetpConfig, r: &Replicated) -> Vec<(f64, f64)> {
     let discs = &r.pts.discs;
     (0..discs.len())
         .map(|i| {
@@ -496,7 +549,7 @@ fn per_disc(r: &Replicated) -> Vec<(f64, f64)> {
                 // The Poisson SE of DETP's part; with `nee` plus the direct part's own variance.
                 let (direct, var) = r.direct_at(i);
                 let detp = (est.mean - direct).max(0.0);
-                est.se = (detp * r.mean_segment_watts / discs.area(i) + var).sqrt();
+                est.se = (r.poisson_var(cfg, 0, i, detp) + var).sqrt();
             }
             (est.mean, est.se)
         })
@@ -564,7 +617,7 @@ fn judged_discs(exact: &[f64]) -> Vec<usize> {
 /// DETP's mean irradiance and the exact mean, over the discs with an exact value (see
 /// [`judged_discs`]), each replica over its own points' (they differ where points vary per replica;
 /// the exact mean is then the mean over replicas of theirs).
-fn mean_irradiance(r: &Replicated) -> (Estimate, f64) {
+fn mean_irradiance(cfg: &DetpConfig, r: &Replicated) -> (Estimate, f64) {
     let judged_of: Vec<Vec<usize>> = r.exact.iter().map(|x| judged_discs(x)).collect();
     let with_exact: Vec<f64> = r
         .exact
@@ -586,7 +639,7 @@ fn mean_irradiance(r: &Replicated) -> (Estimate, f64) {
             .map(|(e, j)| mean_over(e, j))
             .collect::<Vec<_>>(),
     );
-    let (discs, judged) = (&r.pts.discs, judged_discs(&r.pts.exact));
+    let judged = judged_discs(&r.pts.exact);
     if r.irr.len() == 1 && !judged.is_empty() {
         // One replica: the Poisson SE of the mean over the n judged points, each point's sum
         // counted as independent (as the points table does per point): √(Σ Ē·w̄/(π·d_i²))/n, which
@@ -599,7 +652,7 @@ fn mean_irradiance(r: &Replicated) -> (Estimate, f64) {
         let var: f64 = judged
             .iter()
             .zip(&direct)
-            .map(|(&i, d)| detp * r.mean_segment_watts / discs.area(i) + d.1)
+            .map(|(&i, d)| r.poisson_var(cfg, 0, i, detp) + d.1)
             .sum();
         mean_irr.se = var.sqrt() / n;
         mean_irr.clusters = judged.len() as u64;
@@ -611,7 +664,7 @@ fn mean_irradiance(r: &Replicated) -> (Estimate, f64) {
 /// its value in that replica with the Poisson SE of one replica's sum (as [`per_disc`] gives with
 /// one replica). Only lines draw points per replica: no direct part, edge distance, baseline or
 /// path tracing.
-fn replica_point_rows(r: &Replicated) -> Vec<PointRow> {
+fn replica_point_rows(cfg: &DetpConfig, r: &Replicated) -> Vec<PointRow> {
     let mut rows = Vec::new();
     for (k, (set, irr)) in r.sets().zip(&r.irr).enumerate() {
         let discs = &set.discs;
@@ -619,10 +672,10 @@ fn replica_point_rows(r: &Replicated) -> Vec<PointRow> {
             sample: k * discs.len() + i,
             center: discs.centers[i],
             normal: discs.normals[i],
-            disc_radius: discs.radius_of(i),
+            disc_radius: r.radius(k, i),
             edge_distance: f64::NAN,
             mean: irr[i],
-            se: (irr[i].max(0.0) * r.mean_segment_watts / discs.area(i)).sqrt(),
+            se: r.poisson_var(cfg, k, i, irr[i].max(0.0)).sqrt(),
             replicas: Vec::new(),
             exact: set.exact[i],
             baselines: Vec::new(),
@@ -643,7 +696,7 @@ fn point_rows(
     baselines: &[(EngineChoice, Vec<(f64, f64)>)],
 ) -> Vec<PointRow> {
     if cfg.points_per_replica() {
-        return replica_point_rows(r);
+        return replica_point_rows(cfg, r);
     }
     let discs = &r.pts.discs;
     let path = path_tracing_points(r, discs.len());
@@ -662,7 +715,7 @@ fn point_rows(
             sample: i,
             center: discs.centers[i],
             normal: discs.normals[i],
-            disc_radius: discs.radius_of(i),
+            disc_radius: mean_radius(r, i),
             edge_distance: edge[i],
             mean,
             se,
@@ -687,6 +740,15 @@ fn point_rows(
             },
         })
         .collect()
+}
+
+/// Disc `i`'s radius: its own, or with the k-nearest rule r_i's mean over the replicas.
+fn mean_radius(r: &Replicated, i: usize) -> f64 {
+    if r.radii.is_empty() {
+        r.pts.discs.radius_of(i)
+    } else {
+        r.radii.iter().map(|v| v[i]).sum::<f64>() / r.radii.len() as f64
+    }
 }
 
 /// The photon maps' estimates per replica and disc (column stem, `[replica][disc]`), with ≥ 2

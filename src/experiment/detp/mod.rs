@@ -61,7 +61,8 @@ pub use self::spec::{
 };
 
 use self::columns as col;
-use self::engines::ReferenceCache;
+use self::engines::{Gathered, ReferenceCache};
+use self::shards::ReplicaPart;
 use self::estimators::sphere_cache::LevelRow;
 use self::measure::{DetpMeasured, PointRow};
 use self::path_tracing::{PathMeasured, PathRow};
@@ -73,6 +74,8 @@ use super::kind::{
 use crate::detp::brute;
 use crate::detp::disc::Discs;
 use crate::detp::fixed::Acc;
+use crate::detp::nearest::Nearest;
+use crate::detp::tally::Tally;
 use crate::detp::store::SegmentStore;
 use crate::error::Error;
 use crate::sample::lines::uniform_in_ball;
@@ -214,6 +217,8 @@ pub(crate) fn rays(
 struct Agreement {
     /// The first DETP engine's sums.
     sums: Vec<Acc>,
+    /// Its radii with `detp.radius_crossings` (IEEE bits; else empty).
+    radii: Vec<u64>,
     /// Discs where another engine or brute force differs.
     mismatches: u64,
     /// Discs re-computed by brute force.
@@ -242,39 +247,62 @@ fn oracle_runs(cfg: &DetpConfig) -> bool {
     cfg.engines.iter().any(|e| e.estimator().oracle())
 }
 
-/// Brute force's sums on the check subset of discs (in subset order; empty without a subset).
-fn check_sums(cfg: &DetpConfig, point: u64, replica: u64, rays: &RaySet, pts: &PointSet) -> Vec<Acc> {
-    let Some(subset) = check_subset(cfg, point, replica, pts.discs.len()) else {
-        return Vec::new();
-    };
-    let mut bf = vec![0; pts.discs.len()];
-    brute::accumulate(&rays.store, &pts.discs, Some(&subset), 1, &mut bf);
-    subset.iter().map(|&i| bf[i as usize]).collect()
-}
-
-/// Every DETP engine against the first, disc by disc, and the check subset's brute-force sums
-/// `bf` against it (brute force ran on every disc already where there is no subset).
-fn agree(
+/// Brute force's sums (and, with `detp.radius_crossings`, radii) on the check subset of discs (in
+/// subset order; empty without a subset).
+fn check_sums(
     cfg: &DetpConfig,
     point: u64,
     replica: u64,
-    n: usize,
-    sums: &[Vec<Acc>],
-    bf: &[Acc],
-) -> Agreement {
+    rays: &RaySet,
+    pts: &PointSet,
+) -> Gathered {
+    let Some(subset) = check_subset(cfg, point, replica, pts.discs.len()) else {
+        return Gathered::default();
+    };
+    let discs = &pts.discs;
+    match cfg.radius_crossings {
+        None => {
+            let mut bf = vec![0; discs.len()];
+            brute::accumulate(&rays.store, discs, Some(&subset), 1, &mut bf);
+            Gathered {
+                units: subset.iter().map(|&i| bf[i as usize]).collect(),
+                radii: Vec::new(),
+            }
+        }
+        Some(rc) => {
+            let tally = Nearest::new(rc.k);
+            let mut kept = tally.empties(discs.len());
+            brute::accumulate_with(&rays.store, discs, Some(&subset), &tally, &mut kept);
+            engines::select(&kept, &subset, rc.k, discs)
+        }
+    }
+}
+
+/// Every DETP engine against the first, disc by disc, and the check subset's brute-force sums
+/// against it (brute force ran on every disc already where there is no subset): the sums and, with
+/// `detp.radius_crossings`, the radii (`part.radii`, `part.bf_radii`; empty otherwise).
+fn agree(cfg: &DetpConfig, point: u64, replica: u64, n: usize, part: &ReplicaPart) -> Agreement {
+    let (sums, bf) = (&part.sums, &part.bf);
     let (first, rest) = sums
         .split_first()
         .expect("configure refuses a spec without a DETP engine");
+    let no_radii = Vec::new();
+    let radius = |e: usize| part.radii.get(e).unwrap_or(&no_radii);
+    let differs =
+        |e: usize, i: usize, o: &[Acc]| o[i] != first[i] || radius(e).get(i) != radius(0).get(i);
     let mut mismatches = (0..n)
-        .filter(|&i| rest.iter().any(|o| o[i] != first[i]))
+        .filter(|&i| rest.iter().enumerate().any(|(e, o)| differs(e + 1, i, o)))
         .count() as u64;
     let bf_checked = match check_subset(cfg, point, replica, n) {
         _ if oracle_runs(cfg) => n as u64,
         Some(subset) => {
             mismatches += subset
                 .iter()
-                .zip(bf)
-                .filter(|&(&i, &b)| b != first[i as usize])
+                .enumerate()
+                .filter(|&(j, &i)| {
+                    bf[j] != first[i as usize]
+                        || part.bf_radii.get(j) != radius(0).get(i as usize)
+                })
                 .count() as u64;
             subset.len() as u64
         }
@@ -282,6 +310,7 @@ fn agree(
     };
     Agreement {
         sums: first.clone(),
+        radii: radius(0).clone(),
         mismatches,
         bf_checked,
     }
@@ -317,9 +346,12 @@ pub fn describe(cfg: &DetpConfig) -> String {
         Points::File(p) => format!("{} points from {}", p.centers.len(), p.path.display()),
     };
     let engines: Vec<&str> = cfg.engines.iter().map(|e| e.as_str()).collect();
+    let radius = match cfg.radius_crossings {
+        None => format!("d = {}", cfg.disc_radius),
+        Some(rc) => format!("radius of the {} nearest crossings within d = {}", rc.k, cfg.disc_radius),
+    };
     format!(
-        "{rays}, {pts}, d = {}, Q = {}, {:?} lists, {:?} pop, order {:?}, engines {}, {} replica(s)",
-        cfg.disc_radius,
+        "{rays}, {pts}, {radius}, Q = {}, {:?} lists, {:?} pop, order {:?}, engines {}, {} replica(s)",
         cfg.q(),
         cfg.cache.list_mode,
         cfg.cache.pop_rule,
@@ -392,6 +424,9 @@ pub fn memory(cfg: &DetpConfig, threads: usize) -> Memory {
             }
         }
     }
+    if let Some(rc) = cfg.radius_crossings {
+        needs.push(nearest_need(rc.k, n_p, threads));
+    }
     Memory {
         needs,
         budget: Some(("detp.memory_budget_gib", cfg.memory_budget_gib)),
@@ -400,6 +435,22 @@ pub fn memory(cfg: &DetpConfig, threads: usize) -> Memory {
             forced: cfg.photon_batches,
             photons: cfg.photons,
         }),
+    }
+}
+
+/// The k-nearest-crossings heaps of `detp.radius_crossings`: a DETP engine's pass keeps one heap
+/// per disc in every worker (the disc index folds per worker thread; the sphere cache per chunk)
+/// and the merged set, so at most (threads + 1)·n_P heaps, each of at most 2k slots (a growing
+/// vector's capacity) of [`CROSSING_BYTES`](crate::detp::nearest::CROSSING_BYTES). The engines
+/// run one after another, so one engine's at a time.
+fn nearest_need(k: usize, n_p: f64, threads: f64) -> Need {
+    let heap = std::mem::size_of::<crate::detp::nearest::Kept>() as f64
+        + 2.0 * k as f64 * crate::detp::nearest::CROSSING_BYTES as f64;
+    Need {
+        bytes: (threads + 1.0) * n_p * heap,
+        key: "detp.radius_crossings",
+        what: format!("k-nearest heaps of k = {k} crossings for {n_p:.3e} discs, per thread"),
+        per_photon: false,
     }
 }
 

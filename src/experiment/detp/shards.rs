@@ -18,7 +18,7 @@ use std::ops::Range;
 
 use serde::{Deserialize, Serialize};
 
-use super::engines::EnginePart;
+use super::engines::{EnginePart, Gathered};
 use super::estimators::{DynEstimator, Shards, ESTIMATORS};
 use super::{DetpConfig, RaySet};
 use crate::experiment::photon_shards::{add_replica_parts, RangePart};
@@ -52,13 +52,20 @@ pub struct ReplicaPart {
     pub sums: Vec<Vec<Acc>>,
     /// Brute force's sums on the check subset, in subset order.
     pub bf: Vec<Acc>,
+    /// With `detp.radius_crossings`: each DETP engine's radius per disc (IEEE bits), in engine
+    /// order (else empty, and absent from a shard's file). Such a point is never split.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub radii: Vec<Vec<u64>>,
+    /// With `detp.radius_crossings`: brute force's radius on the check subset (else empty).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub bf_radii: Vec<u64>,
     /// Each engine's counts, in engine order.
     pub engines: Vec<EnginePart>,
 }
 
 impl ReplicaPart {
     /// The part of `rays` (photons `ids`) with the engines' sums and the check subset's.
-    pub(super) fn new(ids: (u64, u64), rays: &RaySet, sums: Vec<Vec<Acc>>, bf: Vec<Acc>) -> Self {
+    pub(super) fn new(ids: (u64, u64), rays: &RaySet, sums: Vec<Gathered>, bf: Gathered) -> Self {
         let power: u128 = rays
             .store
             .segments
@@ -76,8 +83,14 @@ impl ReplicaPart {
             law_radius: rays.law_radius.to_bits(),
             trace_s: rays.trace_s,
             edge_s: rays.edge_s,
-            sums,
-            bf,
+            radii: sums
+                .iter()
+                .filter(|g| !g.radii.is_empty())
+                .map(|g| g.radii.clone())
+                .collect(),
+            sums: sums.into_iter().map(|g| g.units).collect(),
+            bf_radii: bf.radii,
+            bf: bf.units,
             engines: Vec::new(),
         }
     }
@@ -116,6 +129,9 @@ impl RangePart for ReplicaPart {
         same("power scales", self.scale, o.scale)?;
         same("root spheres", self.root_radius, o.root_radius)?;
         same("law radii", self.law_radius, o.law_radius)?;
+        if !(self.radii.is_empty() && o.radii.is_empty()) {
+            return Err("the parts keep k-nearest radii, which do not add".into());
+        }
         let shape = |p: &Self| (p.sums.iter().map(Vec::len).collect::<Vec<_>>(), p.bf.len());
         if shape(self) != shape(o) || self.engines.len() != o.engines.len() {
             return Err("the shards' disc or engine counts differ".into());
@@ -139,6 +155,8 @@ impl RangePart for ReplicaPart {
                 .map(|(a, b)| add_vec(a, b))
                 .collect(),
             bf: add_vec(&self.bf, &o.bf),
+            radii: Vec::new(),
+            bf_radii: Vec::new(),
             engines: self
                 .engines
                 .iter()
@@ -158,6 +176,14 @@ pub fn photon_range(photons: u64, k: u64, n: u64) -> Range<u64> {
 /// Why `cfg` cannot be split by photons, if it cannot: it lists estimators whose counts do not
 /// add ([`Shards::Refuse`]).
 pub fn refusal(cfg: &DetpConfig) -> Option<String> {
+    if cfg.radius_crossings.is_some() {
+        // The k smallest of a union are the k smallest of the parts' k smallest, so a merge could
+        // be exact; but a crossing is ordered by its segment's number in its own store, which
+        // restarts in every part, and the parts carry sums, not each disc's kept crossings.
+        return Some(
+            "detp.radius_crossings keeps each disc's k nearest crossings, which photon shards and batches do not carry between their parts yet: run the point in one pass (raise detp.memory_budget_gib if it is over budget)".into(),
+        );
+    }
     let refused = |e: &&dyn DynEstimator| matches!(e.shards(), Shards::Refuse(_));
     let bad: Vec<&str> = cfg
         .engines

@@ -181,6 +181,19 @@ crate::spec_table! {
         /// keeps d.
         radius_schedule_exponent: Option<f64> = {absent "1/6 with a schedule"}, "number", "",
             "≥ 0";
+        /// k_ref of the k-nearest-crossings radius: each disc keeps its k nearest crossings
+        /// within its radius (d, d(N) with a schedule, an edge remedy's clamp) and its radius
+        /// becomes the k-th one's distance; its estimate is the k − 1 nearer crossings' power over
+        /// π r_i² (`docs/theory.md`, "A disc radius from the local density"). With fewer than k
+        /// within the disc, the whole disc counts as in the paper. Kind `detp` only, not with photon
+        /// shards or batches.
+        radius_crossings: Option<u64> = {absent "none: each disc keeps its radius"}
+            read crossings, "integer", "crossings", "≥ 2";
+        /// N_ref of the k-nearest-crossings radius: k = max(2, round(k_ref·(N/N_ref)^(2/3))) at
+        /// N = `photons`, so the radius shrinks as N^(−1/6) and both bias and variance vanish (the
+        /// photon map's k growth with its optimal exponent for a smooth field).
+        radius_crossings_photons: Option<u64> = {absent "none: k = k_ref at every photon count"}
+            read opt_count, "integer", "photons", "≥ 1";
     }
 }
 
@@ -357,6 +370,17 @@ fn growth_exponent<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
         Err(D::Error::custom(format!(
             "got {b}, expected an exponent in [0, 1) (1 or more: k grows as fast as the photons, and the photon map's variance no longer falls)"
         )))
+    }
+}
+
+/// `detp.radius_crossings`: k ≥ 2 (the k-th crossing only sets the radius).
+fn crossings<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
+    match opt_count(toml::Value::deserialize(d)?).map_err(D::Error::custom)? {
+        Some(k) if (k as usize) < crate::detp::nearest::MIN_K => Err(D::Error::custom(format!(
+            "got {k}, expected k ≥ {} (the k-th crossing only sets the radius; the k − 1 nearer ones are counted)",
+            crate::detp::nearest::MIN_K
+        ))),
+        k => Ok(k),
     }
 }
 

@@ -279,6 +279,12 @@ fn paper_method_only(detp: &DetpConfig) -> Result<(), ConfigError> {
             "kind quasi-static runs the paper's method only (its incremental updates keep the stored segments and d); the remedies are measured by kind \"detp\"",
         );
     }
+    if detp.radius_crossings.is_some() {
+        return refuse(
+            "detp.radius_crossings",
+            "kind quasi-static keeps one integer sum per disc and updates it as objects move; the k-nearest-crossings radius (each disc's k nearest crossings) is measured by kind \"detp\"",
+        );
+    }
     // `check_engines` already refused duplicates and a list of baselines alone.
     if detp
         .engines

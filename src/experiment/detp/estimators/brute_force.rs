@@ -4,13 +4,17 @@
 use crate::experiment::detp::columns::*;
 use crate::experiment::detp::config::DetpConfig;
 use crate::experiment::detp::engines::{
-    per_replica, timed, Engine, EngineMeasured, EnginePart, Output, Pooled, ReferenceCache, Sizes,
+    self, gather, per_replica, Engine, EngineMeasured, EnginePart, Output, Pooled, ReferenceCache, Sizes,
 };
 use crate::experiment::detp::{PointSet, RaySet};
 use crate::output::table::{col, Table};
 use crate::stats::Estimate;
 use super::{Estimator, Role, Shards};
 use crate::detp::brute;
+use crate::detp::disc::Discs;
+use crate::detp::fixed::Acc;
+use crate::detp::nearest::{Kept, Nearest};
+use crate::detp::store::SegmentStore;
 
 /// Estimator `brute-force`.
 pub struct BruteForce;
@@ -61,6 +65,19 @@ pub struct BruteMeasured {
     pub seconds_per_replica: Estimate,
 }
 
+/// Brute force's pass: every segment against every disc; its tests.
+struct Pass<'a>(&'a SegmentStore, &'a Discs);
+
+impl engines::Pass for Pass<'_> {
+    type Stats = u64;
+    fn sums(&self, acc: &mut [Acc]) -> u64 {
+        brute::accumulate(self.0, self.1, None, 1, acc)
+    }
+    fn nearest(&self, tally: &Nearest, kept: &mut [Kept]) -> u64 {
+        brute::accumulate_with(self.0, self.1, None, tally, kept)
+    }
+}
+
 /// Brute force: every segment against every disc.
 #[derive(Default)]
 struct Runs {
@@ -68,11 +85,10 @@ struct Runs {
 }
 
 impl Engine for Runs {
-    fn run(&mut self, _cfg: &DetpConfig, rays: &RaySet, pts: &PointSet) -> Output {
-        let mut acc = vec![0; pts.discs.len()];
-        let (tests, s) = timed(|| brute::accumulate(&rays.store, &pts.discs, None, 1, &mut acc));
+    fn run(&mut self, cfg: &DetpConfig, rays: &RaySet, pts: &PointSet) -> Output {
+        let (g, tests, s) = gather(cfg, &pts.discs, &Pass(&rays.store, &pts.discs));
         self.runs.push((tests, s));
-        Output::Sums(acc)
+        Output::Sums(g)
     }
     fn seconds(&self) -> f64 {
         self.runs.iter().map(|r| r.1).sum()

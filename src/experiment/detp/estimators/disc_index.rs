@@ -5,7 +5,7 @@
 use crate::experiment::detp::columns::*;
 use crate::experiment::detp::config::DetpConfig;
 use crate::experiment::detp::engines::{
-    per_replica, timed, Engine, EngineMeasured, EnginePart, Output, Pooled, ReferenceCache, Sizes,
+    self, gather, per_replica, timed, Engine, EngineMeasured, EnginePart, Output, Pooled, ReferenceCache, Sizes,
 };
 use crate::experiment::detp::{PointSet, RaySet};
 use crate::output::table::{col, Table};
@@ -14,6 +14,9 @@ use super::{Estimator, Role, Shards};
 use crate::output::column::{Class, Column};
 use crate::detp::disc_index::{self, DiscIndex as Index, IndexKind, IndexStats};
 use crate::experiment::kind::Need;
+use crate::detp::fixed::Acc;
+use crate::detp::nearest::{Kept, Nearest};
+use crate::detp::store::SegmentStore;
 use crate::theory::detp as th;
 
 /// Estimator `disc-index`.
@@ -110,6 +113,19 @@ struct IndexRun {
     bytes: usize,
 }
 
+/// The disc index's pass: every segment walks the index; its counts.
+struct Pass<'a>(&'a dyn Index, &'a SegmentStore);
+
+impl engines::Pass for Pass<'_> {
+    type Stats = IndexStats;
+    fn sums(&self, acc: &mut [Acc]) -> IndexStats {
+        self.0.accumulate(self.1, None, 1, acc)
+    }
+    fn nearest(&self, tally: &Nearest, kept: &mut [Kept]) -> IndexStats {
+        self.0.accumulate_nearest(self.1, None, tally, kept)
+    }
+}
+
 /// The disc index (octree or grid).
 #[derive(Default)]
 struct Runs {
@@ -122,7 +138,6 @@ impl Engine for Runs {
     /// against the tests): the same thread pool, so the two seconds compare like for like.
     fn run(&mut self, cfg: &DetpConfig, rays: &RaySet, pts: &PointSet) -> Output {
         let discs = &pts.discs;
-        let mut acc = vec![0; discs.len()];
         let (ix, build_s): (Box<dyn Index>, f64) = match cfg.index {
             IndexKind::Octree(leaf) => timed(|| {
                 Box::new(disc_index::Octree::build(discs, leaf, cfg.disc_radius))
@@ -132,7 +147,7 @@ impl Engine for Runs {
                 timed(|| Box::new(disc_index::GridIndex::build(discs, w)) as Box<dyn Index>)
             }
         };
-        let (stats, query_s) = timed(|| ix.accumulate(&rays.store, None, 1, &mut acc));
+        let (g, stats, query_s) = gather(cfg, discs, &Pass(ix.as_ref(), &rays.store));
         let (walked, traversal_s) = timed(|| ix.traversal_only(&rays.store, None));
         debug_assert_eq!(walked, stats, "the walk alone is the pass's walk");
         self.runs.push(IndexRun {
@@ -142,7 +157,7 @@ impl Engine for Runs {
             traversal_s,
             bytes: ix.bytes(),
         });
-        Output::Sums(acc)
+        Output::Sums(g)
     }
     fn seconds(&self) -> f64 {
         self.runs.iter().map(|r| r.query_s).sum()

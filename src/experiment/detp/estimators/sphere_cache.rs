@@ -5,7 +5,7 @@
 use crate::experiment::detp::columns::*;
 use crate::experiment::detp::config::DetpConfig;
 use crate::experiment::detp::engines::{
-    per_replica, timed, Engine, EngineMeasured, Output, Pooled, ReferenceCache, Sizes,
+    self, gather, per_replica, timed, Engine, EngineMeasured, Output, Pooled, ReferenceCache, Sizes,
 };
 use crate::experiment::detp::{PointSet, RaySet};
 use crate::output::table::{col, Table};
@@ -19,6 +19,12 @@ use crate::experiment::detp::engines::Law;
 use crate::experiment::kind::Need;
 use crate::stats::ClusteredMean;
 use crate::theory::detp as th;
+use crate::detp::disc::Discs;
+use crate::detp::fixed::Acc;
+use crate::detp::nearest::{Kept, Nearest};
+use crate::detp::sphere_cache::filter::FilterPath;
+use crate::detp::store::SegmentStore;
+use glam::DVec3;
 
 /// Estimator `sphere-cache`.
 pub struct SphereCache;
@@ -129,6 +135,34 @@ pub struct LevelRow {
     pub lines: bool,
 }
 
+/// The sphere cache's pass over the points in their order; its counts.
+struct Pass<'a> {
+    store: &'a SegmentStore,
+    discs: &'a Discs,
+    perm: &'a [u32],
+    root: (DVec3, f64),
+    params: &'a sphere_cache::SphereCacheParams,
+}
+
+impl engines::Pass for Pass<'_> {
+    type Stats = sphere_cache::CacheStats;
+    fn sums(&self, acc: &mut [Acc]) -> Self::Stats {
+        sphere_cache::run(self.store, self.discs, self.perm, self.root, self.params, acc)
+    }
+    fn nearest(&self, tally: &Nearest, kept: &mut [Kept]) -> Self::Stats {
+        sphere_cache::run_tally(
+            self.store,
+            self.discs,
+            self.perm,
+            self.root,
+            self.params,
+            tally,
+            kept,
+            FilterPath::detect(),
+        )
+    }
+}
+
 /// The sphere cache.
 #[derive(Default)]
 struct Runs {
@@ -144,11 +178,16 @@ impl Engine for Runs {
             law_ball: rays.law_ball,
             ..cfg.cache
         };
-        let mut acc = vec![0; discs.len()];
-        let (stats, s) =
-            timed(|| sphere_cache::run(&rays.store, discs, &perm, rays.root, &params, &mut acc));
+        let pass = Pass {
+            store: &rays.store,
+            discs,
+            perm: &perm,
+            root: rays.root,
+            params: &params,
+        };
+        let (g, stats, s) = gather(cfg, discs, &pass);
         self.runs.push((stats, s, order_s));
-        Output::Sums(acc)
+        Output::Sums(g)
     }
     fn seconds(&self) -> f64 {
         self.runs.iter().map(|r| r.1).sum()
