@@ -325,7 +325,10 @@ fn crossover_keys_the_radius_rules_and_charges_each_its_own_seconds() {
         "\"detp.radius_schedule_exponent\" = [0.0, 0.16666666666666666]\n\"detp.point_spacing\" = [160.0, 80.0]\n\"detp.photons\" = [1000, 4000]",
     );
     let out = dir.path().join("results");
-    run_quiet(&fronts, &out).args(["--run", "0"]).assert().success();
+    run_quiet(&fronts, &out)
+        .args(["--run", "0"])
+        .assert()
+        .success();
     run_quiet(&fronts, &out)
         .args([
             "--run",
@@ -360,7 +363,10 @@ fn crossover_keys_the_radius_rules_and_charges_each_its_own_seconds() {
         let slope: f64 = r[col("error_slope")].parse().expect("slope");
         let floor: f64 = r[col("error_floor")].parse().expect("floor");
         if beta == "NaN" {
-            assert!(theory.is_nan() && slope.is_nan() && floor.is_finite(), "{r:?}");
+            assert!(
+                theory.is_nan() && slope.is_nan() && floor.is_finite(),
+                "{r:?}"
+            );
         } else {
             assert_eq!(beta, "0.16666666666666666");
             assert_eq!(r[col("radius_schedule_photons")], "1000.0");
@@ -374,7 +380,10 @@ fn crossover_keys_the_radius_rules_and_charges_each_its_own_seconds() {
                 reason.contains("no cost sweep at this d/edge/direct and radius rule kappa=0.5"),
                 "{r:?}"
             );
-            assert!(r[col("n_star")] == "NaN" && r[col("seconds_once")] == "NaN", "{r:?}");
+            assert!(
+                r[col("n_star")] == "NaN" && r[col("seconds_once")] == "NaN",
+                "{r:?}"
+            );
         } else {
             assert_eq!(kappa, "NaN");
             assert!(!reason.contains("no cost sweep"), "{r:?}");

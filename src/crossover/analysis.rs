@@ -617,7 +617,11 @@ mod tests {
         let sc = &rows[0];
         assert_eq!(sc.config, config);
         let want = (a / 0.05f64.powi(2)).powf(1.5);
-        assert!((sc.photons / want - 1.0).abs() < 0.05, "{} vs {want}", sc.photons);
+        assert!(
+            (sc.photons / want - 1.0).abs() < 0.05,
+            "{} vs {want}",
+            sc.photons
+        );
         assert!(sc.error_floor.is_nan() && sc.error_fit_c.is_nan(), "{sc:?}");
         assert!((sc.error_fit_a / a - 1.0).abs() < 0.1, "{sc:?}");
         let check = sc.power_law.expect("a schedule is checked");
@@ -638,11 +642,19 @@ mod tests {
         };
         inp.costs.push(own);
         let rows = crossover_rows(&inp, &[0.05]);
-        assert!(rows[0].n_star.is_finite() && rows[0].n_star > 0.0, "{:?}", rows[0]);
+        assert!(
+            rows[0].n_star.is_finite() && rows[0].n_star > 0.0,
+            "{:?}",
+            rows[0]
+        );
         // Errors that level off: the power law does not hold, never.
         inp.detp[0].mse = replicas(&|n| 4e-4 + 40.0 / n);
         let rows = crossover_rows(&inp, &[0.05]);
-        assert!(rows[0].photons.is_nan() && rows[0].n_star.is_nan(), "{:?}", rows[0]);
+        assert!(
+            rows[0].photons.is_nan() && rows[0].n_star.is_nan(),
+            "{:?}",
+            rows[0]
+        );
         assert!(rows[0].reason.contains("flattens"), "{}", rows[0].reason);
     }
 

@@ -333,7 +333,8 @@ pub fn crossover_row(r: &CrossRow) -> Row {
     let coef =
         |f: fn(&crate::stats::fit::CostModel) -> f64| r.cost.map_or(f64::NAN, |c| f(&c.model));
     let rule = r.config.radius_rule.unwrap_or_default();
-    let schedule = |f: fn(&super::method::Schedule) -> f64| rule.schedule.as_ref().map_or(f64::NAN, f);
+    let schedule =
+        |f: fn(&super::method::Schedule) -> f64| rule.schedule.as_ref().map_or(f64::NAN, f);
     let power = |f: fn(&crate::stats::crossover::PowerLawCheck) -> f64| {
         r.power_law.as_ref().map_or(f64::NAN, f)
     };

@@ -363,7 +363,11 @@ mod tests {
         let e = detp_errors(&main, &csv(&pts)).expect("errors");
         assert_eq!(e.len(), 2, "{e:?}");
         assert_eq!(e[0].config.radius_rule, Some(RadiusRule::default()));
-        let s = e[1].config.radius_rule.and_then(|r| r.schedule).expect("a schedule");
+        let s = e[1]
+            .config
+            .radius_rule
+            .and_then(|r| r.schedule)
+            .expect("a schedule");
         assert_eq!((s.photons, s.exponent), (100.0, 1.0 / 6.0));
         assert_eq!((e[0].photons.len(), e[1].photons.len()), (2, 2));
         let old = csv(

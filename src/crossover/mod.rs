@@ -215,7 +215,12 @@ fn sweep_runs(dir: &Path) -> Result<Vec<Source>, OutputError> {
 /// A multi-run input's provenance (the n_P sweep's runs, or the fronts' runs): every run's files
 /// under `role`, and `[extra.ROLE]` naming the folder given (so that `raycost reproduce` reruns on
 /// every run) with each run's machine in `[extra.ROLE.runs.R]`.
-fn record_runs(role: &str, dir: &Path, runs: &[Source], meta: &mut Meta) -> Result<(), OutputError> {
+fn record_runs(
+    role: &str,
+    dir: &Path,
+    runs: &[Source],
+    meta: &mut Meta,
+) -> Result<(), OutputError> {
     if let [one] = runs {
         if one.results.dir == dir {
             return one.record(role, meta);

@@ -595,8 +595,18 @@ mod tests {
         let clear: Vec<ReplicaErrors> =
             (0..6).map(|k| make(0.01 + 0.001 * k as f64, 1.0)).collect();
         let model = cost(1e-12, 1e-6, 1.0);
-        let (est, ci) =
-            points_crossover_interval(ErrorModel::Floor, &photons, &clear, 2e-6, &model, &[], 0.05, 500, 0.95, 1);
+        let (est, ci) = points_crossover_interval(
+            ErrorModel::Floor,
+            &photons,
+            &clear,
+            2e-6,
+            &model,
+            &[],
+            0.05,
+            500,
+            0.95,
+            1,
+        );
         let Crossover::At(x) = est else {
             panic!("{est:?}")
         };
@@ -605,8 +615,18 @@ mod tests {
             .iter()
             .map(|&f| make(f, 1.0))
             .collect();
-        let (_, ci) =
-            points_crossover_interval(ErrorModel::Floor, &photons, &near, 2e-6, &model, &[], 0.05, 500, 0.95, 1);
+        let (_, ci) = points_crossover_interval(
+            ErrorModel::Floor,
+            &photons,
+            &near,
+            2e-6,
+            &model,
+            &[],
+            0.05,
+            500,
+            0.95,
+            1,
+        );
         assert!(ci.never_fraction > 0.1 && ci.hi.is_infinite(), "{ci:?}");
     }
 
@@ -645,7 +665,10 @@ mod tests {
         );
         let flat = replicas(&|_| 0.01);
         let g = PowerLawCheck::run(&photons, &flat, 2000, 0.95, 5);
-        assert!(matches!(g.failure(), Some(Never::NotFalling { .. })), "{g:?}");
+        assert!(
+            matches!(g.failure(), Some(Never::NotFalling { .. })),
+            "{g:?}"
+        );
         // An error model that does not fall says so, not "error floor".
         let fit = ErrorFit::fit_power_law(&photons, &mean_mse(&flat, photons.len(), &[0, 1, 2, 3]));
         assert!(!fit.falls(), "{fit:?}");
@@ -686,10 +709,30 @@ mod tests {
                 pt_cv2: 1.0,
             })
             .collect();
-        let fixed =
-            points_crossover_interval(ErrorModel::Floor, &photons, &reps, 2e-6, &model, &[], 0.05, 500, 0.95, 1);
-        let moved =
-            points_crossover_interval(ErrorModel::Floor, &photons, &reps, 2e-6, &model, &noisy, 0.05, 500, 0.95, 1);
+        let fixed = points_crossover_interval(
+            ErrorModel::Floor,
+            &photons,
+            &reps,
+            2e-6,
+            &model,
+            &[],
+            0.05,
+            500,
+            0.95,
+            1,
+        );
+        let moved = points_crossover_interval(
+            ErrorModel::Floor,
+            &photons,
+            &reps,
+            2e-6,
+            &model,
+            &noisy,
+            0.05,
+            500,
+            0.95,
+            1,
+        );
         assert_eq!(
             fixed.0, moved.0,
             "the estimate uses the fitted cost either way"

@@ -64,10 +64,7 @@ impl ErrorFit {
     /// weights in the log): c = a, exponent = 2γ, B = 0. Fewer than two distinct N: NaN.
     pub fn fit_power_law(photons: &[f64], mse: &[f64]) -> Self {
         let logs = log_points(photons, mse);
-        let measured_min = logs
-            .iter()
-            .map(|p| p.0.exp())
-            .fold(f64::INFINITY, f64::min);
+        let measured_min = logs.iter().map(|p| p.0.exp()).fold(f64::INFINITY, f64::min);
         let centre = mean(logs.iter().map(|p| p.0));
         let rows: Vec<([f64; 2], f64, f64)> = logs
             .iter()
@@ -147,8 +144,11 @@ impl ErrorFit {
         if self.exponent == 1.0 {
             return (room > 0.0).then(|| (self.c / room).max(self.measured_min));
         }
-        (room > 0.0 && self.falls())
-            .then(|| (self.c / room).powf(1.0 / self.exponent).max(self.measured_min))
+        (room > 0.0 && self.falls()).then(|| {
+            (self.c / room)
+                .powf(1.0 / self.exponent)
+                .max(self.measured_min)
+        })
     }
 }
 
@@ -482,7 +482,11 @@ mod tests {
         let got = fit.photons_for(0.01).expect("no floor");
         assert!((got / want - 1.0).abs() < 1e-9, "{got} vs {want}");
         assert!((fit.error(got) - 0.01).abs() < 1e-12);
-        assert_eq!(fit.photons_for(0.5), Some(2.5e4), "already met at the smallest count");
+        assert_eq!(
+            fit.photons_for(0.5),
+            Some(2.5e4),
+            "already met at the smallest count"
+        );
         let noisy: Vec<f64> = exact
             .iter()
             .enumerate()
