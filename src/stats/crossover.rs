@@ -377,7 +377,8 @@ impl PowerLawCheck {
                 lo: self.curvature.lo,
             });
         }
-        (!(self.slope.estimate > 0.0)).then_some(Never::NotFalling {
+        let falls = self.slope.estimate > 0.0; // NaN (no fit) does not fall either
+        (!falls).then_some(Never::NotFalling {
             slope: self.slope.estimate,
         })
     }
