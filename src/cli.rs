@@ -155,9 +155,12 @@ pub struct ReportArgs {
 /// `raycost crossover`.
 #[derive(Debug, Args)]
 pub struct CrossoverArgs {
-    /// The fronts' results folder (kind detp with engine reference, ≥ 2 replicas, write_points).
+    /// The fronts' results folder (kind detp with engine reference, ≥ 2 replicas, write_points);
+    /// with runs/R (raycost run --run R) every run, each adding configurations of its own (e.g. a
+    /// radius rule that cannot share the first run's sweep).
     pub fronts: PathBuf,
-    /// The n_P sweep's results folder (kind detp over detp.points × detp.photons).
+    /// The n_P sweep's results folder (kind detp over detp.points × detp.photons); with runs/R
+    /// every run.
     pub points: PathBuf,
     /// A frames run's results folder (kind quasi-static with path-tracing columns), optional.
     pub frames: Option<PathBuf>,

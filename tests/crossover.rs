@@ -82,9 +82,20 @@ fn crossover_writes_its_tables_and_refuses_what_it_must() {
             "direct",
             "edge",
             "disc_radius",
+            "edge_radius_factor",
+            "radius_schedule_photons",
+            "radius_schedule_exponent",
             "photons",
             "error_floor",
             "error_fit_c",
+            "error_fit_a",
+            "error_slope",
+            "error_slope_lo",
+            "error_slope_hi",
+            "error_slope_theory",
+            "error_curvature",
+            "error_curvature_lo",
+            "error_curvature_hi",
             "seconds_once",
             "seconds_per_point",
             "cost_gamma",
@@ -288,4 +299,141 @@ fn crossover_writes_its_tables_and_refuses_what_it_must() {
         .assert()
         .code(2);
     assert!(!fresh.exists(), "nothing written");
+}
+
+/// The radius rules as configurations, end to end: a fronts run with d fixed beside the N^(−1/6)
+/// schedule at the same d (β swept: 0 is d fixed), a second fronts run (runs/1) adding κ = 0.5 with
+/// clamp-first-hit, and an n_P sweep that timed the fixed d and the schedule but not κ. Every rule
+/// is its own row, labelled by its parameters; the schedule's rows carry the fitted γ beside the
+/// derived 1/3 and no floor; κ's rows say that no cost sweep timed their rule rather than borrow
+/// another rule's seconds; a run repeating a configuration is refused.
+#[test]
+fn crossover_keys_the_radius_rules_and_charges_each_its_own_seconds() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let schedule = "radius_schedule_photons = 1000\n";
+    let sweep = "\"detp.radius_schedule_exponent\" = [0.0, 0.16666666666666666]\n\"detp.photons\" = [1000, 2000, 4000]";
+    let fronts = spec(
+        dir.path(),
+        "rfronts",
+        &format!("point_spacing = 160.0\nengines = [\"sphere-cache\", \"disc-index\", \"path-tracing\", \"reference\"]\nreference_samples = 16\nwrite_points = true\n{schedule}"),
+        sweep,
+    );
+    let points = spec(
+        dir.path(),
+        "rpoints",
+        &format!("engines = [\"sphere-cache\", \"disc-index\", \"path-tracing\"]\n{schedule}"),
+        "\"detp.radius_schedule_exponent\" = [0.0, 0.16666666666666666]\n\"detp.point_spacing\" = [160.0, 80.0]\n\"detp.photons\" = [1000, 4000]",
+    );
+    let out = dir.path().join("results");
+    run_quiet(&fronts, &out)
+        .args(["--run", "0"])
+        .assert()
+        .success();
+    run_quiet(&fronts, &out)
+        .args([
+            "--run",
+            "1",
+            "--set",
+            "detp.edge=\"clamp-first-hit\"",
+            "--set",
+            "detp.edge_radius_factor=0.5",
+        ])
+        .assert()
+        .success();
+    run_quiet(&points, &out).assert().success();
+    let x = dir.path().join("x");
+    crossover(&out.join("rfronts"), &out.join("rpoints"), &x)
+        .assert()
+        .success();
+    let (header, rows) = read_csv(&x.join("crossover.csv"));
+    let col = |name: &str| header.iter().position(|h| h == name).expect(name);
+    let detp: Vec<&Vec<String>> = rows
+        .iter()
+        .filter(|r| r[col("method")] == "sphere-cache")
+        .collect();
+    // Per target: fixed, schedule (run 0), κ fixed and κ with the schedule (run 1).
+    assert_eq!(detp.len(), 2 * 4, "{detp:?}");
+    let third = 1.0 / 3.0;
+    let mut kinds = std::collections::BTreeSet::new();
+    for r in &detp {
+        let beta = r[col("radius_schedule_exponent")].as_str();
+        let kappa = r[col("edge_radius_factor")].as_str();
+        kinds.insert((beta.to_string(), kappa.to_string()));
+        let theory: f64 = r[col("error_slope_theory")].parse().expect("theory");
+        let slope: f64 = r[col("error_slope")].parse().expect("slope");
+        let floor: f64 = r[col("error_floor")].parse().expect("floor");
+        if beta == "NaN" {
+            assert!(
+                theory.is_nan() && slope.is_nan() && floor.is_finite(),
+                "{r:?}"
+            );
+        } else {
+            assert_eq!(beta, "0.16666666666666666");
+            assert_eq!(r[col("radius_schedule_photons")], "1000.0");
+            assert!((theory - third).abs() < 1e-12, "{r:?}");
+            assert!(slope.is_finite() && floor.is_nan(), "{r:?}");
+        }
+        let reason = &r[col("reason")];
+        if kappa == "0.5" {
+            assert_eq!(r[col("edge")], "clamp-first-hit");
+            assert!(
+                reason.contains("no cost sweep at this d/edge/direct and radius rule kappa=0.5"),
+                "{r:?}"
+            );
+            assert!(
+                r[col("n_star")] == "NaN" && r[col("seconds_once")] == "NaN",
+                "{r:?}"
+            );
+        } else {
+            assert_eq!(kappa, "NaN");
+            assert!(!reason.contains("no cost sweep"), "{r:?}");
+        }
+    }
+    assert_eq!(kinds.len(), 4, "{kinds:?}");
+    // A run that repeats run 0's configurations is refused, nothing written.
+    let runs = out.join("rfronts").join("runs");
+    let copy = runs.join("2");
+    std::fs::create_dir_all(&copy).expect("dir");
+    for f in std::fs::read_dir(runs.join("0")).expect("run 0").flatten() {
+        std::fs::copy(f.path(), copy.join(f.file_name())).expect("copy");
+    }
+    let y = dir.path().join("y");
+    crossover(&out.join("rfronts"), &out.join("rpoints"), &y)
+        .assert()
+        .code(2)
+        .stderr(predicates::str::contains("repeats the configuration"));
+    assert!(!y.join("crossover.csv").exists());
+}
+
+/// Tables written before the radius rules read as they always did: the crossover of the
+/// committed hard-cases fronts and n_P sweep gives, in every column it had, exactly the tables the
+/// build before the rules gave (tests/expected/crossover-hard, from 274675a).
+#[test]
+fn crossover_of_committed_tables_is_unchanged_by_the_rules() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let x = dir.path().join("x");
+    let mut c = raycost();
+    c.current_dir(root())
+        .args([
+            "crossover",
+            "results/issue27-fronts-hard",
+            "results/issue27-points-hard",
+            "--targets",
+            "0.1,0.05,0.02",
+            "--out",
+        ])
+        .arg(&x)
+        .assert()
+        .success();
+    for table in ["crossover.csv", "best.csv"] {
+        let (want_h, want) = read_csv(&root().join("tests/expected/crossover-hard").join(table));
+        let (got_h, got) = read_csv(&x.join(table));
+        assert_eq!(want.len(), got.len(), "{table}");
+        for (i, name) in want_h.iter().enumerate() {
+            let j = got_h.iter().position(|h| h == name).expect(name);
+            for (w, g) in want.iter().zip(&got) {
+                assert_eq!(w[i], g[j], "{table} {name}");
+            }
+        }
+    }
 }

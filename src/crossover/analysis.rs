@@ -11,9 +11,10 @@ use super::fronts::{DetpErrors, MapErrors};
 use super::measured::{measured_star, MeasuredInputs, MeasuredStar, RunTimings};
 use super::method::{Config, Method};
 use crate::stats::crossover::{
-    points_crossover, points_crossover_interval, Crossover, Never, PathTracingCost, ReplicaErrors,
+    mean_mse, points_crossover, points_crossover_interval, unreachable, Crossover, Never,
+    PathTracingCost, PowerLawCheck, ReplicaErrors,
 };
-use crate::stats::fit::ErrorFit;
+use crate::stats::fit::{ErrorFit, ErrorModel};
 
 /// Bootstrap resamples.
 pub const DRAWS: usize = 2000;
@@ -58,10 +59,14 @@ pub struct CrossRow {
     pub config: Config,
     /// N_ε (photons of one estimate), or paths per point for path tracing; NaN if unreachable.
     pub photons: f64,
-    /// √B.
+    /// √B (NaN under a radius schedule: its error model has no floor).
     pub error_floor: f64,
-    /// c of B + c/N (path tracing: cv²).
+    /// c of B + c/N (path tracing: cv²; NaN under a radius schedule).
     pub error_fit_c: f64,
+    /// a of a·N^(−2γ) under a radius schedule (NaN otherwise).
+    pub error_fit_a: f64,
+    /// Under a radius schedule: the fitted γ and the log–log curvature with their intervals.
+    pub power_law: Option<PowerLawCheck>,
     /// Seconds paid once at N_ε.
     pub seconds_once: f64,
     /// Seconds per added point at [`POINTS_PER_POINT`] points.
@@ -122,6 +127,12 @@ fn never_reason(n: &Never) -> String {
         Never::PerFrameCost { detp, path_tracing } => {
             format!("per-frame cost {detp:.3e} s ≥ path tracing's {path_tracing:.3e} s per frame")
         }
+        Never::NotFalling { slope } => {
+            format!("the error does not fall with photons (fitted γ = {slope:.3} ≤ 0)")
+        }
+        Never::Flattens { curvature, lo } => format!(
+            "the error curve flattens (log–log curvature {curvature:.3}, 95 % lower bound {lo:.3} > 0): a floor appears, so the power law a·N^(−2γ) does not hold"
+        ),
     }
 }
 
@@ -136,6 +147,8 @@ pub fn path_tracer(cv2: &[f64], seconds_per_path: f64) -> PathTracingCost {
 
 /// A row's fields that follow from the error fit and (if any) the cost model alone.
 fn base_row(inp: &Inputs, target: f64, config: Config, fit: &ErrorFit) -> CrossRow {
+    let rule = config.radius_rule.unwrap_or_default();
+    let power = rule.error_model() == ErrorModel::PowerLaw;
     let cost = inp
         .costs
         .iter()
@@ -152,21 +165,30 @@ fn base_row(inp: &Inputs, target: f64, config: Config, fit: &ErrorFit) -> CrossR
     };
     let mut reason = Vec::new();
     if cost.is_none() {
-        reason.push("no cost sweep at this d/edge/direct".to_string());
+        reason.push(match rule == Default::default() {
+            true => "no cost sweep at this d/edge/direct".to_string(),
+            false => format!(
+                "no cost sweep at this d/edge/direct and radius rule{}",
+                rule.describe()
+            ),
+        });
     }
     if !photons.is_finite() {
-        reason.push(never_reason(&Never::ErrorFloor {
-            floor: fit.floor(),
-            target,
-        }));
+        reason.push(never_reason(&unreachable(fit, target)));
     }
+    let (floor, c, a) = match power {
+        true => (f64::NAN, f64::NAN, fit.c),
+        false => (fit.floor(), fit.c, f64::NAN),
+    };
     CrossRow {
         scene: inp.scene.clone(),
         target,
         config,
         photons,
-        error_floor: fit.floor(),
-        error_fit_c: fit.c,
+        error_floor: floor,
+        error_fit_c: c,
+        error_fit_a: a,
+        power_law: None,
         seconds_once: once,
         seconds_per_point: per_point,
         cost,
@@ -208,10 +230,15 @@ fn replica_rows(
     target: f64,
 ) -> Vec<CrossRow> {
     let reps = mse.len().min(inp.pt_cv2.len());
-    let mean: Vec<f64> = (0..photons.len())
-        .map(|j| mse[..reps].iter().map(|m| m[j]).sum::<f64>() / reps as f64)
-        .collect();
-    let fit = ErrorFit::fit_relative(photons, &mean);
+    let all: Vec<usize> = (0..reps).collect();
+    let mean = mean_mse(mse, photons.len(), &all);
+    let model = config
+        .radius_rule
+        .map_or(ErrorModel::Floor, |r| r.error_model());
+    let fit = model.fit(photons, &mean);
+    let power_law = (model == ErrorModel::PowerLaw)
+        .then(|| PowerLawCheck::run(photons, &mse[..reps], DRAWS, LEVEL, inp.seed));
+    let failure = power_law.as_ref().and_then(PowerLawCheck::failure);
     let replicas: Vec<ReplicaErrors> = (0..reps)
         .map(|r| ReplicaErrors {
             detp_mse: mse[r].clone(),
@@ -226,6 +253,14 @@ fn replica_rows(
                 ..config.clone()
             };
             let mut row = base_row(inp, target, config, &fit);
+            row.power_law = power_law;
+            if let Some(never) = failure {
+                // The fit N_ε rests on does not hold: no N_ε, no N*, and why.
+                (row.photons, row.seconds_once, row.seconds_per_point) =
+                    (f64::NAN, f64::NAN, f64::NAN);
+                add_reason(&mut row, never_reason(&never));
+                return row;
+            }
             if let Some(c) = row.cost {
                 let samples = inp
                     .costs
@@ -233,6 +268,7 @@ fn replica_rows(
                     .find(|s| row.config.matches(&s.config))
                     .map_or(&[][..], |s| &s.samples[..]);
                 let (est, ci) = points_crossover_interval(
+                    model,
                     photons,
                     &replicas,
                     inp.timing.median,
@@ -247,6 +283,7 @@ fn replica_rows(
                 row.n_star_model = est.value();
                 let m = MeasuredInputs {
                     config: &row.config,
+                    model,
                     photons,
                     replicas: &replicas,
                     runs: &inp.runs,
@@ -372,10 +409,13 @@ fn path_row(inp: &Inputs, target: f64) -> CrossRow {
             direct: None,
             edge: None,
             disc_radius: None,
+            radius_rule: None,
         },
         photons: pt.paths_for(target) as f64,
         error_floor: 0.0,
         error_fit_c: pt.cv * pt.cv,
+        error_fit_a: f64::NAN,
+        power_law: None,
         seconds_once: 0.0,
         seconds_per_point: pt.seconds_per_point(target),
         cost: None,
@@ -472,6 +512,7 @@ pub fn best_rows(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::crossover::method::RadiusRule;
     use crate::stats::fit::CostModel;
 
     const MODEL: CostModel = CostModel {
@@ -491,6 +532,7 @@ mod tests {
             floor2: 0.01f64.powi(2),
             c: 50.0,
             measured_min: 0.0,
+            exponent: 1.0,
         };
         let mse: Vec<Vec<f64>> = (0..3)
             .map(|_| photons.iter().map(|&n| truth.mse(n)).collect())
@@ -500,6 +542,7 @@ mod tests {
             direct: Some("photons".into()),
             edge: Some("paper".into()),
             disc_radius: Some(5.0),
+            radius_rule: Some(RadiusRule::default()),
         };
         let mut samples = Vec::new();
         for n in [1e4, 1e5] {
@@ -540,6 +583,81 @@ mod tests {
         }
     }
 
+    /// A radius schedule beside the fixed d at the same d: its N_ε comes from a·N^(−2γ), not
+    /// B + c/N, with γ beside the derived 1/3; the fixed rule's seconds are not its seconds (no
+    /// N* until the sweep timed its own rule); a schedule whose errors level off is never, and
+    /// says why.
+    #[test]
+    fn a_schedule_is_fitted_as_a_power_law_and_timed_by_its_own_rule() {
+        let mut inp = inputs();
+        let rule = RadiusRule::read(f64::NAN, 1e4, f64::NAN);
+        let config = Config {
+            radius_rule: Some(rule),
+            ..inp.detp[0].config.clone()
+        };
+        let photons: Vec<f64> = (0..5).map(|k| 1e4 * 2f64.powi(k)).collect();
+        let replicas = |f: &dyn Fn(f64) -> f64| -> Vec<Vec<f64>> {
+            (0..3)
+                .map(|r| {
+                    photons
+                        .iter()
+                        .enumerate()
+                        .map(|(j, &n)| f(n) * (1.0 + 0.02 * (((r + j) % 3) as f64 - 1.0)))
+                        .collect()
+                })
+                .collect()
+        };
+        let a = 20.0;
+        inp.detp = vec![DetpErrors {
+            config: config.clone(),
+            photons: photons.clone(),
+            mse: replicas(&|n| a * n.powf(-2.0 / 3.0)),
+        }];
+        let rows = crossover_rows(&inp, &[0.05]);
+        let sc = &rows[0];
+        assert_eq!(sc.config, config);
+        let want = (a / 0.05f64.powi(2)).powf(1.5);
+        assert!(
+            (sc.photons / want - 1.0).abs() < 0.05,
+            "{} vs {want}",
+            sc.photons
+        );
+        assert!(sc.error_floor.is_nan() && sc.error_fit_c.is_nan(), "{sc:?}");
+        assert!((sc.error_fit_a / a - 1.0).abs() < 0.1, "{sc:?}");
+        let check = sc.power_law.expect("a schedule is checked");
+        assert!((check.slope.estimate - 1.0 / 3.0).abs() < 0.01, "{check:?}");
+        assert!(
+            sc.reason
+                .contains("no cost sweep at this d/edge/direct and radius rule")
+                && sc.n_star.is_nan(),
+            "{sc:?}"
+        );
+        // Timed under its own rule: an N*.
+        let own = CostSamples {
+            config: Config {
+                radius_rule: Some(rule),
+                ..inp.costs[0].config.clone()
+            },
+            samples: inp.costs[0].samples.clone(),
+        };
+        inp.costs.push(own);
+        let rows = crossover_rows(&inp, &[0.05]);
+        assert!(
+            rows[0].n_star.is_finite() && rows[0].n_star > 0.0,
+            "{:?}",
+            rows[0]
+        );
+        // Errors that level off: the power law does not hold, never.
+        inp.detp[0].mse = replicas(&|n| 4e-4 + 40.0 / n);
+        let rows = crossover_rows(&inp, &[0.05]);
+        assert!(
+            rows[0].photons.is_nan() && rows[0].n_star.is_nan(),
+            "{:?}",
+            rows[0]
+        );
+        assert!(rows[0].reason.contains("flattens"), "{}", rows[0].reason);
+    }
+
     /// A fixed-k photon map whose every replica's error levels off at 20 % (B = 0.04): the mean of
     /// four replicas would be at 10 %, but one estimate never is, so a 10 % target is out of
     /// reach (per-replica values, or only their mean MSE, alike).
@@ -551,6 +669,7 @@ mod tests {
             direct: Some("photons".into()),
             edge: None,
             disc_radius: None,
+            radius_rule: None,
         };
         let photons = vec![1e4, 1e5, 1e6];
         for per_replica in [true, false] {

@@ -61,21 +61,98 @@ pub const DISC_RADIUS: Column = value(
     Class::Parameter,
     "detp.disc_radius d (NaN where the method does not depend on it)",
 );
+/// κ.
+pub const EDGE_RADIUS_FACTOR: Column = value(
+    "edge_radius_factor",
+    "1",
+    Class::Parameter,
+    "radius rule: κ of an edge-clamping remedy, d_i = clamp(κ·s_i, r_min·d, d) (detp.edge_radius_factor), where it is not the default 1 (NaN: κ = 1, no clamping remedy, or a method without discs)",
+);
+/// N_ref.
+pub const RADIUS_SCHEDULE_PHOTONS: Column = value(
+    "radius_schedule_photons",
+    "photons",
+    Class::Parameter,
+    "radius rule: N_ref of the schedule d(N) = d·(N/N_ref)^(−β) (detp.radius_schedule_photons; NaN: d fixed, or β = 0)",
+);
+/// β.
+pub const RADIUS_SCHEDULE_EXPONENT: Column = value(
+    "radius_schedule_exponent",
+    "1",
+    Class::Parameter,
+    "radius rule: β of the schedule d(N) = d·(N/N_ref)^(−β) (NaN: d fixed)",
+);
 /// N_ε or paths.
-pub const PHOTONS: Column = value("photons", "photons", Class::Measured, "N_ε = c/(ε² − B): photons of one estimate (one replica, DETP and the photon maps alike) that reach the target; path tracing: paths per point ⌈(cv/ε)²⌉; NaN if unreachable");
+pub const PHOTONS: Column = value("photons", "photons", Class::Measured, "N_ε = c/(ε² − B): photons of one estimate (one replica, DETP and the photon maps alike) that reach the target (under a radius schedule N_ε = (a/ε²)^(1/(2γ)) from a·N^(−2γ)); path tracing: paths per point ⌈(cv/ε)²⌉; NaN if unreachable");
 /// √B.
 pub const ERROR_FLOOR: Column = value(
     "error_floor",
     "1",
     Class::Measured,
-    "√B of the fit relative MSE = B + c/N (error floor: bias, or noise more photons do not reduce, e.g. NEE direct at fixed detp.direct_samples); 0 for path tracing",
+    "√B of the fit relative MSE = B + c/N (error floor: bias, or noise more photons do not reduce, e.g. NEE direct at fixed detp.direct_samples); 0 for path tracing; NaN under a radius schedule (no floor in its model: see error_curvature)",
 );
 /// c.
 pub const ERROR_FIT_C: Column = value(
     "error_fit_c",
     "photons",
     Class::Measured,
-    "c of relative MSE = B + c/N (path tracing: cv², its relative MSE × paths)",
+    "c of relative MSE = B + c/N (path tracing: cv², its relative MSE × paths; NaN under a radius schedule: see error_fit_a)",
+);
+/// a.
+pub const ERROR_FIT_A: Column = value(
+    "error_fit_a",
+    "photons^(2γ)",
+    Class::Measured,
+    "a of relative MSE = a·N^(−2γ), the error model of a radius schedule (least squares of ln MSE on ln N; no floor); NaN for other rules",
+);
+/// γ fitted.
+pub const ERROR_SLOPE: Column = value(
+    "error_slope",
+    "1",
+    Class::Measured,
+    "γ of relative RMSE ∝ N^(−γ) fitted under a radius schedule (NaN for other rules)",
+);
+/// Its bounds.
+pub const ERROR_SLOPE_LO: Column = value(
+    "error_slope_lo",
+    "1",
+    Class::Measured,
+    "2.5 % percentile of γ over 2000 bootstrap resamples of the fronts' replicas",
+);
+/// Upper.
+pub const ERROR_SLOPE_HI: Column = value(
+    "error_slope_hi",
+    "1",
+    Class::Measured,
+    "97.5 % percentile of γ",
+);
+/// γ derived.
+pub const ERROR_SLOPE_THEORY: Column = value(
+    "error_slope_theory",
+    "1",
+    Class::Theory,
+    "γ the theory derives for the schedule: min(2β, (1 − 2β)/2), 1/3 at β = 1/6 (docs/theory.md; NaN for other rules)",
+);
+/// Curvature.
+pub const ERROR_CURVATURE: Column = value(
+    "error_curvature",
+    "1",
+    Class::Measured,
+    "under a radius schedule, the x² coefficient of ln MSE fitted as a quadratic in x = ln N: 0 for a power law, > 0 where a floor appears (its interval above 0: never, see reason); NaN for other rules or < 3 photon counts",
+);
+/// Its bounds.
+pub const ERROR_CURVATURE_LO: Column = value(
+    "error_curvature_lo",
+    "1",
+    Class::Measured,
+    "2.5 % percentile of the curvature over the same resamples",
+);
+/// Upper.
+pub const ERROR_CURVATURE_HI: Column = value(
+    "error_curvature_hi",
+    "1",
+    Class::Measured,
+    "97.5 % percentile of the curvature",
 );
 /// Seconds once.
 pub const SECONDS_ONCE: Column = value("seconds_once", "s", Class::Timing, "the cost model's seconds at N_ε and no point: fixed + a·N_ε (trace, build); 0 for path tracing");
@@ -171,7 +248,7 @@ pub const NEVER_FRACTION: Column = value(
     "fraction of bootstrap resamples in which it never beats path tracing (NaN: no bootstrap)",
 );
 /// Reason.
-pub const REASON: Column = value("reason", "", Class::Timing, "why a value is NaN or never (error floor, per-point cost, no cost sweep at this d/edge/direct), or a note on how it was computed; NaN when there is nothing to say");
+pub const REASON: Column = value("reason", "", Class::Timing, "why a value is NaN or never (error floor, a schedule's error curve that flattens, per-point cost, no cost sweep at this d/edge/direct and radius rule), or a note on how it was computed; NaN when there is nothing to say");
 
 /// n_P.
 pub const POINTS: Column = value(
@@ -255,15 +332,32 @@ pub fn crossover_row(r: &CrossRow) -> Row {
         .map_or((f64::NAN, f64::NAN), |c| (c.model.gamma, c.worst_misfit));
     let coef =
         |f: fn(&crate::stats::fit::CostModel) -> f64| r.cost.map_or(f64::NAN, |c| f(&c.model));
+    let rule = r.config.radius_rule.unwrap_or_default();
+    let schedule =
+        |f: fn(&super::method::Schedule) -> f64| rule.schedule.as_ref().map_or(f64::NAN, f);
+    let power = |f: fn(&crate::stats::crossover::PowerLawCheck) -> f64| {
+        r.power_law.as_ref().map_or(f64::NAN, f)
+    };
     row.put(&SCENE, r.scene.as_str())
         .put(&TARGET, r.target)
         .put(&METHOD, r.config.method.label())
         .put(&DIRECT, text(&r.config.direct))
         .put(&EDGE, text(&r.config.edge))
         .put(&DISC_RADIUS, r.config.disc_radius.unwrap_or(f64::NAN))
+        .put(&EDGE_RADIUS_FACTOR, rule.edge_factor.unwrap_or(f64::NAN))
+        .put(&RADIUS_SCHEDULE_PHOTONS, schedule(|s| s.photons))
+        .put(&RADIUS_SCHEDULE_EXPONENT, schedule(|s| s.exponent))
         .put(&PHOTONS, r.photons)
         .put(&ERROR_FLOOR, r.error_floor)
         .put(&ERROR_FIT_C, r.error_fit_c)
+        .put(&ERROR_FIT_A, r.error_fit_a)
+        .put(&ERROR_SLOPE, power(|p| p.slope.estimate))
+        .put(&ERROR_SLOPE_LO, power(|p| p.slope.lo))
+        .put(&ERROR_SLOPE_HI, power(|p| p.slope.hi))
+        .put(&ERROR_SLOPE_THEORY, rule.derived_error_slope())
+        .put(&ERROR_CURVATURE, power(|p| p.curvature.estimate))
+        .put(&ERROR_CURVATURE_LO, power(|p| p.curvature.lo))
+        .put(&ERROR_CURVATURE_HI, power(|p| p.curvature.hi))
         .put(&SECONDS_ONCE, r.seconds_once)
         .put(&SECONDS_PER_POINT, r.seconds_per_point)
         .put(&COST_GAMMA, gamma)

@@ -1,5 +1,7 @@
 //! What the n_P sweep (a kind-`detp` run over detp.points × detp.photons × detp.direct ×
-//! detp.edge at one d, no reference) says about seconds: per method configuration the samples
+//! detp.edge at one d, no reference; with the radius rules beside the fixed d where the fronts
+//! have them) says about seconds: per method configuration (the radius rule included: a rule's
+//! seconds are its own) the samples
 //! (N, n_P, seconds of one replica) and [`CostModel::fit_best_gamma`] over them; path tracing's
 //! seconds per path, per row and run ([`run_timings`]).
 //!
@@ -71,14 +73,15 @@ pub fn cost_samples(main: &Csv) -> Result<Vec<CostSamples>, OutputError> {
         }
         let (build, cost) = (main.numbers(&b, why)?, main.numbers(&c, why)?);
         let detp = Method::DETP.contains(&method);
-        for (i, (dir, ed, d)) in settings.iter().enumerate() {
+        for (i, set) in settings.iter().enumerate() {
             let once = trace[i] + direct[i] + build[i] + if detp { edge[i] } else { 0.0 };
             let sample = (photons[i], points[i], (once + cost[i]) / reps[i]);
             let config = Config {
                 method,
-                direct: Some(dir.clone()),
-                edge: detp.then(|| ed.clone()),
-                disc_radius: detp.then_some(*d),
+                direct: Some(set.direct.clone()),
+                edge: detp.then(|| set.edge.clone()),
+                disc_radius: detp.then_some(set.disc_radius),
+                radius_rule: detp.then_some(set.rule),
             };
             match out.iter_mut().find(|s| s.config == config) {
                 Some(s) => s.samples.push(sample),

@@ -105,10 +105,13 @@ pub struct FramesRow {
     pub reason: String,
 }
 
-/// The fronts' configuration the quasi-static layer runs (direct photons, edge paper) nearest `d`.
+/// The fronts' configuration the quasi-static layer runs (direct photons, edge paper, a fixed d)
+/// nearest `d`.
 fn nearest_paper(detp: &[DetpErrors], d: f64) -> Option<&DetpErrors> {
     let paper = detp.iter().filter(|e| {
-        e.config.direct.as_deref() == Some("photons") && e.config.edge.as_deref() == Some("paper")
+        e.config.direct.as_deref() == Some("photons")
+            && e.config.edge.as_deref() == Some("paper")
+            && e.config.radius_rule.unwrap_or_default() == Default::default()
     });
     let gap = |e: &DetpErrors| {
         let x = e.config.disc_radius.unwrap_or(f64::NAN);
@@ -248,6 +251,7 @@ mod tests {
                 direct: Some("photons".into()),
                 edge: Some("paper".into()),
                 disc_radius: Some(10.0),
+                radius_rule: Some(Default::default()),
             },
             mse: vec![photons.iter().map(|n| 10.0 / n).collect(); 2],
             photons,

@@ -1,6 +1,6 @@
 //! What the fronts (a kind-`detp` run with a reference, ≥ 2 replicas and a sweep over
-//! detp.direct × detp.edge × detp.photons × detp.disc_radius) say about errors: per DETP
-//! configuration and replica the relative MSE at each photon count; per photon map the same, per
+//! detp.direct × detp.edge × detp.photons × detp.disc_radius and the radius rules) say about
+//! errors: per DETP configuration (its radius rule included, [`settings`]) and replica the relative MSE at each photon count; per photon map the same, per
 //! replica at its own N photons (a map's error does not fall with the replicas: a fixed-k map's
 //! variance goes as 1/k whatever N); per replica the path tracer's cv².
 //!
@@ -11,7 +11,7 @@
 use std::collections::BTreeMap;
 
 use super::input::Csv;
-use super::method::{Config, Method};
+use super::method::{Config, Method, RadiusRule};
 use crate::error::OutputError;
 use crate::experiment::detp::engines::squared_error_sum;
 use crate::stats::crossover::PathTracingCost;
@@ -71,14 +71,47 @@ pub fn rows_by_point(points: &Csv) -> Result<BTreeMap<u64, Vec<usize>>, OutputEr
     Ok(by)
 }
 
-/// The main table's `detp.direct`, `detp.edge`, `detp.disc_radius` of each row.
-pub fn settings(main: &Csv) -> Result<Vec<(String, String, f64)>, OutputError> {
+/// One row's DETP configuration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Setting {
+    /// `detp.direct`.
+    pub direct: String,
+    /// `detp.edge`.
+    pub edge: String,
+    /// `detp.disc_radius` (the schedule's d_ref).
+    pub disc_radius: f64,
+    /// The radius rule.
+    pub rule: RadiusRule,
+}
+
+/// The radius rules' parameter columns, read where the table has them (see [`RadiusRule::read`]).
+pub const RULE_COLUMNS: [&str; 3] = [
+    "detp.edge_radius_factor",
+    "detp.radius_schedule_photons",
+    "detp.radius_schedule_exponent",
+];
+
+/// The main table's `detp.direct`, `detp.edge`, `detp.disc_radius` and radius rule of each row.
+pub fn settings(main: &Csv) -> Result<Vec<Setting>, OutputError> {
     let why = "the configuration of each row";
     let direct = main.texts("detp.direct", why)?;
     let edge = main.texts("detp.edge", why)?;
     let d = main.numbers("detp.disc_radius", why)?;
+    let mut rule = Vec::new();
+    for c in RULE_COLUMNS {
+        rule.push(match main.has(c) {
+            true => main.numbers(c, why)?,
+            false => vec![f64::NAN; main.rows.len()],
+        });
+    }
+    let (kappa, photons, beta) = (&rule[0], &rule[1], &rule[2]);
     Ok((0..main.rows.len())
-        .map(|i| (direct[i].clone(), edge[i].clone(), d[i]))
+        .map(|i| Setting {
+            direct: direct[i].clone(),
+            edge: edge[i].clone(),
+            disc_radius: d[i],
+            rule: RadiusRule::read(kappa[i], photons[i], beta[i]),
+        })
         .collect())
 }
 
@@ -104,7 +137,7 @@ pub fn detp_errors(main: &Csv, points: &Csv) -> Result<Vec<DetpErrors>, OutputEr
     let sweep = main.numbers("point", "the sweep point")?;
     let photons = main.numbers("detp.photons", "the photon count of each row")?;
     let mut out: Vec<DetpErrors> = Vec::new();
-    for (i, (direct, edge, d)) in settings(main)?.into_iter().enumerate() {
+    for (i, set) in settings(main)?.into_iter().enumerate() {
         let rows = by.get(&(sweep[i] as u64)).ok_or_else(|| {
             OutputError::new(
                 &points.path,
@@ -118,9 +151,10 @@ pub fn detp_errors(main: &Csv, points: &Csv) -> Result<Vec<DetpErrors>, OutputEr
             .collect();
         let config = Config {
             method: Method::SphereCache,
-            direct: Some(direct),
-            edge: Some(edge),
-            disc_radius: Some(d),
+            direct: Some(set.direct),
+            edge: Some(set.edge),
+            disc_radius: Some(set.disc_radius),
+            radius_rule: Some(set.rule),
         };
         let at = match out.iter().position(|e| e.config == config) {
             Some(at) => at,
@@ -188,15 +222,14 @@ pub fn map_errors(main: &Csv, points: &Csv, replicas: f64) -> Result<Vec<MapErro
             )
         };
         let mut seen: Vec<String> = Vec::new();
-        for (direct, edge, d) in &settings {
+        for first in &settings {
+            let direct = &first.direct;
             if seen.contains(direct) {
                 continue;
             }
             seen.push(direct.clone());
             let mut at: Vec<(f64, Vec<f64>)> = Vec::new();
-            for i in
-                (0..settings.len()).filter(|&i| settings[i] == (direct.clone(), edge.clone(), *d))
-            {
+            for i in (0..settings.len()).filter(|&i| settings[i] == *first) {
                 let rows = by.get(&(sweep[i] as u64)).ok_or_else(|| {
                     OutputError::new(
                         &points.path,
@@ -220,6 +253,7 @@ pub fn map_errors(main: &Csv, points: &Csv, replicas: f64) -> Result<Vec<MapErro
                     direct: Some(direct.clone()),
                     edge: None,
                     disc_radius: None,
+                    radius_rule: None,
                 },
                 photons: at.iter().map(|a| a.0).collect(),
                 mse: (0..series)
@@ -309,6 +343,38 @@ mod tests {
         assert!((e[0].mse[0][0] - 0.04).abs() < 1e-12 && (e[0].mse[1][0] - 0.16).abs() < 1e-12);
         assert!((e[0].mse[0][1] - 0.01).abs() < 1e-12, "{e:?}");
         assert_eq!(e[1].config.direct.as_deref(), Some("nee"));
+    }
+
+    /// The rule's parameter columns key the configuration: the same d and photons with β = 0 and
+    /// β = 1/6 are two configurations; a table without the columns reads as d fixed.
+    #[test]
+    fn detp_errors_key_the_radius_rule() {
+        let main = csv(
+            "point,detp.direct,detp.edge,detp.photons,detp.disc_radius,detp.radius_schedule_photons,detp.radius_schedule_exponent\n\
+             0,photons,paper,100,5,100,0.0\n1,photons,paper,100,5,100,0.16666666666666666\n\
+             2,photons,paper,200,5,100,0.0\n3,photons,paper,200,5,100,0.16666666666666666\n",
+        );
+        let mut pts = String::from(
+            "point,sample,irradiance_replica_0,irradiance_replica_1,reference_e,reference_se\n",
+        );
+        for p in 0..4 {
+            pts.push_str(&format!("{p},0,1.1,0.9,1,0\n"));
+        }
+        let e = detp_errors(&main, &csv(&pts)).expect("errors");
+        assert_eq!(e.len(), 2, "{e:?}");
+        assert_eq!(e[0].config.radius_rule, Some(RadiusRule::default()));
+        let s = e[1]
+            .config
+            .radius_rule
+            .and_then(|r| r.schedule)
+            .expect("a schedule");
+        assert_eq!((s.photons, s.exponent), (100.0, 1.0 / 6.0));
+        assert_eq!((e[0].photons.len(), e[1].photons.len()), (2, 2));
+        let old = csv(
+            "point,detp.direct,detp.edge,detp.photons,detp.disc_radius\n0,photons,clamp-first-hit,100,5\n",
+        );
+        let set = settings(&old).expect("settings");
+        assert_eq!(set[0].rule, RadiusRule::default());
     }
 
     /// Four replicas of a photon map at two points, truth 1 ± 0: per-replica columns give each

@@ -17,7 +17,7 @@ use super::costs::CostSamples;
 use super::method::Config;
 use crate::sample::rng::Stream;
 use crate::stats::crossover::{bootstrap_with, Interval, PathTracingCost, ReplicaErrors};
-use crate::stats::fit::ErrorFit;
+use crate::stats::fit::ErrorModel;
 
 /// One run of the n_P sweep: its seconds per configuration and path tracing's per row.
 #[derive(Clone, Debug, PartialEq)]
@@ -147,6 +147,8 @@ pub fn crossing(curve: &[(f64, f64, f64)], form: Form) -> Found {
 pub struct MeasuredInputs<'a> {
     /// The configuration.
     pub config: &'a Config,
+    /// Its error model (its radius rule's).
+    pub model: ErrorModel,
     /// Photon counts of the error fit.
     pub photons: &'a [f64],
     /// The fronts' replicas.
@@ -170,7 +172,7 @@ fn curve(
     let mse: Vec<f64> = (0..m.photons.len())
         .map(|j| pick.iter().map(|&r| m.replicas[r].detp_mse[j]).sum::<f64>() / k)
         .collect();
-    let n_eps = ErrorFit::fit_relative(m.photons, &mse).photons_for(m.target)?;
+    let n_eps = m.model.fit(m.photons, &mse).photons_for(m.target)?;
     let cv2 = pick.iter().map(|&r| m.replicas[r].pt_cv2).sum::<f64>() / k;
     let paths = PathTracingCost {
         cv: cv2.max(0.0).sqrt(),
@@ -238,7 +240,11 @@ pub fn measured_star(
     seed: u64,
 ) -> Option<MeasuredStar> {
     let all: Vec<usize> = (0..m.replicas.len()).collect();
-    let runs: Vec<usize> = (0..m.runs.len()).collect();
+    // The runs that timed this configuration (runs may add configurations of their own, e.g. a
+    // radius rule run apart): the bootstrap resamples these.
+    let runs: Vec<usize> = (0..m.runs.len())
+        .filter(|&r| m.runs[r].costs.iter().any(|c| m.config.matches(&c.config)))
+        .collect();
     let c = curve(m, &all, &runs, None)?;
     let range = (c[0].0, c[c.len() - 1].0);
     let ci = |form: Form| {
@@ -246,9 +252,9 @@ pub fn measured_star(
             let Some(rng) = rng else {
                 return crossing(&c, form).n_star;
             };
-            let runs: Vec<usize> = if m.runs.len() >= 2 {
-                (0..m.runs.len())
-                    .map(|_| rand::Rng::gen_range(rng, 0..m.runs.len()))
+            let runs: Vec<usize> = if runs.len() >= 2 {
+                (0..runs.len())
+                    .map(|_| runs[rand::Rng::gen_range(rng, 0..runs.len())])
                     .collect()
             } else {
                 runs.clone()
@@ -278,6 +284,7 @@ mod tests {
             direct: Some("photons".into()),
             edge: Some("paper".into()),
             disc_radius: Some(5.0),
+            radius_rule: Some(Default::default()),
         };
         let mut samples = Vec::new();
         let mut path = Vec::new();
@@ -315,6 +322,7 @@ mod tests {
         let config = run.costs[0].config.clone();
         let m = MeasuredInputs {
             config: &config,
+            model: ErrorModel::Floor,
             photons: &[1e4, 1e5, 1e6],
             replicas: &reps,
             runs: std::slice::from_ref(&run),
@@ -395,6 +403,7 @@ mod tests {
         let width = |runs: &[RunTimings]| {
             let m = MeasuredInputs {
                 config: &config,
+                model: ErrorModel::Floor,
                 photons: &[1e4, 1e5, 1e6],
                 replicas: &reps,
                 runs,

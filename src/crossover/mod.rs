@@ -1,6 +1,8 @@
 //! `raycost crossover FRONTS_DIR POINTS_DIR [FRAMES_DIR] --targets … --out DIR`: which method when
 //! (issue 27), from three runs of one scene — the fronts (errors of every method against a
-//! reference, ≥ 2 replicas), the n_P sweep (seconds over photons × points) and optionally a
+//! reference, ≥ 2 replicas; one run, or several in `runs/R` that add configurations, e.g. a radius
+//! rule that cannot share the first run's sweep), the n_P sweep (seconds over photons × points;
+//! one run or several) and optionally a
 //! quasi-static frames run (incremental costs). Writes `DIR/crossover.csv` (per target and method
 //! configuration: photons or paths needed, seconds once and per point, N* with a bootstrap CI over
 //! the fronts' replicas, or why never), `DIR/best.csv` (per target and n_P ∈ {10², …, 10⁶} the two
@@ -184,8 +186,8 @@ fn first_number(t: &Csv, column: &str, why: &str) -> Result<f64, OutputError> {
         .ok_or_else(|| OutputError::new(&t.path, "has no rows"))
 }
 
-/// The n_P sweep's runs: `DIR/runs/R` for every run R that `raycost run --run R` (or `--repeat`)
-/// wrote there, in run order; else the one run in `DIR`.
+/// An input's runs (the n_P sweep's, or the fronts'): `DIR/runs/R` for every run R that
+/// `raycost run --run R` (or `--repeat`) wrote there, in run order; else the one run in `DIR`.
 fn sweep_runs(dir: &Path) -> Result<Vec<Source>, OutputError> {
     let runs = dir.join("runs");
     if !runs.is_dir() {
@@ -210,39 +212,73 @@ fn sweep_runs(dir: &Path) -> Result<Vec<Source>, OutputError> {
     numbered.iter().map(|(_, d)| Source::open(d)).collect()
 }
 
-/// The sweep's provenance: every run's files under role `points`, and `[extra.points]` naming the
-/// folder given (so that `raycost reproduce` reruns on every run) with each run's machine in
-/// `[extra.points.runs.R]`.
-fn record_sweep(dir: &Path, sweeps: &[Source], meta: &mut Meta) -> Result<(), OutputError> {
-    if let [one] = sweeps {
+/// A multi-run input's provenance (the n_P sweep's runs, or the fronts' runs): every run's files
+/// under `role`, and `[extra.ROLE]` naming the folder given (so that `raycost reproduce` reruns on
+/// every run) with each run's machine in `[extra.ROLE.runs.R]`.
+fn record_runs(
+    role: &str,
+    dir: &Path,
+    runs: &[Source],
+    meta: &mut Meta,
+) -> Result<(), OutputError> {
+    if let [one] = runs {
         if one.results.dir == dir {
-            return one.record("points", meta);
+            return one.record(role, meta);
         }
     }
-    let mut runs = toml::Table::new();
-    for s in sweeps {
+    let mut table = toml::Table::new();
+    for s in runs {
         let mut m = Meta::begin("crossover", Default::default());
-        s.record("points", &mut m)?;
+        s.record(role, &mut m)?;
         meta.inputs.extend(m.inputs);
-        if let Some(t) = m.extra.remove("points") {
+        if let Some(t) = m.extra.remove(role) {
             let run = s
                 .results
                 .dir
                 .file_name()
                 .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-            runs.insert(run, t);
+            table.insert(run, t);
         }
     }
     let mut t = toml::Table::new();
     t.insert("dir".into(), toml::Value::String(dir.display().to_string()));
-    t.insert("runs".into(), toml::Value::Table(runs));
-    meta.extra.insert("points".into(), toml::Value::Table(t));
+    t.insert("runs".into(), toml::Value::Table(table));
+    meta.extra.insert(role.into(), toml::Value::Table(t));
+    Ok(())
+}
+
+/// The DETP errors of the fronts' further runs (`FRONTS_DIR/runs/R` beyond the first: e.g. a
+/// radius rule that cannot share the first run's sweep, such as κ, which only a clamping edge
+/// remedy takes), added to the first run's; a configuration in two runs is refused (which
+/// run's errors would it be?).
+fn add_fronts_runs(
+    detp: &mut Vec<fronts::DetpErrors>,
+    more: &mut [Source],
+) -> Result<(), OutputError> {
+    for src in more {
+        let main = src.main()?;
+        let points = src.side("points")?;
+        for e in fronts::detp_errors(&main, &points)? {
+            if detp.iter().any(|d| d.config == e.config) {
+                return Err(OutputError::new(
+                    &main.path,
+                    format!(
+                        "repeats the configuration {} of an earlier run of the fronts: each run must add its own configurations",
+                        e.config.describe()
+                    ),
+                ));
+            }
+            detp.push(e);
+        }
+    }
     Ok(())
 }
 
 /// Reads every input and runs the analysis.
 fn compute(o: &Options) -> Result<Outputs, OutputError> {
-    let mut fronts = Source::open(&o.fronts)?;
+    let mut fronts_runs = sweep_runs(&o.fronts)?;
+    let mut more_fronts = fronts_runs.split_off(1);
+    let fronts = &mut fronts_runs[0];
     let main = fronts.main()?;
     let points = fronts.side("points")?;
     let pt_side = fronts.side("path_tracing")?;
@@ -253,7 +289,8 @@ fn compute(o: &Options) -> Result<Outputs, OutputError> {
         "the photon maps' spread over replicas",
     )?;
     let scene = scene_name(&main, &fronts.results.name);
-    let detp = fronts::detp_errors(&main, &points)?;
+    let mut detp = fronts::detp_errors(&main, &points)?;
+    add_fronts_runs(&mut detp, &mut more_fronts)?;
     let maps = fronts::map_errors(&main, &points, replicas)?;
     let (pt_point, pt_cv2) = fronts::path_tracing_cv2(&pt_side, &points)?;
     let mut sweeps = sweep_runs(&o.points)?;
@@ -296,8 +333,9 @@ fn compute(o: &Options) -> Result<Outputs, OutputError> {
     );
     let mut meta = Meta::begin("crossover", Default::default());
     meta.run.seed = seed;
-    fronts.record("fronts", &mut meta)?;
-    record_sweep(&o.points, &sweeps, &mut meta)?;
+    fronts_runs.extend(more_fronts);
+    record_runs("fronts", &o.fronts, &fronts_runs, &mut meta)?;
+    record_runs("points", &o.points, &sweeps, &mut meta)?;
     if let Some(src) = confirm.as_mut() {
         src.record("confirm", &mut meta)?;
     }

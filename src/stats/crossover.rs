@@ -29,7 +29,7 @@
 //! data cannot exclude that DETP never wins). Seconds are taken as given (their spread across
 //! replicas is small next to the errors'; the load at measurement time is reported beside them).
 
-use super::fit::{CostModel, ErrorFit};
+use super::fit::{log_curvature, CostModel, ErrorFit, ErrorModel};
 use crate::sample::rng::{domain, stream};
 
 /// Per-point path tracing's cost and noise.
@@ -97,6 +97,20 @@ pub enum Never {
         /// The path tracer's seconds per point.
         path_tracing: f64,
     },
+    /// A power law a·N^(−2γ) fitted to an error that does not fall (γ ≤ 0): no photon count
+    /// reaches a target below the errors measured.
+    NotFalling {
+        /// The fitted γ.
+        slope: f64,
+    },
+    /// The error curve of a radius schedule flattens in log–log (its curvature's interval lies
+    /// above 0): a floor appears, so the power law a·N^(−2γ) that N_ε rests on does not hold.
+    Flattens {
+        /// The curvature of ln MSE in ln N ([`log_curvature`]).
+        curvature: f64,
+        /// The lower bound of its bootstrap interval (> 0).
+        lo: f64,
+    },
     /// DETP's seconds per further (incremental) frame are not below the path tracer's per frame.
     PerFrameCost {
         /// DETP's seconds per incremental frame.
@@ -125,6 +139,20 @@ impl Crossover {
     }
 }
 
+/// Why no photon count of `error` reaches `target` (where [`ErrorFit::photons_for`] is `None`): a
+/// power law that does not fall, else the floor.
+pub fn unreachable(error: &ErrorFit, target: f64) -> Never {
+    if error.exponent != 1.0 && !error.falls() {
+        return Never::NotFalling {
+            slope: error.error_slope(),
+        };
+    }
+    Never::ErrorFloor {
+        floor: error.floor(),
+        target,
+    }
+}
+
 /// DETP's seconds for `points` points at relative RMSE `target`, or why it cannot reach it.
 pub fn detp_seconds(
     error: &ErrorFit,
@@ -134,10 +162,7 @@ pub fn detp_seconds(
 ) -> Result<f64, Never> {
     match error.photons_for(target) {
         Some(n) => Ok(cost.seconds(n, points)),
-        None => Err(Never::ErrorFloor {
-            floor: error.floor(),
-            target,
-        }),
+        None => Err(unreachable(error, target)),
     }
 }
 
@@ -150,10 +175,7 @@ pub fn points_crossover(
     target: f64,
 ) -> Crossover {
     let Some(n) = error.photons_for(target) else {
-        return Crossover::Never(Never::ErrorFloor {
-            floor: error.floor(),
-            target,
-        });
+        return Crossover::Never(unreachable(error, target));
     };
     let p = pt.seconds_per_point(target);
     let d = |x: f64| cost.seconds(n, x) - p * x;
@@ -312,11 +334,62 @@ pub struct ReplicaErrors {
     pub pt_cv2: f64,
 }
 
+/// The replicas `pick`'s mean relative MSE at each photon count (`mse[r][j]`: replica r at count j).
+pub fn mean_mse(mse: &[Vec<f64>], photons: usize, pick: &[usize]) -> Vec<f64> {
+    let k = pick.len() as f64;
+    (0..photons)
+        .map(|j| pick.iter().map(|&r| mse[r][j]).sum::<f64>() / k)
+        .collect()
+}
+
+/// Whether a radius schedule's errors follow the power law a·N^(−2γ) its theory gives: γ and the
+/// curvature of ln MSE in ln N ([`log_curvature`]), each with its bootstrap interval over the
+/// replicas (the same resamples).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PowerLawCheck {
+    /// γ of the fit on all replicas, and its interval.
+    pub slope: Interval,
+    /// The curvature, and its interval (NaN with fewer than three photon counts).
+    pub curvature: Interval,
+}
+
+impl PowerLawCheck {
+    /// Both statistics from `mse[r][j]` (replica r at `photons[j]`), `draws` resamples at `level`
+    /// from the bootstrap stream of `seed`.
+    pub fn run(photons: &[f64], mse: &[Vec<f64>], draws: usize, level: f64, seed: u64) -> Self {
+        let at = |pick: &[usize]| mean_mse(mse, photons.len(), pick);
+        let slope = bootstrap(mse.len(), draws, level, seed, |p| {
+            ErrorFit::fit_power_law(photons, &at(p)).error_slope()
+        });
+        let curvature = bootstrap(mse.len(), draws, level, seed, |p| {
+            log_curvature(photons, &at(p))
+        });
+        PowerLawCheck { slope, curvature }
+    }
+
+    /// Why the power law fails, if it does: the curvature's interval lies above 0 (the curve
+    /// flattens: a floor appears), or γ ≤ 0 (the error does not fall). A NaN curvature (two photon
+    /// counts) cannot fail.
+    pub fn failure(&self) -> Option<Never> {
+        if self.curvature.lo > 0.0 {
+            return Some(Never::Flattens {
+                curvature: self.curvature.estimate,
+                lo: self.curvature.lo,
+            });
+        }
+        let falls = self.slope.estimate > 0.0; // NaN (no fit) does not fall either
+        (!falls).then_some(Never::NotFalling {
+            slope: self.slope.estimate,
+        })
+    }
+}
+
 /// N* with its bootstrap interval: each resample averages the replicas' MSE curves and cv², refits
-/// B + c/N, redraws the cost model from `cost_samples` ([`resample_cost`]; empty: costs fixed) and
+/// the error `model` (B + c/N, or a radius schedule's power law), redraws the cost model from `cost_samples` ([`resample_cost`]; empty: costs fixed) and
 /// re-derives N*. The estimate is from all replicas and the fitted cost.
 #[allow(clippy::too_many_arguments)] // the measured summaries, the target and the bootstrap's knobs
 pub fn points_crossover_interval(
+    model: ErrorModel,
     photons: &[f64],
     replicas: &[ReplicaErrors],
     seconds_per_path: f64,
@@ -337,7 +410,7 @@ pub fn points_crossover_interval(
             cv: cv2.sqrt(),
             seconds_per_path,
         };
-        points_crossover(&pt, &ErrorFit::fit_relative(photons, &mse), cost, target)
+        points_crossover(&pt, &model.fit(photons, &mse), cost, target)
     };
     let all: Vec<usize> = (0..replicas.len()).collect();
     let estimate = at(&all, cost);
@@ -393,6 +466,7 @@ mod tests {
             floor2: 0.01f64.powi(2),
             c: 50.0,
             measured_min: 0.0,
+            exponent: 1.0,
         };
         let model = cost(1e-12, 2e-6, 1.0);
         for target in [0.1, 0.05, 0.02] {
@@ -423,6 +497,7 @@ mod tests {
             floor2: 0.0,
             c: 10.0,
             measured_min: 0.0,
+            exponent: 1.0,
         };
         let model = cost(1e-9, 1e-6, 0.5);
         let Crossover::At(x) = points_crossover(&pt, &err, &model, 0.05) else {
@@ -442,6 +517,7 @@ mod tests {
             floor2: 0.08f64.powi(2),
             c: 10.0,
             measured_min: 0.0,
+            exponent: 1.0,
         };
         assert_eq!(
             points_crossover(&pt, &biased, &cost(0.0, 1e-6, 1.0), 0.05),
@@ -456,6 +532,7 @@ mod tests {
             floor2: 0.0,
             c: 10.0,
             measured_min: 0.0,
+            exponent: 1.0,
         };
         match points_crossover(&pt, &unbiased, &cost(2.5e-4, 0.0, 1.0), 0.05) {
             Crossover::Never(Never::PerPointCost { detp, path_tracing }) => {
@@ -519,8 +596,18 @@ mod tests {
         let clear: Vec<ReplicaErrors> =
             (0..6).map(|k| make(0.01 + 0.001 * k as f64, 1.0)).collect();
         let model = cost(1e-12, 1e-6, 1.0);
-        let (est, ci) =
-            points_crossover_interval(&photons, &clear, 2e-6, &model, &[], 0.05, 500, 0.95, 1);
+        let (est, ci) = points_crossover_interval(
+            ErrorModel::Floor,
+            &photons,
+            &clear,
+            2e-6,
+            &model,
+            &[],
+            0.05,
+            500,
+            0.95,
+            1,
+        );
         let Crossover::At(x) = est else {
             panic!("{est:?}")
         };
@@ -529,9 +616,64 @@ mod tests {
             .iter()
             .map(|&f| make(f, 1.0))
             .collect();
-        let (_, ci) =
-            points_crossover_interval(&photons, &near, 2e-6, &model, &[], 0.05, 500, 0.95, 1);
+        let (_, ci) = points_crossover_interval(
+            ErrorModel::Floor,
+            &photons,
+            &near,
+            2e-6,
+            &model,
+            &[],
+            0.05,
+            500,
+            0.95,
+            1,
+        );
         assert!(ci.never_fraction > 0.1 && ci.hi.is_infinite(), "{ci:?}");
+    }
+
+    /// Four replicas of a schedule's error a·N^(−2/3), each with its own ±8 % noise: γ's interval
+    /// holds 1/3 and is narrow, the curvature's holds 0, the power law stands. Replicas that level
+    /// off (B + c/N) are flagged as flattening; replicas that do not fall, as not falling.
+    #[test]
+    fn the_power_law_check_recovers_gamma_and_flags_a_floor() {
+        let photons: Vec<f64> = (0..5).map(|k| 2.5e4 * 2f64.powi(k)).collect();
+        let noise = |r: usize, j: usize| 1.0 + 0.08 * (((r * 7 + j * 3) % 5) as f64 - 2.0) / 2.0;
+        let replicas = |f: &dyn Fn(f64) -> f64| -> Vec<Vec<f64>> {
+            (0..4)
+                .map(|r| {
+                    photons
+                        .iter()
+                        .enumerate()
+                        .map(|(j, &n)| f(n) * noise(r, j))
+                        .collect()
+                })
+                .collect()
+        };
+        let power = replicas(&|n| 20.0 * n.powf(-2.0 / 3.0));
+        let c = PowerLawCheck::run(&photons, &power, 2000, 0.95, 5);
+        let third = 1.0 / 3.0;
+        assert!(
+            c.slope.lo < third && third < c.slope.hi && c.slope.hi - c.slope.lo < 0.05,
+            "{c:?}"
+        );
+        assert!(c.curvature.lo < 0.0 && 0.0 < c.curvature.hi, "{c:?}");
+        assert_eq!(c.failure(), None);
+        let floor = replicas(&|n| 4e-4 + 40.0 / n);
+        let f = PowerLawCheck::run(&photons, &floor, 2000, 0.95, 5);
+        assert!(
+            matches!(f.failure(), Some(Never::Flattens { lo, .. }) if lo > 0.0),
+            "{f:?}"
+        );
+        let flat = replicas(&|_| 0.01);
+        let g = PowerLawCheck::run(&photons, &flat, 2000, 0.95, 5);
+        assert!(
+            matches!(g.failure(), Some(Never::NotFalling { .. })),
+            "{g:?}"
+        );
+        // An error model that does not fall says so, not "error floor".
+        let fit = ErrorFit::fit_power_law(&photons, &mean_mse(&flat, photons.len(), &[0, 1, 2, 3]));
+        assert!(!fit.falls(), "{fit:?}");
+        assert!(matches!(unreachable(&fit, 0.005), Never::NotFalling { .. }));
     }
 
     /// The cost model's residual bootstrap: exact samples give the model back; noisy ones move
@@ -568,10 +710,30 @@ mod tests {
                 pt_cv2: 1.0,
             })
             .collect();
-        let fixed =
-            points_crossover_interval(&photons, &reps, 2e-6, &model, &[], 0.05, 500, 0.95, 1);
-        let moved =
-            points_crossover_interval(&photons, &reps, 2e-6, &model, &noisy, 0.05, 500, 0.95, 1);
+        let fixed = points_crossover_interval(
+            ErrorModel::Floor,
+            &photons,
+            &reps,
+            2e-6,
+            &model,
+            &[],
+            0.05,
+            500,
+            0.95,
+            1,
+        );
+        let moved = points_crossover_interval(
+            ErrorModel::Floor,
+            &photons,
+            &reps,
+            2e-6,
+            &model,
+            &noisy,
+            0.05,
+            500,
+            0.95,
+            1,
+        );
         assert_eq!(
             fixed.0, moved.0,
             "the estimate uses the fitted cost either way"

@@ -22,6 +22,10 @@ pub struct ErrorFit {
     /// [`ErrorFit::photons_for`] never answers fewer, since below it the fit is an extrapolation and
     /// the measured count already reaches the target.
     pub measured_min: f64,
+    /// The power of N in the falling part: MSE(N) = B + c·N^(−exponent). 1 for a fixed radius per
+    /// point (variance ∝ 1/N, [`ErrorFit::fit_relative`]); 2γ for a radius that shrinks with N
+    /// (no floor, B = 0: [`ErrorFit::fit_power_law`]).
+    pub exponent: f64,
 }
 
 impl ErrorFit {
@@ -48,11 +52,33 @@ impl ErrorFit {
         Self {
             floor2: x[0],
             c: x[1],
-            measured_min: if measured_min.is_finite() {
-                measured_min
-            } else {
-                0.0
-            },
+            measured_min: finite_or_zero(measured_min),
+            exponent: 1.0,
+        }
+    }
+
+    /// The power law of a radius schedule (`docs/theory.md`, "A disc radius per point and per
+    /// photon count"): with d ∝ N^(−β) the bias² falls as N^(−4β) and the variance as
+    /// N^(−(1−2β)), so the MSE has no floor and falls as a·N^(−2γ). Least squares of ln MSE on
+    /// ln N over the positive values (an MSE estimate's noise is proportional to its size, so equal
+    /// weights in the log): c = a, exponent = 2γ, B = 0. Fewer than two distinct N: NaN.
+    pub fn fit_power_law(photons: &[f64], mse: &[f64]) -> Self {
+        let logs = log_points(photons, mse);
+        let measured_min = logs.iter().map(|p| p.0.exp()).fold(f64::INFINITY, f64::min);
+        let centre = mean(logs.iter().map(|p| p.0));
+        let rows: Vec<([f64; 2], f64, f64)> = logs
+            .iter()
+            .map(|&(x, y)| ([1.0, x - centre], y, 1.0))
+            .collect();
+        let (c, exponent) = match solve_support(&rows, &[0, 1]) {
+            Some(b) => ((b[0] - b[1] * centre).exp(), -b[1]),
+            None => (f64::NAN, f64::NAN),
+        };
+        Self {
+            floor2: 0.0,
+            c,
+            measured_min: finite_or_zero(measured_min),
+            exponent,
         }
     }
 
@@ -79,7 +105,22 @@ impl ErrorFit {
 
     /// Relative MSE at `photons`.
     pub fn mse(&self, photons: f64) -> f64 {
-        self.floor2 + self.c / photons
+        if self.exponent == 1.0 {
+            self.floor2 + self.c / photons
+        } else {
+            self.floor2 + self.c * photons.powf(-self.exponent)
+        }
+    }
+
+    /// γ: the relative RMSE's fall in N where it has no floor (error ∝ N^(−γ)), exponent/2.
+    pub fn error_slope(&self) -> f64 {
+        0.5 * self.exponent
+    }
+
+    /// Whether the error falls with N at all (a positive c and exponent): a power law fitted to a
+    /// flat or rising curve reaches no target below it.
+    pub fn falls(&self) -> bool {
+        self.c > 0.0 && self.exponent > 0.0
     }
 
     /// Relative RMSE at `photons`.
@@ -94,12 +135,81 @@ impl ErrorFit {
         self.floor2.sqrt()
     }
 
-    /// Photons for a relative RMSE of `target`: c/(target² − B), but not fewer than
-    /// `measured_min` (conservative: the fit is not trusted below the counts it was made on); `None`
-    /// if the floor is at or above the target.
+    /// Photons for a relative RMSE of `target`: c/(target² − B) (with a power law
+    /// (c/(target² − B))^(1/exponent)), but not fewer than `measured_min` (conservative: the fit is
+    /// not trusted below the counts it was made on); `None` if the floor is at or above the target
+    /// or the error does not fall ([`ErrorFit::falls`]).
     pub fn photons_for(&self, target: f64) -> Option<f64> {
         let room = target * target - self.floor2;
-        (room > 0.0).then(|| (self.c / room).max(self.measured_min))
+        if self.exponent == 1.0 {
+            return (room > 0.0).then(|| (self.c / room).max(self.measured_min));
+        }
+        (room > 0.0 && self.falls()).then(|| {
+            (self.c / room)
+                .powf(1.0 / self.exponent)
+                .max(self.measured_min)
+        })
+    }
+}
+
+/// Which form a DETP configuration's error takes in its photon count N.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ErrorModel {
+    /// MSE = B + c/N: a radius fixed per point (fixed d, or the edge-aware κ·s_i): the variance
+    /// falls as 1/N, the bias stays ([`ErrorFit::fit_relative`]).
+    Floor,
+    /// MSE = a·N^(−2γ): a radius shrinking with N (the schedule): bias and variance both fall
+    /// ([`ErrorFit::fit_power_law`]).
+    PowerLaw,
+}
+
+impl ErrorModel {
+    /// This model fitted to the relative MSE `mse` at `photons`.
+    pub fn fit(self, photons: &[f64], mse: &[f64]) -> ErrorFit {
+        match self {
+            ErrorModel::Floor => ErrorFit::fit_relative(photons, mse),
+            ErrorModel::PowerLaw => ErrorFit::fit_power_law(photons, mse),
+        }
+    }
+}
+
+/// The curvature of ln MSE against ln N: the x² coefficient of the least-squares quadratic in
+/// x = ln N (centred), over the positive values. 0 for a power law; positive where the curve
+/// flattens (a floor appears: B + c/N has curvature B·c/N/(B + c/N)² > 0); NaN with fewer than three
+/// distinct N.
+pub fn log_curvature(photons: &[f64], mse: &[f64]) -> f64 {
+    let logs = log_points(photons, mse);
+    let centre = mean(logs.iter().map(|p| p.0));
+    let rows: Vec<([f64; 3], f64, f64)> = logs
+        .iter()
+        .map(|&(x, y)| {
+            let x = x - centre;
+            ([1.0, x, x * x], y, 1.0)
+        })
+        .collect();
+    solve_support(&rows, &[0, 1, 2]).map_or(f64::NAN, |b| b[2])
+}
+
+/// (ln N, ln MSE) of the finite pairs with N > 0 and MSE > 0.
+fn log_points(photons: &[f64], mse: &[f64]) -> Vec<(f64, f64)> {
+    photons
+        .iter()
+        .zip(mse)
+        .filter(|(n, y)| n.is_finite() && **n > 0.0 && y.is_finite() && **y > 0.0)
+        .map(|(n, y)| (n.ln(), y.ln()))
+        .collect()
+}
+
+fn mean(v: impl Iterator<Item = f64>) -> f64 {
+    let (s, k) = v.fold((0.0, 0usize), |(s, k), x| (s + x, k + 1));
+    s / k as f64
+}
+
+fn finite_or_zero(x: f64) -> f64 {
+    if x.is_finite() {
+        x
+    } else {
+        0.0
     }
 }
 
@@ -298,6 +408,7 @@ mod tests {
             floor2: 0.08f64.powi(2),
             c: 40.0,
             measured_min: 0.0,
+            exponent: 1.0,
         };
         let n = [2.5e4, 1e5, 4e5, 1.6e6];
         let mse: Vec<f64> = n.iter().map(|&x| truth.mse(x)).collect();
@@ -338,6 +449,7 @@ mod tests {
             floor2: 1e-3,
             c: 100.0,
             measured_min: 0.0,
+            exponent: 1.0,
         };
         let n: Vec<f64> = (0..8).map(|k| 1e4 * 2f64.powi(k)).collect();
         // ±5 % alternating noise.
@@ -350,6 +462,68 @@ mod tests {
         for &x in &n {
             assert!((fit.mse(x) / truth.mse(x) - 1.0).abs() < 0.06, "{fit:?}");
         }
+    }
+
+    /// A radius schedule's error a·N^(−2γ), γ = 1/3, with ±5 % alternating noise over six octaves:
+    /// γ and N_ε come back within what the noise allows, the exact curve exactly; below the
+    /// smallest measured count the measured count is the answer.
+    #[test]
+    fn a_power_law_is_recovered_from_noisy_errors() {
+        let (a, gamma) = (20.0, 1.0 / 3.0);
+        let n: Vec<f64> = (0..7).map(|k| 2.5e4 * 2f64.powi(k)).collect();
+        let truth = |x: f64| a * x.powf(-2.0 * gamma);
+        let exact: Vec<f64> = n.iter().map(|&x| truth(x)).collect();
+        let fit = ErrorFit::fit_power_law(&n, &exact);
+        assert!((fit.error_slope() - gamma).abs() < 1e-12, "{fit:?}");
+        assert!((fit.c / a - 1.0).abs() < 1e-9, "{fit:?}");
+        assert_eq!((fit.floor2, fit.measured_min), (0.0, 2.5e4));
+        // ε = 1 %: N_ε = (a/ε²)^(3/2).
+        let want = (a / 1e-4f64).powf(1.5);
+        let got = fit.photons_for(0.01).expect("no floor");
+        assert!((got / want - 1.0).abs() < 1e-9, "{got} vs {want}");
+        assert!((fit.error(got) - 0.01).abs() < 1e-12);
+        assert_eq!(
+            fit.photons_for(0.5),
+            Some(2.5e4),
+            "already met at the smallest count"
+        );
+        let noisy: Vec<f64> = exact
+            .iter()
+            .enumerate()
+            .map(|(k, &y)| y * if k % 2 == 0 { 1.05 } else { 0.95 })
+            .collect();
+        let fit = ErrorModel::PowerLaw.fit(&n, &noisy);
+        assert!((fit.error_slope() - gamma).abs() < 0.01, "{fit:?}");
+        let got = fit.photons_for(0.01).expect("no floor");
+        assert!((got / want - 1.0).abs() < 0.1, "{got} vs {want}");
+        // The floor model on the same data is the other fit.
+        assert_eq!(ErrorModel::Floor.fit(&n, &noisy).exponent, 1.0);
+    }
+
+    /// A flat error does not fall: no target below it is reached.
+    #[test]
+    fn a_power_law_that_does_not_fall_reaches_nothing() {
+        let n = [1e4, 2e4, 4e4, 8e4];
+        let fit = ErrorFit::fit_power_law(&n, &[0.01, 0.011, 0.0105, 0.0112]);
+        assert!(!fit.falls() && fit.error_slope() <= 0.0, "{fit:?}");
+        assert_eq!(fit.photons_for(0.05), None);
+        let two = ErrorFit::fit_power_law(&[1e4, 1e4], &[0.01, 0.02]);
+        assert!(two.exponent.is_nan() && two.photons_for(0.05).is_none());
+    }
+
+    /// The log–log curvature: 0 for a power law; for B + c/N (second derivative B·c/N/(B + c/N)²
+    /// in ln N, ¼ at the knee N = c/B) a quadratic coefficient of about half the mean second
+    /// derivative over the counts; NaN with two counts.
+    #[test]
+    fn the_log_curvature_sees_a_floor() {
+        let n: Vec<f64> = (0..5).map(|k| 1e4 * 4f64.powi(k)).collect();
+        let power: Vec<f64> = n.iter().map(|x| 3.0 * x.powf(-0.6)).collect();
+        assert!(log_curvature(&n, &power).abs() < 1e-9);
+        // The knee at 10⁵ photons, inside the counts: 0.0930 by an independent quadratic fit.
+        let floor: Vec<f64> = n.iter().map(|x| 1e-4 + 10.0 / x).collect();
+        let q = log_curvature(&n, &floor);
+        assert!((q - 0.0930).abs() < 0.001, "{q}");
+        assert!(log_curvature(&n[..2], &floor[..2]).is_nan());
     }
 
     #[test]
