@@ -32,13 +32,14 @@ class RadiusScheduleNumbers(unittest.TestCase):
         with contextlib.redirect_stdout(out):
             R.main(["--results", os.path.join(ROOT, "results")])
             R.main(["--results", os.path.join(ROOT, "results"), "--floors"])
+            R.main(["--results", os.path.join(ROOT, "results"), "--beta"])
         self.printed = out.getvalue()
         self.doc = section()
 
     def test_every_rmse_in_the_table_is_printed(self):
         """Each 'mean ± se' cell of the findings' table appears in the script's output."""
         cells = re.findall(r"0\.\d{5} ± 0\.\d{5}", self.doc)
-        self.assertGreaterEqual(len(cells), 32)
+        self.assertGreaterEqual(len(cells), 40)
         for c in cells:
             self.assertIn(c, self.printed)
 
@@ -46,11 +47,13 @@ class RadiusScheduleNumbers(unittest.TestCase):
         """The verdict the spec's rule gives on the committed table is the one the findings state."""
         verdict = re.search(r"band \[1\.6, 2\.4\]: (\w+)", self.printed).group(1)
         self.assertIn("**%s** from the smooth field's 2" % verdict, self.doc)
+        verdict = re.search(r"beta 0\.3: slope band \[-0\.25, -0\.15\]: (\w+)", self.printed).group(1)
+        self.assertIn("(`detp-radius-beta-cornell`, %s)" % verdict, self.doc)
 
     def test_every_slope_and_interval_is_printed(self):
         """Each 'slope [lo, hi]' the findings quote is printed, to the digits the findings give."""
         quoted = re.findall(r"(-?0\.\d+) \[(-?0\.\d+), (-?0\.\d+)\]", self.doc)
-        self.assertGreaterEqual(len(quoted), 12)
+        self.assertGreaterEqual(len(quoted), 14)
         printed = [tuple(float(x) for x in m) for m in
                    re.findall(r"(-?0\.\d+) \[(-?0\.\d+), (-?0\.\d+)\]", self.printed)]
         for q in quoted:
