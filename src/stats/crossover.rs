@@ -596,18 +596,21 @@ mod tests {
         let clear: Vec<ReplicaErrors> =
             (0..6).map(|k| make(0.01 + 0.001 * k as f64, 1.0)).collect();
         let model = cost(1e-12, 1e-6, 1.0);
-        let (est, ci) = points_crossover_interval(
-            ErrorModel::Floor,
-            &photons,
-            &clear,
-            2e-6,
-            &model,
-            &[],
-            0.05,
-            500,
-            0.95,
-            1,
-        );
+        let interval = |replicas: &[ReplicaErrors]| {
+            points_crossover_interval(
+                ErrorModel::Floor,
+                &photons,
+                replicas,
+                2e-6,
+                &model,
+                &[],
+                0.05,
+                500,
+                0.95,
+                1,
+            )
+        };
+        let (est, ci) = interval(&clear);
         let Crossover::At(x) = est else {
             panic!("{est:?}")
         };
@@ -616,18 +619,7 @@ mod tests {
             .iter()
             .map(|&f| make(f, 1.0))
             .collect();
-        let (_, ci) = points_crossover_interval(
-            ErrorModel::Floor,
-            &photons,
-            &near,
-            2e-6,
-            &model,
-            &[],
-            0.05,
-            500,
-            0.95,
-            1,
-        );
+        let (_, ci) = interval(&near);
         assert!(ci.never_fraction > 0.1 && ci.hi.is_infinite(), "{ci:?}");
     }
 
