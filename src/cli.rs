@@ -155,7 +155,8 @@ pub struct ReportArgs {
 /// `raycost crossover`.
 #[derive(Debug, Args)]
 pub struct CrossoverArgs {
-    /// The fronts' results folder (kind detp with engine reference, ≥ 2 replicas, write_points);
+    /// The fronts' results folder (kind detp with engine reference and ≥ 2 replicas: it reads
+    /// NAME.replica_errors.csv, or the points table of a run written before that table);
     /// with runs/R (raycost run --run R) every run, each adding configurations of its own (e.g. a
     /// radius rule that cannot share the first run's sweep).
     pub fronts: PathBuf,

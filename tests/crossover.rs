@@ -220,7 +220,7 @@ fn crossover_writes_its_tables_and_refuses_what_it_must() {
     );
     let meta = std::fs::read_to_string(out.join("crossover.meta.toml")).expect("meta");
     assert!(
-        meta.contains("fronts.points.csv") && meta.contains("[extra.points]"),
+        meta.contains("fronts.replica_errors.csv") && meta.contains("[extra.points]"),
         "{meta}"
     );
     assert!(!out.join("frames.csv").exists());
@@ -403,6 +403,61 @@ fn crossover_keys_the_radius_rules_and_charges_each_its_own_seconds() {
         .code(2)
         .stderr(predicates::str::contains("repeats the configuration"));
     assert!(!y.join("crossover.csv").exists());
+}
+
+/// The kind's `NAME.replica_errors.csv` (and path tracing's `ref_mean`) give the crossover the
+/// same bits as the points table does: fronts with only the small table, and fronts as written
+/// before it (points table, no `ref_mean`), give byte-identical crossover and best tables.
+#[test]
+fn crossover_reads_the_replica_errors_as_the_points_table() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (fronts, points) = runs(dir.path());
+    let (eh, er) = read_csv(&fronts.join("fronts.replica_errors.csv"));
+    assert_eq!(eh, ["point", "estimator", "replica", "relative_mse"]);
+    // 4 sweep points × (detp + 2 photon maps) × 2 replicas.
+    assert_eq!(er.len(), 4 * 3 * 2, "{er:?}");
+    let copy = |name: &str, skip: &dyn Fn(&str) -> bool| {
+        let to = dir.path().join(name);
+        std::fs::create_dir_all(&to).expect("dir");
+        for f in files_below(&fronts) {
+            let n = f.file_name().expect("name").to_string_lossy().into_owned();
+            if !skip(&n) {
+                std::fs::copy(&f, to.join(&n)).expect("copy");
+            }
+        }
+        to
+    };
+    let small = copy("small", &|n| n.ends_with(".points.csv"));
+    let old = copy("old", &|n| n.ends_with(".replica_errors.csv"));
+    // The old layout's path tracing table has no ref_mean column.
+    let pt = old.join("fronts.path_tracing.csv");
+    let (h, rows) = read_csv(&pt);
+    let drop = h.iter().position(|c| c == "ref_mean").expect("ref_mean");
+    let line = |v: &[String]| {
+        let mut v = v.to_vec();
+        v.remove(drop);
+        v.join(",")
+    };
+    let mut text = line(&h) + "\n";
+    for r in &rows {
+        text += &(line(r) + "\n");
+    }
+    std::fs::write(&pt, text).expect("write");
+    let mut outs = Vec::new();
+    for (name, f) in [("a", &fronts), ("b", &small), ("c", &old)] {
+        let out = dir.path().join(format!("x-{name}"));
+        crossover(f, &points, &out).assert().success();
+        outs.push(out);
+    }
+    for table in ["crossover.csv", "best.csv"] {
+        let read = |d: &Path| std::fs::read_to_string(d.join(table)).expect(table);
+        let want = read(&outs[0]);
+        assert!(want.lines().count() > 1, "{table}: {want}");
+        assert_eq!(want, read(&outs[1]), "{table}: replica_errors only");
+        assert_eq!(want, read(&outs[2]), "{table}: points table only");
+    }
+    let meta = std::fs::read_to_string(outs[1].join("crossover.meta.toml")).expect("meta");
+    assert!(meta.contains("fronts.replica_errors.csv"), "{meta}");
 }
 
 /// Tables written before the radius rules read as they always did: the crossover of the

@@ -6,15 +6,148 @@
 //!
 //! Relative MSE of a replica: [mean_i (E_ri − R_i)² − mean_i se_R,i²] / (mean_i R_i)², the truth's
 //! variance subtracted exactly as the kind computes `irradiance_ref_rmse`
-//! ([`squared_error_sum`]), over the same points.
+//! ([`relative_mse`]), over the same points. The kind writes it per estimator and replica
+//! (`NAME.replica_errors.csv`, and path tracing's truth as `ref_mean` in `NAME.path_tracing.csv`);
+//! fronts written before those tables are judged from their points table by the same function
+//! ([`Judged::from_points`]), and both give the same bits.
 
 use std::collections::BTreeMap;
 
 use super::input::Csv;
 use super::method::{Config, Method, RadiusRule};
 use crate::error::OutputError;
-use crate::experiment::detp::engines::squared_error_sum;
+pub use crate::experiment::detp::engines::relative_mse;
+use crate::experiment::detp::replica_errors::DETP;
 use crate::stats::crossover::PathTracingCost;
+
+/// What the fronts judged at each sweep point: per estimator (`detp` or a photon map's column
+/// stem) its relative MSE in each replica, or for a photon map whose points table has no
+/// per-replica values one series, the mean over replicas ([`mean_replica_mse`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Judged {
+    /// (sweep point, estimator) → relative MSE per replica.
+    pub mse: BTreeMap<(u64, String), Vec<f64>>,
+    /// Per estimator: whether its series are the replicas (else the one mean series).
+    pub per_replica: BTreeMap<String, bool>,
+    /// The file the numbers came from, for errors.
+    pub path: std::path::PathBuf,
+}
+
+impl Judged {
+    /// From `NAME.replica_errors.csv`.
+    pub fn from_table(t: &Csv) -> Result<Judged, OutputError> {
+        let why = "each estimator's relative MSE per replica";
+        let (point, replica) = (t.numbers("point", why)?, t.numbers("replica", why)?);
+        let (estimator, mse) = (t.texts("estimator", why)?, t.numbers("relative_mse", why)?);
+        let mut j = Judged {
+            path: t.path.clone(),
+            ..Judged::default()
+        };
+        for i in 0..point.len() {
+            let v = j
+                .mse
+                .entry((point[i] as u64, estimator[i].clone()))
+                .or_default();
+            if replica[i] as usize != v.len() {
+                return Err(OutputError::new(
+                    &t.path,
+                    format!(
+                        "row {}: replica {} of {} at sweep point {} is out of order (replicas are written 0, 1, …)",
+                        i + 2,
+                        replica[i],
+                        estimator[i],
+                        point[i]
+                    ),
+                ));
+            }
+            v.push(mse[i]);
+            j.per_replica.insert(estimator[i].clone(), true);
+        }
+        Ok(j)
+    }
+
+    /// From a points table (fronts written before `NAME.replica_errors.csv`): DETP's
+    /// `irradiance_replica_{r}` and each photon map's `{map}_replica_{r}` (or its mean and SE)
+    /// against `reference_e`, `reference_se` at every sweep point.
+    pub fn from_points(points: &Csv, replicas: f64) -> Result<Judged, OutputError> {
+        let reps = points.family("irradiance_replica_");
+        if reps.len() < 2 {
+            return Err(OutputError::new(
+                &points.path,
+                "has fewer than 2 irradiance_replica_{r} columns: the crossover's bootstrap needs detp.replicas ≥ 2 in the fronts",
+            ));
+        }
+        let why = "the truth the estimators are judged against: engine reference";
+        let (refe, refse) = (
+            points.numbers("reference_e", why)?,
+            points.numbers("reference_se", why)?,
+        );
+        let values = |family: &[(u64, String)], why: &str| {
+            family
+                .iter()
+                .map(|(_, c)| points.numbers(c, why))
+                .collect::<Result<Vec<_>, _>>()
+        };
+        let detp = values(&reps, "DETP's value per replica")?;
+        let mut maps = Vec::new();
+        for method in Method::MAPS {
+            let member = method.member();
+            if !points.has(&format!("{member}_e")) {
+                continue;
+            }
+            let reps = values(
+                &points.family(&format!("{member}_replica_")),
+                "the photon map's value per replica",
+            )?;
+            let mean_se = if reps.len() >= 2 {
+                None
+            } else {
+                let why = "the photon map's mean over replicas and its SE";
+                Some((
+                    points.numbers(&format!("{member}_e"), why)?,
+                    points.numbers(&format!("{member}_se"), why)?,
+                ))
+            };
+            maps.push((member.to_string(), reps, mean_se));
+        }
+        let mut j = Judged {
+            path: points.path.clone(),
+            ..Judged::default()
+        };
+        j.per_replica.insert(DETP.into(), true);
+        for (m, _, mean_se) in &maps {
+            j.per_replica.insert(m.clone(), mean_se.is_none());
+        }
+        for (point, rows) in rows_by_point(points)? {
+            let refr: Vec<(f64, f64)> = rows.iter().map(|&k| (refe[k], refse[k])).collect();
+            let pick = |v: &[f64]| rows.iter().map(|&k| v[k]).collect::<Vec<_>>();
+            let per = |v: &[Vec<f64>]| v.iter().map(|v| relative_mse(&pick(v), &refr)).collect();
+            j.mse.insert((point, DETP.into()), per(&detp));
+            for (m, reps, mean_se) in &maps {
+                let mse = match mean_se {
+                    None => per(reps),
+                    Some((mean, se)) => {
+                        vec![mean_replica_mse(&pick(mean), &pick(se), replicas, &refr)]
+                    }
+                };
+                j.mse.insert((point, m.clone()), mse);
+            }
+        }
+        Ok(j)
+    }
+
+    /// Estimator `estimator`'s series at sweep point `point`.
+    fn at(&self, point: f64, estimator: &str) -> Result<&Vec<f64>, OutputError> {
+        self.mse
+            .get(&(point as u64, estimator.to_string()))
+            .ok_or_else(|| {
+                OutputError::new(
+                    &self.path,
+                    format!("has no {estimator} rows of sweep point {point}"),
+                )
+            })
+    }
+}
 
 /// One DETP configuration's errors (both engines: they agree bit for bit).
 #[derive(Clone, Debug, PartialEq)]
@@ -52,13 +185,6 @@ pub fn mean_replica_mse(mean: &[f64], se: &[f64], replicas: f64, refr: &[(f64, f
     let truth = refr.iter().map(|r| r.0).sum::<f64>() / n;
     let spread = se.iter().map(|s| s * s).sum::<f64>() / n;
     relative_mse(mean, refr) + (replicas - 1.0) * spread / (truth * truth)
-}
-
-/// Relative MSE of `est` against the reference `refr` (R_i, se_R,i): see the module doc.
-pub fn relative_mse(est: &[f64], refr: &[(f64, f64)]) -> f64 {
-    let n = est.len().min(refr.len()) as f64;
-    let truth = refr.iter().map(|r| r.0).sum::<f64>() / n;
-    squared_error_sum(est.iter().copied(), refr) / n / (truth * truth)
 }
 
 /// Rows of the points table per sweep point.
@@ -116,39 +242,12 @@ pub fn settings(main: &Csv) -> Result<Vec<Setting>, OutputError> {
 }
 
 /// Per DETP configuration, its replicas' relative MSE at each photon count.
-pub fn detp_errors(main: &Csv, points: &Csv) -> Result<Vec<DetpErrors>, OutputError> {
-    let reps = points.family("irradiance_replica_");
-    if reps.len() < 2 {
-        return Err(OutputError::new(
-            &points.path,
-            "has fewer than 2 irradiance_replica_{r} columns: the crossover's bootstrap needs detp.replicas ≥ 2 in the fronts",
-        ));
-    }
-    let why = "the truth DETP is judged against: engine reference";
-    let (refe, refse) = (
-        points.numbers("reference_e", why)?,
-        points.numbers("reference_se", why)?,
-    );
-    let replica: Vec<Vec<f64>> = reps
-        .iter()
-        .map(|(_, c)| points.numbers(c, "DETP's value per replica"))
-        .collect::<Result<_, _>>()?;
-    let by = rows_by_point(points)?;
+pub fn detp_errors(main: &Csv, judged: &Judged) -> Result<Vec<DetpErrors>, OutputError> {
     let sweep = main.numbers("point", "the sweep point")?;
     let photons = main.numbers("detp.photons", "the photon count of each row")?;
     let mut out: Vec<DetpErrors> = Vec::new();
     for (i, set) in settings(main)?.into_iter().enumerate() {
-        let rows = by.get(&(sweep[i] as u64)).ok_or_else(|| {
-            OutputError::new(
-                &points.path,
-                format!("has no rows of sweep point {}", sweep[i]),
-            )
-        })?;
-        let refr: Vec<(f64, f64)> = rows.iter().map(|&k| (refe[k], refse[k])).collect();
-        let mse: Vec<f64> = replica
-            .iter()
-            .map(|v| relative_mse(&rows.iter().map(|&k| v[k]).collect::<Vec<_>>(), &refr))
-            .collect();
+        let mse = judged.at(sweep[i], DETP)?.clone();
         let config = Config {
             method: Method::SphereCache,
             direct: Some(set.direct),
@@ -162,7 +261,7 @@ pub fn detp_errors(main: &Csv, points: &Csv) -> Result<Vec<DetpErrors>, OutputEr
                 out.push(DetpErrors {
                     config,
                     photons: Vec::new(),
-                    mse: vec![Vec::new(); replica.len()],
+                    mse: vec![Vec::new(); mse.len()],
                 });
                 out.len() - 1
             }
@@ -187,39 +286,18 @@ fn sort_by_photons(photons: &mut Vec<f64>, mse: &mut [Vec<f64>]) {
     }
 }
 
-/// Per photon map present in the points table and detp.direct: each replica's relative MSE at its N
-/// photons (or, without per-replica columns, their mean: see [`MapErrors`]), from the rows at the
-/// first (edge, d) of that direct in the table (a photon map does not depend on either).
-pub fn map_errors(main: &Csv, points: &Csv, replicas: f64) -> Result<Vec<MapErrors>, OutputError> {
-    let why = "the truth the photon map is judged against: engine reference";
-    let (refe, refse) = (
-        points.numbers("reference_e", why)?,
-        points.numbers("reference_se", why)?,
-    );
-    let by = rows_by_point(points)?;
+/// Per photon map the fronts judged and detp.direct: each replica's relative MSE at its N photons
+/// (or their mean: see [`MapErrors`]), from the rows at the first (edge, d) of that direct in the
+/// table (a photon map does not depend on either).
+pub fn map_errors(main: &Csv, judged: &Judged) -> Result<Vec<MapErrors>, OutputError> {
     let sweep = main.numbers("point", "the sweep point")?;
     let photons = main.numbers("detp.photons", "the photon count of each row")?;
     let settings = settings(main)?;
     let mut out = Vec::new();
     for method in Method::MAPS {
         let member = method.member();
-        if !points.has(&format!("{member}_e")) {
+        let Some(&per_replica) = judged.per_replica.get(member) else {
             continue;
-        }
-        let reps: Vec<Vec<f64>> = points
-            .family(&format!("{member}_replica_"))
-            .iter()
-            .map(|(_, c)| points.numbers(c, "the photon map's value per replica"))
-            .collect::<Result<_, _>>()?;
-        let per_replica = reps.len() >= 2;
-        let (mean, se) = if per_replica {
-            (Vec::new(), Vec::new())
-        } else {
-            let why = "the photon map's mean over replicas and its SE";
-            (
-                points.numbers(&format!("{member}_e"), why)?,
-                points.numbers(&format!("{member}_se"), why)?,
-            )
         };
         let mut seen: Vec<String> = Vec::new();
         for first in &settings {
@@ -230,20 +308,7 @@ pub fn map_errors(main: &Csv, points: &Csv, replicas: f64) -> Result<Vec<MapErro
             seen.push(direct.clone());
             let mut at: Vec<(f64, Vec<f64>)> = Vec::new();
             for i in (0..settings.len()).filter(|&i| settings[i] == *first) {
-                let rows = by.get(&(sweep[i] as u64)).ok_or_else(|| {
-                    OutputError::new(
-                        &points.path,
-                        format!("has no rows of sweep point {}", sweep[i]),
-                    )
-                })?;
-                let refr: Vec<(f64, f64)> = rows.iter().map(|&k| (refe[k], refse[k])).collect();
-                let pick = |v: &[f64]| rows.iter().map(|&k| v[k]).collect::<Vec<_>>();
-                let mse = if per_replica {
-                    reps.iter().map(|v| relative_mse(&pick(v), &refr)).collect()
-                } else {
-                    vec![mean_replica_mse(&pick(&mean), &pick(&se), replicas, &refr)]
-                };
-                at.push((photons[i], mse));
+                at.push((photons[i], judged.at(sweep[i], member)?.clone()));
             }
             at.sort_by(|a, b| a.0.total_cmp(&b.0));
             let series = at.first().map_or(0, |a| a.1.len());
@@ -269,33 +334,32 @@ pub fn map_errors(main: &Csv, points: &Csv, replicas: f64) -> Result<Vec<MapErro
 /// The path tracer's cv² per replica from `NAME.path_tracing.csv` at its first sweep point (path
 /// tracing is the same at every sweep point of a point set), by
 /// [`PathTracingCost::cv2_from_prefix_errors`] over its checkpoints, `ref_mse` made relative by the
-/// reference's mean over the points it ran on (those with a finite `path_tracing_e_{K}`). Returns
-/// (sweep point used, cv² per replica).
-pub fn path_tracing_cv2(side: &Csv, points: &Csv) -> Result<(u64, Vec<f64>), OutputError> {
+/// reference's mean over the points it ran on: the table's `ref_mean`, or for tables written before
+/// it the mean of the points table's `reference_e` over the points with a finite
+/// `path_tracing_e_{K}` (the same sum in the same order). Returns (sweep point used, cv² per
+/// replica).
+pub fn path_tracing_cv2(side: &Csv, points: Option<&Csv>) -> Result<(u64, Vec<f64>), OutputError> {
     let why = "path tracing's errors per replica and checkpoint";
     let (point, replica) = (side.numbers("point", why)?, side.numbers("replica", why)?);
     let (paths, mse) = (side.numbers("paths", why)?, side.numbers("ref_mse", why)?);
     let Some(first) = point.iter().copied().map(|p| p as u64).min() else {
         return Err(OutputError::new(&side.path, "has no rows"));
     };
-    let rows = rows_by_point(points)?;
-    let at = rows.get(&first).ok_or_else(|| {
-        OutputError::new(&points.path, format!("has no rows of sweep point {first}"))
-    })?;
-    let refe = points.numbers("reference_e", "the truth path tracing is judged against")?;
-    let ran: Vec<usize> = match points.family("path_tracing_e_").last() {
-        Some((_, col)) => {
-            let e = points.numbers(col, why)?;
-            at.iter().copied().filter(|&k| e[k].is_finite()).collect()
+    let truth: Vec<f64> = match (side.has("ref_mean"), points) {
+        (true, _) => side.numbers("ref_mean", why)?,
+        (false, Some(points)) => vec![points_truth(points, first)?; point.len()],
+        (false, None) => {
+            return Err(OutputError::new(
+                &side.path,
+                "has no ref_mean column and the fronts have no points table to take the truth's mean from",
+            ))
         }
-        None => at.clone(),
     };
-    let truth = ran.iter().map(|&k| refe[k]).sum::<f64>() / ran.len().max(1) as f64;
     let mut by_replica: BTreeMap<u64, (Vec<f64>, Vec<f64>)> = BTreeMap::new();
     for i in (0..point.len()).filter(|&i| point[i] as u64 == first) {
         let e = by_replica.entry(replica[i] as u64).or_default();
         e.0.push(paths[i]);
-        e.1.push(mse[i] / (truth * truth));
+        e.1.push(mse[i] / (truth[i] * truth[i]));
     }
     let cv2 = by_replica
         .values()
@@ -304,12 +368,34 @@ pub fn path_tracing_cv2(side: &Csv, points: &Csv) -> Result<(u64, Vec<f64>), Out
     Ok((first, cv2))
 }
 
+/// The reference's mean at sweep point `first` over the points path tracing ran on (a finite
+/// `path_tracing_e_{K}`; every point where the table has no such column).
+fn points_truth(points: &Csv, first: u64) -> Result<f64, OutputError> {
+    let rows = rows_by_point(points)?;
+    let at = rows.get(&first).ok_or_else(|| {
+        OutputError::new(&points.path, format!("has no rows of sweep point {first}"))
+    })?;
+    let refe = points.numbers("reference_e", "the truth path tracing is judged against")?;
+    let ran: Vec<usize> = match points.family("path_tracing_e_").last() {
+        Some((_, col)) => {
+            let e = points.numbers(col, "path tracing's estimate per point")?;
+            at.iter().copied().filter(|&k| e[k].is_finite()).collect()
+        }
+        None => at.clone(),
+    };
+    Ok(ran.iter().map(|&k| refe[k]).sum::<f64>() / ran.len().max(1) as f64)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn csv(text: &str) -> Csv {
         Csv::from_text(text)
+    }
+
+    fn judged(points: &str) -> Judged {
+        Judged::from_points(&csv(points), 2.0).expect("judged")
     }
 
     /// Two points with truth 2 ± 0 and 4 ± 0.5: a replica off by +1 and −1 has squared errors
@@ -336,7 +422,7 @@ mod tests {
                 pts.push_str(&format!("{p},{s},{},{},1,0\n", off(0.0), off(1.0)));
             }
         }
-        let e = detp_errors(&main, &csv(&pts)).expect("errors");
+        let e = detp_errors(&main, &judged(&pts)).expect("errors");
         assert_eq!(e.len(), 2);
         assert_eq!(e[0].photons, [100.0, 200.0]);
         // Photons 100 is sweep point 1: offsets 0.2 and 0.4.
@@ -360,7 +446,7 @@ mod tests {
         for p in 0..4 {
             pts.push_str(&format!("{p},0,1.1,0.9,1,0\n"));
         }
-        let e = detp_errors(&main, &csv(&pts)).expect("errors");
+        let e = detp_errors(&main, &judged(&pts)).expect("errors");
         assert_eq!(e.len(), 2, "{e:?}");
         assert_eq!(e[0].config.radius_rule, Some(RadiusRule::default()));
         let s = e[1]
@@ -386,25 +472,28 @@ mod tests {
             "point,detp.direct,detp.edge,detp.photons,detp.disc_radius\n0,photons,paper,100,5\n",
         );
         let vals = [[1.2, 0.8, 1.1, 0.9], [0.7, 1.3, 1.0, 1.0]];
-        let mut with =
-            String::from("point,sample,reference_e,reference_se,photon_map_e,photon_map_se");
+        let mut with = String::from(
+            "point,sample,irradiance_replica_0,irradiance_replica_1,reference_e,reference_se,photon_map_e,photon_map_se",
+        );
         for r in 0..4 {
             with.push_str(&format!(",photon_map_replica_{r}"));
         }
         with.push('\n');
-        let mut without =
-            String::from("point,sample,reference_e,reference_se,photon_map_e,photon_map_se\n");
+        let mut without = String::from(
+            "point,sample,irradiance_replica_0,irradiance_replica_1,reference_e,reference_se,photon_map_e,photon_map_se\n",
+        );
         for (s, v) in vals.iter().enumerate() {
             let m = v.iter().sum::<f64>() / 4.0;
             let var = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / 3.0;
             let se = (var / 4.0).sqrt();
             with.push_str(&format!(
-                "0,{s},1,0,{m},{se},{},{},{},{}\n",
+                "0,{s},1,1,1,0,{m},{se},{},{},{},{}\n",
                 v[0], v[1], v[2], v[3]
             ));
-            without.push_str(&format!("0,{s},1,0,{m},{se}\n"));
+            without.push_str(&format!("0,{s},1,1,1,0,{m},{se}\n"));
         }
-        let e = map_errors(&main, &csv(&with), 4.0).expect("errors");
+        let e =
+            map_errors(&main, &Judged::from_points(&csv(&with), 4.0).expect("j")).expect("errors");
         assert_eq!(e.len(), 1);
         assert!(e[0].per_replica);
         assert_eq!(e[0].photons, [100.0]);
@@ -414,7 +503,8 @@ mod tests {
         for (r, want) in own.iter().enumerate() {
             assert!((e[0].mse[r][0] - want).abs() < 1e-12, "{e:?}");
         }
-        let f = map_errors(&main, &csv(&without), 4.0).expect("errors");
+        let f = map_errors(&main, &Judged::from_points(&csv(&without), 4.0).expect("j"))
+            .expect("errors");
         assert!(!f[0].per_replica);
         let mean = own.iter().sum::<f64>() / 4.0;
         assert!(
@@ -433,8 +523,13 @@ mod tests {
         let pts = csv(
             "point,reference_e,path_tracing_e_1,path_tracing_e_2\n3,2,1,1\n3,7,NaN,NaN\n4,2,1,1\n",
         );
-        let (p, cv2) = path_tracing_cv2(&side, &pts).expect("cv2");
+        let (p, cv2) = path_tracing_cv2(&side, Some(&pts)).expect("cv2");
         assert_eq!(p, 3);
         assert_eq!(cv2, [2.0, 4.5]);
+        // With the kind's ref_mean column the points table is not needed.
+        let with = csv("point,replica,paths,ref_mse,ref_mean\n\
+             3,0,1,8,2\n3,0,2,4,2\n3,1,1,18,2\n3,1,2,9,2\n4,0,1,99,2\n");
+        assert_eq!(path_tracing_cv2(&with, None).expect("cv2").1, [2.0, 4.5]);
+        assert!(path_tracing_cv2(&side, None).is_err());
     }
 }

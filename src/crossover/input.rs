@@ -75,6 +75,13 @@ impl Results {
         }
     }
 
+    /// Whether side table `NAME.TABLE.csv` (or `.csv.gz`) is there.
+    pub fn has_side(&self, table: &str) -> bool {
+        ["csv", "csv.gz"]
+            .iter()
+            .any(|ext| self.file(&format!("{table}.{ext}")).is_file())
+    }
+
     /// The run's metadata.
     pub fn meta(&self) -> Result<Meta, OutputError> {
         Meta::read(&self.file("meta.toml"))

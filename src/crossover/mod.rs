@@ -1,6 +1,7 @@
 //! `raycost crossover FRONTS_DIR POINTS_DIR [FRAMES_DIR] --targets … --out DIR`: which method when
 //! (issue 27), from three runs of one scene — the fronts (errors of every method against a
-//! reference, ≥ 2 replicas; one run, or several in `runs/R` that add configurations, e.g. a radius
+//! reference, ≥ 2 replicas, read from `NAME.replica_errors.csv` or an older run's points table;
+//! one run, or several in `runs/R` that add configurations, e.g. a radius
 //! rule that cannot share the first run's sweep), the n_P sweep (seconds over photons × points;
 //! one run or several) and optionally a
 //! quasi-static frames run (incremental costs). Writes `DIR/crossover.csv` (per target and method
@@ -136,6 +137,26 @@ impl Source {
         Ok(t)
     }
 
+    /// What the fronts judged: `NAME.replica_errors.csv` where the run wrote one, else its points
+    /// table (returned too: path tracing's truth comes from it in tables written before
+    /// `ref_mean`).
+    fn judged(&mut self, main: &Csv) -> Result<(fronts::Judged, Option<Csv>), OutputError> {
+        if self.results.has_side("replica_errors") {
+            let t = self.side("replica_errors")?;
+            return Ok((fronts::Judged::from_table(&t)?, None));
+        }
+        let replicas = first_number(
+            main,
+            "detp.replicas",
+            "the photon maps' spread over replicas",
+        )?;
+        let points = self.side("points")?;
+        Ok((
+            fronts::Judged::from_points(&points, replicas)?,
+            Some(points),
+        ))
+    }
+
     /// What the metadata keeps of this input: its files' hashes and its run's machine.
     fn record(&self, role: &str, meta: &mut Meta) -> Result<(), OutputError> {
         for f in &self.files {
@@ -257,8 +278,8 @@ fn add_fronts_runs(
 ) -> Result<(), OutputError> {
     for src in more {
         let main = src.main()?;
-        let points = src.side("points")?;
-        for e in fronts::detp_errors(&main, &points)? {
+        let (judged, _) = src.judged(&main)?;
+        for e in fronts::detp_errors(&main, &judged)? {
             if detp.iter().any(|d| d.config == e.config) {
                 return Err(OutputError::new(
                     &main.path,
@@ -280,19 +301,14 @@ fn compute(o: &Options) -> Result<Outputs, OutputError> {
     let mut more_fronts = fronts_runs.split_off(1);
     let fronts = &mut fronts_runs[0];
     let main = fronts.main()?;
-    let points = fronts.side("points")?;
+    let (judged, points) = fronts.judged(&main)?;
     let pt_side = fronts.side("path_tracing")?;
     let seed = first_number(&main, "experiment.seed", "the bootstrap's seed")? as u64;
-    let replicas = first_number(
-        &main,
-        "detp.replicas",
-        "the photon maps' spread over replicas",
-    )?;
     let scene = scene_name(&main, &fronts.results.name);
-    let mut detp = fronts::detp_errors(&main, &points)?;
+    let mut detp = fronts::detp_errors(&main, &judged)?;
     add_fronts_runs(&mut detp, &mut more_fronts)?;
-    let maps = fronts::map_errors(&main, &points, replicas)?;
-    let (pt_point, pt_cv2) = fronts::path_tracing_cv2(&pt_side, &points)?;
+    let maps = fronts::map_errors(&main, &judged)?;
+    let (pt_point, pt_cv2) = fronts::path_tracing_cv2(&pt_side, points.as_ref())?;
     let mut sweeps = sweep_runs(&o.points)?;
     let mut tables = Vec::new();
     for s in &mut sweeps {

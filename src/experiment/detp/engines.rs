@@ -387,6 +387,17 @@ pub fn squared_error_sum(est: impl IntoIterator<Item = f64>, refr: &[(f64, f64)]
         .fold(0.0, |acc, (e, &(r, sr))| acc + ((e - r) * (e - r) - sr * sr))
 }
 
+/// Relative MSE of one replica's values `est` against the reference `refr` (R_i, se_R,i):
+/// [mean_i (E_i − R_i)² − mean_i se_R,i²] / (mean_i R_i)², the truth's variance subtracted as in
+/// [`squared_error_sum`]. What `raycost crossover` bootstraps over replicas: the kind writes it per
+/// estimator and replica (`NAME.replica_errors.csv`), and the crossover computes it the same way
+/// from a points table that has no such table beside it, so both give the same bits.
+pub fn relative_mse(est: &[f64], refr: &[(f64, f64)]) -> f64 {
+    let n = est.len().min(refr.len()) as f64;
+    let truth = refr.iter().map(|r| r.0).sum::<f64>() / n;
+    squared_error_sum(est.iter().copied(), refr) / n / (truth * truth)
+}
+
 /// An engine's estimates `est` against the reference `refr`, both (value, SE) per disc: the mean
 /// error (bias) and the root-mean-square error against the *true* irradiance, each with a standard
 /// error from the Monte Carlo noise of both (the point set is fixed).

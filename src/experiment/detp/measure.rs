@@ -17,6 +17,7 @@ use super::estimators::photon_map::PhotonMap;
 use super::estimators::photon_map_growing::PhotonMapGrowing;
 use super::estimators::sphere_cache::LevelRow;
 use super::estimators::Role;
+use super::replica_errors::ReplicaErrorRow;
 use super::spec::EngineChoice;
 use super::shards::ReplicaPart;
 use super::{agree, check_sums, points, rays, PointSet};
@@ -435,11 +436,17 @@ fn mean_over(values: &[f64], judged: &[usize]) -> f64 {
     judged.iter().map(|&i| values[i]).sum::<f64>() / judged.len().max(1) as f64
 }
 
-/// What the point measured, its levels and points rows, and its warnings.
+/// What the point measured, its levels, points and replica-errors rows, and its warnings.
 pub(super) fn measure(
     cfg: &DetpConfig,
     r: &Replicated,
-) -> (DetpMeasured, Vec<LevelRow>, Vec<PointRow>, Vec<String>) {
+) -> (
+    DetpMeasured,
+    Vec<LevelRow>,
+    Vec<PointRow>,
+    Vec<ReplicaErrorRow>,
+    Vec<String>,
+) {
     let discs = &r.pts.discs;
     let reps = cfg.replicas as f64;
     let mut pooled = Pooled {
@@ -495,6 +502,10 @@ pub(super) fn measure(
     } else {
         Vec::new()
     };
+    let replica_errors = match pooled.reference {
+        Some(refr) => super::replica_errors::rows(&r.irr, &map_replica_points(cfg, r), refr),
+        None => Vec::new(),
+    };
     let mut warnings = Vec::new();
     if !discs.is_empty() && r.irr.iter().all(|e| e.iter().all(|&x| x == 0.0)) {
         warnings.push(format!(
@@ -534,7 +545,7 @@ pub(super) fn measure(
         irradiance_bias: engines::per_replica(&errs.iter().map(|e| e.1).collect::<Vec<_>>()),
         rays_per_s: r.segments as f64 / engine_s.max(1e-12),
     };
-    (measured, levels, rows, warnings)
+    (measured, levels, rows, replica_errors, warnings)
 }
 
 /// DETP's estimate per disc: mean over replicas, SE across them (or, with one replica, the Poisson

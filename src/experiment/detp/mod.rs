@@ -46,6 +46,7 @@ pub mod engines;
 pub mod estimators;
 mod lines;
 pub mod measure;
+pub mod replica_errors;
 mod scene;
 pub mod shards;
 pub mod spec;
@@ -66,6 +67,7 @@ use self::shards::ReplicaPart;
 use self::estimators::sphere_cache::LevelRow;
 use self::measure::{DetpMeasured, PointRow};
 use self::path_tracing::{PathMeasured, PathRow};
+use self::replica_errors::ReplicaErrorRow;
 use self::spec::DetpSpec;
 use super::inputs::Inputs;
 use super::kind::{
@@ -317,12 +319,15 @@ fn agree(cfg: &DetpConfig, point: u64, replica: u64, n: usize, part: &ReplicaPar
 }
 
 crate::side_tables!(
-    /// `NAME.levels.csv` (one row per sphere-cache level) and, with `detp.write_points`,
-    /// `NAME.points.csv` (one row per sample point).
+    /// `NAME.levels.csv` (one row per sphere-cache level), with `detp.write_points`
+    /// `NAME.points.csv` (one row per sample point), with engine `path-tracing`
+    /// `NAME.path_tracing.csv`, and with engine `reference` and ≥ 2 replicas
+    /// `NAME.replica_errors.csv` (one row per estimator and replica).
     DetpTables for DetpConfig {
         levels: LevelRow = estimators::sphere_cache::LEVELS,
         points: PointRow = col::POINTS_TABLE,
         path_tracing: PathRow = path_tracing::PATH_TRACING_TABLE,
+        replica_errors: ReplicaErrorRow = replica_errors::REPLICA_ERRORS_TABLE,
     }
 );
 
@@ -463,7 +468,7 @@ impl Kind for DetpKind {
         "detp.engines",
         "the engines decide the table's columns, which must be the same for every point",
     )];
-    const ABOUT: &'static str = "Density estimation on the tangent plane: photon segments (μ-random lines through the unit ball, or photons traced from a scene) crossing discs of radius d on sample points, gathered by the sphere cache (radius ratio Q, threshold, Morton/Hilbert order), a disc index (octree or grid), brute force and, as baselines, Jensen's photon map (fixed k, or k growing with the photons: photon-map-growing), per-point path tracing as the competitor at a target error (path-tracing: its own streams, running means at 1, 2, 4, … paths, NAME.path_tracing.csv) and a path-traced reference (engine reference: unbiased irradiance per point with its SE, and every engine's bias and RMSE against it). With detp.direct = \"nee\" direct light is next-event estimation at each point and DETP (and the photon maps) estimate the indirect light from the segments after the first bounce. Engines agree bit for bit (integer fixed point) and with brute force on a keyed subset; tests per engine against Theorem 1, rays per level against n_R·Q^(2i), irradiance against the exact value where the source has one.";
+    const ABOUT: &'static str = "Density estimation on the tangent plane: photon segments (μ-random lines through the unit ball, or photons traced from a scene) crossing discs of radius d on sample points, gathered by the sphere cache (radius ratio Q, threshold, Morton/Hilbert order), a disc index (octree or grid), brute force and, as baselines, Jensen's photon map (fixed k, or k growing with the photons: photon-map-growing), per-point path tracing as the competitor at a target error (path-tracing: its own streams, running means at 1, 2, 4, … paths, NAME.path_tracing.csv) and a path-traced reference (engine reference: unbiased irradiance per point with its SE, and every engine's bias and RMSE against it; with ≥ 2 replicas each estimator's relative MSE per replica, NAME.replica_errors.csv, what raycost crossover reads). With detp.direct = \"nee\" direct light is next-event estimation at each point and DETP (and the photon maps) estimate the indirect light from the segments after the first bounce. Engines agree bit for bit (integer fixed point) and with brute force on a keyed subset; tests per engine against Theorem 1, rays per level against n_R·Q^(2i), irradiance against the exact value where the source has one.";
     type Raw = DetpSpec;
     type Point = DetpConfig;
     type Measured = DetpMeasured;
@@ -520,7 +525,7 @@ impl Kind for DetpKind {
                 measure::replicate_merged(p, ctx.stream_point, &total, ctx.progress, refs)?
             }
         };
-        let (measured, levels, points, warnings) = measure::measure(p, &replicated);
+        let (measured, levels, points, replica_errors, warnings) = measure::measure(p, &replicated);
         let path_tracing = measured
             .engines
             .iter()
@@ -542,6 +547,7 @@ impl Kind for DetpKind {
                 levels,
                 points,
                 path_tracing,
+                replica_errors,
             },
             checks,
             rate,

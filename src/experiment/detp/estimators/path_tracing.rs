@@ -166,6 +166,11 @@ impl Runs {
             let m = r.subset.len().max(1) as f64;
             let variance_mean = run.variance.iter().sum::<f64>() / m;
             for (c, &paths) in run.checkpoints.iter().enumerate() {
+                // The truth's mean over the replica's points, summed in point order as the
+                // crossover sums it from a points table.
+                let ref_mean = refr.map_or(f64::NAN, |refr| {
+                    r.subset.iter().map(|&i| refr[i].0).sum::<f64>() / m
+                });
                 let (ref_mse, ref_bias) = refr.map_or((f64::NAN, f64::NAN), |refr| {
                     let (mut se, mut b) = (0.0, 0.0);
                     for (j, &i) in r.subset.iter().enumerate() {
@@ -184,6 +189,7 @@ impl Runs {
                     thread_s: run.thread_s[c],
                     ref_mse,
                     ref_bias,
+                    ref_mean,
                     variance_mean,
                 });
             }
@@ -211,6 +217,8 @@ pub struct PathRow {
     pub ref_mse: f64,
     /// Mean error against the reference.
     pub ref_bias: f64,
+    /// The reference's mean over the replica's points (what its relative error is relative to).
+    pub ref_mean: f64,
     /// Mean per-path variance over the points (at K).
     pub variance_mean: f64,
 }
@@ -465,6 +473,14 @@ pub const PT_REF_BIAS: Column = Column::value(
     "this replica's mean over its points of E_i − R_i at this checkpoint; NaN without reference",
 );
 
+/// The truth's mean over the points.
+pub const PT_REF_MEAN: Column = Column::value(
+    "ref_mean",
+    "W/m²",
+    Class::Measured,
+    "this replica's mean over its points of the reference R_i (the scale of a relative error: ref_mse / ref_mean² is the relative MSE `raycost crossover` takes path tracing's cv² from); NaN without reference",
+);
+
 /// Mean per-path variance.
 pub const PT_VARIANCE_MEAN: Column = Column::value(
     "variance_mean",
@@ -484,5 +500,6 @@ pub const PATH_TRACING_TABLE: Table<DetpConfig, PathRow> = Table::of(&[
     col(&PT_THREAD_S, |_, r| r.thread_s.into()),
     col(&PT_REF_MSE, |_, r| r.ref_mse.into()),
     col(&PT_REF_BIAS, |_, r| r.ref_bias.into()),
+    col(&PT_REF_MEAN, |_, r| r.ref_mean.into()),
     col(&PT_VARIANCE_MEAN, |_, r| r.variance_mean.into()),
 ]);

@@ -1,0 +1,118 @@
+#!/usr/bin/env python3
+"""N* per DETP configuration and target, side by side for several `raycost crossover` folders:
+what the disc radius rules change on one scene ("before": a crossover of the fixed-d fronts;
+"after": one of the rules' fronts).
+
+Run from the repository root:
+    python3 scripts/nstar_by_rule.py results/crossover-rules-cornell [results/issue27-crossover-cornell …]
+
+For every folder it prints one line per method configuration (method, detp.direct, detp.edge, the
+radius rule: d fixed, κ = edge_radius_factor, or the schedule d·(N/N_ref)^(−β)) and per target:
+N* with its bootstrap interval, the share of bootstrap draws that never reach the target, and where
+N* is not finite the crossover's reason. It reads crossover.csv through the columns its metadata
+declares (scripts/raycost_tables.py) and computes nothing: every number is the crossover's.
+Standard library only.
+"""
+
+import argparse
+import math
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import raycost_tables as T  # noqa: E402
+
+COLUMNS = (
+    "scene",
+    "target",
+    "method",
+    "direct",
+    "edge",
+    "disc_radius",
+    "edge_radius_factor",
+    "radius_schedule_exponent",
+    "n_star",
+    "n_star_lo",
+    "n_star_hi",
+    "never_fraction",
+    "reason",
+)
+
+
+def number(text):
+    """A cell as a float where it is one, else the text."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def rule(row):
+    """The radius rule of a DETP row, in words ('' for the photon maps and path tracing)."""
+    if not isinstance(row["disc_radius"], float) or math.isnan(row["disc_radius"]):
+        return ""
+    kappa, beta = row["edge_radius_factor"], row["radius_schedule_exponent"]
+    parts = []
+    if isinstance(kappa, float) and not math.isnan(kappa):
+        parts.append("kappa=%g" % kappa)
+    if isinstance(beta, float) and not math.isnan(beta) and beta > 0:
+        parts.append("schedule beta=%.3g" % beta)
+    return " ".join(parts) or "d fixed"
+
+
+def label(row):
+    """Method, direct, edge and radius rule of a row."""
+    parts = [row["method"], "direct=%s" % row["direct"]]
+    if isinstance(row["edge"], str) and row["edge"] not in ("", "NaN"):
+        parts.append("edge=%s" % row["edge"])
+    r = rule(row)
+    if r:
+        parts.append("d=%g %s" % (row["disc_radius"], r))
+    return " ".join(parts)
+
+
+def cell(row):
+    """N* [lo, hi] (never share), or the reason where N* is not finite."""
+    n = row["n_star"]
+    if isinstance(n, float) and math.isfinite(n):
+        return "%.3g [%.3g, %.3g] never %.2f" % (
+            n,
+            row["n_star_lo"],
+            row["n_star_hi"],
+            row["never_fraction"],
+        )
+    return "never: %s" % row["reason"]
+
+
+def read(folder):
+    """The rows of FOLDER/crossover.csv as dicts."""
+    _, rows = T.read_rows(os.path.join(folder, "crossover.csv"), number, COLUMNS)
+    return rows
+
+
+def lines(folder):
+    """The printed lines of one crossover folder."""
+    rows = read(folder)
+    out = ["## %s (scene %s)" % (folder, rows[0]["scene"] if rows else "?")]
+    for target in sorted({r["target"] for r in rows}, reverse=True):
+        out.append("target %g:" % target)
+        for r in sorted((r for r in rows if r["target"] == target), key=label):
+            out.append("  %-72s %s" % (label(r), cell(r)))
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("folders", nargs="+", help="raycost crossover output folders")
+    args = ap.parse_args(argv)
+    for folder in args.folders:
+        try:
+            print("\n".join(lines(folder)))
+        except T.TableError as e:
+            print("nstar_by_rule: %s" % e, file=sys.stderr)
+            return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
