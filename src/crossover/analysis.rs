@@ -443,13 +443,19 @@ fn path_row(inp: &Inputs, target: f64) -> CrossRow {
 }
 
 /// Every row of `crossover.csv`: per target, DETP's configurations (both engines), the photon
-/// maps, path tracing.
+/// maps, path tracing. The DETP configurations run in parallel (each one's bootstrap draws from
+/// its own stream of the fronts' seed, so the rows do not depend on the thread count) and are
+/// collected in order.
 pub fn crossover_rows(inp: &Inputs, targets: &[f64]) -> Vec<CrossRow> {
+    use rayon::prelude::*;
     let mut rows = Vec::new();
     for &target in targets {
-        for e in &inp.detp {
-            rows.extend(detp_rows(inp, e, target));
-        }
+        let detp: Vec<Vec<CrossRow>> = inp
+            .detp
+            .par_iter()
+            .map(|e| detp_rows(inp, e, target))
+            .collect();
+        rows.extend(detp.into_iter().flatten());
         rows.extend(inp.maps.iter().map(|e| map_row(inp, e, target)));
         rows.push(path_row(inp, target));
     }
