@@ -8,8 +8,9 @@ Run from the repository root:
 
 For every folder it prints one line per method configuration (method, detp.direct, detp.edge, the
 radius rule: d fixed, κ = edge_radius_factor, or the schedule d·(N/N_ref)^(−β)) and per target:
-N* with its bootstrap interval, the share of bootstrap draws that never reach the target, and where
-N* is not finite the crossover's reason. It reads crossover.csv through the columns its metadata
+N* with its bootstrap interval, the share of bootstrap draws that never reach the target, how far
+the photons N_eps it rests on lie past the largest count the fronts measured (where they do), and
+where N* is not finite the crossover's reason. It reads crossover.csv through the columns its metadata
 declares (scripts/raycost_tables.py) and computes nothing: every number is the crossover's.
 Standard library only.
 """
@@ -28,6 +29,7 @@ COLUMNS = (
     "method",
     "direct",
     "edge",
+    "photons",
     "disc_radius",
     "edge_radius_factor",
     "radius_schedule_exponent",
@@ -71,15 +73,25 @@ def label(row):
     return " ".join(parts)
 
 
+def past_data(row):
+    """' (N_eps k× past the data)' where the photons N_eps exceed the largest count the fronts
+    measured (column photons_measured_max, absent in crossovers written before it), else ''."""
+    n, top = row["photons"], row.get("photons_measured_max", float("nan"))
+    if isinstance(n, float) and isinstance(top, float) and n > top:
+        return " (N_eps %.3g, %.3g× past the data)" % (n, n / top)
+    return ""
+
+
 def cell(row):
     """N* [lo, hi] (never share), or the reason where N* is not finite."""
     n = row["n_star"]
     if isinstance(n, float) and math.isfinite(n):
-        return "%.3g [%.3g, %.3g] never %.2f" % (
+        return "%.3g [%.3g, %.3g] never %.2f%s" % (
             n,
             row["n_star_lo"],
             row["n_star_hi"],
             row["never_fraction"],
+            past_data(row),
         )
     return "never: %s" % row["reason"]
 

@@ -86,6 +86,7 @@ fn crossover_writes_its_tables_and_refuses_what_it_must() {
             "radius_schedule_photons",
             "radius_schedule_exponent",
             "photons",
+            "photons_measured_max",
             "error_floor",
             "error_fit_c",
             "error_fit_a",
@@ -128,6 +129,13 @@ fn crossover_writes_its_tables_and_refuses_what_it_must() {
         let detp = ["sphere-cache", "disc-index"].contains(&r[col("method")].as_str());
         if detp && d == "80.0" {
             assert!(r[col("reason")].contains("no cost sweep"), "{r:?}");
+        }
+        // N_ε is judged against the largest photon count the fronts measured (4 000): NaN for
+        // path tracing, which has no photons.
+        let top = &r[col("photons_measured_max")];
+        match r[col("method")].as_str() {
+            "path-tracing" => assert_eq!(top, "NaN", "{r:?}"),
+            _ => assert_eq!(top, "4000.0", "{r:?}"),
         }
         if detp && d == "40.0" {
             // Timed: a γ on the grid and a bootstrap (or a floor above the target).

@@ -59,6 +59,9 @@ pub struct CrossRow {
     pub config: Config,
     /// N_ε (photons of one estimate), or paths per point for path tracing; NaN if unreachable.
     pub photons: f64,
+    /// The largest photon count the fronts measured for this configuration (NaN for path
+    /// tracing): an N_ε beyond it is the error fit's extrapolation, not a measured error.
+    pub photons_measured_max: f64,
     /// √B (NaN under a radius schedule: its error model has no floor).
     pub error_floor: f64,
     /// c of B + c/N (path tracing: cv²; NaN under a radius schedule).
@@ -185,6 +188,7 @@ fn base_row(inp: &Inputs, target: f64, config: Config, fit: &ErrorFit) -> CrossR
         target,
         config,
         photons,
+        photons_measured_max: f64::NAN,
         error_floor: floor,
         error_fit_c: c,
         error_fit_a: a,
@@ -253,6 +257,7 @@ fn replica_rows(
                 ..config.clone()
             };
             let mut row = base_row(inp, target, config, &fit);
+            row.photons_measured_max = photons.iter().copied().fold(f64::NAN, f64::max);
             row.power_law = power_law;
             if let Some(never) = failure {
                 // The fit N_ε rests on does not hold: no N_ε, no N*, and why.
@@ -382,6 +387,7 @@ fn map_row(inp: &Inputs, e: &MapErrors, target: f64) -> CrossRow {
     let mean = e.mse.first().map_or(&[][..], |m| &m[..]);
     let fit = ErrorFit::fit_relative(&e.photons, mean);
     let mut row = base_row(inp, target, e.config.clone(), &fit);
+    row.photons_measured_max = e.photons.iter().copied().fold(f64::NAN, f64::max);
     add_reason(
         &mut row,
         "no per-replica values in the points table: the replicas' mean MSE at N photons from the mean and its SE, no bootstrap CI"
@@ -412,6 +418,7 @@ fn path_row(inp: &Inputs, target: f64) -> CrossRow {
             radius_rule: None,
         },
         photons: pt.paths_for(target) as f64,
+        photons_measured_max: f64::NAN,
         error_floor: 0.0,
         error_fit_c: pt.cv * pt.cv,
         error_fit_a: f64::NAN,

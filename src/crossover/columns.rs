@@ -84,6 +84,8 @@ pub const RADIUS_SCHEDULE_EXPONENT: Column = value(
 );
 /// N_ε or paths.
 pub const PHOTONS: Column = value("photons", "photons", Class::Measured, "N_ε = c/(ε² − B): photons of one estimate (one replica, DETP and the photon maps alike) that reach the target (under a radius schedule N_ε = (a/ε²)^(1/(2γ)) from a·N^(−2γ)); path tracing: paths per point ⌈(cv/ε)²⌉; NaN if unreachable");
+/// The fronts' largest photon count.
+pub const PHOTONS_MEASURED_MAX: Column = value("photons_measured_max", "photons", Class::Measured, "the largest photon count of one estimate the fronts measured for this configuration (NaN for path tracing): where photons exceeds it, N_ε (and the N* resting on it) is the error fit's extrapolation past the measured errors, by the factor photons / photons_measured_max");
 /// √B.
 pub const ERROR_FLOOR: Column = value(
     "error_floor",
@@ -348,6 +350,7 @@ pub fn crossover_row(r: &CrossRow) -> Row {
         .put(&RADIUS_SCHEDULE_PHOTONS, schedule(|s| s.photons))
         .put(&RADIUS_SCHEDULE_EXPONENT, schedule(|s| s.exponent))
         .put(&PHOTONS, r.photons)
+        .put(&PHOTONS_MEASURED_MAX, r.photons_measured_max)
         .put(&ERROR_FLOOR, r.error_floor)
         .put(&ERROR_FIT_C, r.error_fit_c)
         .put(&ERROR_FIT_A, r.error_fit_a)
