@@ -3,6 +3,7 @@
 table results/detp-radius-schedule-cornell.
 
 Run from the repository root:  python3 scripts/radius_schedule_numbers.py [--results DIR]
+[--floors | --beta | --crossings]
 
 For each (d_ref, β) it prints the RMSE against the reference (± SE) at every photon count and:
 - the slope of log RMSE against log N (weighted least squares on the log means, weights from the
@@ -34,6 +35,7 @@ DRAWS = 4000
 # means the smooth-field law (√B ∝ d²) holds; wholly below it, it differs.
 SMOOTH_BAND = (1.6, 2.4)
 BETA = "detp-radius-beta-cornell"
+CROSSINGS = "detp-radius-crossings-cornell"
 # The rule detp-radius-beta-cornell.toml states: the log-log slope at β = 0.3 inside this band means
 # the derivation corrected for the measured floor (RMSE ∝ N^(−α/(2α+2))) holds; wholly outside, differs.
 BETA_RULE = (0.3, (-0.25, -0.15))
@@ -160,6 +162,19 @@ def print_beta(results):
     print("beta %g: slope band [%.2f, %.2f]: %s" % (beta, lo, hi, verdict))
 
 
+def print_crossings(results):
+    """The k-nearest radius: per photon count k, the mean r_i/d and the RMSE; the log-log slope."""
+    path = os.path.join(results, CROSSINGS, CROSSINGS + ".csv")
+    rows = sorted(T.read_rows(path, num)[1], key=lambda r: r["detp.photons"])
+    for r in rows:
+        print("%d photons: k %d, mean r/d %.3f, rmse %.5f ± %.5f, mismatches %d" % (
+            r["detp.photons"], r["radius_crossings_k"], r["radius_crossings_ratio"],
+            r["irradiance_ref_rmse_mean"], r["irradiance_ref_rmse_se"], r["mismatches"]))
+    pts = [(r["detp.photons"], r["irradiance_ref_rmse_mean"], r["irradiance_ref_rmse_se"]) for r in rows]
+    iv, chi2, dof = slope(pts)
+    print("slope %.3f [%.3f, %.3f], chi2 %.1f on %d" % (iv.value, iv.lo, iv.hi, chi2, dof))
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--results", default="results")
@@ -167,7 +182,12 @@ def main(argv=None):
                     help="the floor-against-d test of %s instead" % FLOORS)
     ap.add_argument("--beta", action="store_true",
                     help="the schedule-exponent test of %s instead" % BETA)
+    ap.add_argument("--crossings", action="store_true",
+                    help="the k-nearest radius of %s instead" % CROSSINGS)
     a = ap.parse_args(argv)
+    if a.crossings:
+        print_crossings(a.results)
+        return
     if a.beta:
         print_beta(a.results)
         return

@@ -279,3 +279,45 @@ fn a_crossover_result_reruns_on_its_recorded_inputs() {
         "{err}"
     );
 }
+
+/// An input given as runs (`DIR/runs/R`, whose files share their names) is recorded run by run
+/// (`runs/0/NAME.csv`, `runs/1/NAME.csv`), so a reproduce matches each file to its own and names
+/// the run whose file changed.
+#[test]
+fn a_crossover_over_runs_reruns_and_names_the_run_that_changed() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let (fronts, _) = crate::crossover::runs(tmp.path());
+    let repeated = tmp.path().join("repeated");
+    for r in ["0", "1"] {
+        crate::common::run_quiet(&tmp.path().join("points.toml"), &repeated)
+            .args(["--run", r])
+            .assert()
+            .success();
+    }
+    let points = repeated.join("points");
+    let out = tmp.path().join("x");
+    crate::crossover::crossover(&fronts, &points, &out)
+        .assert()
+        .success();
+    let meta = std::fs::read_to_string(out.join("crossover.meta.toml")).expect("meta");
+    for r in ["0", "1"] {
+        assert!(
+            meta.contains(&format!("location = \"runs/{r}/points.csv\"")),
+            "{meta}"
+        );
+    }
+    let (code, text, err) = output(&mut reproduce(&out, &[]));
+    assert_eq!(code, 0, "{text}{err}");
+    tamper(
+        &points.join("runs/1/points.csv"),
+        0,
+        "experiment.seed",
+        |s| format!("{s}0"),
+    );
+    let (code, _, err) = output(&mut reproduce(&out, &[]));
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("runs/1/points.csv") && err.contains("content changed"),
+        "{err}"
+    );
+}

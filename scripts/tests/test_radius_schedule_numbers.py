@@ -33,6 +33,7 @@ class RadiusScheduleNumbers(unittest.TestCase):
             R.main(["--results", os.path.join(ROOT, "results")])
             R.main(["--results", os.path.join(ROOT, "results"), "--floors"])
             R.main(["--results", os.path.join(ROOT, "results"), "--beta"])
+            R.main(["--results", os.path.join(ROOT, "results"), "--crossings"])
         self.printed = out.getvalue()
         self.doc = section()
 

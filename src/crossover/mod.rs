@@ -159,8 +159,16 @@ impl Source {
 
     /// What the metadata keeps of this input: its files' hashes and its run's machine.
     fn record(&self, role: &str, meta: &mut Meta) -> Result<(), OutputError> {
+        self.record_from(role, &self.results.dir, meta)
+    }
+
+    /// [`Source::record`] with every file's location taken relative to `base`: the folder given
+    /// on the command line, so that the runs `base/runs/R` of one input, whose files share their
+    /// names, keep distinct locations (`runs/0/NAME.csv`, `runs/1/NAME.csv`) and `raycost
+    /// reproduce` matches each file to its own.
+    fn record_from(&self, role: &str, base: &Path, meta: &mut Meta) -> Result<(), OutputError> {
         for f in &self.files {
-            let h = InputFile::hash(f, role, &self.results.dir)
+            let h = InputFile::hash(f, role, base)
                 .map_err(|e| OutputError::new(f, format!("cannot read: {e}")))?;
             meta.inputs.push(h);
         }
@@ -250,7 +258,7 @@ fn record_runs(
     let mut table = toml::Table::new();
     for s in runs {
         let mut m = Meta::begin("crossover", Default::default());
-        s.record(role, &mut m)?;
+        s.record_from(role, dir, &mut m)?;
         meta.inputs.extend(m.inputs);
         if let Some(t) = m.extra.remove(role) {
             let run = s
