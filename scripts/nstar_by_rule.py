@@ -30,6 +30,7 @@ COLUMNS = (
     "direct",
     "edge",
     "photons",
+    "error_floor",
     "disc_radius",
     "edge_radius_factor",
     "radius_schedule_exponent",
@@ -113,13 +114,55 @@ def lines(folder):
     return out
 
 
+def family(row):
+    """The radius rule's family: d fixed, kappa, schedule or kappa + schedule."""
+    r = rule(row)
+    return {"d fixed": "d fixed", "kappa=0.5": "kappa"}.get(r, r.split(" beta")[0].replace(
+        "kappa=0.5 schedule", "kappa + schedule"))
+
+
+def best_lines(folder):
+    """Per target and radius rule family, the DETP configuration (either engine) with the smallest
+    finite N*, or 'never' where none reaches the target."""
+    rows = [r for r in read(folder) if rule(r)]
+    out = ["## %s (scene %s): smallest DETP N* per radius rule" % (
+        folder, rows[0]["scene"] if rows else "?")]
+    families = ["d fixed", "kappa", "schedule", "kappa + schedule"]
+    for target in sorted({r["target"] for r in rows}, reverse=True):
+        for fam in families:
+            mine = [r for r in rows if r["target"] == target and family(r) == fam]
+            if not mine:
+                continue
+            finite = [r for r in mine if isinstance(r["n_star"], float) and math.isfinite(r["n_star"])]
+            if finite:
+                r = min(finite, key=lambda r: r["n_star"])
+                what = "%s direct=%s edge=%s: %s" % (r["method"], r["direct"], r["edge"], cell(r))
+            else:
+                # The reason of the configuration closest to the target: the smallest N_eps if
+                # any reaches it (then the cost is what is missing), else the lowest floor.
+                def closeness(r):
+                    n, f = r["photons"], r["error_floor"]
+                    n = n if isinstance(n, float) and math.isfinite(n) else math.inf
+                    f = f if isinstance(f, float) and math.isfinite(f) else math.inf
+                    return (n, f, r["reason"])
+                near = min(mine, key=closeness)
+                what = "never (%s)" % near["reason"].split("; model:")[0]
+                if isinstance(near["photons"], float) and math.isfinite(near["photons"]):
+                    what += "; its N_eps %.3g, %.3g× the largest measured" % (
+                        near["photons"], near["photons"] / near.get("photons_measured_max", math.nan))
+            out.append("%g %-16s %s" % (target, fam, what))
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("folders", nargs="+", help="raycost crossover output folders")
+    ap.add_argument("--best", action="store_true",
+                    help="per target and radius rule only the DETP configuration with the smallest N*")
     args = ap.parse_args(argv)
     for folder in args.folders:
         try:
-            print("\n".join(lines(folder)))
+            print("\n".join(best_lines(folder) if args.best else lines(folder)))
         except T.TableError as e:
             print("nstar_by_rule: %s" % e, file=sys.stderr)
             return 2

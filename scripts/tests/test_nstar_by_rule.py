@@ -18,9 +18,10 @@ import nstar_by_rule as N  # noqa: E402
 
 HEADER = ",".join(N.COLUMNS + ("photons_measured_max",))
 ROWS = [
-    "cornell,0.1,sphere-cache,photons,paper,1.6e6,15.0,NaN,0.0,6600.0,5250.0,7020.0,0.0,,8e5",
-    "cornell,0.1,sphere-cache,nee,clamp-first-hit,NaN,15.0,0.5,0.16666666666666666,inf,NaN,NaN,1.0,a floor appears,8e5",
-    "cornell,0.05,photon-map,nee,NaN,4e5,NaN,NaN,NaN,1020.0,615.0,1080.0,0.25,,8e5",
+    "cornell,0.1,sphere-cache,photons,paper,1.6e6,0.01,15.0,NaN,0.0,6600.0,5250.0,7020.0,0.0,,8e5",
+    "cornell,0.1,sphere-cache,nee,clamp-first-hit,NaN,NaN,15.0,0.5,0.16666666666666666,inf,NaN,NaN,1.0,a floor appears,8e5",
+    "cornell,0.05,photon-map,nee,NaN,4e5,0.2,NaN,NaN,NaN,1020.0,615.0,1080.0,0.25,,8e5",
+    "cornell,0.05,disc-index,photons,paper,NaN,0.07,15.0,NaN,0.0,inf,NaN,NaN,1.0,error floor,8e5",
 ]
 
 
@@ -45,11 +46,50 @@ class NstarByRule(unittest.TestCase):
         self.assertNotIn("edge=", m)
         self.assertTrue(m.endswith("1.02e+03 [615, 1.08e+03] never 0.25"), m)
 
+    def test_best_keeps_the_smallest_n_star_per_rule_or_says_never(self):
+        with tempfile.TemporaryDirectory() as d:
+            with open(os.path.join(d, "crossover.csv"), "w", encoding="utf-8") as f:
+                f.write(HEADER + "\n" + "\n".join(ROWS) + "\n")
+            out = io.StringIO()
+            with contextlib.redirect_stdout(out):
+                self.assertEqual(N.main(["--best", d]), 0)
+        text = out.getvalue().splitlines()
+        self.assertEqual(len(text), 4, text)
+        self.assertTrue(text[1].startswith("0.1 d fixed          sphere-cache direct=photons"), text)
+        self.assertEqual(text[2], "0.1 kappa + schedule never (a floor appears)")
+        self.assertEqual(text[3], "0.05 d fixed          never (error floor)")
+
     def test_a_missing_folder_is_an_error(self):
         err = io.StringIO()
         with contextlib.redirect_stderr(err):
             self.assertEqual(N.main(["/nonexistent/x"]), 2)
         self.assertIn("no such file", err.getvalue())
+
+
+ROOT = os.path.join(HERE, "..", "..")
+
+
+class FindingsBlock(unittest.TestCase):
+    """docs/findings-detp.md quotes `nstar_by_rule.py --best` over the committed crossovers: the
+    block is the script's output, line for line."""
+
+    def test_the_block_is_what_the_script_prints(self):
+        with open(os.path.join(ROOT, "docs", "findings-detp.md"), encoding="utf-8") as f:
+            text = f.read()
+        begin = text.index("<!-- nstar_by_rule --best: begin -->")
+        end = text.index("<!-- nstar_by_rule --best: end -->")
+        block = [l for l in text[begin:end].splitlines()[1:] if l and not l.startswith("```")]
+        folders = [l.split()[1] for l in block if l.startswith("## ")]
+        self.assertGreaterEqual(len(folders), 1, block)
+        out = io.StringIO()
+        cwd = os.getcwd()
+        try:
+            os.chdir(ROOT)
+            with contextlib.redirect_stdout(out):
+                self.assertEqual(N.main(["--best"] + folders), 0)
+        finally:
+            os.chdir(cwd)
+        self.assertEqual(block, out.getvalue().splitlines())
 
 
 if __name__ == "__main__":
