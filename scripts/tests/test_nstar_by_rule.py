@@ -26,14 +26,18 @@ ROWS = [
 
 
 class NstarByRule(unittest.TestCase):
-    def test_labels_cells_and_targets(self):
+    def printed(self, *flags):
+        """What the script prints for a crossover folder holding ROWS."""
         with tempfile.TemporaryDirectory() as d:
             with open(os.path.join(d, "crossover.csv"), "w", encoding="utf-8") as f:
                 f.write(HEADER + "\n" + "\n".join(ROWS) + "\n")
             out = io.StringIO()
             with contextlib.redirect_stdout(out):
-                self.assertEqual(N.main([d]), 0)
-        text = out.getvalue().splitlines()
+                self.assertEqual(N.main(list(flags) + [d]), 0)
+        return out.getvalue().splitlines()
+
+    def test_labels_cells_and_targets(self):
+        text = self.printed()
         self.assertEqual(text[1], "target 0.1:")
         fixed = [l for l in text if "edge=paper" in l][0]
         self.assertIn("d=15 d fixed", fixed)
@@ -47,13 +51,7 @@ class NstarByRule(unittest.TestCase):
         self.assertTrue(m.endswith("1.02e+03 [615, 1.08e+03] never 0.25"), m)
 
     def test_best_keeps_the_smallest_n_star_per_rule_or_says_never(self):
-        with tempfile.TemporaryDirectory() as d:
-            with open(os.path.join(d, "crossover.csv"), "w", encoding="utf-8") as f:
-                f.write(HEADER + "\n" + "\n".join(ROWS) + "\n")
-            out = io.StringIO()
-            with contextlib.redirect_stdout(out):
-                self.assertEqual(N.main(["--best", d]), 0)
-        text = out.getvalue().splitlines()
+        text = self.printed("--best")
         self.assertEqual(len(text), 4, text)
         self.assertTrue(text[1].startswith("0.1 d fixed          sphere-cache direct=photons"), text)
         self.assertEqual(text[2], "0.1 kappa + schedule never (a floor appears)")
