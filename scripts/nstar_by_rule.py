@@ -121,36 +121,134 @@ def family(row):
         "kappa=0.5 schedule", "kappa + schedule"))
 
 
+FAMILIES = ["d fixed", "kappa", "schedule", "kappa + schedule"]
+
+
+def finite_n_star(row):
+    """Whether a row's N* is a finite number."""
+    return isinstance(row["n_star"], float) and math.isfinite(row["n_star"])
+
+
+def best_of(rows, target, fam):
+    """The DETP row of radius rule family `fam` at `target` with the smallest finite N*, else the
+    one closest to the target (the smallest N_eps if any reaches it, so the cost is what is missing;
+    else the lowest floor), whose reason says why none does; None where the family has no row."""
+    mine = [r for r in rows if r["target"] == target and family(r) == fam]
+    if not mine:
+        return None
+    finite = [r for r in mine if finite_n_star(r)]
+    if finite:
+        return min(finite, key=lambda r: r["n_star"])
+
+    def closeness(r):
+        n, f = r["photons"], r["error_floor"]
+        n = n if isinstance(n, float) and math.isfinite(n) else math.inf
+        f = f if isinstance(f, float) and math.isfinite(f) else math.inf
+        return (n, f, r["reason"])
+    return min(mine, key=closeness)
+
+
+def never_text(row):
+    """Why a row's N* is not finite: its reason without the cost model's echo, and how far the
+    photons N_eps it would need lie past the largest count measured."""
+    what = "never (%s)" % row["reason"].split("; model:")[0]
+    if isinstance(row["photons"], float) and math.isfinite(row["photons"]):
+        what += "; its N_eps %.3g, %.3g× the largest measured" % (
+            row["photons"], row["photons"] / row.get("photons_measured_max", math.nan))
+    return what
+
+
 def best_lines(folder):
     """Per target and radius rule family, the DETP configuration (either engine) with the smallest
     finite N*, or 'never' where none reaches the target."""
     rows = [r for r in read(folder) if rule(r)]
     out = ["## %s (scene %s): smallest DETP N* per radius rule" % (
         folder, rows[0]["scene"] if rows else "?")]
-    families = ["d fixed", "kappa", "schedule", "kappa + schedule"]
     for target in sorted({r["target"] for r in rows}, reverse=True):
-        for fam in families:
-            mine = [r for r in rows if r["target"] == target and family(r) == fam]
-            if not mine:
+        for fam in FAMILIES:
+            r = best_of(rows, target, fam)
+            if r is None:
                 continue
-            finite = [r for r in mine if isinstance(r["n_star"], float) and math.isfinite(r["n_star"])]
-            if finite:
-                r = min(finite, key=lambda r: r["n_star"])
+            if finite_n_star(r):
                 what = "%s direct=%s edge=%s: %s" % (r["method"], r["direct"], r["edge"], cell(r))
             else:
-                # The reason of the configuration closest to the target: the smallest N_eps if
-                # any reaches it (then the cost is what is missing), else the lowest floor.
-                def closeness(r):
-                    n, f = r["photons"], r["error_floor"]
-                    n = n if isinstance(n, float) and math.isfinite(n) else math.inf
-                    f = f if isinstance(f, float) and math.isfinite(f) else math.inf
-                    return (n, f, r["reason"])
-                near = min(mine, key=closeness)
-                what = "never (%s)" % near["reason"].split("; model:")[0]
-                if isinstance(near["photons"], float) and math.isfinite(near["photons"]):
-                    what += "; its N_eps %.3g, %.3g× the largest measured" % (
-                        near["photons"], near["photons"] / near.get("photons_measured_max", math.nan))
+                what = never_text(r)
             out.append("%g %-16s %s" % (target, fam, what))
+    return out
+
+
+def sci(x):
+    """A number as README writes it: 1.6·10³ (two significant digits), ∞ for infinity."""
+    if not math.isfinite(x):
+        return "∞" if x > 0 else "NaN"
+    if x == 0:
+        return "0"
+    e = math.floor(math.log10(abs(x)))
+    m = round(x / 10 ** e, 1)
+    if abs(m) >= 10:
+        m, e = m / 10, e + 1
+    sup = str(e).translate(str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹"))
+    return "%g·10%s" % (m, sup)
+
+
+def times(x):
+    """A ratio in two significant digits, without an exponent: 1.1×, 44×, 1 100×."""
+    if not math.isfinite(x) or x < 10:
+        return "%.2g×" % x
+    r = int(round(x, 1 - int(math.floor(math.log10(x)))))
+    return "{:,}×".format(r).replace(",", " ")
+
+
+SHORT = {"sphere-cache": "sphere cache", "disc-index": "disc index", "nee": "NEE",
+         "photons": "photons", "clamp-first-hit": "clamp", "paper": "paper's edge"}
+
+
+def why_never(row):
+    """A short 'never' cell: the floor, a flattening error curve, no timing, or the reason as is;
+    and the photons N_eps where the fit gives them."""
+    reason = row["reason"].split("; model:")[0]
+    if "error floor √B = " in reason:
+        floor = float(reason.split("error floor √B = ")[1].split()[0])
+        why = "floor %.3g %%" % (100 * floor)
+    elif "flattens" in reason:
+        why = "the error curve flattens"
+    elif "no cost sweep" in reason:
+        why = "not timed over n_P"
+    else:
+        why = reason
+    n, top = row["photons"], row.get("photons_measured_max", math.nan)
+    if isinstance(n, float) and math.isfinite(n):
+        why += "; N_ε %s (%s the data)" % (sci(n), times(n / top))
+    return "never: " + why
+
+
+def markdown_cell(row):
+    """N* [lo, hi] with the configuration reaching it, or why never."""
+    if row is None:
+        return "–"
+    if not finite_n_star(row):
+        return why_never(row)
+    text = "**%s** [%s, %s]: %s, %s, %s" % (
+        sci(row["n_star"]), sci(row["n_star_lo"]), sci(row["n_star_hi"]),
+        SHORT.get(row["method"], row["method"]), SHORT.get(row["direct"], row["direct"]),
+        SHORT.get(row["edge"], row["edge"]))
+    n, top = row["photons"], row.get("photons_measured_max", math.nan)
+    if isinstance(n, float) and n > top:
+        text += " (N_ε %s the data)" % times(n / top)
+    return text
+
+
+def markdown_lines(folders):
+    """One markdown table over all folders: per scene and target, each radius rule family's
+    smallest DETP N* (either engine, any direct light and edge remedy) or why none is finite."""
+    out = ["| scene | ε | d fixed | κ = 0.5 | schedule d(N) | κ = 0.5 + schedule |",
+           "|---|---|---|---|---|---|"]
+    for folder in folders:
+        rows = [r for r in read(folder) if rule(r)]
+        scene = rows[0]["scene"] if rows else "?"
+        for target in sorted({r["target"] for r in rows}, reverse=True):
+            cells = [markdown_cell(best_of(rows, target, fam)) for fam in FAMILIES]
+            out.append("| %s | %g %% | %s |" % (scene, 100 * target, " | ".join(cells)))
     return out
 
 
@@ -159,7 +257,16 @@ def main(argv=None):
     ap.add_argument("folders", nargs="+", help="raycost crossover output folders")
     ap.add_argument("--best", action="store_true",
                     help="per target and radius rule only the DETP configuration with the smallest N*")
+    ap.add_argument("--markdown", action="store_true",
+                    help="as --best, one markdown table over all folders (README's)")
     args = ap.parse_args(argv)
+    if args.markdown:
+        try:
+            print("\n".join(markdown_lines(args.folders)))
+        except T.TableError as e:
+            print("nstar_by_rule: %s" % e, file=sys.stderr)
+            return 2
+        return 0
     for folder in args.folders:
         try:
             print("\n".join(best_lines(folder) if args.best else lines(folder)))

@@ -63,9 +63,11 @@ def target_panel(ax, rows, target):
                 label="%s (%s)" % (label(r), "%d paths" % r["photons"] if r is pt else "N = %.2g" % r["photons"]))
         if pt is not None and r is not pt and finite(r["n_star"]):
             x = r["n_star"]
-            # No bootstrap (photon maps): the marker alone; an unbounded end (+inf): to the edge.
+            # No bootstrap (photon maps): the marker alone; an unbounded end (+inf): to the edge,
+            # or nothing where N* itself lies past the edge.
             lo = r["n_star_lo"] if finite(r["n_star_lo"]) else x
-            hi = r["n_star_hi"] if finite(r["n_star_hi"]) else (POINTS[-1] if r["n_star_hi"] == math.inf else x)
+            edge = max(POINTS[-1], x)
+            hi = r["n_star_hi"] if finite(r["n_star_hi"]) else (edge if r["n_star_hi"] == math.inf else x)
             ax.errorbar([x], [seconds(pt, x)], xerr=[[x - lo], [hi - x]], fmt="o", color=color, ms=5,
                         capsize=3)
             print("target %g: %-48s N* = %.4g [%.4g, %.4g]" % (target, label(r), x, lo, hi))

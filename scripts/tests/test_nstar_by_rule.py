@@ -57,6 +57,25 @@ class NstarByRule(unittest.TestCase):
         self.assertEqual(text[2], "0.1 kappa + schedule never (a floor appears)")
         self.assertEqual(text[3], "0.05 d fixed          never (error floor)")
 
+    def test_markdown_is_one_row_per_target_with_a_cell_per_rule(self):
+        text = self.printed("--markdown")
+        self.assertEqual(len(text), 4, text)
+        self.assertTrue(text[0].startswith("| scene | ε | d fixed | κ = 0.5 |"), text)
+        cells = [c.strip() for c in text[2].strip("|").split("|")]
+        self.assertEqual(cells[:2], ["cornell", "10 %"])
+        self.assertEqual(cells[2], "**6.6·10³** [5.2·10³, 7·10³]: sphere cache, photons, paper's "
+                                   "edge (N_ε 2× the data)")
+        self.assertEqual(cells[3], "–")  # no κ-only row at 10 %
+        self.assertEqual(cells[5], "never: a floor appears")  # a reason kept as written
+        self.assertEqual([c.strip() for c in text[3].strip("|").split("|")][2:],
+                         ["never: error floor", "–", "–", "–"])
+
+    def test_numbers_and_ratios_as_the_readme_writes_them(self):
+        self.assertEqual([N.sci(x) for x in (1640.0, 9.96e4, 3.5e10, 0.0, float("inf"))],
+                         ["1.6·10³", "1·10⁵", "3.5·10¹⁰", "0", "∞"])
+        self.assertEqual([N.times(x) for x in (1.09, 43.7, 1094.0, 88700.0)],
+                         ["1.1×", "44×", "1 100×", "89 000×"])
+
     def test_a_missing_folder_is_an_error(self):
         err = io.StringIO()
         with contextlib.redirect_stderr(err):
@@ -67,27 +86,50 @@ class NstarByRule(unittest.TestCase):
 ROOT = os.path.join(HERE, "..", "..")
 
 
-class FindingsBlock(unittest.TestCase):
-    """docs/findings-detp.md quotes `nstar_by_rule.py --best` over the committed crossovers: the
-    block is the script's output, line for line."""
+def quoted_block(path, flag):
+    """The lines between `<!-- nstar_by_rule FLAG: begin -->` and its end marker in PATH (code
+    fences and blank lines left out), and the folders named by the marker's `folders:` line or by
+    the block's `## FOLDER` headings."""
+    with open(os.path.join(ROOT, path), encoding="utf-8") as f:
+        text = f.read()
+    begin = text.index("<!-- nstar_by_rule %s: begin" % flag)
+    end = text.index("<!-- nstar_by_rule %s: end -->" % flag)
+    head, _, body = text[begin:end].partition("-->")
+    block = [l for l in body.splitlines() if l and not l.startswith("```")]
+    folders = head.split("folders:")[1].split() if "folders:" in head else [
+        l.split()[1] for l in block if l.startswith("## ")]
+    return block, folders
 
-    def test_the_block_is_what_the_script_prints(self):
-        with open(os.path.join(ROOT, "docs", "findings-detp.md"), encoding="utf-8") as f:
-            text = f.read()
-        begin = text.index("<!-- nstar_by_rule --best: begin -->")
-        end = text.index("<!-- nstar_by_rule --best: end -->")
-        block = [l for l in text[begin:end].splitlines()[1:] if l and not l.startswith("```")]
-        folders = [l.split()[1] for l in block if l.startswith("## ")]
+
+def printed_at_root(args):
+    """What the script prints, run from the repository root."""
+    out = io.StringIO()
+    cwd = os.getcwd()
+    try:
+        os.chdir(ROOT)
+        with contextlib.redirect_stdout(out):
+            status = N.main(args)
+    finally:
+        os.chdir(cwd)
+    return status, out.getvalue().splitlines()
+
+
+class QuotedBlocks(unittest.TestCase):
+    """docs/findings-detp.md quotes `nstar_by_rule.py --best` and README.md `--markdown` over the
+    committed crossovers: each block is the script's output, line for line."""
+
+    def check(self, path, flag):
+        block, folders = quoted_block(path, flag)
         self.assertGreaterEqual(len(folders), 1, block)
-        out = io.StringIO()
-        cwd = os.getcwd()
-        try:
-            os.chdir(ROOT)
-            with contextlib.redirect_stdout(out):
-                self.assertEqual(N.main(["--best"] + folders), 0)
-        finally:
-            os.chdir(cwd)
-        self.assertEqual(block, out.getvalue().splitlines())
+        status, out = printed_at_root([flag] + folders)
+        self.assertEqual(status, 0)
+        self.assertEqual(block, out)
+
+    def test_the_findings_block_is_what_the_script_prints(self):
+        self.check(os.path.join("docs", "findings-detp.md"), "--best")
+
+    def test_the_readme_table_is_what_the_script_prints(self):
+        self.check("README.md", "--markdown")
 
 
 if __name__ == "__main__":

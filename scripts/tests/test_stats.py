@@ -323,5 +323,46 @@ class BootstrapBookkeeping(unittest.TestCase):
         self.assertAlmostEqual(iv.categories["none"] + iv.categories["ok"], 1.0)
 
 
+def cost_fit_cases():
+    """The shared cases of data/cost_fit_cases.txt: (γ, [(photons, points, seconds)], expected
+    [fixed, a, b, c])."""
+    cases = []
+    with open(os.path.join(DATA, "cost_fit_cases.txt")) as f:
+        for line in f:
+            word, *rest = line.split()
+            if word == "case":
+                cases.append((float(rest[0]), [], None))
+            elif word == "sample":
+                cases[-1][1].append(tuple(float(v) for v in rest))
+            elif word == "expect":
+                cases[-1] = (cases[-1][0], cases[-1][1], [float(v) for v in rest])
+    return cases
+
+
+class CostFitShared(unittest.TestCase):
+    """The cost fit lives in two languages until it moves to one (raycost_stats.fit_costs and
+    the Rust CostModel::fit); both are held to the same shared cases, which the Rust side reads
+    too. Agreement means the same columns kept (the same zeros) and fitted seconds within 1e-9
+    relative at every sample: the fit is exact arithmetic on rows normalised by their seconds."""
+
+    def test_fit_costs_gives_the_shared_answers(self):
+        cases = cost_fit_cases()
+        self.assertEqual(len(cases), 5)
+        for gamma, samples, expect in cases:
+            cols = [[1.0] * len(samples), [n for n, _, _ in samples],
+                    [n * p ** gamma for n, p, _ in samples], [p for _, p, _ in samples]]
+            coef, _ = S.fit_costs(cols, [s for _, _, s in samples])
+            self.assertEqual([c == 0 for c in coef], [c == 0 for c in expect], (gamma, coef))
+            for k, (_, _, s) in enumerate(samples):
+                got = sum(c * col[k] for c, col in zip(coef, cols))
+                want = sum(c * col[k] for c, col in zip(expect, cols))
+                self.assertLess(abs(got - want), 1e-9 * s, (gamma, k))
+
+    def test_the_noise_free_case_gives_its_coefficients_back(self):
+        gamma, samples, expect = cost_fit_cases()[0]
+        for got, want in zip(expect, [0.05, 2e-7, 3e-12, 4e-6]):
+            self.assertAlmostEqual(got / want, 1.0, places=12)
+
+
 if __name__ == "__main__":
     unittest.main()

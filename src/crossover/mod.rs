@@ -1,14 +1,14 @@
 //! `raycost crossover FRONTS_DIR POINTS_DIR [FRAMES_DIR] --targets … --out DIR`: which method when
-//! (issue 27), from three runs of one scene — the fronts (errors of every method against a
-//! reference, ≥ 2 replicas, read from `NAME.replica_errors.csv` or an older run's points table;
-//! one run, or several in `runs/R` that add configurations, e.g. a radius
-//! rule that cannot share the first run's sweep), the n_P sweep (seconds over photons × points;
-//! one run or several) and optionally a
-//! quasi-static frames run (incremental costs). Writes `DIR/crossover.csv` (per target and method
-//! configuration: photons or paths needed, seconds once and per point, N* with a bootstrap CI over
-//! the fronts' replicas, or why never), `DIR/best.csv` (per target and n_P ∈ {10², …, 10⁶} the two
-//! fastest configurations), `DIR/frames.csv` (F*, with FRAMES_DIR) and `DIR/crossover.meta.toml`
-//! (this build and machine, every input file's hash, and each input run's CPU, load and commit).
+//! (DETP, a photon map or per-point path tracing), from three runs of one scene — the fronts
+//! (errors of every method against a reference, ≥ 2 replicas, read from `NAME.replica_errors.csv`
+//! or an older run's points table; one run, or several in `runs/R` that add configurations, e.g. a
+//! radius rule that cannot share the first run's sweep), the n_P sweep (seconds over photons ×
+//! points; one run or several) and optionally a quasi-static frames run (incremental costs). Writes
+//! `DIR/crossover.csv` (per target and method configuration: photons or paths needed, seconds once
+//! and per point, N* with a bootstrap CI over the fronts' replicas, or why never), `DIR/best.csv`
+//! (per target and n_P ∈ {10², …, 10⁶} the two fastest configurations), `DIR/frames.csv` (F*, with
+//! FRAMES_DIR) and `DIR/crossover.meta.toml` (this build and machine, every input file's hash, and
+//! each input run's CPU, load and commit).
 //!
 //! The steps are pure and tested one by one: [`fronts`] (errors), [`costs`] (seconds),
 //! [`analysis`] (N*, best), [`frames`] (F*); this file reads the folders ([`input`]) and writes

@@ -122,7 +122,7 @@ pub mod domain {
     pub const CHECK: u64 = 0x6368_6563;
     /// The reference path tracer's samples at one sample point: `[REFERENCE, seed, point, sample]`.
     pub const REFERENCE: u64 = 0x7265_6665;
-    /// Per-point path tracing as a competitor (issue 27), independent of the reference it is
+    /// Per-point path tracing as a competitor, independent of the reference it is
     /// judged against: `[PATH_TRACE, seed, replica, point]`.
     pub const PATH_TRACE: u64 = 0x7061_7468;
     /// Direct light by next-event estimation alone: `[DIRECT, seed, replica, point]`.

@@ -386,6 +386,63 @@ fn solve_support<const K: usize>(
 mod tests {
     use super::*;
 
+    /// The cost fit's second copy, in Python (`scripts/raycost_stats.py`, `fit_costs`), is held to
+    /// the same shared cases (`scripts/tests/data/cost_fit_cases.txt`, Python's answers): the same
+    /// columns kept and fitted seconds within 1e-9 relative at every sample. Both solve the same
+    /// normal equations on rows normalised by their seconds, so only rounding may differ.
+    #[test]
+    fn the_cost_fit_equals_the_python_copy() {
+        let text = include_str!("../../scripts/tests/data/cost_fit_cases.txt");
+        /// γ, the samples (photons, points, seconds), Python's [fixed, a, b, c].
+        type Case = (f64, Vec<(f64, f64, f64)>, Vec<f64>);
+        let mut cases: Vec<Case> = Vec::new();
+        for line in text.lines().filter(|l| !l.starts_with('#')) {
+            let mut words = line.split_whitespace();
+            let word = words.next();
+            let values: Vec<f64> = words.map(|w| w.parse().unwrap()).collect();
+            match word {
+                Some("case") => cases.push((values[0], Vec::new(), Vec::new())),
+                Some("sample") => cases
+                    .last_mut()
+                    .unwrap()
+                    .1
+                    .push((values[0], values[1], values[2])),
+                Some("expect") => cases.last_mut().unwrap().2 = values,
+                _ => {}
+            }
+        }
+        assert_eq!(cases.len(), 5);
+        for (gamma, samples, expect) in &cases {
+            let fit = CostModel::fit(samples, *gamma);
+            let got = [
+                fit.fixed,
+                fit.per_photon,
+                fit.per_photon_point,
+                fit.per_point,
+            ];
+            let zeros = |c: &[f64]| c.iter().map(|&v| v == 0.0).collect::<Vec<_>>();
+            assert_eq!(
+                zeros(&got),
+                zeros(expect),
+                "γ {gamma}: {got:?} against {expect:?}"
+            );
+            let python = CostModel {
+                fixed: expect[0],
+                per_photon: expect[1],
+                per_photon_point: expect[2],
+                per_point: expect[3],
+                gamma: *gamma,
+            };
+            for &(n, p, s) in samples {
+                let (a, b) = (fit.seconds(n, p), python.seconds(n, p));
+                assert!(
+                    (a - b).abs() < 1e-9 * s,
+                    "γ {gamma} at ({n}, {p}): {a} against {b}"
+                );
+            }
+        }
+    }
+
     /// Below the smallest measured photon count the fit is not trusted: a target the measured
     /// count already reaches needs that count, not the extrapolated fewer.
     #[test]

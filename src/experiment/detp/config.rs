@@ -701,7 +701,7 @@ fn check_radius(rays: &Rays, disc_radius: f64, key: &str) -> Result<(), ConfigEr
             format!("d = {disc_radius:e} is larger than {}: a tangent disc must be small against the scene", reach.1),
         );
     }
-    // Enough of f64 left for d and the scene at the scene's coordinates (issue 26).
+    // Enough of f64 left for d and the scene at the scene's coordinates.
     if let Rays::Scene(s) = rays {
         s.scene
             .precision()

@@ -1,5 +1,5 @@
 //! Estimator `path-tracing`: per-point path tracing with next-event estimation as DETP's competitor
-//! (issue 27), [`crate::lt::pathtrace`] run on its own streams (`[PATH_TRACE, seed, replica, i]`,
+//! ("which method when"), [`crate::lt::pathtrace`] run on its own streams (`[PATH_TRACE, seed, replica, i]`,
 //! i the point's place in the subset it runs on), so it shares no random number with the
 //! reference it is judged against.
 //!
