@@ -1,4 +1,4 @@
-//! Profiling aid for the query grid (how issue 3's numbers were found): times configurations of
+//! Profiling aid for the query grid (how its tuned defaults were found): times configurations of
 //! [`FastGrid`] against each other in alternating single-thread rounds, one process, so that the
 //! machine's drift cancels out of their comparison.
 //!

@@ -1,4 +1,4 @@
-//! Issue 29's evaluation of the pure-Rust `obvhs` crate (compressed-wide BVH built by PLOC) as the
+//! The evaluation of the pure-Rust `obvhs` crate (compressed-wide BVH built by PLOC) as the
 //! traversal of light transport's exact queries, against our own core (`src/lt/bvh/`) and Embree.
 //!
 //! ```text

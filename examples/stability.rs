@@ -1,4 +1,4 @@
-//! The stability table of issue 26: the Cornell box translated by 10⁰ … 10¹² of its size, scaled by
+//! The stability table: the Cornell box translated by 10⁰ … 10¹² of its size, scaled by
 //! 10⁻⁹ … 10⁶ (and by powers of two), and rotated, each against the box where it is — the same
 //! photon streams, the same sample points moved alike, crossings summed by brute force
 //! ([`raycost::detp::stability`], which `tests/stability.rs` asserts on).

@@ -16,8 +16,9 @@ threads, with the 1 → 2 thread speed-up.
 The infinite scene's rows (`grid-infinite`, one per cell width and thread count) draw only their best
 width in the main figure; all widths go to NAME.infinite.png: rays/s and ns per visited cell against
 the cell width, on 1 and 2 threads, beside the finite grid's rays/s (n = 10^6, paired rounds) and
-issue 10's target (1/3 of it), with the paired ratio infinite / finite of each width. A CSV from
-before the width sweep (one grid-infinite row per thread count) still plots.
+the infinite scene's goal (1/3 of the finite grid's rays/s), with the paired ratio infinite / finite
+of each width. A CSV from before the width sweep (one grid-infinite row per thread count) still
+plots.
 """
 
 import math

@@ -64,7 +64,7 @@ fn run_writes_csv_meta_and_histograms_with_contract_columns() {
     }
     assert_eq!(rows[3][0], "3");
     assert_eq!(rows[3][2], "uniform");
-    // The metadata declares every column's class: N_S is measured (issue 15: `n_s_mean` was once
+    // The metadata declares every column's class: N_S is measured (`n_s_mean` was once
     // taken for a timing by its `_s_mean` suffix), speeds are timings.
     let meta = raycost::output::meta::Meta::read(&out.join("small/small.meta.toml")).expect("meta");
     assert!(!meta.run.spec_hash.is_empty() && !meta.raycost.git_commit.is_empty());
@@ -305,7 +305,7 @@ fn resume_recovers_a_run_killed_while_finishing() {
         .any(|p| p.to_string_lossy().ends_with(".partial")));
 }
 
-/// Issue 16: `--threads 100000` once ran for minutes on a 0.2 s job; more than 8 threads per CPU is
+/// `--threads 100000` once ran for minutes on a 0.2 s job; more than 8 threads per CPU is
 /// refused as a usage error, and nothing is written.
 #[test]
 fn absurd_thread_counts_are_refused() {
@@ -347,7 +347,7 @@ fn absurd_thread_counts_are_refused() {
     assert!(files_below(tmp.path()).is_empty());
 }
 
-/// Issue 16: 3·10⁷ photons under a 2 GB memory limit once aborted after 37 s ("memory allocation
+/// 3·10⁷ photons under a 2 GB memory limit once aborted after 37 s ("memory allocation
 /// failed"); the budget now takes the memory this process may use (MemAvailable, the cgroup limit,
 /// `ulimit -v`), and the run is refused before anything is allocated, naming the key.
 #[test]

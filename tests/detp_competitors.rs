@@ -1,4 +1,4 @@
-//! Issue 27's competitors wired into kind `detp`: engine `path-tracing` writes what
+//! DETP's competitors wired into kind `detp`: engine `path-tracing` writes what
 //! `lt::pathtrace` computes, whatever the thread count; `direct = "nee"` keeps the DETP engines
 //! bit-identical (the run fails otherwise) and sums to the closed sphere's exact irradiance.
 

@@ -1,4 +1,4 @@
-//! Sharding and `raycost merge` (issue 4): a sweep run as shards and merged is the table one run
+//! Sharding and `raycost merge`: a sweep run as shards and merged is the table one run
 //! writes (measured columns byte for byte), whatever the thread count; bad shards and bad `--shard`
 //! values are refused with exit code 2 and nothing written.
 

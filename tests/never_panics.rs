@@ -1,4 +1,4 @@
-//! No input can make raycost panic (issue 16): random mutations of every shipped spec, of the TOML
+//! No input can make raycost panic: random mutations of every shipped spec, of the TOML
 //! scenes, of AFF text and of points CSVs go through the readers and the whole validation (`raycost
 //! check`'s path: every point configured, input files loaded, memory estimated). Each must come
 //! back as `Ok` or a located error; a panic fails the test and proptest shrinks it to a minimal

@@ -1,4 +1,4 @@
-//! `--photon-shard K/N` (issue 29 item 5): one run's photons split over N shards, run in any order,
+//! `--photon-shard K/N`: one run's photons split over N shards, run in any order,
 //! merged by `raycost merge` into the table the unsplit run writes, every measured column (main
 //! table and side tables) equal bit for bit — for kind `detp`, and for kind `quasi-static` frame by
 //! frame, where only the segment index's own work (summed over the shards' indexes) is set apart

@@ -1,7 +1,7 @@
-//! The result-folder protocol (issue 26): nothing a user has is ever lost or corrupted. Two writers
+//! The result-folder protocol: nothing a user has is ever lost or corrupted. Two writers
 //! on one result, a torn row, a merge told to overwrite its own input, a write that fails at every
 //! step (file size limit, a full small file system), symlinks planted at the temporary paths, and an
-//! empty metadata file — each reproduced as the failing input the issue reports, then held to what
+//! empty metadata file — each reproduced as the failing input once reported, then held to what
 //! must happen now.
 
 use std::fs;
@@ -243,7 +243,7 @@ fn a_torn_last_row_is_dropped_reported_and_recomputed() {
     let body = &text[..text.len() - last.len() - 1];
     let cut = &last[..last.len() / 2];
     let tears = [
-        format!("{body}{cut}\n"), // mid-field, newline kept (the issue's case)
+        format!("{body}{cut}\n"), // mid-field, newline kept (the reported case)
         format!("{body}{cut}"),   // mid-field, no newline
         format!("{body}{cut}\0\0\0\0\0\0\0"), // a crash zero-filled the block
         text[..20].to_string(),   // a cut header: nothing survives

@@ -1,4 +1,4 @@
-//! Kind quasi-static with `"path-tracing"` in `detp.engines` (issue 27, item 4): at frame 0 and
+//! Kind quasi-static with `"path-tracing"` in `detp.engines`: at frame 0 and
 //! every checked frame it is `path_trace` on the scene posed at that frame, at kind detp's keyed
 //! subset of that frame's points; its measured columns do not depend on the thread count; and
 //! switching it on changes no other column (the header without it is the header of before).

@@ -1,4 +1,4 @@
-//! The reference path tracer (issue 18) on a real scene: it agrees with a high-photon DETP run at
+//! The reference path tracer on a real scene: it agrees with a high-photon DETP run at
 //! open surface points of the Cornell box within their combined standard error, closed forms hold
 //! through the engine, and the surface sampler drops the floor a block stands on.
 

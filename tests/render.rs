@@ -212,7 +212,7 @@ engines = ["disc-index"]
     assert_eq!(o.status.code(), Some(2), "kind detp has frame 0 only");
 }
 
-/// Issue 16: `--width 100000` once aborted allocating 640 GB; now it is refused before anything is
+/// `--width 100000` once aborted allocating 640 GB; now it is refused before anything is
 /// traced, naming the flag, and nothing is written.
 #[test]
 fn an_image_larger_than_memory_is_refused_before_tracing() {

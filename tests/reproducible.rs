@@ -1,6 +1,6 @@
-//! Issue 15's silent wrong answers, each with its exact reproduction: a run is pinned to the content
-//! of every file it reads, `--set` on a sweep axis replaces the axis, N_S is a measured column, and
-//! every kind's built-in check keeps its row and fails the run.
+//! Silent wrong answers raycost once gave, each with its exact reproduction: a run is pinned to
+//! the content of every file it reads, `--set` on a sweep axis replaces the axis, N_S is a measured
+//! column, and every kind's built-in check keeps its row and fails the run.
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -80,7 +80,7 @@ fn resume_after_editing_the_points_csv_is_refused_naming_the_file() {
     let out = tmp.path().join("out");
     run_quiet(&spec, &out).assert().success();
     cut_to_partial(&out.join("pts"), "pts", 2);
-    // The issue's reproduction: the points file changes between the cut and the resume.
+    // The reported reproduction: the points file changes between the cut and the resume.
     write_points(tmp.path(), 0.01);
     let before = snapshot(&out);
     let o = run_quiet(&spec, &out).arg("--resume").output().unwrap();
@@ -155,7 +155,7 @@ fn merge_refuses_shards_computed_from_different_points_files() {
 
 #[test]
 fn set_on_a_sweep_axis_replaces_the_axis() {
-    // The issue's reproduction, verbatim.
+    // The reported reproduction, verbatim.
     let spec = root().join("experiments/quickstart.toml");
     let o = raycost()
         .arg("check")

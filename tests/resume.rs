@@ -1,4 +1,4 @@
-//! Kill and resume (issue 4): a run interrupted by SIGINT or SIGKILL keeps every finished point in
+//! Kill and resume: a run interrupted by SIGINT or SIGKILL keeps every finished point in
 //! its `.partial` files, and `raycost run --resume` completes a table identical (outside timing
 //! columns) to an uninterrupted run. Resuming with another spec, or starting over a partial run
 //! without `--resume`/`--force`, is refused with exit code 2 and the partial run left untouched.

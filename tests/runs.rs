@@ -1,4 +1,4 @@
-//! Issue 25's samples a referee accepts: common random numbers (every sweep point on the same
+//! Samples a referee accepts: common random numbers (every sweep point on the same
 //! lines, photons, points and scenes) and separate runs (`--run R`, `--repeat K`), each with its own
 //! seed, written where the claims engine pools them (`OUT/NAME/runs/R/NAME.csv`).
 

@@ -1,4 +1,4 @@
-//! Physics sanity (issue 16): answers that would be meaningless come with a counted warning on
+//! Physics sanity: answers that would be meaningless come with a counted warning on
 //! stderr and in `meta.toml`, however `--quiet` the run.
 
 use crate::common::{run_quiet, write_spec};

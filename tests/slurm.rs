@@ -1,4 +1,4 @@
-//! The Slurm scripts without a cluster (issue 4): `sweep.sbatch` run once per array task id and
+//! The Slurm scripts without a cluster: `sweep.sbatch` run once per array task id and
 //! `merge.sbatch` after them, as Slurm would, give the table of one local run; `submit.sh` refuses
 //! bad arguments before submitting anything. The real cluster test is `scripts/slurm/ci_test.sh`
 //! (run by `.ci/run`).

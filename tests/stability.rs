@@ -1,4 +1,4 @@
-//! Numerical stability wherever a scene sits and whatever its unit (issue 26): the photon tracer,
+//! Numerical stability wherever a scene sits and whatever its unit: the photon tracer,
 //! the discs and the crossing test give the same irradiance for the Cornell box translated by
 //! 10⁰ … 10¹² of its size, scaled by 10⁻⁹ … 10⁶ (and by powers of two, exactly), and rotated — bit
 //! for bit where the arithmetic allows it, within the standard error elsewhere — or the scene is
@@ -66,8 +66,9 @@ fn bits(t: f64) -> f64 {
 /// each gets is asserted. Up to 10⁴·S every crossing sum is the same bit for bit (the irradiance
 /// too, but for the last bits of the light's area, which a decimal shift rounds differently);
 /// 10⁵ … 10⁷·S (≥ 23 bits left for d) the same within the SE, a few points' sums differing; from
-/// 10⁸·S (19.8 bits) refused, naming the bits. Before issue 26 the box at 10¹¹ mm never finished,
-/// and at 10¹⁰ most of its surface points were taken for covered by a contact distance of 10 mm.
+/// 10⁸·S (19.8 bits) refused, naming the bits. Before tolerances followed the scene's scale, the
+/// box at 10¹¹ mm never finished, and at 10¹⁰ most of its surface points were taken for covered by
+/// a contact distance of 10 mm.
 #[test]
 fn translations_give_the_same_irradiance_or_are_refused() {
     let at0 = run(&Placement::IDENTITY);

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# ci_test.sh — the real Slurm test of issue 4, run by .ci/run.
+# ci_test.sh — the real Slurm test of sharded sweeps and `raycost merge`, run by .ci/run.
 #
 #   RAYCOST=target/release/raycost bash scripts/slurm/ci_test.sh
 #
@@ -10,7 +10,7 @@
 # merged table with the local one: every non-timing column byte for byte, and the histogram table
 # whole. The cluster is always brought down again (trap), by the pids cluster.sh recorded.
 #
-# Then the same with one run's photons split (issue 29 item 5): tests/specs/slurm-photons.toml as
+# Then the same with one run's photons split: tests/specs/slurm-photons.toml as
 # an array of PHOTON_SHARDS tasks (`submit.sh --photons`: task K runs `--photon-shard
 # K/PHOTON_SHARDS`) and the dependent merge, compared with a local unsplit run: every non-timing
 # column of every table (main, points; a quasi-static run's frames) byte for byte; then the same

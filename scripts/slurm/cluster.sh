@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # cluster.sh — a private one-node Slurm cluster on this machine, for testing the
-# raycost job-array scripts (issue 4). Debian 12 packages, no systemd needed.
+# raycost job-array scripts. Debian 12 packages, no systemd needed.
 #
 #   bash scripts/slurm/cluster.sh up      # install if missing, start munged/slurmctld/slurmd, wait for idle
 #   bash scripts/slurm/cluster.sh down    # stop exactly the daemons `up` started (by recorded pid)

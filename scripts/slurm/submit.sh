@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# submit.sh — run a raycost sweep as a Slurm job array plus a dependent merge job (issue 4).
+# submit.sh — run a raycost sweep as a Slurm job array plus a dependent merge job.
 #
 #   scripts/slurm/submit.sh [--wait] [--timeout SECONDS] [--photons] [--missing|--check] SPEC SHARDS OUT
 #

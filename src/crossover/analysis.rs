@@ -1,4 +1,4 @@
-//! The analysis (docs/plans/issue27-wiring.md §4), pure: per target and method configuration the
+//! The analysis (docs/plans/crossover-wiring.md §4), pure: per target and method configuration the
 //! photons (or paths) it needs, its seconds once and per point, and N* — the points beyond which
 //! it beats per-point path tracing — from the measured seconds of the n_P sweep
 //! ([`measured_star`]: interpolated between measured n_P, marked where extrapolated, a bootstrap

@@ -124,7 +124,7 @@ pub fn clamped_radii(
 /// s for every point, whatever the edge mode: the distance from centre `c[i]` (normal `n[i]`) to the
 /// nearest surface of `scene` that is not the point's own plane ([`nearest_other_surface`]), capped
 /// at `reach` (`reach` itself means "none nearer"). The hard cases are read against s/d; the points
-/// table carries it (issues 25, 27). The boundary of the point's own plane is not an edge here: a
+/// table carries it (`edge_distance`). The boundary of the point's own plane is not an edge here: a
 /// disc that hangs over an open rim reaches into free space, not into a solid. Parallel over
 /// points; each value depends only on its own point.
 pub fn edge_distances(scene: &Scene, c: &[DVec3], n: &[DVec3], reach: f64) -> Vec<f64> {

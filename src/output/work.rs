@@ -65,7 +65,7 @@ mod tests {
 
     #[test]
     fn photons_times_points_is_summed_and_warned_above_the_threshold() {
-        // The case: 10⁴ points × 5·10⁶ photons.
+        // The reported case: 10⁴ points × 5·10⁶ photons.
         let (lines, w) = total(&[(5_000_000, "photons", 10_000)]);
         assert!(
             lines[0].contains("5.000e10 photons × sample points"),

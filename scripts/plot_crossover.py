@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Which method when (issue 27): the output of `raycost crossover` for one scene
+"""Which method when: the output of `raycost crossover` for one scene
 (results/issue27-crossover-SCENE/crossover.csv, with best.csv and, for a frames run, frames.csv
 beside it).
 

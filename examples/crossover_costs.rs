@@ -5,10 +5,10 @@
 //! and sphere cache) with the photon map beside them, then the cost model
 //! `seconds = fixed + a·N + b·N·n_P^γ + c·n_P` fitted to them (γ = 1, and the best γ on a grid) and
 //! its worst misfit.
-//! Prints Markdown; `docs/plans/issue27-wiring.md` quotes it. Timings depend on the load: the first
+//! Prints Markdown; `docs/plans/crossover-wiring.md` quotes it. Timings depend on the load: the first
 //! and last lines give `uptime`'s load and the CPU.
 //!
-//! `cargo run --release --example issue27_costs [-- SCENE…]` (names: cornell, kitchen, hard,
+//! `cargo run --release --example crossover_costs [-- SCENE…]` (names: cornell, kitchen, hard,
 //! museum, robots; default all). `RAYCOST_QUICK=1` halves every size.
 
 use std::path::Path;
