@@ -6,7 +6,7 @@
 //! other interpolation form and the global model), the global cost model's N* beside it with its
 //! own interval ([`points_crossover_interval`]); and per target and n_P the fastest configuration.
 
-use super::costs::{CostSamples, FittedCost, PathTiming};
+use super::costs::{points_range, CostSamples, FittedCost, PathTiming};
 use super::fronts::{DetpErrors, MapErrors};
 use super::measured::{measured_star, MeasuredInputs, MeasuredStar, RunTimings};
 use super::method::{Config, Method};
@@ -311,6 +311,7 @@ fn replica_rows(
                             &mut row,
                             "no per-run seconds at ≥ 2 n_P: N* from the global cost model".into(),
                         );
+                        mark_model_range(&mut row, samples);
                     }
                 }
                 if let Crossover::Never(n) = est {
@@ -399,8 +400,29 @@ fn map_row(inp: &Inputs, e: &MapErrors, target: f64) -> CrossRow {
             Crossover::At(x) => (row.n_star, row.n_star_model) = (x, x),
             Crossover::Never(n) => add_reason(&mut row, never_reason(&n)),
         }
+        let samples = inp
+            .costs
+            .iter()
+            .find(|s| row.config.matches(&s.config))
+            .map_or(&[][..], |s| &s.samples[..]);
+        mark_model_range(&mut row, samples);
     }
     row
+}
+
+/// A row whose N* comes from the global cost model alone: the n_P its configuration was timed at
+/// (`samples`, the sweep's), and the N* marked extrapolated where it lies outside them — the model
+/// is a fit over those n_P, so beyond them it is a trend, not a measurement.
+fn mark_model_range(row: &mut CrossRow, samples: &[(f64, f64, f64)]) {
+    let (lo, hi) = points_range(samples);
+    row.measured_points = (lo, hi);
+    if row.n_star.is_finite() && !(lo..=hi).contains(&row.n_star) {
+        row.extrapolated = true;
+        add_reason(
+            row,
+            format!("N* extrapolated: the model's, outside the timed n_P {lo:.0}–{hi:.0}"),
+        );
+    }
 }
 
 /// Path tracing's row at `target`.
@@ -771,6 +793,57 @@ mod tests {
         let best = best_rows(&rows, &[0.05], &[], (1e2, 3e2));
         assert!(best[0].points == 1e2 && !best[0].extrapolated);
         assert!(best[1..].iter().all(|b| b.extrapolated), "{best:?}");
+    }
+
+    /// A row whose N* comes from the global cost model alone (no per-run seconds; a photon map
+    /// with only its replicas' mean MSE) records the n_P its configuration was timed at and is
+    /// marked extrapolated when its N* (≈ 651 here) lies outside them.
+    #[test]
+    fn a_model_only_n_star_outside_the_timed_points_is_marked_extrapolated() {
+        let mut inp = inputs();
+        let rows = crossover_rows(&inp, &[0.05]);
+        let sc = &rows[0];
+        assert!(sc.n_star > 600.0 && sc.n_star < 700.0, "{sc:?}");
+        assert!(
+            !sc.extrapolated && sc.measured_points == (1e2, 1e5),
+            "{sc:?}"
+        );
+        inp.costs[0].samples.retain(|s| s.1 >= 1e4);
+        let map = Config {
+            method: Method::PhotonMap,
+            direct: Some("photons".into()),
+            edge: None,
+            disc_radius: None,
+            radius_rule: None,
+        };
+        let photons = vec![1e4, 1e5, 1e6];
+        inp.maps = vec![MapErrors {
+            config: map.clone(),
+            photons: photons.clone(),
+            mse: vec![photons.iter().map(|n| 50.0 / n).collect()],
+            per_replica: false,
+        }];
+        inp.costs.push(CostSamples {
+            config: map,
+            samples: inp.costs[0].samples.clone(),
+        });
+        let rows = crossover_rows(&inp, &[0.05]);
+        let model_only: Vec<&CrossRow> = rows
+            .iter()
+            .filter(|r| {
+                matches!(r.config.method, Method::SphereCache | Method::PhotonMap)
+                    && r.n_star.is_finite()
+            })
+            .collect();
+        assert_eq!(model_only.len(), 2, "{rows:?}");
+        for r in model_only {
+            assert!(r.n_star < 1e4, "{r:?}");
+            assert_eq!(r.measured_points, (1e4, 1e5));
+            assert!(
+                r.extrapolated && r.reason.contains("N* extrapolated"),
+                "{r:?}"
+            );
+        }
     }
 
     #[test]

@@ -121,10 +121,16 @@ pub fn pooled(runs: &[RunTimings]) -> Vec<CostSamples> {
 
 /// The smallest and largest n_P the runs timed (NaN, NaN without any).
 pub fn measured_points(runs: &[RunTimings]) -> (f64, f64) {
-    let all = runs.iter().flat_map(|r| &r.costs).flat_map(|c| &c.samples);
-    let (lo, hi) = all.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
-        (lo.min(s.1), hi.max(s.1))
-    });
+    points_range(runs.iter().flat_map(|r| &r.costs).flat_map(|c| &c.samples))
+}
+
+/// The smallest and largest n_P among `samples` (NaN, NaN without any).
+pub fn points_range<'a>(samples: impl IntoIterator<Item = &'a (f64, f64, f64)>) -> (f64, f64) {
+    let (lo, hi) = samples
+        .into_iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
+            (lo.min(s.1), hi.max(s.1))
+        });
     if lo <= hi {
         (lo, hi)
     } else {
