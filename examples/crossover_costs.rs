@@ -1,4 +1,4 @@
-//! Issue 27's cost figures, measured at library level before the experiment kinds are wired: per
+//! The crossover's cost figures, measured at library level before the experiment kinds are wired: per
 //! scene, per-point path tracing (seconds per path, rays per path by kind, seconds per ray, the
 //! per-path cv), direct light by NEE (seconds per point), photon tracing (seconds per photon and per
 //! segment, the share of indirect segments), and DETP's seconds over photons × points (disc index

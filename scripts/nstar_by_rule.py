@@ -4,7 +4,7 @@ what the disc radius rules change on one scene ("before": a crossover of the fix
 "after": one of the rules' fronts).
 
 Run from the repository root:
-    python3 scripts/nstar_by_rule.py results/crossover-rules-cornell [results/issue27-crossover-cornell …]
+    python3 scripts/nstar_by_rule.py results/crossover-rules-cornell [results/crossover-cornell …]
 
 For every folder it prints one line per method configuration (method, detp.direct, detp.edge, the
 radius rule: d fixed, κ = edge_radius_factor, or the schedule d·(N/N_ref)^(−β)) and per target:

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Which method when: the output of `raycost crossover` for one scene
-(results/issue27-crossover-SCENE/crossover.csv, with best.csv and, for a frames run, frames.csv
+(results/crossover-SCENE/crossover.csv, with best.csv and, for a frames run, frames.csv
 beside it).
 
 One panel per target relative RMSE: seconds to reach the target at n_P points, 10² … 10⁶, for
@@ -20,7 +20,7 @@ import os
 
 import raycost_plot as rp
 
-NAME = "issue27-crossover-cornell"
+NAME = "crossover-cornell"
 REQUIRED = ["scene", "target", "method", "direct", "edge", "disc_radius", "photons", "seconds_per_point",
             "cost_gamma", "cost_fixed", "cost_per_photon", "cost_per_photon_point", "cost_per_point",
             "n_star", "n_star_lo", "n_star_hi", "reason"]

@@ -8,7 +8,7 @@ engine), ± 95 % CI: DETP with the sphere cache and with the disc index (one cur
 over photon counts; both engines give the same estimate, so they differ in time only) and the photon
 map (one curve per k; with engine photon-map-growing's columns also the photon map whose k grows
 with the photon count), and per-point path tracing over its paths per point K (side table
-NAME.path_tracing.csv, written by the fronts: experiments issue27-fronts-*). Seconds are everything an estimate pays: photon
+NAME.path_tracing.csv, written by the fronts: experiments fronts-*). Seconds are everything an estimate pays: photon
 tracing, the edge remedy, NEE direct light, the build and the engine. The grey steps are the front of best choices: configurations no other is both
 faster and more accurate than. Right: the relative bias (mean error over the points) ± 95 % CI.
 One row of panels per scene (detp.scene), DETP curves per d and edge mode (detp.edge): rows of

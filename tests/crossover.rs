@@ -469,8 +469,8 @@ fn crossover_reads_the_replica_errors_as_the_points_table() {
 }
 
 /// Tables written before the radius rules read as they always did: the crossover of the
-/// hard-cases fronts as committed then (tests/data/before-rules: their points table, no replica
-/// errors; results/ now holds a rerun) and the committed n_P sweep gives, in every column it had,
+/// hard-cases fronts and n_P sweep as committed then (tests/data/before-rules: the fronts' points
+/// table, no replica errors; results/ now holds reruns) gives, in every column it had,
 /// exactly the tables the build before the rules gave (tests/expected/crossover-hard, from 274675a),
 /// but for one later change: a photon-map row without per-replica values (N* from the cost model
 /// alone) now records the n_P its configuration was timed at (`sweep_points_min/max`, NaN before).
@@ -483,7 +483,7 @@ fn crossover_of_committed_tables_is_unchanged_by_the_rules() {
         .args([
             "crossover",
             "tests/data/before-rules/issue27-fronts-hard",
-            "results/issue27-points-hard",
+            "tests/data/before-rules/issue27-points-hard",
             "--targets",
             "0.1,0.05,0.02",
             "--out",

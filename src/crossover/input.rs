@@ -59,20 +59,27 @@ impl Results {
         self.dir.join(format!("{}.{suffix}", self.name))
     }
 
-    /// The main table.
+    /// The main table, its header checked against the columns the metadata records.
     pub fn main(&self) -> Result<Csv, OutputError> {
-        Csv::read(&self.file("csv"))
+        Csv::read(&self.file("csv"), self.declared("main")?.as_deref())
     }
 
-    /// Side table `NAME.TABLE.csv`, or its gzip-compressed `NAME.TABLE.csv.gz`.
+    /// Side table `NAME.TABLE.csv`, or its gzip-compressed `NAME.TABLE.csv.gz`, its header checked
+    /// against the columns the metadata records for `TABLE`.
     pub fn side(&self, table: &str) -> Result<Csv, OutputError> {
         let plain = self.file(&format!("{table}.csv"));
         let gz = self.file(&format!("{table}.csv.gz"));
+        let declared = self.declared(table)?;
         if plain.is_file() || !gz.is_file() {
-            Csv::read(&plain)
+            Csv::read(&plain, declared.as_deref())
         } else {
-            Csv::read(&gz)
+            Csv::read(&gz, declared.as_deref())
         }
+    }
+
+    /// The columns the run's metadata records for `table` (`None` where it declares none).
+    fn declared(&self, table: &str) -> Result<Option<Vec<String>>, OutputError> {
+        Ok(self.meta()?.declared(table))
     }
 
     /// Whether side table `NAME.TABLE.csv` (or `.csv.gz`) is there.
@@ -100,8 +107,9 @@ pub struct Csv {
 }
 
 impl Csv {
-    /// Reads and checks `path` (gzip-decompressed if its name ends in `.gz`).
-    pub fn read(path: &Path) -> Result<Csv, OutputError> {
+    /// Reads and checks `path` (gzip-decompressed if its name ends in `.gz`); with `declared`, its
+    /// header must be exactly those columns.
+    pub fn read(path: &Path, declared: Option<&[String]>) -> Result<Csv, OutputError> {
         let raw =
             std::fs::read(path).map_err(|e| OutputError::new(path, format!("cannot read: {e}")))?;
         let text = if path.extension().is_some_and(|e| e == "gz") {
@@ -113,7 +121,7 @@ impl Csv {
         } else {
             raw
         };
-        let table = check_table(path, text, None, Torn::Refuse)?;
+        let table = check_table(path, text, declared, Torn::Refuse)?;
         Self::parse(path, &table.text)
     }
 
@@ -201,7 +209,20 @@ mod tests {
         let d = tempfile::tempdir().expect("tempdir");
         let text = "point,a,b_1,b_0\n0,1.5,x,NaN\n1,2.5,y,3\n";
         std::fs::write(d.path().join("r.csv"), text).expect("write");
-        std::fs::write(d.path().join("r.meta.toml"), "").expect("write");
+        let mut meta = Meta::begin("test", Default::default());
+        let declared = |names: &[&str]| -> Vec<crate::output::column::ColumnInfo> {
+            names
+                .iter()
+                .map(|&name| crate::output::column::ColumnInfo {
+                    name: name.into(),
+                    class: crate::output::column::Class::Measured,
+                    unit: String::new(),
+                })
+                .collect()
+        };
+        meta.columns
+            .insert("main".into(), declared(&["point", "a", "b_1", "b_0"]));
+        std::fs::write(d.path().join("r.meta.toml"), meta.render()).expect("write");
         let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
         gz.write_all(text.as_bytes()).expect("gzip");
         std::fs::write(d.path().join("r.points.csv.gz"), gz.finish().expect("gzip"))
@@ -222,5 +243,13 @@ mod tests {
             "{e}"
         );
         assert!(Results::find(&d.path().join("nope")).is_err());
+        // A header that is not what the metadata declares is refused, naming the file; a table it
+        // declares nothing for is read on the readback checks alone.
+        meta.columns
+            .insert("main".into(), declared(&["point", "a", "b_0", "b_1"]));
+        std::fs::write(d.path().join("r.meta.toml"), meta.render()).expect("write");
+        let e = r.main().expect_err("header differs from the declaration");
+        assert!(e.to_string().contains("r.csv"), "{e}");
+        assert!(r.side("points").is_ok());
     }
 }

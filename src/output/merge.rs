@@ -656,11 +656,7 @@ fn check_header(t: &Table, reference: &Table) -> Result<(), OutputError> {
 /// be the columns `meta` records for `table`.
 fn read_finished(path: &Path, meta: &Meta, table: &str) -> Result<Table, OutputError> {
     let text = fs::read(path).map_err(|e| err(path, format!("cannot read: {e}")))?;
-    let declared: Option<Vec<String>> = meta
-        .columns
-        .get(table)
-        .map(|c| c.iter().map(|c| c.name.clone()).collect());
-    check_table(path, text, declared.as_deref(), Torn::Refuse)
+    check_table(path, text, meta.declared(table).as_deref(), Torn::Refuse)
 }
 
 /// One shard, read and checked on its own.

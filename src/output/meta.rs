@@ -365,6 +365,15 @@ pub fn changed_input(then: &[InputFile], now: &[InputFile]) -> Option<String> {
 }
 
 impl Meta {
+    /// The column names this metadata records for `table` (`main` or a side table's name), in
+    /// header order; `None` for a table it does not declare (results written before tables were
+    /// declared), which readers then check on their own terms.
+    pub fn declared(&self, table: &str) -> Option<Vec<String>> {
+        self.columns
+            .get(table)
+            .map(|c| c.iter().map(|c| c.name.clone()).collect())
+    }
+
     /// The metadata of a `command` starting now on this machine with this build: the run's own
     /// facts (spec, points, inputs, columns) are filled in by the caller.
     pub fn begin(command: &str, simd: BTreeMap<String, String>) -> Meta {
