@@ -260,7 +260,12 @@ fn crossover_writes_its_tables_and_refuses_what_it_must() {
     // per target and frames row, N_ε from the fronts' configuration at the frames' d.
     let frames = dir.path().join("frames");
     std::fs::create_dir_all(&frames).expect("mkdir");
-    std::fs::copy(fronts.join("fronts.meta.toml"), frames.join("f.meta.toml")).expect("meta");
+    let m = std::fs::read_to_string(fronts.join("fronts.meta.toml")).expect("meta");
+    std::fs::write(
+        frames.join("f.meta.toml"),
+        without_declared(&m, "main", None),
+    )
+    .expect("meta");
     std::fs::write(
         frames.join("f.csv"),
         "point,detp.photons,detp.disc_radius,points_static,points_dynamic,frame0_s,frame_s_mean,full_frame_s_mean,path_tracing_s_per_path_mean,path_tracing_cv_mean\n\
@@ -451,6 +456,13 @@ fn crossover_reads_the_replica_errors_as_the_points_table() {
         text += &(line(r) + "\n");
     }
     std::fs::write(&pt, text).expect("write");
+    let meta = old.join("fronts.meta.toml");
+    let m = std::fs::read_to_string(&meta).expect("meta");
+    std::fs::write(
+        &meta,
+        without_declared(&m, "path_tracing", Some("ref_mean")),
+    )
+    .expect("meta");
     let mut outs = Vec::new();
     for (name, f) in [("a", &fronts), ("b", &small), ("c", &old)] {
         let out = dir.path().join(format!("x-{name}"));
@@ -466,6 +478,20 @@ fn crossover_reads_the_replica_errors_as_the_points_table() {
     }
     let meta = std::fs::read_to_string(outs[1].join("crossover.meta.toml")).expect("meta");
     assert!(meta.contains("fronts.replica_errors.csv"), "{meta}");
+}
+
+/// Metadata text without the `[[columns.TABLE]]` declarations (all of them, or only `column`'s), for
+/// fixtures that write a table of their own beside a copied metadata file.
+fn without_declared(meta: &str, table: &str, column: Option<&str>) -> String {
+    let head = format!("[[columns.{table}]]");
+    meta.split("\n\n")
+        .filter(|block| {
+            let b = block.trim_start();
+            !(b.starts_with(&head)
+                && column.is_none_or(|c| b.contains(&format!("name = \"{c}\"\n"))))
+        })
+        .collect::<Vec<_>>()
+        .join("\n\n")
 }
 
 /// Tables written before the radius rules read as they always did: the crossover of the
