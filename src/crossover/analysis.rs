@@ -693,19 +693,24 @@ mod tests {
         assert!(rows[0].reason.contains("flattens"), "{}", rows[0].reason);
     }
 
+    /// A photon map with photons-only direct light (no d, edge or radius rule).
+    fn photon_map() -> Config {
+        Config {
+            method: Method::PhotonMap,
+            direct: Some("photons".into()),
+            edge: None,
+            disc_radius: None,
+            radius_rule: None,
+        }
+    }
+
     /// A fixed-k photon map whose every replica's error levels off at 20 % (B = 0.04): the mean of
     /// four replicas would be at 10 %, but one estimate never is, so a 10 % target is out of
     /// reach (per-replica values, or only their mean MSE, alike).
     #[test]
     fn a_photon_map_does_not_reach_what_one_replica_does_not() {
         let mut inp = inputs();
-        let config = Config {
-            method: Method::PhotonMap,
-            direct: Some("photons".into()),
-            edge: None,
-            disc_radius: None,
-            radius_rule: None,
-        };
+        let config = photon_map();
         let photons = vec![1e4, 1e5, 1e6];
         for per_replica in [true, false] {
             let series = if per_replica { 4 } else { 1 };
@@ -809,13 +814,7 @@ mod tests {
             "{sc:?}"
         );
         inp.costs[0].samples.retain(|s| s.1 >= 1e4);
-        let map = Config {
-            method: Method::PhotonMap,
-            direct: Some("photons".into()),
-            edge: None,
-            disc_radius: None,
-            radius_rule: None,
-        };
+        let map = photon_map();
         let photons = vec![1e4, 1e5, 1e6];
         inp.maps = vec![MapErrors {
             config: map.clone(),
