@@ -498,8 +498,11 @@ fn without_declared(meta: &str, table: &str, column: Option<&str>) -> String {
 /// hard-cases fronts and n_P sweep as committed then (tests/data/before-rules: the fronts' points
 /// table, no replica errors; results/ now holds reruns) gives, in every column it had,
 /// exactly the tables the build before the rules gave (tests/expected/crossover-hard, from 274675a),
-/// but for one later change: a photon-map row without per-replica values (N* from the cost model
-/// alone) now records the n_P its configuration was timed at (`sweep_points_min/max`, NaN before).
+/// but for two later changes: a photon-map row without per-replica values (N* from the cost model
+/// alone) now records the n_P its configuration was timed at (`sweep_points_min/max`, NaN before);
+/// and the bootstrap's percentile is Python's (rank ⌊q·(n − 1)⌋ instead of ⌊q·n⌋, both ends one
+/// rank of 2 000 lower), so the expected `n_star_model_lo/hi` were updated with it (18 cells, no
+/// other column).
 #[test]
 fn crossover_of_committed_tables_is_unchanged_by_the_rules() {
     let dir = tempfile::tempdir().expect("temp dir");

@@ -323,6 +323,28 @@ class BootstrapBookkeeping(unittest.TestCase):
         self.assertAlmostEqual(iv.categories["none"] + iv.categories["ok"], 1.0)
 
 
+class PercentileShared(unittest.TestCase):
+    """The bootstrap's percentile lives in two languages (raycost_stats.percentile and the Rust
+    stats::percentile that the crossover's bootstrap uses); both are held to the shared cases of
+    data/percentile_cases.txt, which the Rust side reads too."""
+
+    def test_percentile_gives_the_shared_ranks(self):
+        with open(os.path.join(DATA, "percentile_cases.txt")) as f:
+            cases = [line.split() for line in f if not line.startswith("#")]
+        self.assertGreater(len(cases), 100)
+        for n, q, rank in cases:
+            values = [float(v) for v in range(int(n))]
+            self.assertEqual(S.percentile(values, float(q)), float(rank), (n, q))
+
+    def test_the_bootstrap_interval_is_the_percentile_of_its_draws(self):
+        # A statistic whose draws are known: the sampler's single mean, drawn around 0.
+        sampler = S.Parametric([0.0], [1.0], [10])
+        rng = random.Random(7)
+        draws = sorted(sampler.draw(rng)[0][0] for _ in range(999))
+        iv = S.bootstrap(lambda m, _v: m[0], sampler, 999, 7)
+        self.assertEqual((iv.lo, iv.hi), (S.percentile(draws, 0.025), S.percentile(draws, 0.975)))
+
+
 def cost_fit_cases():
     """The shared cases of data/cost_fit_cases.txt: (γ, [(photons, points, seconds)], expected
     [fixed, a, b, c])."""

@@ -71,4 +71,80 @@ mod tests {
             assert!(!k.about().is_empty());
         }
     }
+
+    /// One name, one meaning: wherever kinds declare the same column name, it carries the same
+    /// unit and class. The shapes may differ only as one observation against its estimate (a
+    /// frame's `frame_s` in the frames table, `frame_s_mean`/`_se` over frames in the main table),
+    /// which write different CSV names.
+    #[test]
+    fn a_column_name_means_one_thing_across_kinds_and_tables() {
+        use std::collections::BTreeMap;
+        let mut by: BTreeMap<&str, Vec<(String, &str, crate::output::column::Class)>> =
+            BTreeMap::new();
+        for k in KINDS {
+            for (t, cols) in k.columns() {
+                for c in cols {
+                    by.entry(c.name).or_default().push((
+                        format!("{}.{t}", k.name()),
+                        c.unit,
+                        c.class,
+                    ));
+                }
+            }
+        }
+        let two: Vec<String> = by
+            .iter()
+            .filter(|(_, v)| {
+                v.iter()
+                    .map(|(_, u, c)| (*u, c.as_str()))
+                    .collect::<BTreeSet<_>>()
+                    .len()
+                    > 1
+            })
+            .map(|(n, v)| format!("{n}: {v:?}"))
+            .collect();
+        assert!(
+            two.is_empty(),
+            "names with two meanings:\n{}",
+            two.join("\n")
+        );
+    }
+
+    #[test]
+    fn every_header_change_names_a_column_its_kind_no_longer_writes_and_a_kept_one_it_does() {
+        use crate::output::header_changes::{Change, CHANGES};
+        for c in CHANGES {
+            let kind = find(c.kind).unwrap_or_else(|| panic!("{}: no such kind", c.kind));
+            let names: Vec<String> = kind
+                .columns()
+                .into_iter()
+                .filter(|(t, _)| *t == c.table)
+                .flat_map(|(_, cols)| cols.into_iter().flat_map(|col| col.expand(col.name)))
+                .map(|i| i.name)
+                .collect();
+            assert!(!names.is_empty(), "{}: no table {}", c.kind, c.table);
+            assert!(
+                !names.iter().any(|n| n == c.old),
+                "{}.{}: {} is still written",
+                c.kind,
+                c.table,
+                c.old
+            );
+            match c.change {
+                Change::Renamed(new) => assert!(
+                    names.iter().any(|n| n == new),
+                    "{}.{}: {new} is not written",
+                    c.kind,
+                    c.table
+                ),
+                // A kept parameter column comes from the spec's keys, not the declarations.
+                Change::Duplicate(kept) => assert!(
+                    kept.contains('.') || names.iter().any(|n| n == kept),
+                    "{}.{}: {kept} is not written",
+                    c.kind,
+                    c.table
+                ),
+            }
+        }
+    }
 }

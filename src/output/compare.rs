@@ -20,6 +20,7 @@ use std::io::Read as _;
 use std::path::{Path, PathBuf};
 
 use super::column::{Class, ColumnInfo};
+use super::header_changes;
 use super::meta::Meta;
 use crate::error::OutputError;
 
@@ -162,6 +163,9 @@ pub struct TableComparison {
     pub first: Vec<CellDiff>,
     /// What else is wrong (a missing table, another header, other classes, another row count).
     pub problems: Vec<String>,
+    /// Columns of the first side read under their current name or dropped as duplicates
+    /// ([`super::header_changes`]): reported, not counted.
+    pub mapped: Vec<String>,
     /// The timing columns.
     pub timings: Timings,
 }
@@ -201,6 +205,9 @@ impl TableComparison {
         }
         for p in &self.problems {
             s.push_str(&format!(" | {p}"));
+        }
+        for m in &self.mapped {
+            s.push_str(&format!(" | mapped: {m}"));
         }
         let t = &self.timings;
         if t.columns > 0 {
@@ -255,6 +262,7 @@ impl TableComparison {
             "columns_differ": self.columns_differ,
             "differences": cells(&self.first),
             "problems": self.problems,
+            "mapped": self.mapped,
             "timing": {
                 "columns": t.columns,
                 "with_interval": t.with_interval,
@@ -348,6 +356,7 @@ pub fn compare(
             columns_differ: Vec::new(),
             first: Vec::new(),
             problems: Vec::new(),
+            mapped: Vec::new(),
             timings: Timings {
                 not_counted: not_counted.clone(),
                 ..Timings::default()
@@ -355,15 +364,21 @@ pub fn compare(
         };
         match (old.file(&table), new.file(&table)) {
             (Some(a), Some(b)) => {
-                let classes = old.meta.columns.get(&table).map_or(&[][..], Vec::as_slice);
+                let mut classes = old.meta.columns.get(&table).cloned().unwrap_or_default();
                 let new_classes = new.meta.columns.get(&table).map_or(&[][..], Vec::as_slice);
-                compare_table(
-                    &mut c,
-                    &read_cells(a)?,
-                    &read_cells(b)?,
-                    classes,
-                    new_classes,
-                );
+                let mut cells = read_cells(a)?;
+                if let Some(kind) = old.meta.kind() {
+                    let (mapped, differ) = header_changes::upgrade(
+                        kind,
+                        &table,
+                        &mut cells.header,
+                        &mut cells.rows,
+                        &mut classes,
+                    );
+                    c.mapped = mapped;
+                    c.problems.extend(differ);
+                }
+                compare_table(&mut c, &cells, &read_cells(b)?, &classes, new_classes);
             }
             (None, Some(_)) => c.problems.push(
                 "missing in the result (declared in its metadata or written by the rerun)".into(),
@@ -590,6 +605,7 @@ mod tests {
             columns_differ: Vec::new(),
             first: Vec::new(),
             problems: Vec::new(),
+            mapped: Vec::new(),
             timings: Timings::default(),
         }
     }

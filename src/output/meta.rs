@@ -365,6 +365,16 @@ pub fn changed_input(then: &[InputFile], now: &[InputFile]) -> Option<String> {
 }
 
 impl Meta {
+    /// The run's `experiment.kind`, as the spec it records says (`None` for a crossover's
+    /// metadata, which records no spec).
+    pub fn kind(&self) -> Option<&str> {
+        self.spec
+            .get("base")?
+            .get("experiment")?
+            .get("kind")?
+            .as_str()
+    }
+
     /// The column names this metadata records for `table` (`main` or a side table's name), in
     /// header order; `None` for a table it does not declare (results written before tables were
     /// declared), which readers then check on their own terms.

@@ -11,6 +11,7 @@ pub mod column;
 pub mod compare;
 pub mod csv;
 pub mod folder;
+pub mod header_changes;
 pub mod location;
 pub mod merge;
 pub mod meta;

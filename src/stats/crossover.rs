@@ -283,7 +283,7 @@ pub fn bootstrap_with(
         })
         .collect();
     values.sort_by(f64::total_cmp);
-    let at = |q: f64| values[((q * draws as f64).floor() as usize).min(draws - 1)];
+    let at = |q: f64| super::percentile(&values, q);
     Interval {
         estimate,
         lo: at(0.5 - 0.5 * level),

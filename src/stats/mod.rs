@@ -16,6 +16,19 @@ pub use histogram::Histogram;
 pub use mean::{ClusteredMean, Estimate};
 pub use verdict::{Theory, Tone, Verdict};
 
+/// The q-quantile of `sorted` (ascending, not empty) as every bootstrap interval in raycost takes
+/// it, in Rust and in `scripts/raycost_stats.py` alike: the value at 0-based rank ⌊q·(n − 1)⌋,
+/// computed in double (numpy's "lower" percentile). At the draw counts used (2 000, 4 000) and
+/// q = 0.025, 0.975 it is also the inverse of the empirical CDF. Both sides are held to the shared
+/// cases of `scripts/tests/data/percentile_cases.txt`.
+///
+/// # Panics
+/// If `sorted` is empty or q is outside [0, 1].
+pub fn percentile(sorted: &[f64], q: f64) -> f64 {
+    assert!(!sorted.is_empty() && (0.0..=1.0).contains(&q));
+    sorted[((q * (sorted.len() - 1) as f64).floor() as usize).min(sorted.len() - 1)]
+}
+
 /// Two-sided Student-t quantile with `dof` degrees of freedom (normal beyond 10⁴; NaN for 0).
 pub fn t_for_level(level: f64, dof: u64) -> f64 {
     use statrs::distribution::{ContinuousCDF, StudentsT};
@@ -38,6 +51,26 @@ pub fn z_for_level(level: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    /// The percentile convention Python's bootstrap uses too: the shared cases (written by
+    /// `scripts/tests/data/make_percentile_cases.py`, checked by `scripts/tests/test_stats.py`).
+    #[test]
+    fn percentile_gives_the_ranks_python_gives() {
+        let text = include_str!("../../scripts/tests/data/percentile_cases.txt");
+        let mut cases = 0;
+        for line in text.lines().filter(|l| !l.starts_with('#')) {
+            let w: Vec<&str> = line.split_whitespace().collect();
+            let (n, q, rank): (usize, f64, f64) = (
+                w[0].parse().expect("n"),
+                w[1].parse().expect("q"),
+                w[2].parse().expect("rank"),
+            );
+            let values: Vec<f64> = (0..n).map(|i| i as f64).collect();
+            assert_eq!(super::percentile(&values, q), rank, "n {n}, q {q}");
+            cases += 1;
+        }
+        assert!(cases > 100, "{cases} cases");
+    }
+
     #[test]
     fn t_quantiles_match_tables() {
         assert!((super::t_for_level(0.99, 3) - 5.8409).abs() < 1e-3);

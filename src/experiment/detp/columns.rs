@@ -218,9 +218,9 @@ pub const POINTS_COVERED: Column = Column::value(
     Class::Measured,
     "point_source = \"surface\": lattice points skipped because other geometry covers them (a surface within 10⁻⁶ of the scene's size along the normal, or every probe over the hemisphere meets the back of a surface: inside a solid)",
 );
-/// Speed.
-pub const RAYS_PER_S: Column = Column::value(
-    "rays_per_s",
+/// Speed (segments, not rays: grid kinds' `rays_per_s` counts rays).
+pub const SEGMENTS_PER_S: Column = Column::value(
+    "segments_per_s",
     "segments/s",
     Class::Timing,
     "segments handled per second of engine time",
@@ -291,7 +291,7 @@ pub const MAIN: Table<DetpConfig, DetpMeasured> = Table::of(&[
     }),
     col(&IRRADIANCE_RMSE, |_, m| m.irradiance_rmse.into()),
     col(&IRRADIANCE_BIAS, |_, m| m.irradiance_bias.into()),
-    col(&RAYS_PER_S, |_, m| m.rays_per_s.into()),
+    col(&SEGMENTS_PER_S, |_, m| m.segments_per_s.into()),
 ]);
 
 /// Sample index.

@@ -135,7 +135,7 @@ pub(crate) struct Law {
 pub(crate) trait Engine: Send {
     /// Runs on one replica.
     fn run(&mut self, cfg: &DetpConfig, rays: &RaySet, pts: &PointSet) -> Output;
-    /// Engine seconds over all replicas so far (for `rays_per_s`).
+    /// Engine seconds over all replicas so far (for `segments_per_s`).
     fn seconds(&self) -> f64;
     /// What it measured over all replicas.
     fn measured(&self, p: &Pooled) -> EngineMeasured;

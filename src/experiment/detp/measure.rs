@@ -66,7 +66,7 @@ pub struct DetpMeasured {
     /// DETP's mean error against it.
     pub irradiance_bias: Estimate,
     /// Segments per second of engine time.
-    pub rays_per_s: f64,
+    pub segments_per_s: f64,
 }
 
 /// The engines against the path-traced reference.
@@ -543,7 +543,7 @@ pub(super) fn measure(
         exact_mean,
         irradiance_rmse: engines::per_replica(&errs.iter().map(|e| e.0).collect::<Vec<_>>()),
         irradiance_bias: engines::per_replica(&errs.iter().map(|e| e.1).collect::<Vec<_>>()),
-        rays_per_s: r.segments as f64 / engine_s.max(1e-12),
+        segments_per_s: r.segments as f64 / engine_s.max(1e-12),
     };
     (measured, levels, rows, replica_errors, warnings)
 }

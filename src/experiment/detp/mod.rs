@@ -538,7 +538,7 @@ impl Kind for DetpKind {
             checked: measured.bf_checked.max(measured.points as u64 * p.replicas),
         }];
         let rate = Rate {
-            per_s: measured.rays_per_s,
+            per_s: measured.segments_per_s,
             unit: "segments",
         };
         Ok(Output {

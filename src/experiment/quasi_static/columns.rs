@@ -34,8 +34,6 @@ const fn theory(name: &'static str, unit: &'static str, doc: &'static str) -> Co
 
 /// Frames.
 pub const FRAMES: Column = parameter("frames", "frames", "frames run (frame 0 is a full trace)");
-/// Photons.
-pub const PHOTONS: Column = parameter("photons", "photons", "photons traced per frame");
 /// Segments.
 pub const SEGMENTS: Column = measured(
     "segments",
@@ -420,17 +418,11 @@ pub const WARM_S: Column = Column::timed_estimate(
     "s",
     "the engine's seconds on every segment for the first object's points, timed warm dynamic.warm_repeats times per replica, the engines interleaved (one cluster per replica)",
 );
-/// Error against a reference.
-pub const IRRADIANCE_RMSE: Column = measured(
-    "irradiance_rmse",
+/// Error against a reference, relative (detp's `irradiance_rmse` is in W/m²).
+pub const IRRADIANCE_REL_RMSE: Column = measured(
+    "irradiance_rel_rmse",
     "1",
     "relative RMSE of the last frame against a run of dynamic.reference_photons photons (includes the reference's own noise)",
-);
-/// Reference photons.
-pub const REFERENCE_PHOTONS: Column = parameter(
-    "reference_photons",
-    "photons",
-    "photons of the reference run",
 );
 /// Reference seconds.
 pub const REFERENCE_S: Column = timing("reference_s", "s", "seconds of the reference run");
@@ -528,7 +520,6 @@ fn engines(costs: (f64, f64)) -> Cell {
 pub const MAIN: Table<QuasiStaticConfig, QsMeasured> = Table {
     entries: &[
         col(&FRAMES, |p, _| u64::from(p.frames).into()),
-        col(&PHOTONS, |p, _| p.detp.photons.into()),
         col(&SEGMENTS, |_, m| m.segments.into()),
         col(&POINTS_STATIC, |_, m| m.points_static.into()),
         col(&POINTS_DYNAMIC, |_, m| m.points_dynamic.into()),
@@ -600,8 +591,7 @@ pub const MAIN: Table<QuasiStaticConfig, QsMeasured> = Table {
             ]),
             None => Cell::Absent,
         }),
-        col(&IRRADIANCE_RMSE, |_, m| m.reference.map(|r| r.0).into()),
-        col(&REFERENCE_PHOTONS, |_, m| m.reference.map(|r| r.2).into()),
+        col(&IRRADIANCE_REL_RMSE, |_, m| m.reference.map(|r| r.0).into()),
         col(&REFERENCE_S, |_, m| m.reference.map(|r| r.1).into()),
         col(&PATH_TRACING_POINTS, |_, m| {
             m.path_tracing.map(|t| t.points).into()

@@ -140,8 +140,9 @@ pub struct QsMeasured {
     /// Warm seconds of each engine (sphere cache, disc index) on every segment for the first
     /// object: one cluster per replica (the mean of its rounds), where timed.
     pub warm: Option<[Estimate; 2]>,
-    /// Against a reference run: (relative RMSE, seconds, photons), means over replicas.
-    pub reference: Option<(f64, f64, u64)>,
+    /// Against a reference run (of `dynamic.reference_photons` photons, a parameter column
+    /// already): (relative RMSE, seconds), means over replicas.
+    pub reference: Option<(f64, f64)>,
     /// Per-point path tracing over the traced frames, where it ran.
     pub path_tracing: Option<PathTracingMeasured>,
 }
@@ -275,7 +276,7 @@ pub(super) fn measure(
                     .sum::<f64>()
                     / extras.len() as f64
             };
-            (of(0), of(1), cfg.reference_photons.unwrap_or(0))
+            (of(0), of(1))
         }),
         path_tracing: pt::pool(extras),
     };

@@ -22,7 +22,7 @@
 //!
 //! Refused: the sphere cache (`detp.engine` other than "disc-index": it subdivides a sphere when it
 //! holds `detp.threshold` rays, a decision on all the photons), the §4.1 predictor (it times a
-//! fraction of all photons) and the reference run (`irradiance_rmse` is not a sum).
+//! fraction of all photons) and the reference run (`irradiance_rel_rmse` is not a sum).
 
 use serde::{Deserialize, Serialize};
 
@@ -244,7 +244,7 @@ pub fn refusal(cfg: &QuasiStaticConfig) -> Option<String> {
     } else if cfg.predict.is_some() {
         "dynamic.predict times the engines on a fraction of all the photons, which no photon shard holds".into()
     } else if cfg.reference_photons.is_some() {
-        "dynamic.reference_photons: irradiance_rmse compares the whole run's irradiance with a reference, which is not a sum over photon shards; run the reference unsplit".into()
+        "dynamic.reference_photons: irradiance_rel_rmse compares the whole run's irradiance with a reference, which is not a sum over photon shards; run the reference unsplit".into()
     } else if cfg.path_tracing() {
         "detp.engines has \"path-tracing\": it path-traces each replica's checked frames in the posed scene, which a merge of photon shards does not hold; run it unsplit".into()
     } else {

@@ -44,7 +44,7 @@ crate::spec_table! {
         points_frame: Option<u64> = {absent "the last frame"} read opt_count_or_zero,
             "integer", "", "0 … frames − 1";
         /// Photons of a reference full recalculation of the last frame (another seed); the run's
-        /// error against it is `irradiance_rmse`.
+        /// error against it is `irradiance_rel_rmse`.
         reference_photons: Option<u64> = {absent "no reference"} read opt_count,
             "integer", "photons", "≥ 1";
         /// The §4.1 predictor: the fraction of the photons whose segments predict each engine's
