@@ -8,7 +8,7 @@
 
 use super::analysis::CrossRow;
 use super::costs::run_timings;
-use super::input::Csv;
+use super::input::{keys, Csv};
 use super::measured::{crossing, seconds_at, Form, Found};
 use super::method::{Config, Method};
 use crate::error::OutputError;
@@ -31,7 +31,7 @@ impl HeadToHead {
     pub fn read(main: &Csv) -> Result<HeadToHead, OutputError> {
         let run = run_timings(main)?;
         let paths = main
-            .numbers("detp.path_samples", "path tracing's paths per point")?
+            .param(keys::PATH_SAMPLES)?
             .into_iter()
             .next()
             .ok_or_else(|| OutputError::new(&main.path, "has no rows"))?;

@@ -12,10 +12,12 @@
 //! paper's method), a photon map `trace_s + direct_s + build_{e}_s + cost_{e}_s`.
 
 use super::fronts::settings;
-use super::input::Csv;
+use super::input::{keys, Csv};
 use super::measured::RunTimings;
 use super::method::{Config, Method};
 use crate::error::OutputError;
+use crate::experiment::detp::columns::{BUILD_S, COST_S, DIRECT_S, EDGE_S, POINTS, TRACE_S};
+use crate::experiment::detp::estimators::path_tracing::PATH_TRACING_S_PER_PATH;
 use crate::stats::fit::CostModel;
 
 /// γ's grid: 0, 0.05, …, 1.
@@ -54,24 +56,20 @@ impl CostSamples {
 
 /// The samples of every engine the table has columns for, per configuration.
 pub fn cost_samples(main: &Csv) -> Result<Vec<CostSamples>, OutputError> {
-    let why = "seconds per replica of each method";
-    let reps = main.numbers("detp.replicas", why)?;
-    let photons = main.numbers("detp.photons", why)?;
-    let points = main.numbers("points", why)?;
-    let trace = main.numbers("trace_s", why)?;
-    let edge = main.numbers("edge_s", why)?;
-    let direct = main.numbers("direct_s", why)?;
+    let reps = main.param(keys::REPLICAS)?;
+    let photons = main.param(keys::PHOTONS)?;
+    let points = main.value(&POINTS)?;
+    let trace = main.value(&TRACE_S)?;
+    let edge = main.value(&EDGE_S)?;
+    let direct = main.value(&DIRECT_S)?;
     let settings = settings(main)?;
     let mut out: Vec<CostSamples> = Vec::new();
     for method in Method::DETP.into_iter().chain(Method::MAPS) {
-        let (b, c) = (
-            format!("build_{}_s", method.member()),
-            format!("cost_{}_s", method.member()),
-        );
-        if !main.has(&c) {
+        if !main.has_member(&COST_S, method.member()) {
             continue;
         }
-        let (build, cost) = (main.numbers(&b, why)?, main.numbers(&c, why)?);
+        let build = main.member(&BUILD_S, method.member())?;
+        let cost = main.member(&COST_S, method.member())?;
         let detp = Method::DETP.contains(&method);
         for (i, set) in settings.iter().enumerate() {
             let once = trace[i] + direct[i] + build[i] + if detp { edge[i] } else { 0.0 };
@@ -98,9 +96,8 @@ pub fn cost_samples(main: &Csv) -> Result<Vec<CostSamples>, OutputError> {
 /// One run's timings: its seconds per configuration and path tracing's seconds per path on each
 /// row (n_P, seconds per path; each row times its own path tracing).
 pub fn run_timings(main: &Csv) -> Result<RunTimings, OutputError> {
-    let why = "path tracing's seconds per path on each row";
-    let points = main.numbers("points", why)?;
-    let spp = main.numbers("path_tracing_s_per_path", why)?;
+    let points = main.value(&POINTS)?;
+    let spp = main.value(&PATH_TRACING_S_PER_PATH)?;
     Ok(RunTimings {
         costs: cost_samples(main)?,
         path: points.into_iter().zip(spp).collect(),
@@ -156,7 +153,7 @@ pub fn path_timing(mains: &[Csv]) -> Result<PathTiming, OutputError> {
     let mut v: Vec<f64> = Vec::new();
     for main in mains {
         v.extend(
-            main.numbers("path_tracing_s_per_path", "path tracing's seconds per path")?
+            main.value(&PATH_TRACING_S_PER_PATH)?
                 .into_iter()
                 .filter(|x| x.is_finite() && *x > 0.0),
         );

@@ -11,8 +11,13 @@
 //! cv and seconds per path the frames run measured in the moving scene.
 
 use super::fronts::DetpErrors;
-use super::input::Csv;
+use super::input::{keys, Csv};
 use crate::error::OutputError;
+use crate::experiment::quasi_static::columns::{
+    FRAME0_S, FRAME_S, FULL_FRAME_S, PATH_TRACING_CV, PATH_TRACING_S_PER_PATH, POINTS_DYNAMIC,
+    POINTS_STATIC,
+};
+use crate::output::column::POINT;
 use crate::stats::crossover::{frames_crossover, Crossover, PathTracingCost};
 use crate::stats::fit::{CostModel, ErrorFit};
 
@@ -41,17 +46,29 @@ pub struct FramesInput {
 
 /// Reads the frames table's rows (every column needed, or an error naming the missing one).
 pub fn read_frames(main: &Csv) -> Result<Vec<FramesInput>, OutputError> {
-    let why = "the frames analysis (kind quasi-static with engine path-tracing)";
-    let n = |c: &str| main.numbers(c, why);
-    let (point, photons) = (n("point")?, n("detp.photons")?);
-    let (st, dy) = (n("points_static")?, n("points_dynamic")?);
-    let (first, frame, full) = (n("frame0_s")?, n("frame_s_mean")?, n("full_frame_s_mean")?);
-    let (spp, cv) = (
-        n("path_tracing_s_per_path_mean")?,
-        n("path_tracing_cv_mean")?,
+    frames_columns(main).map_err(|mut e| {
+        e.message.push_str(
+            " (the frames analysis reads a run of kind quasi-static with engine path-tracing)",
+        );
+        e
+    })
+}
+
+/// [`read_frames`] without the context its errors get.
+fn frames_columns(main: &Csv) -> Result<Vec<FramesInput>, OutputError> {
+    let (point, photons) = (main.value(&POINT)?, main.param(keys::PHOTONS)?);
+    let (st, dy) = (main.value(&POINTS_STATIC)?, main.value(&POINTS_DYNAMIC)?);
+    let (first, frame, full) = (
+        main.value(&FRAME0_S)?,
+        main.mean(&FRAME_S)?,
+        main.mean(&FULL_FRAME_S)?,
     );
-    let d = if main.has("detp.disc_radius") {
-        n("detp.disc_radius")?
+    let (spp, cv) = (
+        main.mean(&PATH_TRACING_S_PER_PATH)?,
+        main.mean(&PATH_TRACING_CV)?,
+    );
+    let d = if main.has_param(keys::DISC_RADIUS) {
+        main.param(keys::DISC_RADIUS)?
     } else {
         vec![f64::NAN; point.len()]
     };

@@ -13,11 +13,21 @@
 
 use std::collections::BTreeMap;
 
-use super::input::Csv;
+use super::input::{keys, Csv};
 use super::method::{Config, Method, RadiusRule};
 use crate::error::OutputError;
+use crate::experiment::detp::columns::{
+    POINT_BASELINE_E, POINT_BASELINE_SE, POINT_IRRADIANCE_REPLICA, POINT_PATH_TRACING_E,
+};
 pub use crate::experiment::detp::engines::relative_mse;
-use crate::experiment::detp::replica_errors::DETP;
+use crate::experiment::detp::estimators::path_tracing::{
+    PT_PATHS, PT_REF_MEAN, PT_REF_MSE, PT_REPLICA,
+};
+use crate::experiment::detp::estimators::photon_map::PHOTON_MAP_REPLICA;
+use crate::experiment::detp::estimators::photon_map_growing::PHOTON_MAP_GROWING_REPLICA;
+use crate::experiment::detp::replica_errors::{DETP, ESTIMATOR, RELATIVE_MSE};
+use crate::output::column::Column;
+use crate::output::column::POINT;
 use crate::stats::crossover::PathTracingCost;
 
 /// What the fronts judged at each sweep point: per estimator (`detp` or a photon map's column
@@ -36,9 +46,8 @@ pub struct Judged {
 impl Judged {
     /// From `NAME.replica_errors.csv`.
     pub fn from_table(t: &Csv) -> Result<Judged, OutputError> {
-        let why = "each estimator's relative MSE per replica";
-        let (point, replica) = (t.numbers("point", why)?, t.numbers("replica", why)?);
-        let (estimator, mse) = (t.texts("estimator", why)?, t.numbers("relative_mse", why)?);
+        let (point, replica) = (t.value(&POINT)?, t.value(&PT_REPLICA)?);
+        let (estimator, mse) = (t.text(&ESTIMATOR)?, t.value(&RELATIVE_MSE)?);
         let mut j = Judged {
             path: t.path.clone(),
             ..Judged::default()
@@ -70,42 +79,42 @@ impl Judged {
     /// `irradiance_replica_{r}` and each photon map's `{map}_replica_{r}` (or its mean and SE)
     /// against `reference_e`, `reference_se` at every sweep point.
     pub fn from_points(points: &Csv, replicas: f64) -> Result<Judged, OutputError> {
-        let reps = points.family("irradiance_replica_");
+        let reps = points.family(&POINT_IRRADIANCE_REPLICA.member(""));
         if reps.len() < 2 {
             return Err(OutputError::new(
                 &points.path,
                 "has fewer than 2 irradiance_replica_{r} columns: the crossover's bootstrap needs detp.replicas ≥ 2 in the fronts",
             ));
         }
-        let why = "the truth the estimators are judged against: engine reference";
         let (refe, refse) = (
-            points.numbers("reference_e", why)?,
-            points.numbers("reference_se", why)?,
+            points.member(&POINT_BASELINE_E, "reference")?,
+            points.member(&POINT_BASELINE_SE, "reference")?,
         );
-        let values = |family: &[(u64, String)], why: &str| {
-            family
+        // A replica family's members (`irradiance_replica_{r}`: r = 0, 1, …).
+        let values = |c: &Column| {
+            points
+                .family(&c.member(""))
                 .iter()
-                .map(|(_, c)| points.numbers(c, why))
+                .map(|(r, _)| points.member(c, &r.to_string()))
                 .collect::<Result<Vec<_>, _>>()
         };
-        let detp = values(&reps, "DETP's value per replica")?;
+        let detp = values(&POINT_IRRADIANCE_REPLICA)?;
         let mut maps = Vec::new();
         for method in Method::MAPS {
             let member = method.member();
-            if !points.has(&format!("{member}_e")) {
+            if !points.has_member(&POINT_BASELINE_E, member) {
                 continue;
             }
-            let reps = values(
-                &points.family(&format!("{member}_replica_")),
-                "the photon map's value per replica",
-            )?;
+            let reps = values(match method {
+                Method::PhotonMapGrowing => &PHOTON_MAP_GROWING_REPLICA,
+                _ => &PHOTON_MAP_REPLICA,
+            })?;
             let mean_se = if reps.len() >= 2 {
                 None
             } else {
-                let why = "the photon map's mean over replicas and its SE";
                 Some((
-                    points.numbers(&format!("{member}_e"), why)?,
-                    points.numbers(&format!("{member}_se"), why)?,
+                    points.member(&POINT_BASELINE_E, member)?,
+                    points.member(&POINT_BASELINE_SE, member)?,
                 ))
             };
             maps.push((member.to_string(), reps, mean_se));
@@ -189,7 +198,7 @@ pub fn mean_replica_mse(mean: &[f64], se: &[f64], replicas: f64, refr: &[(f64, f
 
 /// Rows of the points table per sweep point.
 pub fn rows_by_point(points: &Csv) -> Result<BTreeMap<u64, Vec<usize>>, OutputError> {
-    let p = points.numbers("point", "the sweep point of each sample")?;
+    let p = points.value(&POINT)?;
     let mut by: BTreeMap<u64, Vec<usize>> = BTreeMap::new();
     for (i, &x) in p.iter().enumerate() {
         by.entry(x as u64).or_default().push(i);
@@ -211,22 +220,21 @@ pub struct Setting {
 }
 
 /// The radius rules' parameter columns, read where the table has them (see [`RadiusRule::read`]).
-pub const RULE_COLUMNS: [&str; 3] = [
-    "detp.edge_radius_factor",
-    "detp.radius_schedule_photons",
-    "detp.radius_schedule_exponent",
+pub const RULE_KEYS: [super::input::Key; 3] = [
+    keys::EDGE_RADIUS_FACTOR,
+    keys::RADIUS_SCHEDULE_PHOTONS,
+    keys::RADIUS_SCHEDULE_EXPONENT,
 ];
 
 /// The main table's `detp.direct`, `detp.edge`, `detp.disc_radius` and radius rule of each row.
 pub fn settings(main: &Csv) -> Result<Vec<Setting>, OutputError> {
-    let why = "the configuration of each row";
-    let direct = main.texts("detp.direct", why)?;
-    let edge = main.texts("detp.edge", why)?;
-    let d = main.numbers("detp.disc_radius", why)?;
+    let direct = main.param_texts(keys::DIRECT)?;
+    let edge = main.param_texts(keys::EDGE)?;
+    let d = main.param(keys::DISC_RADIUS)?;
     let mut rule = Vec::new();
-    for c in RULE_COLUMNS {
-        rule.push(match main.has(c) {
-            true => main.numbers(c, why)?,
+    for k in RULE_KEYS {
+        rule.push(match main.has_param(k) {
+            true => main.param(k)?,
             false => vec![f64::NAN; main.rows.len()],
         });
     }
@@ -243,8 +251,8 @@ pub fn settings(main: &Csv) -> Result<Vec<Setting>, OutputError> {
 
 /// Per DETP configuration, its replicas' relative MSE at each photon count.
 pub fn detp_errors(main: &Csv, judged: &Judged) -> Result<Vec<DetpErrors>, OutputError> {
-    let sweep = main.numbers("point", "the sweep point")?;
-    let photons = main.numbers("detp.photons", "the photon count of each row")?;
+    let sweep = main.value(&POINT)?;
+    let photons = main.param(keys::PHOTONS)?;
     let mut out: Vec<DetpErrors> = Vec::new();
     for (i, set) in settings(main)?.into_iter().enumerate() {
         let mse = judged.at(sweep[i], DETP)?.clone();
@@ -290,8 +298,8 @@ fn sort_by_photons(photons: &mut Vec<f64>, mse: &mut [Vec<f64>]) {
 /// (or their mean: see [`MapErrors`]), from the rows at the first (edge, d) of that direct in the
 /// table (a photon map does not depend on either).
 pub fn map_errors(main: &Csv, judged: &Judged) -> Result<Vec<MapErrors>, OutputError> {
-    let sweep = main.numbers("point", "the sweep point")?;
-    let photons = main.numbers("detp.photons", "the photon count of each row")?;
+    let sweep = main.value(&POINT)?;
+    let photons = main.param(keys::PHOTONS)?;
     let settings = settings(main)?;
     let mut out = Vec::new();
     for method in Method::MAPS {
@@ -339,14 +347,13 @@ pub fn map_errors(main: &Csv, judged: &Judged) -> Result<Vec<MapErrors>, OutputE
 /// `path_tracing_e_{K}` (the same sum in the same order). Returns (sweep point used, cv² per
 /// replica).
 pub fn path_tracing_cv2(side: &Csv, points: Option<&Csv>) -> Result<(u64, Vec<f64>), OutputError> {
-    let why = "path tracing's errors per replica and checkpoint";
-    let (point, replica) = (side.numbers("point", why)?, side.numbers("replica", why)?);
-    let (paths, mse) = (side.numbers("paths", why)?, side.numbers("ref_mse", why)?);
+    let (point, replica) = (side.value(&POINT)?, side.value(&PT_REPLICA)?);
+    let (paths, mse) = (side.value(&PT_PATHS)?, side.value(&PT_REF_MSE)?);
     let Some(first) = point.iter().copied().map(|p| p as u64).min() else {
         return Err(OutputError::new(&side.path, "has no rows"));
     };
-    let truth: Vec<f64> = match (side.has("ref_mean"), points) {
-        (true, _) => side.numbers("ref_mean", why)?,
+    let truth: Vec<f64> = match (side.has_column(&PT_REF_MEAN), points) {
+        (true, _) => side.value(&PT_REF_MEAN)?,
         (false, Some(points)) => vec![points_truth(points, first)?; point.len()],
         (false, None) => {
             return Err(OutputError::new(
@@ -375,10 +382,10 @@ fn points_truth(points: &Csv, first: u64) -> Result<f64, OutputError> {
     let at = rows.get(&first).ok_or_else(|| {
         OutputError::new(&points.path, format!("has no rows of sweep point {first}"))
     })?;
-    let refe = points.numbers("reference_e", "the truth path tracing is judged against")?;
-    let ran: Vec<usize> = match points.family("path_tracing_e_").last() {
-        Some((_, col)) => {
-            let e = points.numbers(col, "path tracing's estimate per point")?;
+    let refe = points.member(&POINT_BASELINE_E, "reference")?;
+    let ran: Vec<usize> = match points.family(&POINT_PATH_TRACING_E.member("")).last() {
+        Some((k, _)) => {
+            let e = points.member(&POINT_PATH_TRACING_E, &k.to_string())?;
             at.iter().copied().filter(|&k| e[k].is_finite()).collect()
         }
         None => at.clone(),

@@ -145,11 +145,7 @@ impl Source {
             let t = self.side("replica_errors")?;
             return Ok((fronts::Judged::from_table(&t)?, None));
         }
-        let replicas = first_number(
-            main,
-            "detp.replicas",
-            "the photon maps' spread over replicas",
-        )?;
+        let replicas = first(main, main.param(input::keys::REPLICAS)?)?;
         let points = self.side("points")?;
         Ok((
             fronts::Judged::from_points(&points, replicas)?,
@@ -195,7 +191,7 @@ impl Source {
 
 /// The scene's name: the fronts' `detp.scene` file stem, else the run's name.
 fn scene_name(main: &Csv, run: &str) -> String {
-    main.texts("detp.scene", "")
+    main.param_texts(input::keys::SCENE)
         .ok()
         .and_then(|v| v.into_iter().next())
         .and_then(|s| {
@@ -207,9 +203,9 @@ fn scene_name(main: &Csv, run: &str) -> String {
         .unwrap_or_else(|| run.to_string())
 }
 
-/// The first row's value of `column`, as a number.
-fn first_number(t: &Csv, column: &str, why: &str) -> Result<f64, OutputError> {
-    t.numbers(column, why)?
+/// The first row's value of a column `t` was read from.
+fn first(t: &Csv, column: Vec<f64>) -> Result<f64, OutputError> {
+    column
         .into_iter()
         .next()
         .ok_or_else(|| OutputError::new(&t.path, "has no rows"))
@@ -311,7 +307,7 @@ fn compute(o: &Options) -> Result<Outputs, OutputError> {
     let main = fronts.main()?;
     let (judged, points) = fronts.judged(&main)?;
     let pt_side = fronts.side("path_tracing")?;
-    let seed = first_number(&main, "experiment.seed", "the bootstrap's seed")? as u64;
+    let seed = first(&main, main.param(input::keys::SEED)?)? as u64;
     let scene = scene_name(&main, &fronts.results.name);
     let mut detp = fronts::detp_errors(&main, &judged)?;
     add_fronts_runs(&mut detp, &mut more_fronts)?;
@@ -348,7 +344,10 @@ fn compute(o: &Options) -> Result<Outputs, OutputError> {
         None => None,
     };
     // The fronts' own point count joins the grid: "at the points I measured, which is fastest?"
-    let fronts_points = first_number(&main, "points", "the fronts' number of points")?;
+    let fronts_points = first(
+        &main,
+        main.value(&crate::experiment::detp::columns::POINTS)?,
+    )?;
     let best = analysis::best_rows(
         &rows,
         &o.targets,
