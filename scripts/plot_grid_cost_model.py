@@ -2,17 +2,17 @@
 """The query-time model t = N_I·T_I + N_S·T_S against the timed query (experiment grid-cost-model).
 
 x = cell width a. Left: measured time_per_ray_s against time_model_s (theory counts × the
-microbenchmarked T_I, T_S) and time_counts_model_s (measured counts × T_I, T_S), and the least-squares
-fit time_per_ray_s ≈ n_i_mb_mean·T_I + n_s_mean·T_S; the argmin of the measured time and of each model
-are marked. The fitted T_I, T_S are printed beside the microbenchmarked t_i_s, t_s_s.
+microbenchmarked T_I, T_S) and time_counts_model_s (measured counts × T_I, T_S), and the fit
+time_per_ray_s ≈ n_i_mb_mean·T_I + n_s_mean·T_S (raycost_stats.fit_costs: non-negative least squares on
+relative residuals, the one cost fit raycost has, held equal to the Rust side's on shared cases); the
+argmin of the measured time and of each model are marked. The fitted T_I, T_S are printed beside the microbenchmarked t_i_s, t_s_s.
 Right: the measured counts E[N_I] (mailbox) and E[N_S] against their theory, which drive the model.
 """
 
 import math
 
-import numpy as np
-
 import raycost_plot as rp
+import raycost_stats as S
 
 NAME = "grid-cost-model"
 REQUIRED = ["grid.cell_width", "time_per_ray_s", "time_model_s", "time_counts_model_s",
@@ -25,14 +25,17 @@ def argmin(xs, ys):
 
 
 def fit_costs(rows):
-    """Least squares of time_per_ray_s ≈ N_I·T_I + N_S·T_S (no intercept). Returns (T_I, T_S)."""
-    a = np.array([[r["n_i_mb_mean"], r["n_s_mean"]] for r in rows], dtype=float)
-    b = np.array([r["time_per_ray_s"] for r in rows], dtype=float)
-    ok = np.isfinite(a).all(axis=1) & np.isfinite(b)
-    if ok.sum() < 2:
+    """time_per_ray_s ≈ N_I·T_I + N_S·T_S (no intercept) by the shared cost fit. Returns (T_I, T_S)."""
+    ok = [r for r in rows
+          if all(math.isfinite(r[c]) for c in ("n_i_mb_mean", "n_s_mean", "time_per_ray_s"))
+          and r["time_per_ray_s"] > 0]
+    if len(ok) < 2:
         return math.nan, math.nan
-    sol, *_ = np.linalg.lstsq(a[ok], b[ok], rcond=None)
-    return float(sol[0]), float(sol[1])
+    fit = S.fit_costs([[r["n_i_mb_mean"] for r in ok], [r["n_s_mean"] for r in ok]],
+                      [r["time_per_ray_s"] for r in ok])
+    if fit is None:
+        return math.nan, math.nan
+    return fit[0][0], fit[0][1]
 
 
 def plot(args):
