@@ -113,6 +113,7 @@ fn reproduce(a: crate::cli::ReproduceArgs) -> crate::error::Result<()> {
         threads,
         force: a.force,
         judge_timings: a.timings == crate::cli::Timings::Judge,
+        check_only: a.check,
     })?;
     let text = if a.json {
         json_text(&report.json())

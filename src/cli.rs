@@ -203,6 +203,11 @@ pub struct ReproduceArgs {
     /// a run's standard errors cover its replicas, not the spread between separate runs).
     #[arg(long, value_enum, default_value_t = Timings::Judge)]
     pub timings: Timings,
+    /// Only check that the result can be rerun as recorded (spec and its keys' defaults, inputs,
+    /// point count; a crossover's input files): runs and writes nothing. Exit 0 if it can, 2 with
+    /// the reason if not.
+    #[arg(long)]
+    pub check: bool,
 }
 
 /// How `raycost reproduce` treats timing means.

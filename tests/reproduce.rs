@@ -168,6 +168,14 @@ fn a_changed_spec_a_changed_input_and_a_gone_spec_are_refused() {
     let results = tmp.path().join("results");
     run_quiet(&spec, &results).assert().success();
     let dir = results.join("tiny-grid");
+    // `--check` accepts the result as it stands, running and writing nothing.
+    let scratch = tmp.path().join("scratch");
+    let (code, out, err) = output(&mut reproduce(
+        &dir,
+        &["--check", "--out", scratch.to_str().unwrap()],
+    ));
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("rerunnable") && !scratch.exists(), "{out}");
     let meta = fs::read_to_string(dir.join("tiny-grid.meta.toml")).expect("meta");
     let then = meta
         .lines()
@@ -176,6 +184,13 @@ fn a_changed_spec_a_changed_input_and_a_gone_spec_are_refused() {
         .trim_end_matches('"')
         .to_string();
     grid_spec(tmp.path(), 4000);
+    // … and refuses it, naming the key, once the spec changed.
+    let (code, _, err) = output(&mut reproduce(&dir, &["--check"]));
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("experiment.rays = 3000 then, 4000 now"),
+        "{err}"
+    );
     let (code, out, err) = output(&mut reproduce(&dir, &[]));
     assert_eq!(code, 2, "{out}{err}");
     assert!(
@@ -212,6 +227,9 @@ fn a_changed_spec_a_changed_input_and_a_gone_spec_are_refused() {
     run_quiet(&detp, &results).assert().success();
     reproduce(&results.join("pts"), &[]).assert().success();
     points(0.01);
+    let (code, _, err) = output(&mut reproduce(&results.join("pts"), &["--check"]));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("pts.csv"), "{err}");
     let (code, _, err) = output(&mut reproduce(&results.join("pts"), &[]));
     assert_eq!(code, 2, "{err}");
     assert!(
@@ -268,10 +286,19 @@ fn a_crossover_result_reruns_on_its_recorded_inputs() {
         "{text}"
     );
     assert!(text.contains("targets: 0.5,0.2"), "{text}");
-    // A crossover input changed since: named.
+    let (code, text, err) = output(&mut reproduce(&out, &["--check"]));
+    assert_eq!(code, 0, "{text}{err}");
+    assert!(text.contains("rerunnable"), "{text}");
+    // A crossover input changed since: named (by --check too, which hashes the recorded inputs).
     tamper(&points.join("points.csv"), 0, "experiment.seed", |s| {
         format!("{s}0")
     });
+    let (code, _, err) = output(&mut reproduce(&out, &["--check"]));
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("points.csv") && err.contains("other content"),
+        "{err}"
+    );
     let (code, _, err) = output(&mut reproduce(&out, &[]));
     assert_eq!(code, 2, "{err}");
     assert!(

@@ -24,7 +24,7 @@ use crate::error::{Error, OutputError};
 use crate::experiment::plan::Plan;
 use crate::experiment::runner::{self, RunOptions, Shard};
 use crate::output::compare::{compare, Side, TableComparison};
-use crate::output::meta::{changed_input, Build, Meta};
+use crate::output::meta::{changed_input, Build, InputFile, Meta};
 
 /// What `raycost reproduce` was asked.
 #[derive(Clone, Debug)]
@@ -41,6 +41,10 @@ pub struct Options {
     /// report them (`--timings report`): a run's standard errors cover its replicas, not the
     /// spread between separate runs, which can be wider.
     pub judge_timings: bool,
+    /// Only check that the result could be rerun as recorded (its spec and its keys' defaults, its
+    /// input files, its point count; a crossover's input files), without rerunning it: what CI
+    /// asks of every committed result.
+    pub check_only: bool,
 }
 
 /// What a reproduction found.
@@ -56,6 +60,8 @@ pub struct Report {
     pub scratch: Option<PathBuf>,
     /// Every table compared.
     pub tables: Vec<TableComparison>,
+    /// Only checked, not rerun ([`Options::check_only`]).
+    pub checked_only: bool,
 }
 
 impl Report {
@@ -73,7 +79,9 @@ impl Report {
             .map(|t| t.file.as_str())
             .collect();
         let compared: usize = self.tables.iter().map(|t| t.compared).sum();
-        if differ.is_empty() {
+        if self.checked_only {
+            "rerunnable: everything it read is as recorded (spec and its keys' defaults, inputs, points; --check: not rerun)".into()
+        } else if differ.is_empty() {
             format!(
                 "reproduced: {} table(s), {compared} counted column(s), every cell identical",
                 self.tables.len()
@@ -122,6 +130,7 @@ impl Report {
             "scratch": self.scratch.as_ref().map(|s| s.display().to_string()),
             "tables": self.tables.iter().map(TableComparison::json).collect::<Vec<_>>(),
             "verdict": self.verdict(),
+            "checked_only": self.checked_only,
         })
     }
 }
@@ -383,6 +392,15 @@ fn reproduce_run(
                 .map_err(|e| OutputError::new(meta_path, format!("records shard {e}")))?,
         ),
     };
+    if o.check_only {
+        let mut notes = Vec::new();
+        build_notes("the result", &meta.raycost, &mut notes);
+        return Ok(checked(
+            o,
+            rerun_rows(&meta, &plan, &spec, run, shard, o.threads),
+            notes,
+        ));
+    }
     let name = plan.spec.experiment.name.clone();
     let spec_dir = spec.parent().unwrap_or(Path::new(".")).to_path_buf();
     let (out, temporary) = scratch(
@@ -580,6 +598,34 @@ fn reproduce_crossover(o: &Options, meta_path: &Path) -> Result<Report, Error> {
     let frames = input("frames")?;
     let confirm = input("confirm")?;
     let targets = crossover_targets(&meta, &o.dir)?;
+    if o.check_only {
+        for i in &meta.inputs {
+            let now = locate(&i.path, &o.dir)
+                .and_then(|p| InputFile::hash(&p, &i.role, Path::new(".")).ok());
+            if now.as_ref().is_none_or(|n| n.sha256 != i.sha256) {
+                return Err(OutputError::new(
+                    meta_path,
+                    format!(
+                        "an input changed since the result was made: {} ({})",
+                        i.path,
+                        if now.is_some() {
+                            "other content"
+                        } else {
+                            "gone"
+                        }
+                    ),
+                )
+                .into());
+            }
+        }
+        let mut notes = Vec::new();
+        build_notes("the result", &meta.raycost, &mut notes);
+        let rerun = vec![(
+            "inputs".to_string(),
+            format!("{} file(s), content unchanged", meta.inputs.len()),
+        )];
+        return Ok(checked(o, rerun, notes));
+    }
     let mut forbidden: Vec<(&Path, &str)> = vec![(&o.dir, "the result folder")];
     for d in [
         Some(&fronts),
@@ -664,7 +710,20 @@ fn finish(
         notes,
         scratch: (!temporary || keep).then_some(out),
         tables: outcome?,
+        checked_only: false,
     })
+}
+
+/// The report of a check that found the result rerunnable (nothing run, nothing written).
+fn checked(o: &Options, rerun: Vec<(String, String)>, notes: Vec<String>) -> Report {
+    Report {
+        dir: o.dir.clone(),
+        rerun,
+        notes,
+        scratch: None,
+        tables: Vec::new(),
+        checked_only: true,
+    }
 }
 
 #[cfg(test)]
