@@ -599,32 +599,7 @@ fn reproduce_crossover(o: &Options, meta_path: &Path) -> Result<Report, Error> {
     let confirm = input("confirm")?;
     let targets = crossover_targets(&meta, &o.dir)?;
     if o.check_only {
-        for i in &meta.inputs {
-            let now = locate(&i.path, &o.dir)
-                .and_then(|p| InputFile::hash(&p, &i.role, Path::new(".")).ok());
-            if now.as_ref().is_none_or(|n| n.sha256 != i.sha256) {
-                return Err(OutputError::new(
-                    meta_path,
-                    format!(
-                        "an input changed since the result was made: {} ({})",
-                        i.path,
-                        if now.is_some() {
-                            "other content"
-                        } else {
-                            "gone"
-                        }
-                    ),
-                )
-                .into());
-            }
-        }
-        let mut notes = Vec::new();
-        build_notes("the result", &meta.raycost, &mut notes);
-        let rerun = vec![(
-            "inputs".to_string(),
-            format!("{} file(s), content unchanged", meta.inputs.len()),
-        )];
-        return Ok(checked(o, rerun, notes));
+        return check_crossover_inputs(o, &meta, meta_path);
     }
     let mut forbidden: Vec<(&Path, &str)> = vec![(&o.dir, "the result folder")];
     for d in [
@@ -712,6 +687,36 @@ fn finish(
         tables: outcome?,
         checked_only: false,
     })
+}
+
+/// `--check` of a crossover: every input file it recorded is still there with the same content.
+fn check_crossover_inputs(o: &Options, meta: &Meta, meta_path: &Path) -> Result<Report, Error> {
+    for i in &meta.inputs {
+        let now =
+            locate(&i.path, &o.dir).and_then(|p| InputFile::hash(&p, &i.role, Path::new(".")).ok());
+        if now.as_ref().is_none_or(|n| n.sha256 != i.sha256) {
+            return Err(OutputError::new(
+                meta_path,
+                format!(
+                    "an input changed since the result was made: {} ({})",
+                    i.path,
+                    if now.is_some() {
+                        "other content"
+                    } else {
+                        "gone"
+                    }
+                ),
+            )
+            .into());
+        }
+    }
+    let mut notes = Vec::new();
+    build_notes("the result", &meta.raycost, &mut notes);
+    let rerun = vec![(
+        "inputs".to_string(),
+        format!("{} file(s), content unchanged", meta.inputs.len()),
+    )];
+    Ok(checked(o, rerun, notes))
 }
 
 /// The report of a check that found the result rerunnable (nothing run, nothing written).
