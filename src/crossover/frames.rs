@@ -60,12 +60,12 @@ fn frames_columns(main: &Csv) -> Result<Vec<FramesInput>, OutputError> {
     let (st, dy) = (main.value(&POINTS_STATIC)?, main.value(&POINTS_DYNAMIC)?);
     let (first, frame, full) = (
         main.value(&FRAME0_S)?,
-        main.mean(&FRAME_S)?,
-        main.mean(&FULL_FRAME_S)?,
+        main.value(&FRAME_S)?,
+        main.value(&FULL_FRAME_S)?,
     );
     let (spp, cv) = (
-        main.mean(&PATH_TRACING_S_PER_PATH)?,
-        main.mean(&PATH_TRACING_CV)?,
+        main.value(&PATH_TRACING_S_PER_PATH)?,
+        main.value(&PATH_TRACING_CV)?,
     );
     let d = if main.has_param(keys::DISC_RADIUS) {
         main.param(keys::DISC_RADIUS)?

@@ -6,8 +6,8 @@
 //! (exit 2, nothing written).
 //!
 //! Columns are read through their declarations, never by a name typed at the reading site: a
-//! measured or timed column by the [`Column`] its writer puts it with ([`Csv::value`],
-//! [`Csv::member`], [`Csv::mean`]), a parameter by its spec key ([`Key`], from [`keys`]). Where the
+//! measured or timed column by the [`Column`] its writer puts it with ([`Csv::value`]: a value
+//! or an estimate's `_mean`; [`Csv::member`]), a parameter by its spec key ([`Key`], from [`keys`]). Where the
 //! result's metadata declares the column (every result since columns were recorded), its unit and
 //! class must be the declaration's: a column renamed, or given another meaning since the result was
 //! written, is refused by name rather than read as something it is not.
@@ -216,7 +216,7 @@ impl Csv {
         Self::parse(Path::new("t.csv"), text.as_bytes()).expect("valid CSV")
     }
 
-    /// Declared column `c` (a single value, not a family) as numbers.
+    /// Declared column `c` (not a family) as numbers: its value, or an estimate's `_mean`.
     pub fn value(&self, c: &Column) -> Result<Vec<f64>, OutputError> {
         self.numbers(&self.typed(c, None)?, c.doc)
     }
@@ -239,11 +239,6 @@ impl Csv {
     /// Whether the table has declared column `c` (its first CSV column: `NAME` or `NAME_mean`).
     pub fn has_column(&self, c: &Column) -> bool {
         c.expand(c.name).first().is_some_and(|i| self.has(&i.name))
-    }
-
-    /// The `_mean` of declared estimate `c`.
-    pub fn mean(&self, c: &Column) -> Result<Vec<f64>, OutputError> {
-        self.numbers(&self.typed(c, None)?, c.doc)
     }
 
     /// The parameter column of spec key `k`.
