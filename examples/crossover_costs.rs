@@ -27,8 +27,8 @@ use raycost::geom::Aabb;
 use raycost::lt::direct::direct_irradiance;
 use raycost::lt::pathtrace::{path_trace, powers_of_two};
 use raycost::lt::Scene;
-use raycost::stats::crossover::PathTracingCost;
 use raycost::stats::fit::CostModel;
+use raycost::stats::time_to_target::PathTracingCost;
 
 /// One scene of the study: its file, points for the path tracer (a points file or a lattice
 /// spacing), the disc radius d and the point counts of the DETP sweep.

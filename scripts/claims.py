@@ -16,8 +16,8 @@ goes beside (other accountings, variants, derived figures) and write
                            every judged unit (the `units` of results/claims.toml)
   claims/engine-versions.toml  the engine's versions and every claim's outcome under each
                            (claims_version.py): a version whose outcome differs from the one before
-                           it under the same rule needs that claim's history entry, else nothing is
-                           written and --check fails
+                           it under the same rule, or new tables that change an outcome, need that
+                           claim's history entry, else nothing is written and --check fails
 
 This file holds no verdict, window or claim-specific number: they are all in the pre-registration
 (scripts/tests/test_claims.py checks it).
@@ -118,12 +118,16 @@ def check(pre, path):
             raise SystemExit("error: %s: claim %s: rule %r must be %s/N" % (path, c["id"], c["rule"], c["id"]))
         for h in c.get("history", []):
             lack = [k for k in ("rule", "registered", "text", "verdict", "data") if k not in h]
-            # An engine entry (`engine` = the version that gave the verdict) keeps the rule's id:
-            # the engine changed, not the rule.
+            # An engine entry (`engine` = the version that gave the verdict) or a rerun entry
+            # (`rerun` = the tables that changed it) keeps the rule's id: the engine or the data
+            # changed, not the rule.
             if "engine" in h and not isinstance(h["engine"], int):
                 raise SystemExit("error: %s: claim %s: history entry %s: engine must be a version number" % (
                     path, c["id"], h.get("rule", "?")))
-            if lack or (h["rule"] == c["rule"] and "engine" not in h):
+            if "rerun" in h and (not isinstance(h["rerun"], str) or not h["rerun"].strip()):
+                raise SystemExit("error: %s: claim %s: history entry %s: rerun must name the tables" % (
+                    path, c["id"], h.get("rule", "?")))
+            if lack or (h["rule"] == c["rule"] and "engine" not in h and "rerun" not in h):
                 raise SystemExit("error: %s: claim %s: history entry %s: %s" % (
                     path, c["id"], h.get("rule", "?"),
                     "missing " + ", ".join(lack) if lack else "has the current rule's id"))
@@ -243,7 +247,9 @@ def registered_text(claim, ctx):
 def earlier_text(claim):
     def one(h):
         engine = ", claims engine %d" % h["engine"] if "engine" in h else ""
-        return "%s%s (%s, on the %s tables): %s" % (h["rule"], engine, h["registered"], h["data"], h["verdict"])
+        rerun = ", before the rerun on %s" % h["rerun"] if "rerun" in h else ""
+        return "%s%s%s (%s, on the %s tables): %s" % (h["rule"], engine, rerun, h["registered"], h["data"],
+                                                     h["verdict"])
     return "; ".join(one(h) for h in claim.get("history", []))
 
 
@@ -442,8 +448,8 @@ def main():
               % (len(records), new_versions[-1]["version"]))
         return 0
     if problems:
-        print("error: nothing written: a verdict changed with the engine; keep the earlier one in the claim's "
-              "history (claims/README.md)", file=sys.stderr)
+        print("error: nothing written: a verdict changed with the engine or with new tables; keep the earlier "
+              "one in the claim's history (claims/README.md)", file=sys.stderr)
         return 1
     open(V.LEDGER, "w").write(ledger_text)
     open(toml_path, "w").write(toml_text)

@@ -18,6 +18,23 @@ earlier verdict must be kept in that claim's history in claims/preregistered.tom
   verdict = "inconclusive"  # the outcome it gave
   data = "…"                # on which tables
 
+Each version keeps the outcomes it gave when it was recorded (`[version.adopted]`, written only
+where they differ from its latest ones): those were judged on the same tables as the version before
+it ended with, so comparing the two isolates what the engine changed.
+
+New tables can change a verdict too (a rerun; the engine unchanged). The newest version then keeps a
+`[[version.rerun]]` record {claim, rule, was, now}, written by scripts/claims.py, and the earlier
+verdict must be kept in the claim's history as a rerun entry (the rule id stays: the data changed,
+not the rule):
+
+  [[claim.history]]
+  rule = "CLAIM/K"
+  rerun = "…"               # the tables that changed it (commit, what was rerun and why)
+  registered = "…"          # when the rule was registered
+  text = "what the new tables differ in"
+  verdict = "holds-in-part" # the outcome the earlier tables gave
+  data = "…"                # the earlier tables
+
 scripts/claims.py refuses to write, and `--check` (CI) fails, when such an entry is missing
 (`transition_problems`), and `--check` fails when the engine's files no longer hash to the newest
 version (the engine changed and its verdicts were not recorded).
@@ -73,11 +90,19 @@ def render_ledger(versions):
         lines += ["[[version]]", "version = %d" % v["version"], "hash = %s" % _q(v["hash"])]
         if v.get("where"):
             lines.append("where = %s" % _q(v["where"]))
-        lines.append("[version.claims]")
-        for cid, c in v["claims"].items():
-            lines.append("%s = { rule = %s, outcome = %s }" % (_q(cid), _q(c["rule"]), _q(c["outcome"])))
+        for table in ("claims", "adopted"):
+            if table in v:
+                lines.append("[version.%s]" % table)
+                lines += ["%s = { rule = %s, outcome = %s }" % (_q(cid), _q(c["rule"]), _q(c["outcome"]))
+                          for cid, c in v[table].items()]
+        for r in v.get("rerun", []):
+            lines += ["[[version.rerun]]"] + ["%s = %s" % (k, _q(r[k])) for k in RERUN_KEYS]
         lines.append("")
     return "\n".join(lines)
+
+
+# A verdict changed by new tables under one engine: which claim, under which rule, from what to what.
+RERUN_KEYS = ("claim", "rule", "was", "now")
 
 
 def claims_of(records):
@@ -91,10 +116,28 @@ def updated(versions, records, digest, where=""):
     versions = [dict(v) for v in versions]
     now = claims_of(records)
     if versions and versions[-1]["hash"] == digest:
-        versions[-1]["claims"] = now
+        last = versions[-1]
+        # New tables under the same engine: every changed outcome (same rule) is a rerun record;
+        # the outcomes the version gave when it was recorded stay as `adopted`.
+        reruns = [{"claim": cid, "rule": c["rule"], "was": last["claims"][cid]["outcome"], "now": c["outcome"]}
+                  for cid, c in now.items()
+                  if cid in last["claims"] and last["claims"][cid]["rule"] == c["rule"]
+                  and last["claims"][cid]["outcome"] != c["outcome"]]
+        if reruns:
+            last["rerun"] = list(last.get("rerun", [])) + reruns
+        if now != last["claims"]:
+            last.setdefault("adopted", last["claims"])
+            last["claims"] = now
+        if last.get("adopted") == now:
+            del last["adopted"]
     else:
         versions.append({"version": len(versions) + 1, "hash": digest, "where": where, "claims": now})
     return versions
+
+
+def adopted(version):
+    """The outcomes a version gave when it was recorded (on the tables the version before it ended with)."""
+    return version.get("adopted", version["claims"])
 
 
 def transition_problems(versions, prereg):
@@ -105,7 +148,7 @@ def transition_problems(versions, prereg):
     out = []
     for old, new in zip(versions, versions[1:]):
         for cid, was in old["claims"].items():
-            now = new["claims"].get(cid)
+            now = adopted(new).get(cid)
             if now is None or now["rule"] != was["rule"] or now["outcome"] == was["outcome"]:
                 continue
             history = by_id.get(cid, {}).get("history", [])
@@ -115,4 +158,23 @@ def transition_problems(versions, prereg):
                            "add a [[claim.history]] entry with rule = %r, engine = %d, verdict = %r"
                            % (cid, old["version"], was["outcome"], new["version"], now["outcome"],
                               was["rule"], was["rule"], old["version"], was["outcome"]))
+    return out + rerun_problems(versions, by_id)
+
+
+def rerun_problems(versions, by_id):
+    """Every verdict changed by new tables (a `[[version.rerun]]` record) without a rerun entry
+    {rule, rerun, verdict = the earlier outcome} in its claim's history: as many entries as records."""
+    out = []
+    records = [r for v in versions for r in v.get("rerun", [])]
+    for key in sorted({(r["claim"], r["rule"], r["was"]) for r in records}):
+        cid, rule, was = key
+        needed = sum(1 for r in records if (r["claim"], r["rule"], r["was"]) == key)
+        history = by_id.get(cid, {}).get("history", [])
+        kept = sum(1 for h in history if "rerun" in h and h.get("rule") == rule
+                   and h.get("verdict", "").split(":")[0].strip() == was)
+        if kept < needed:
+            now = [r["now"] for r in records if (r["claim"], r["rule"], r["was"]) == key][-1]
+            out.append("claim %s: new tables turned %s into %s under the same rule %s: add a [[claim.history]] "
+                       "entry with rule = %r, rerun = \"the tables that changed it\", verdict = %r"
+                       % (cid, was, now, rule, rule, was))
     return out

@@ -14,6 +14,11 @@ a clock decided) are the only ones allowed to differ between two runs of one spe
 the new tables only, and is left out before the headers are compared; `--added TABLE:COLUMN` only in
 that side table (`frames:static_index_build_s`), `main:COLUMN` only in the main table.
 
+Columns a kind renamed or stopped writing since the old tables were written are brought up to date
+on the old side first, from the list `raycost reproduce` uses (src/output/header_changes.toml): a
+renamed column is read under its new name; a dropped duplicate must equal the column it repeated,
+row by row (else each differing row is a difference), and is then left out. Each is printed.
+
 Prints one line per table: "N measured columns of M compared, 0 differ", or the first differences;
 exits 1 on any difference (or a missing table), 0 otherwise.
 
@@ -36,6 +41,54 @@ from pathlib import Path
 
 # Differences printed per table before the rest are only counted.
 SHOWN = 5
+
+HEADER_CHANGES = Path(__file__).resolve().parent.parent / "src" / "output" / "header_changes.toml"
+
+
+def header_changes(kind, table, path=HEADER_CHANGES):
+    """The changes of src/output/header_changes.toml that apply to `kind`'s `table`, oldest first."""
+    changes = tomllib.loads(path.read_text())["change"]
+    for c in changes:
+        if ("renamed" in c) == ("duplicate_of" in c):
+            raise SystemExit(f"error: {path}: {c.get('old')}: give exactly one of renamed and duplicate_of")
+    return [c for c in changes if c["kind"] == kind and c["table"] == table]
+
+
+def upgrade(changes, header, rows, cls):
+    """Brings an old table up to date (the list's meaning, as `raycost reproduce` applies it):
+    returns (header, rows, classes, lines applied, differences)."""
+    applied, differences = [], []
+    for c in changes:
+        if c["old"] not in header:
+            continue
+        at = header.index(c["old"])
+        if "renamed" in c:
+            new = c["renamed"]
+            if new in header:
+                differences.append(f"both {c['old']} and its new name {new} in one header")
+                continue
+            header = header[:at] + [new] + header[at + 1:]
+            cls = [(new if n == c["old"] else n, k) for n, k in cls]
+            applied.append(f"{c['old']} read as {new} ({c['why']})")
+            continue
+        kept = c["duplicate_of"]
+        if kept not in header:
+            differences.append(f"{c['old']} dropped as a duplicate of {kept}, which the table lacks")
+            continue
+        k = header.index(kept)
+        differences += [f"row {r}: {c['old']} = {row[at]!r} but {kept} = {row[k]!r}"
+                        for r, row in enumerate(rows) if row[at] != row[k]]
+        header = header[:at] + header[at + 1:]
+        rows = [row[:at] + row[at + 1:] for row in rows]
+        cls = [(n, kk) for n, kk in cls if n != c["old"]]
+        applied.append(f"{c['old']} dropped ({c['why']})")
+    return header, rows, cls, applied, differences
+
+
+def kind_of(meta_path: Path):
+    """`experiment.kind` of the spec a NAME.meta.toml records (None if it records none)."""
+    meta = tomllib.loads(meta_path.read_text())
+    return meta.get("spec", {}).get("base", {}).get("experiment", {}).get("kind")
 
 
 def classes(meta_path: Path) -> dict:
@@ -68,12 +121,14 @@ def table_files(exp_dir: Path, name: str):
     return out
 
 
-def compare_table(label, old_path, new_path, old_cls, new_cls, added=()):
-    """Returns (ok, line); the columns `added` are dropped from the new table first."""
+def compare_table(label, old_path, new_path, old_cls, new_cls, added=(), changes=()):
+    """Returns (ok, line); the columns `added` are dropped from the new table first, and the old
+    table is brought up to date by `changes` (header_changes)."""
     problems = []
     if not new_path.exists():
         return False, f"{label}: missing in the new folder"
     old_header, old_rows = read_csv(old_path)
+    old_header, old_rows, old_cls, mapped, problems = upgrade(changes, old_header, old_rows, old_cls)
     new_header, new_rows = read_csv(new_path, added)
     new_cls = [(c, k) for c, k in new_cls if c not in added]
     if old_header != new_header:
@@ -107,17 +162,18 @@ def compare_table(label, old_path, new_path, old_cls, new_cls, added=()):
     line = (
         f"{label}: {len(compared)} measured columns of {len(old_header)} compared, "
         f"{len(old_rows)} rows, {differ} differ"
-    )
+    ) + ("".join(f" | mapped: {m}" for m in mapped))
     if problems:
         return False, line + " — " + " | ".join(problems)
     return True, line
 
 
-def compare_streams(label, old_path, new_path, old_cls, z_max):
+def compare_streams(label, old_path, new_path, old_cls, z_max, changes=()):
     """Returns (ok, line) for two runs on different random streams (see --stream-changed)."""
     if not new_path.exists():
         return False, f"{label}: missing in the new folder"
     old_header, old_rows = read_csv(old_path)
+    old_header, old_rows, old_cls, _, _ = upgrade(changes, old_header, old_rows, old_cls)
     new_header, new_rows = read_csv(new_path)
     if old_header != new_header:
         return False, f"{label}: headers differ"
@@ -187,6 +243,7 @@ def main():
             ok_all = False
             continue
         old_meta, new_meta = classes(exp / f"{name}.meta.toml"), classes(new_exp / f"{name}.meta.toml")
+        kind = kind_of(exp / f"{name}.meta.toml")
         old_tables = table_files(exp, name)
         new_tables = {t for t, _ in table_files(new_exp, name)}
         for extra in sorted(new_tables - {t for t, _ in old_tables}):
@@ -197,9 +254,10 @@ def main():
             label = name if table == "main" else f"{name}.{table}"
             added = [a.split(":", 1)[-1] for a in args.added
                      if ":" not in a or a.split(":", 1)[0] == table]
+            changes = header_changes(kind, table) if kind else []
             if args.stream_changed is not None:
                 ok, line = compare_streams(
-                    label, path, new_exp / path.name, old_meta.get(table, []), args.stream_changed
+                    label, path, new_exp / path.name, old_meta.get(table, []), args.stream_changed, changes
                 )
             else:
                 ok, line = compare_table(
@@ -209,6 +267,7 @@ def main():
                     old_meta.get(table, []),
                     new_meta.get(table, []),
                     added,
+                    changes,
                 )
             ok_all &= ok
             print(("" if ok else "DIFFERS ") + line)

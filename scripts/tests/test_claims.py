@@ -343,6 +343,14 @@ class EngineVersions(unittest.TestCase):
     def records(self, outcome, rule="c/2"):
         return [{"id": "c", "rule": rule, "outcome": outcome}]
 
+    def assert_round_trips(self, versions):
+        """The ledger written and read back is the same."""
+        with tempfile.TemporaryDirectory() as d:
+            p = os.path.join(d, "l.toml")
+            with open(p, "w") as f:
+                f.write(self.V.render_ledger(versions))
+            self.assertEqual(self.V.read_ledger(p), versions)
+
     def test_a_verdict_changed_by_the_engine_without_history_fails(self):
         v1 = self.V.updated([], self.records("inconclusive"), "h1")
         v2 = self.V.updated(v1, self.records("holds"), "h2")
@@ -365,13 +373,53 @@ class EngineVersions(unittest.TestCase):
         self.assertEqual(len(same), 1)
         self.assertEqual(same[0]["claims"]["c"]["outcome"], "holds")
 
+    def test_a_verdict_changed_by_new_tables_needs_a_rerun_entry(self):
+        v1 = self.V.updated([], self.records("holds-in-part"), "h1")
+        v1 = self.V.updated(v1, self.records("differs"), "h1")      # a rerun: same engine
+        self.assertEqual(len(v1), 1)
+        self.assertEqual(v1[0]["rerun"], [{"claim": "c", "rule": "c/2", "was": "holds-in-part", "now": "differs"}])
+        self.assertEqual(v1[0]["adopted"]["c"]["outcome"], "holds-in-part")
+        pre = {"claim": [{"id": "c", "rule": "c/2"}]}
+        problems = self.V.transition_problems(v1, pre)
+        self.assertEqual(len(problems), 1)
+        self.assertIn("rerun", problems[0])
+        # An engine entry does not stand for a rerun entry, nor one with another verdict.
+        pre["claim"][0]["history"] = [{"rule": "c/2", "engine": 1, "verdict": "holds-in-part"},
+                                      {"rule": "c/2", "rerun": "t", "verdict": "holds"}]
+        self.assertEqual(len(self.V.transition_problems(v1, pre)), 1)
+        pre["claim"][0]["history"].append({"rule": "c/2", "rerun": "t", "verdict": "holds-in-part"})
+        self.assertEqual(self.V.transition_problems(v1, pre), [])
+        # Back again: a second record, a second entry needed; the record stays once written.
+        v1 = self.V.updated(v1, self.records("holds-in-part"), "h1")
+        self.assertEqual(len(v1[0]["rerun"]), 2)
+        self.assertNotIn("adopted", v1[0])
+        self.assertEqual(len(self.V.transition_problems(v1, pre)), 1)
+        self.assertEqual(len(self.V.updated(v1, self.records("holds-in-part"), "h1")[0]["rerun"]), 2)
+
+    def test_an_engine_change_is_judged_on_the_tables_it_was_recorded_on(self):
+        # Version 2 gave the same outcome as version 1 when recorded; new tables changed it later.
+        v = self.V.updated([], self.records("holds"), "h1", where="one")
+        v = self.V.updated(v, self.records("holds"), "h2", where="two")
+        v = self.V.updated(v, self.records("differs"), "h2")
+        pre = {"claim": [{"id": "c", "rule": "c/2",
+                          "history": [{"rule": "c/2", "rerun": "t", "verdict": "holds"}]}]}
+        self.assertEqual(self.V.transition_problems(v, pre), [])
+        self.assert_round_trips(v)
+
+    def test_check_accepts_a_rerun_entry_with_the_current_rule_and_refuses_an_empty_one(self):
+        pre = prereg()
+        c = next(c for c in pre["claim"] if c.get("history"))
+        entry = {"rule": c["rule"], "rerun": "tables at abc", "registered": "x", "text": "x",
+                 "verdict": "holds", "data": "x"}
+        c["history"].append(entry)
+        claims.check(pre, PREREG)
+        entry["rerun"] = " "
+        with self.assertRaises(SystemExit):
+            claims.check(pre, PREREG)
+
     def test_the_ledger_round_trips(self):
         v = self.V.updated([], self.records("holds"), "h1", where='a "quoted" place')
-        with tempfile.TemporaryDirectory() as d:
-            p = os.path.join(d, "l.toml")
-            with open(p, "w") as f:
-                f.write(self.V.render_ledger(v))
-            self.assertEqual(self.V.read_ledger(p), v)
+        self.assert_round_trips(v)
 
     def test_the_committed_ledger_keeps_every_changed_verdict(self):
         versions = self.V.read_ledger()

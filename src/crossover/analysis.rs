@@ -10,11 +10,11 @@ use super::costs::{points_range, CostSamples, FittedCost, PathTiming};
 use super::fronts::{DetpErrors, MapErrors};
 use super::measured::{measured_star, MeasuredInputs, MeasuredStar, RunTimings};
 use super::method::{Config, Method};
-use crate::stats::crossover::{
+use crate::stats::fit::{ErrorFit, ErrorModel};
+use crate::stats::time_to_target::{
     mean_mse, points_crossover, points_crossover_interval, unreachable, Crossover, Never,
     PathTracingCost, PowerLawCheck, ReplicaErrors,
 };
-use crate::stats::fit::{ErrorFit, ErrorModel};
 
 /// Bootstrap resamples.
 pub const DRAWS: usize = 2000;
@@ -111,7 +111,7 @@ impl CrossRow {
         if !self.photons.is_finite() {
             return None;
         }
-        if self.config.method == Method::PathTracing {
+        if self.config.method.is_path_tracing() {
             return Some(points * self.seconds_per_point);
         }
         self.cost.map(|c| c.model.seconds(self.photons, points))
@@ -373,7 +373,7 @@ fn put_measured(row: &mut CrossRow, s: &MeasuredStar) {
 
 /// A DETP configuration's rows (one per engine) at `target`, with the bootstrap CI of N*.
 fn detp_rows(inp: &Inputs, e: &DetpErrors, target: f64) -> Vec<CrossRow> {
-    replica_rows(inp, &e.config, &Method::DETP, &e.photons, &e.mse, target)
+    replica_rows(inp, &e.config, &Method::detp(), &e.photons, &e.mse, target)
 }
 
 /// A photon map's row at `target`, judged as DETP is: each replica's error at its own N photons
@@ -433,7 +433,7 @@ fn path_row(inp: &Inputs, target: f64) -> CrossRow {
         scene: inp.scene.clone(),
         target,
         config: Config {
-            method: Method::PathTracing,
+            method: Method::path_tracing(),
             direct: None,
             edge: None,
             disc_radius: None,
@@ -573,7 +573,7 @@ mod tests {
             .map(|_| photons.iter().map(|&n| truth.mse(n)).collect())
             .collect();
         let config = Config {
-            method: Method::SphereCache,
+            method: Method::named("sphere-cache").unwrap(),
             direct: Some("photons".into()),
             edge: Some("paper".into()),
             disc_radius: Some(5.0),
@@ -696,7 +696,7 @@ mod tests {
     /// A photon map with photons-only direct light (no d, edge or radius rule).
     fn photon_map() -> Config {
         Config {
-            method: Method::PhotonMap,
+            method: Method::named("photon-map").unwrap(),
             direct: Some("photons".into()),
             edge: None,
             disc_radius: None,
@@ -724,7 +724,7 @@ mod tests {
             let rows = crossover_rows(&inp, &[0.1, 0.25]);
             let map: Vec<&CrossRow> = rows
                 .iter()
-                .filter(|r| r.config.method == Method::PhotonMap)
+                .filter(|r| r.config.method.label() == "photon-map")
                 .collect();
             assert_eq!(map.len(), 2);
             assert!(
@@ -830,7 +830,7 @@ mod tests {
         let model_only: Vec<&CrossRow> = rows
             .iter()
             .filter(|r| {
-                matches!(r.config.method, Method::SphereCache | Method::PhotonMap)
+                ["sphere-cache", "photon-map"].contains(&r.config.method.label())
                     && r.n_star.is_finite()
             })
             .collect();
@@ -852,7 +852,7 @@ mod tests {
         // Per target: 2 configurations × 2 engines + path tracing.
         assert_eq!(rows.len(), 10);
         let sc = &rows[0];
-        assert_eq!(sc.config.method, Method::SphereCache);
+        assert_eq!(sc.config.method.label(), "sphere-cache");
         let n_eps = 50.0 / (0.05f64.powi(2) - 1e-4);
         assert!((sc.photons / n_eps - 1.0).abs() < 1e-6, "{}", sc.photons);
         let p = 400.0 * 2e-6; // (1/0.05)² paths per point
@@ -875,7 +875,10 @@ mod tests {
         assert!(rows[1].reason.contains("no cost sweep") && rows[1].n_star.is_nan());
         assert!(rows[2].reason.contains("no cost sweep"));
         let pt = &rows[4];
-        assert_eq!((pt.config.method, pt.photons), (Method::PathTracing, 400.0));
+        assert_eq!(
+            (pt.config.method, pt.photons),
+            (Method::path_tracing(), 400.0)
+        );
         // Below the floor: never, and why.
         assert!(
             rows[5].photons.is_nan() && rows[5].reason.contains("error floor"),

@@ -337,7 +337,7 @@ pub fn crossover_row(r: &CrossRow) -> Row {
     let rule = r.config.radius_rule.unwrap_or_default();
     let schedule =
         |f: fn(&super::method::Schedule) -> f64| rule.schedule.as_ref().map_or(f64::NAN, f);
-    let power = |f: fn(&crate::stats::crossover::PowerLawCheck) -> f64| {
+    let power = |f: fn(&crate::stats::time_to_target::PowerLawCheck) -> f64| {
         r.power_law.as_ref().map_or(f64::NAN, f)
     };
     row.put(&SCENE, r.scene.as_str())

@@ -10,7 +10,7 @@ use super::analysis::CrossRow;
 use super::costs::run_timings;
 use super::input::{keys, Csv};
 use super::measured::{crossing, seconds_at, Form, Found};
-use super::method::{Config, Method};
+use super::method::Config;
 use crate::error::OutputError;
 
 /// Seconds to the target at each n_P: (n_P, DETP's, path tracing's), increasing in n_P.
@@ -80,14 +80,14 @@ impl HeadToHead {
     pub fn confirm(&self, rows: &mut [CrossRow]) {
         let paths: Vec<(f64, f64)> = rows
             .iter()
-            .filter(|r| r.config.method == Method::PathTracing)
+            .filter(|r| r.config.method.is_path_tracing())
             .map(|r| (r.target, r.photons))
             .collect();
         for row in rows.iter_mut() {
             let Some(&(_, k)) = paths.iter().find(|p| p.0 == row.target) else {
                 continue;
             };
-            if row.config.method == Method::PathTracing || !row.photons.is_finite() {
+            if row.config.method.is_path_tracing() || !row.photons.is_finite() {
                 continue;
             }
             let Some((found, curve)) = self.crossing_for(&row.config, row.photons, k) else {

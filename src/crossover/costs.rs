@@ -64,13 +64,14 @@ pub fn cost_samples(main: &Csv) -> Result<Vec<CostSamples>, OutputError> {
     let direct = main.value(&DIRECT_S)?;
     let settings = settings(main)?;
     let mut out: Vec<CostSamples> = Vec::new();
-    for method in Method::DETP.into_iter().chain(Method::MAPS) {
+    let maps = Method::maps().into_iter().map(|(m, _)| m);
+    for method in Method::detp().into_iter().chain(maps) {
         if !main.has_member(&COST_S, method.member()) {
             continue;
         }
         let build = main.member(&BUILD_S, method.member())?;
         let cost = main.member(&COST_S, method.member())?;
-        let detp = Method::DETP.contains(&method);
+        let detp = method.is_detp();
         for (i, set) in settings.iter().enumerate() {
             let once = trace[i] + direct[i] + build[i] + if detp { edge[i] } else { 0.0 };
             let sample = (photons[i], points[i], (once + cost[i]) / reps[i]);
@@ -220,7 +221,7 @@ mod tests {
         let main = Csv::from_text(&text);
         let s = cost_samples(&main).expect("samples");
         assert_eq!(s.len(), 2, "{s:?}");
-        assert_eq!(s[0].config.method, Method::SphereCache);
+        assert_eq!(s[0].config.method.label(), "sphere-cache");
         assert_eq!(s[1].config.edge, None, "a photon map ignores the edge mode");
         for &(n, p, sec) in &s[0].samples {
             assert!((sec / truth.seconds(n, p) - 1.0).abs() < 1e-12);

@@ -18,8 +18,8 @@ use crate::experiment::quasi_static::columns::{
     POINTS_STATIC,
 };
 use crate::output::column::POINT;
-use crate::stats::crossover::{frames_crossover, Crossover, PathTracingCost};
 use crate::stats::fit::{CostModel, ErrorFit};
+use crate::stats::time_to_target::{frames_crossover, Crossover, PathTracingCost};
 
 /// One frames row, as read.
 #[derive(Clone, Debug, PartialEq)]
@@ -264,7 +264,7 @@ mod tests {
         let photons = vec![1e3, 1e4, 1e5];
         let detp = vec![DetpErrors {
             config: Config {
-                method: Method::SphereCache,
+                method: Method::named("sphere-cache").unwrap(),
                 direct: Some("photons".into()),
                 edge: Some("paper".into()),
                 disc_radius: Some(10.0),

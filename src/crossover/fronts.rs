@@ -23,12 +23,10 @@ pub use crate::experiment::detp::engines::relative_mse;
 use crate::experiment::detp::estimators::path_tracing::{
     PT_PATHS, PT_REF_MEAN, PT_REF_MSE, PT_REPLICA,
 };
-use crate::experiment::detp::estimators::photon_map::PHOTON_MAP_REPLICA;
-use crate::experiment::detp::estimators::photon_map_growing::PHOTON_MAP_GROWING_REPLICA;
 use crate::experiment::detp::replica_errors::{DETP, ESTIMATOR, RELATIVE_MSE};
 use crate::output::column::Column;
 use crate::output::column::POINT;
-use crate::stats::crossover::PathTracingCost;
+use crate::stats::time_to_target::PathTracingCost;
 
 /// What the fronts judged at each sweep point: per estimator (`detp` or a photon map's column
 /// stem) its relative MSE in each replica, or for a photon map whose points table has no
@@ -100,15 +98,12 @@ impl Judged {
         };
         let detp = values(&POINT_IRRADIANCE_REPLICA)?;
         let mut maps = Vec::new();
-        for method in Method::MAPS {
+        for (method, replica) in Method::maps() {
             let member = method.member();
             if !points.has_member(&POINT_BASELINE_E, member) {
                 continue;
             }
-            let reps = values(match method {
-                Method::PhotonMapGrowing => &PHOTON_MAP_GROWING_REPLICA,
-                _ => &PHOTON_MAP_REPLICA,
-            })?;
+            let reps = values(replica)?;
             let mean_se = if reps.len() >= 2 {
                 None
             } else {
@@ -257,7 +252,7 @@ pub fn detp_errors(main: &Csv, judged: &Judged) -> Result<Vec<DetpErrors>, Outpu
     for (i, set) in settings(main)?.into_iter().enumerate() {
         let mse = judged.at(sweep[i], DETP)?.clone();
         let config = Config {
-            method: Method::SphereCache,
+            method: Method::detp_errors(),
             direct: Some(set.direct),
             edge: Some(set.edge),
             disc_radius: Some(set.disc_radius),
@@ -302,7 +297,7 @@ pub fn map_errors(main: &Csv, judged: &Judged) -> Result<Vec<MapErrors>, OutputE
     let photons = main.param(keys::PHOTONS)?;
     let settings = settings(main)?;
     let mut out = Vec::new();
-    for method in Method::MAPS {
+    for (method, _) in Method::maps() {
         let member = method.member();
         let Some(&per_replica) = judged.per_replica.get(member) else {
             continue;

@@ -16,8 +16,8 @@
 use super::costs::CostSamples;
 use super::method::Config;
 use crate::sample::rng::Stream;
-use crate::stats::crossover::{bootstrap_with, Interval, PathTracingCost, ReplicaErrors};
 use crate::stats::fit::ErrorModel;
+use crate::stats::time_to_target::{bootstrap_with, Interval, PathTracingCost, ReplicaErrors};
 
 /// One run of the n_P sweep: its seconds per configuration and path tracing's per row.
 #[derive(Clone, Debug, PartialEq)]
@@ -280,7 +280,7 @@ mod tests {
     /// path tracing n_P·paths·t: with cv² = 1 and a 10 % target, 100 paths per point.
     fn sweep(spp: &[f64], n_p: &[f64]) -> RunTimings {
         let config = Config {
-            method: Method::SphereCache,
+            method: Method::named("sphere-cache").unwrap(),
             direct: Some("photons".into()),
             edge: Some("paper".into()),
             disc_radius: Some(5.0),

@@ -1,48 +1,117 @@
 //! The methods `raycost crossover` compares and the configuration a row describes.
 
+use crate::experiment::detp::estimators::{Crossover, EngineChoice};
+use crate::output::column::Column;
 use crate::stats::fit::ErrorModel;
 
-/// An estimator a user could pick.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Method {
-    /// DETP, sphere-cache engine.
-    SphereCache,
-    /// DETP, disc-index engine.
-    DiscIndex,
-    /// Photon map, fixed k.
-    PhotonMap,
-    /// Photon map, k growing with N.
-    PhotonMapGrowing,
-    /// Per-point path tracing with NEE.
-    PathTracing,
+/// An estimator `raycost crossover` compares: one of kind detp's registry that declares how it is
+/// compared ([`Crossover`]); its name and column member are the estimator's own, so adding an
+/// estimator adds a method without touching this layer. Ordered as registered.
+#[derive(Clone, Copy)]
+pub struct Method {
+    /// Its place in the registry (the order of `crossover.csv`'s rows).
+    rank: usize,
+    estimator: EngineChoice,
+    how: Crossover,
 }
 
 impl Method {
+    /// Every method, in registry order.
+    pub fn all() -> Vec<Method> {
+        EngineChoice::all()
+            .enumerate()
+            .filter_map(|(rank, estimator)| {
+                estimator.crossover().map(|how| Method {
+                    rank,
+                    estimator,
+                    how,
+                })
+            })
+            .collect()
+    }
+
+    /// The method of the estimator named `name` in specs, if the crossover compares it.
+    pub fn named(name: &str) -> Option<Method> {
+        Self::all().into_iter().find(|m| m.label() == name)
+    }
+
     /// The DETP engines (exact, bit-identical errors; their costs differ).
-    pub const DETP: [Method; 2] = [Method::SphereCache, Method::DiscIndex];
-    /// The photon maps.
-    pub const MAPS: [Method; 2] = [Method::PhotonMap, Method::PhotonMapGrowing];
+    pub fn detp() -> Vec<Method> {
+        Self::all()
+            .into_iter()
+            .filter(|m| m.how == Crossover::Detp)
+            .collect()
+    }
+
+    /// The photon maps, each with the points-table family of its per-replica estimates.
+    pub fn maps() -> Vec<(Method, &'static Column)> {
+        Self::all()
+            .into_iter()
+            .filter_map(|m| match m.how {
+                Crossover::PhotonMap { replica } => Some((m, replica)),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// The method DETP's errors are filed under (the first DETP engine registered: every DETP
+    /// engine's errors are the same).
+    pub fn detp_errors() -> Method {
+        Self::detp()[0]
+    }
+
+    /// Per-point path tracing.
+    pub fn path_tracing() -> Method {
+        Self::all()
+            .into_iter()
+            .find(|m| m.how == Crossover::PathTracing)
+            .expect("the registry has a path tracer")
+    }
+
+    /// Is it per-point path tracing?
+    pub fn is_path_tracing(self) -> bool {
+        self.how == Crossover::PathTracing
+    }
+
+    /// Is it a DETP engine?
+    pub fn is_detp(self) -> bool {
+        self.how == Crossover::Detp
+    }
 
     /// The engine's name in specs and in `crossover.csv`.
     pub fn label(self) -> &'static str {
-        match self {
-            Method::SphereCache => "sphere-cache",
-            Method::DiscIndex => "disc-index",
-            Method::PhotonMap => "photon-map",
-            Method::PhotonMapGrowing => "photon-map-growing",
-            Method::PathTracing => "path-tracing",
-        }
+        self.estimator.as_str()
     }
 
     /// Its member in column families (`cost_{}_s` → `cost_sphere_cache_s`).
     pub fn member(self) -> &'static str {
-        match self {
-            Method::SphereCache => "sphere_cache",
-            Method::DiscIndex => "disc_index",
-            Method::PhotonMap => "photon_map",
-            Method::PhotonMapGrowing => "photon_map_growing",
-            Method::PathTracing => "path_tracing",
-        }
+        self.estimator.column()
+    }
+}
+
+impl PartialEq for Method {
+    fn eq(&self, o: &Self) -> bool {
+        self.rank == o.rank
+    }
+}
+
+impl Eq for Method {}
+
+impl PartialOrd for Method {
+    fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(o))
+    }
+}
+
+impl Ord for Method {
+    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
+        self.rank.cmp(&o.rank)
+    }
+}
+
+impl std::fmt::Debug for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.label())
     }
 }
 
@@ -179,9 +248,35 @@ impl Config {
 mod tests {
     use super::*;
 
+    #[test]
+    fn the_methods_are_the_estimators_that_declare_a_crossover_in_registry_order() {
+        let names: Vec<(&str, &str)> = Method::all()
+            .iter()
+            .map(|m| (m.label(), m.member()))
+            .collect();
+        assert_eq!(
+            names,
+            [
+                ("sphere-cache", "sphere_cache"),
+                ("disc-index", "disc_index"),
+                ("photon-map", "photon_map"),
+                ("photon-map-growing", "photon_map_growing"),
+                ("path-tracing", "path_tracing"),
+            ]
+        );
+        let all = Method::all();
+        assert!(all.windows(2).all(|w| w[0] < w[1]));
+        assert!(Method::path_tracing().is_path_tracing());
+        assert_eq!(Method::detp_errors().label(), "sphere-cache");
+        assert!(Method::detp().iter().all(|m| m.is_detp()));
+        assert_eq!(Method::maps().len(), 2);
+        assert!(Method::named("reference").is_none());
+        assert!(Method::named("brute-force").is_none());
+    }
+
     fn detp(rule: RadiusRule) -> Config {
         Config {
-            method: Method::SphereCache,
+            method: Method::named("sphere-cache").unwrap(),
             direct: Some("photons".into()),
             edge: Some("clamp-first-hit".into()),
             disc_radius: Some(15.0),
@@ -229,7 +324,7 @@ mod tests {
         assert!(fixed.derived_error_slope().is_nan());
         // A photon map (no rule) is timed whatever rule the cost sweep's row had.
         let map = Config {
-            method: Method::PhotonMap,
+            method: Method::named("photon-map").unwrap(),
             edge: None,
             disc_radius: None,
             radius_rule: None,

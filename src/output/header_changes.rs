@@ -13,68 +13,95 @@
 //!   parameter written twice). The old table's cells must equal the kept column's, row by row; a
 //!   row where they differ is reported, so dropping never hides a difference.
 
+//!
+//! The list itself is data, `header_changes.toml` beside this file, compiled in and read by
+//! `scripts/compare_tables.py` too: one list for both comparers.
+
 use super::column::ColumnInfo;
+use serde::Deserialize;
+use std::sync::OnceLock;
 
 /// What became of an old column.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Change {
     /// Written under this name now.
-    Renamed(&'static str),
+    Renamed(String),
     /// No longer written: it repeated this column of the same table.
-    Duplicate(&'static str),
+    Duplicate(String),
 }
 
 /// One column of one kind's table that changed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct HeaderChange {
     /// `experiment.kind`.
-    pub kind: &'static str,
+    pub kind: String,
     /// Table (`main` or a side table's name).
-    pub table: &'static str,
+    pub table: String,
     /// The CSV name old results carry.
-    pub old: &'static str,
+    pub old: String,
     /// What it is now.
     pub change: Change,
     /// Why, one sentence (the CHANGELOG says the same).
-    pub why: &'static str,
+    pub why: String,
 }
 
-/// Every change, oldest first.
-pub const CHANGES: &[HeaderChange] = &[
-    HeaderChange {
-        kind: "detp",
-        table: "main",
-        old: "rays_per_s",
-        change: Change::Renamed("segments_per_s"),
-        why:
-            "it counts photon segments per engine second; rays_per_s counts rays in the grid kinds",
-    },
-    HeaderChange {
-        kind: "quasi-static",
-        table: "main",
-        old: "irradiance_rmse",
-        change: Change::Renamed("irradiance_rel_rmse"),
-        why: "a relative error of one value, where detp's irradiance_rmse is an estimate in W/m²",
-    },
-    HeaderChange {
-        kind: "quasi-static",
-        table: "main",
-        old: "photons",
-        change: Change::Duplicate("detp.photons"),
-        why: "it repeated the parameter column detp.photons",
-    },
-    HeaderChange {
-        kind: "quasi-static",
-        table: "main",
-        old: "reference_photons",
-        change: Change::Duplicate("dynamic.reference_photons"),
-        why: "it repeated the parameter column dynamic.reference_photons",
-    },
-];
+/// The list as written in `header_changes.toml`.
+const LIST: &str = include_str!("header_changes.toml");
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ListFile {
+    change: Vec<Entry>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Entry {
+    kind: String,
+    table: String,
+    old: String,
+    why: String,
+    renamed: Option<String>,
+    duplicate_of: Option<String>,
+}
+
+/// Parses a list in `header_changes.toml`'s format; an entry must say exactly one of `renamed`
+/// and `duplicate_of`.
+fn parse(text: &str) -> Result<Vec<HeaderChange>, String> {
+    let file: ListFile = toml::from_str(text).map_err(|e| e.to_string())?;
+    file.change
+        .into_iter()
+        .map(|e| {
+            let change = match (e.renamed, e.duplicate_of) {
+                (Some(new), None) => Change::Renamed(new),
+                (None, Some(kept)) => Change::Duplicate(kept),
+                _ => {
+                    return Err(format!(
+                        "{}.{}: {}: give exactly one of renamed and duplicate_of",
+                        e.kind, e.table, e.old
+                    ))
+                }
+            };
+            Ok(HeaderChange {
+                kind: e.kind,
+                table: e.table,
+                old: e.old,
+                change,
+                why: e.why,
+            })
+        })
+        .collect()
+}
+
+/// Every change, oldest first (the compiled-in list; its test parses it).
+pub fn changes() -> &'static [HeaderChange] {
+    static CHANGES: OnceLock<Vec<HeaderChange>> = OnceLock::new();
+    CHANGES.get_or_init(|| parse(LIST).expect("src/output/header_changes.toml"))
+}
 
 /// The changes that apply to `kind`'s `table`.
 pub fn of<'a>(kind: &'a str, table: &'a str) -> impl Iterator<Item = &'static HeaderChange> + 'a {
-    CHANGES
+    changes()
         .iter()
         .filter(move |c| c.kind == kind && c.table == table)
 }
@@ -92,10 +119,10 @@ pub fn upgrade(
 ) -> (Vec<String>, Vec<String>) {
     let (mut applied, mut differences) = (Vec::new(), Vec::new());
     for c in of(kind, table) {
-        let Some(at) = header.iter().position(|h| h == c.old) else {
+        let Some(at) = header.iter().position(|h| *h == c.old) else {
             continue;
         };
-        match c.change {
+        match &c.change {
             Change::Renamed(new) => {
                 if header.iter().any(|h| h == new) {
                     differences.push(format!(
@@ -104,9 +131,9 @@ pub fn upgrade(
                     ));
                     continue;
                 }
-                header[at] = new.to_string();
+                header[at] = new.clone();
                 for info in classes.iter_mut().filter(|i| i.name == c.old) {
-                    info.name = new.to_string();
+                    info.name = new.clone();
                 }
                 applied.push(format!("{} read as {new} ({})", c.old, c.why));
             }
@@ -157,6 +184,19 @@ mod tests {
 
     fn strings(v: &[&str]) -> Vec<String> {
         v.iter().map(|s| s.to_string()).collect()
+    }
+
+    #[test]
+    fn the_compiled_in_list_parses_and_a_malformed_entry_is_refused() {
+        assert!(!changes().is_empty());
+        let both = "[[change]]\nkind = \"k\"\ntable = \"main\"\nold = \"a\"\nwhy = \"w\"\n";
+        assert!(parse(both).unwrap_err().contains("exactly one"));
+        let two = format!("{both}renamed = \"b\"\nduplicate_of = \"c\"\n");
+        assert!(parse(&two).unwrap_err().contains("exactly one"));
+        let odd = format!("{both}renamed = \"b\"\nnote = \"x\"\n");
+        assert!(parse(&odd).is_err(), "an unknown key is refused");
+        let one = parse(&format!("{both}renamed = \"b\"\n")).unwrap();
+        assert_eq!(one[0].change, Change::Renamed("b".into()));
     }
 
     #[test]

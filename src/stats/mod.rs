@@ -1,15 +1,17 @@
 //! Estimators that every engine's counters flow into: mergeable means with honest standard errors,
 //! histograms, goodness-of-fit statistics, and the verdict of a measurement against theory
 //! ([`verdict`]). All of them merge partial results in a fixed order, so a run's numbers do not
-//! depend on how the work was split across threads. [`fit`] and [`crossover`] turn such summaries
+//! depend on how the work was split across threads. [`fit`] and [`time_to_target`] turn such summaries
 //! into the speed-against-error answers (time to a target error, the crossover in points
 //! or frames, bootstrap CIs over replicas).
 
-pub mod crossover;
 pub mod fit;
 pub mod gof;
 pub mod histogram;
 pub mod mean;
+/// Seconds to a target error per method, and where one overtakes another (N*, F*): the cost
+/// model behind `raycost crossover` (named apart from that command's layer, `crate::crossover`).
+pub mod time_to_target;
 pub mod verdict;
 
 pub use histogram::Histogram;

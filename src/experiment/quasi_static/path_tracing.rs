@@ -22,7 +22,7 @@ use crate::detp::quasi_static::QuasiStatic;
 use crate::experiment::detp::path_tracing::subset;
 use crate::lt::pathtrace::{path_trace, powers_of_two, PathTraceRun};
 use crate::sample::rng::hash_key;
-use crate::stats::crossover::PathTracingCost;
+use crate::stats::time_to_target::PathTracingCost;
 use crate::stats::{ClusteredMean, Estimate};
 
 /// Tag of the per-frame path-tracing seed (`[seed, tag, frame]`).

@@ -10,7 +10,7 @@ use crate::experiment::detp::engines::{
 use crate::experiment::detp::{PointSet, RaySet};
 use crate::output::table::{col, Table};
 use crate::stats::Estimate;
-use super::{Estimator, Role, Shards};
+use super::{Crossover, Estimator, Role, Shards};
 use crate::output::column::{Class, Column};
 use crate::detp::disc_index::{self, DiscIndex as Index, IndexKind, IndexStats};
 use crate::experiment::kind::Need;
@@ -26,6 +26,7 @@ impl Estimator for DiscIndex {
     const NAME: &'static str = "disc-index";
     const COLUMN: &'static str = "disc_index";
     const ROLE: Role = Role::Detp;
+    const CROSSOVER: Option<Crossover> = Some(Crossover::Detp);
     const SHARDS: Shards = Shards::Add;
     type Measured = IndexMeasured;
     const COLUMNS: Table<DetpConfig, IndexMeasured> = Table::of(&[

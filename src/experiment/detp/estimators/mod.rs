@@ -63,6 +63,22 @@ pub enum Role {
     Reference,
 }
 
+/// How `raycost crossover` compares an estimator (which method when): the estimator says, so a new
+/// one joins the comparison from its own file.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Crossover {
+    /// A DETP engine: its errors are DETP's (every DETP engine's, bit for bit), its seconds its own.
+    Detp,
+    /// A photon map: its own errors, one per replica in the points-table family `replica`, and its
+    /// own seconds.
+    PhotonMap {
+        /// The points table's per-replica estimates (member: the replica).
+        replica: &'static Column,
+    },
+    /// Per-point path tracing: errors from its per-path variance, seconds per path.
+    PathTracing,
+}
+
 /// How `--photon-shard` treats an estimator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Shards {
@@ -89,6 +105,8 @@ pub(crate) trait Estimator: 'static {
     /// Its sums are brute force's: where it runs, every disc is checked against it and no keyed
     /// subset is re-computed.
     const ORACLE: bool = false;
+    /// How `raycost crossover` compares it (`None`: not at all).
+    const CROSSOVER: Option<Crossover> = None;
     /// What it measured over a point's replicas.
     type Measured: fmt::Debug + Send + Sync + 'static;
     /// Its group of main-table columns, read from [`Estimator::Measured`].
@@ -118,6 +136,8 @@ pub(crate) trait DynEstimator: Sync {
     fn shards(&self) -> Shards;
     /// [`Estimator::ORACLE`].
     fn oracle(&self) -> bool;
+    /// [`Estimator::CROSSOVER`].
+    fn crossover(&self) -> Option<Crossover>;
     /// Its main-table columns.
     fn columns(&self) -> Vec<&'static Column>;
     /// [`Estimator::check`].
@@ -151,6 +171,9 @@ impl<E: Estimator> DynEstimator for Registered<E> {
     }
     fn oracle(&self) -> bool {
         E::ORACLE
+    }
+    fn crossover(&self) -> Option<Crossover> {
+        E::CROSSOVER
     }
     fn columns(&self) -> Vec<&'static Column> {
         E::COLUMNS.columns()
@@ -198,6 +221,14 @@ impl EngineChoice {
     /// once by the merge.
     pub fn reads_photons(self) -> bool {
         self.0.shards() != Shards::Skip
+    }
+    /// How `raycost crossover` compares it.
+    pub fn crossover(self) -> Option<Crossover> {
+        self.0.crossover()
+    }
+    /// Every estimator, in registry order.
+    pub fn all() -> impl Iterator<Item = EngineChoice> {
+        ESTIMATORS.iter().map(|&e| Self(e))
     }
     /// Is it estimator `E`?
     pub(crate) fn is<E: Estimator>(self) -> bool {

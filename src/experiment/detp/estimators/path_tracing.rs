@@ -21,7 +21,7 @@ use std::sync::Arc;
 use glam::DVec3;
 use rand::seq::SliceRandom;
 
-use super::{Estimator, Role, Shards};
+use super::{Crossover, Estimator, Role, Shards};
 use crate::output::column::{Class, Column};
 use crate::experiment::detp::columns::*;
 use crate::experiment::detp::config::DetpConfig;
@@ -35,7 +35,7 @@ use crate::experiment::kind::{refuse, ConfigError};
 use crate::output::table::{col, Table};
 use crate::lt::pathtrace::{path_trace, powers_of_two, PathTraceRun};
 use crate::sample::rng::{domain, stream};
-use crate::stats::crossover::PathTracingCost;
+use crate::stats::time_to_target::PathTracingCost;
 
 /// Tag of the stream that permutes the points for `detp.path_points` (`[POINTS, seed, tag, n]`:
 /// no sweep point has this index, so it draws no other stream's numbers).
@@ -71,6 +71,7 @@ impl Estimator for PathTracing {
     const NAME: &'static str = "path-tracing";
     const COLUMN: &'static str = "path_tracing";
     const ROLE: Role = Role::Baseline;
+    const CROSSOVER: Option<Crossover> = Some(Crossover::PathTracing);
     const SHARDS: Shards = Shards::Skip;
     type Measured = PathMeasured;
     const COLUMNS: Table<DetpConfig, PathMeasured> = Table::of(&[

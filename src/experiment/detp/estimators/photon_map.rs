@@ -9,7 +9,7 @@ use crate::experiment::detp::engines::{
 use crate::experiment::detp::{PointSet, RaySet};
 use crate::output::table::{col, Table};
 use super::photon_map_growing::PhotonMapGrowing;
-use super::{Estimator, Role, Shards};
+use super::{Crossover, Estimator, Role, Shards};
 use crate::output::column::Column;
 use crate::detp::photon_map::{self, Filter};
 use crate::experiment::detp::engines::errors;
@@ -28,6 +28,9 @@ impl Estimator for PhotonMap {
     const NAME: &'static str = "photon-map";
     const COLUMN: &'static str = "photon_map";
     const ROLE: Role = Role::Baseline;
+    const CROSSOVER: Option<Crossover> = Some(Crossover::PhotonMap {
+        replica: &PHOTON_MAP_REPLICA,
+    });
     const SHARDS: Shards = NO_SHARDS;
     type Measured = MapMeasured;
     const COLUMNS: Table<DetpConfig, MapMeasured> = Table::of(&[

@@ -3,7 +3,7 @@
 //! every baseline's, `photon_map_growing_ref_*`).
 
 use super::photon_map::{kd_tree, needs_a_scene, MapMeasured, Runs, NO_SHARDS};
-use super::{Estimator, Role, Shards};
+use super::{Crossover, Estimator, Role, Shards};
 use crate::output::column::{Class, Column};
 use crate::experiment::detp::columns::*;
 use crate::experiment::detp::config::DetpConfig;
@@ -19,6 +19,9 @@ impl Estimator for PhotonMapGrowing {
     const NAME: &'static str = "photon-map-growing";
     const COLUMN: &'static str = "photon_map_growing";
     const ROLE: Role = Role::Baseline;
+    const CROSSOVER: Option<Crossover> = Some(Crossover::PhotonMap {
+        replica: &PHOTON_MAP_GROWING_REPLICA,
+    });
     const SHARDS: Shards = NO_SHARDS;
     type Measured = MapMeasured;
     const COLUMNS: Table<DetpConfig, MapMeasured> = Table::of(&[

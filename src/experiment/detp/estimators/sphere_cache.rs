@@ -10,7 +10,7 @@ use crate::experiment::detp::engines::{
 use crate::experiment::detp::{PointSet, RaySet};
 use crate::output::table::{col, Table};
 use crate::stats::Estimate;
-use super::{Estimator, Role, Shards};
+use super::{Crossover, Estimator, Role, Shards};
 use crate::output::column::{Class, Column};
 use crate::output::table::{Against, Cell, Line};
 use crate::stats::Theory;
@@ -33,6 +33,7 @@ impl Estimator for SphereCache {
     const NAME: &'static str = "sphere-cache";
     const COLUMN: &'static str = "sphere_cache";
     const ROLE: Role = Role::Detp;
+    const CROSSOVER: Option<Crossover> = Some(Crossover::Detp);
     const SHARDS: Shards =
         Shards::Refuse("the sphere cache subdivides a sphere by how many rays it holds");
     type Measured = CacheMeasured;
