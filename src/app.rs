@@ -106,7 +106,10 @@ pub fn run(cli: Cli) -> crate::error::Result<()> {
 
 /// `raycost reproduce`: the report on stdout, exit 1 when something counted differs.
 fn reproduce(a: crate::cli::ReproduceArgs) -> crate::error::Result<()> {
-    let threads = thread_pool(a.threads)?;
+    let threads = thread_pool(
+        a.threads
+            .or_else(|| crate::reproduce::recorded_threads(&a.dir)),
+    )?;
     let report = crate::reproduce::run(&crate::reproduce::Options {
         dir: a.dir,
         out: a.out,

@@ -190,7 +190,8 @@ pub struct ReproduceArgs {
     /// result reproduces); never inside DIR or the spec's folder.
     #[arg(long, value_name = "SCRATCH")]
     pub out: Option<PathBuf>,
-    /// Worker threads (default: all cores; the counted columns do not depend on it).
+    /// Worker threads (default: the count the result recorded, at most this machine's cores; the
+    /// counted columns do not depend on it, the timings do).
     #[arg(long)]
     pub threads: Option<usize>,
     /// Replace the rerun's files in SCRATCH if they exist.

@@ -157,6 +157,21 @@ pub fn run(o: &Options) -> Result<Report, Error> {
     }
 }
 
+/// The thread count the result in `dir` recorded, at most this machine's logical CPUs (`None` for a
+/// crossover, or where the metadata cannot be read: the refusal then comes from [`run`]).
+/// `raycost reproduce` reruns with it unless `--threads` says otherwise: the counted columns do not
+/// depend on it, but the timings it holds against their intervals do (a one-thread result rerun on
+/// two threads runs in about half the time).
+pub fn recorded_threads(dir: &Path) -> Option<usize> {
+    if dir.join("crossover.meta.toml").is_file() {
+        return None;
+    }
+    let results = find_result(dir).ok()?;
+    let meta = Meta::read(&results.file("meta.toml")).ok()?;
+    let cpus = std::thread::available_parallelism().map_or(1, |c| c.get());
+    (meta.run.threads > 0).then_some(meta.run.threads.min(cpus))
+}
+
 /// The result in `dir`: its one `NAME.csv` beside a `NAME.meta.toml`; where a merged table sits
 /// beside the shards it was merged from, the merged one.
 fn find_result(dir: &Path) -> Result<Results, OutputError> {
@@ -734,6 +749,25 @@ fn checked(o: &Options, rerun: Vec<(String, String)>, notes: Vec<String>) -> Rep
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_rerun_takes_the_thread_count_the_result_recorded() {
+        // Committed results: a one-thread run, a two-thread run, a crossover.
+        assert_eq!(
+            recorded_threads(Path::new("results/detp-engines-cost/runs/2")),
+            Some(1)
+        );
+        let cpus = std::thread::available_parallelism().map_or(1, |c| c.get());
+        assert_eq!(
+            recorded_threads(Path::new("results/cornell-levels")),
+            Some(2.min(cpus))
+        );
+        assert_eq!(
+            recorded_threads(Path::new("results/crossover-cornell")),
+            None
+        );
+        assert_eq!(recorded_threads(Path::new("results/no-such-result")), None);
+    }
 
     #[test]
     fn spec_differences_name_the_keys() {
