@@ -348,3 +348,69 @@ fn a_crossover_over_runs_reruns_and_names_the_run_that_changed() {
         "{err}"
     );
 }
+
+/// A result with separate committed runs (`--repeat 3`) holds a rerun's timing means to the band
+/// those runs give one more run, after the rerun's machine factor: a uniformly faster or slower
+/// machine is reported as the factor and still reproduces; one cell far outside the runs' spread
+/// (there, as in every committed run) is named.
+#[test]
+fn timings_are_held_to_the_spread_between_committed_runs() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let spec_dir = tmp.path().join("spec");
+    fs::create_dir(&spec_dir).expect("spec folder");
+    let spec = write_spec(
+        &spec_dir,
+        "tiny-detp",
+        "[experiment]\nname = \"tiny-detp\"\nkind = \"detp\"\nseed = 3\n[detp]\nphotons = 4000\n\
+         points = 200\ndisc_radius = 0.1\n[sweep]\n\"detp.disc_radius\" = [0.05, 0.1, 0.2, 0.3]\n",
+    );
+    let results = tmp.path().join("results");
+    run_quiet(&spec, &results)
+        .args(["--repeat", "3", "--threads", "1"])
+        .assert()
+        .success();
+    let runs: Vec<PathBuf> = (0..3)
+        .map(|r| results.join(format!("tiny-detp/runs/{r}")))
+        .collect();
+    let column = "cost_sphere_cache_per_replica_s_mean";
+    let scale = |row: Option<usize>, by: f64| {
+        for run in &runs {
+            let table = run.join("tiny-detp.csv");
+            let rows = read_csv(&table).1.len();
+            for r in (0..rows).filter(|r| row.is_none_or(|x| x == *r)) {
+                tamper(&table, r, column, |s| {
+                    (s.parse::<f64>().expect("a number") * by).to_string()
+                });
+            }
+        }
+    };
+    let json = |args: &[&str]| {
+        let (code, out, err) = output(reproduce(&runs[1], args).arg("--json"));
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|_| panic!("{err}"));
+        (code, v)
+    };
+    // Every committed run twice as slow as this machine: factor about ½, counted cells identical.
+    scale(None, 2.0);
+    let (_, v) = json(&[]);
+    let timing = &v["tables"][0]["timing"];
+    assert_eq!(v["tables"][0]["cells_differ"], 0, "{v}");
+    assert_eq!(timing["committed_runs"], 3, "{v}");
+    assert_eq!(timing["judged_between_runs"], 4, "{v}");
+    let factor = timing["run_factor"].as_f64().expect("a factor");
+    assert!((0.2..1.0).contains(&factor), "{factor}");
+    // Row 2 ten thousand times slower in every committed run: outside the band, named.
+    scale(Some(2), 1e4);
+    let (code, v) = json(&[]);
+    assert_eq!(code, 1, "{v}");
+    let timing = &v["tables"][0]["timing"];
+    let outside = timing["first_outside"].as_array().expect("cells");
+    assert!(
+        outside
+            .iter()
+            .any(|c| c["row"] == 2 && c["column"] == column),
+        "{v}"
+    );
+    // `--timings report` holds nothing.
+    let (code, v) = json(&["--timings", "report"]);
+    assert_eq!(code, 0, "{v}");
+}

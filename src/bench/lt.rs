@@ -194,11 +194,16 @@ fn bench_scene(name: &'static str, scene: &Scene, plan: Plan) -> anyhow::Result<
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
     #[cfg(feature = "embree")]
     let embree = crate::embree::triangles::EmbreeTriangles::build(scene)?;
-    let casters: Vec<(&'static str, &dyn DynCaster)> = vec![
-        ("", scene),
-        #[cfg(feature = "embree")]
-        ("-embree", &embree),
-    ];
+    // The core with the f32 triangle pre-test (same answers, checked below), where the CPU has it.
+    let mut pretest = scene.clone();
+    let mut casters: Vec<(&'static str, &dyn DynCaster)> = vec![("", scene)];
+    if Path::Avx2Pretest.available() {
+        pretest.set_bvh_path(Path::Avx2Pretest);
+        casters.push(("-f32-pretest", &pretest));
+    }
+    #[cfg(feature = "embree")]
+    casters.push(("-embree", &embree));
+    let embree_at = casters.iter().position(|c| c.0 == "-embree");
     let (pts, nrm) = points(scene, plan.points);
     let engines = casters.len();
     // Contestant c: engine c % engines; photons if c < engines, else paths.
@@ -214,13 +219,19 @@ fn bench_scene(name: &'static str, scene: &Scene, plan: Plan) -> anyhow::Result<
             rays[c].push(n);
         })
     });
-    let (mismatches_photons, mismatches_paths) = self_checks(scene, &pts, &nrm, plan)?;
+    let (mismatches_photons, mismatches_paths) = self_checks(scene, &pts, &nrm, plan, None)?;
+    let (pretest_photons, pretest_paths) = if Path::Avx2Pretest.available() {
+        self_checks(scene, &pts, &nrm, plan, Some(&pretest))?
+    } else {
+        (0, 0)
+    };
     let store = one.install(|| trace_photons_with(scene, scene, plan.photons, 0));
     let mut out = Vec::new();
     for c in 0..2 * engines {
         let (suffix, caster) = casters[c % engines];
         let photons = c < engines;
-        let embree_ratio = if suffix.is_empty() && engines > 1 {
+        let embree = embree_at.filter(|&e| e != c % engines);
+        let embree_ratio = if let Some(e) = embree {
             // Seconds per ray of the core over Embree's, round by round.
             let per_ray = |k: usize| -> Vec<f64> {
                 times.secs[k]
@@ -231,7 +242,7 @@ fn bench_scene(name: &'static str, scene: &Scene, plan: Plan) -> anyhow::Result<
             };
             let ratios = paired_ratios(
                 &RoundTimes {
-                    secs: vec![per_ray(c + 1), per_ray(c)],
+                    secs: vec![per_ray(e + c - c % engines), per_ray(c)],
                 },
                 0,
                 1,
@@ -240,57 +251,69 @@ fn bench_scene(name: &'static str, scene: &Scene, plan: Plan) -> anyhow::Result<
         } else {
             f64::NAN
         };
-        let (checked, disagree) = if suffix.is_empty() {
-            (0, 0)
-        } else {
+        let is_embree = suffix == "-embree";
+        let (checked, disagree) = if is_embree {
             caster.disagreements(scene, &store, plan.checked)
+        } else {
+            (0, 0)
         };
         out.push(LtRow {
             scene: name,
-            engine: match (photons, suffix.is_empty()) {
-                (true, true) => "lt-photons",
-                (true, false) => "lt-photons-embree",
-                (false, true) => "lt-paths",
-                (false, false) => "lt-paths-embree",
+            engine: match (photons, suffix) {
+                (true, "") => "lt-photons",
+                (false, "") => "lt-paths",
+                (true, "-f32-pretest") => "lt-photons-f32-pretest",
+                (false, "-f32-pretest") => "lt-paths-f32-pretest",
+                (true, _) => "lt-photons-embree",
+                (false, _) => "lt-paths-embree",
             },
             triangles: scene.triangles.len() as u64,
             rays: rays[c].clone(),
             secs: times.secs[c].clone(),
             embree_ratio,
             checked,
-            mismatches: if !suffix.is_empty() {
-                0
-            } else if photons {
-                mismatches_photons
-            } else {
-                mismatches_paths
+            mismatches: match (suffix, photons) {
+                ("", true) => mismatches_photons,
+                ("", false) => mismatches_paths,
+                ("-f32-pretest", true) => pretest_photons,
+                ("-f32-pretest", false) => pretest_paths,
+                _ => 0,
             },
             embree_disagree: disagree,
-            bvh_path: if suffix.is_empty() {
-                scene_path(scene)
-            } else {
+            bvh_path: if is_embree {
                 "embree"
+            } else {
+                caster_path(suffix, scene)
             },
         });
     }
     Ok(out)
 }
 
-fn scene_path(scene: &Scene) -> &'static str {
-    scene.bvh_path().name()
+/// The core's path a row ran (the pre-test rows run [`Path::Avx2Pretest`]).
+fn caster_path(suffix: &str, scene: &Scene) -> &'static str {
+    if suffix == "-f32-pretest" {
+        Path::Avx2Pretest.name()
+    } else {
+        scene.bvh_path().name()
+    }
 }
 
-/// The core's answers on the scalar path and on all threads against the detected path on one
-/// thread: (differing photon segments, differing reference estimates).
+/// The core's answers on `other` (by default the scalar path) and on all threads against the
+/// detected path on one thread: (differing photon segments, differing reference estimates).
 fn self_checks(
     scene: &Scene,
     pts: &[DVec3],
     nrm: &[DVec3],
     plan: Plan,
+    other: Option<&Scene>,
 ) -> anyhow::Result<(u64, u64)> {
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
-    let mut scalar = scene.clone();
-    scalar.set_bvh_path(Path::Scalar);
+    let scalar = other.cloned().unwrap_or_else(|| {
+        let mut s = scene.clone();
+        s.set_bvh_path(Path::Scalar);
+        s
+    });
     let base = one.install(|| trace_photons_with(scene, scene, plan.photons, 0));
     let mut photons = 0;
     for other in [

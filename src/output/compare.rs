@@ -11,7 +11,9 @@
 //!   |a − b| ≤ 3·√(se_a² + se_b²), and counted only when both runs' seconds are comparable: the same
 //!   CPU model and neither run busy (other processes under [`super::meta::BUSY_CORES`] cores);
 //!   otherwise, and for every other timing column, the cells are reported (ratios new/old), never
-//!   counted. Seconds of one machine say nothing about another's.
+//!   counted. Seconds of one machine say nothing about another's. Where the result has committed
+//!   separate runs (`runs/R`), a timing mean is held instead to the band those runs' spread gives
+//!   one more run ([`RunSpread`]): the machine drifts between runs more than within one.
 //!
 //! A table declared in the first side's metadata but missing from either side is a counted
 //! difference: a result that cannot be compared is not reproduced.
@@ -22,6 +24,8 @@ use std::path::{Path, PathBuf};
 use super::column::{Class, ColumnInfo};
 use super::header_changes;
 use super::meta::Meta;
+use super::run_spread::judge_offsets;
+pub use super::run_spread::RunSpread;
 use crate::error::OutputError;
 
 /// Differences printed per table before the rest are only counted.
@@ -37,6 +41,8 @@ pub struct Side {
     pub tables: Vec<(String, PathBuf)>,
     /// The run's metadata (the classes of its columns, its machine).
     pub meta: Meta,
+    /// The folder it was read from (for reports).
+    pub folder: String,
 }
 
 impl Side {
@@ -68,7 +74,12 @@ impl Side {
         tables.sort();
         // Both `T.csv` and `T.csv.gz`: the plain one is read (as `raycost crossover` does).
         tables.dedup_by(|b, a| a.0 == b.0);
-        Ok(Side { tables, meta })
+        let folder = dir.display().to_string();
+        Ok(Side {
+            tables,
+            meta,
+            folder,
+        })
     }
 
     /// The tables of a `raycost crossover` folder: `crossover.csv` (`main`), `best.csv`,
@@ -83,10 +94,14 @@ impl Side {
         .map(|(t, f)| (t.to_string(), dir.join(f)))
         .filter(|(_, p)| p.is_file())
         .collect();
-        Side { tables, meta }
+        Side {
+            tables,
+            meta,
+            folder: dir.display().to_string(),
+        }
     }
 
-    fn file(&self, table: &str) -> Option<&PathBuf> {
+    pub(super) fn file(&self, table: &str) -> Option<&PathBuf> {
         self.tables.iter().find(|(t, _)| t == table).map(|(_, p)| p)
     }
 
@@ -140,6 +155,14 @@ pub struct Timings {
     pub ratios: Option<(f64, f64, f64)>,
     /// Timing cells that differ as text (any timing column).
     pub differ: usize,
+    /// Of the judged cells, those judged against the spread between the result's committed
+    /// separate runs ([`RunSpread`]) rather than the two runs' own standard errors.
+    pub between_runs: usize,
+    /// How many committed runs that spread comes from (0: none).
+    pub runs: usize,
+    /// The rerun's seconds over the committed runs' (geometric means), the median over the cells
+    /// judged against their spread: the machine's speed that session, reported, not judged.
+    pub run_factor: Option<f64>,
 }
 
 /// One table compared.
@@ -213,15 +236,21 @@ impl TableComparison {
         if t.columns > 0 {
             s.push_str(&format!("; {} timing column(s)", t.columns));
             if t.with_interval > 0 {
-                match &t.not_counted {
-                    None => s.push_str(&format!(
-                        ", {} cell(s) inside their ±{TIMING_SIGMAS}σ interval, {} outside",
-                        t.inside, t.outside
-                    )),
-                    Some(why) => s.push_str(&format!(
-                        ", {} cell(s) inside their ±{TIMING_SIGMAS}σ interval, {} outside (not counted: {why})",
-                        t.inside, t.outside
-                    )),
+                s.push_str(&format!(
+                    ", {} cell(s) inside their ±{TIMING_SIGMAS}σ interval, {} outside",
+                    t.inside, t.outside
+                ));
+                if t.between_runs > 0 {
+                    s.push_str(&format!(
+                        " ({} of them judged against the spread between {} committed runs, after \
+                         this run's machine factor {:.3})",
+                        t.between_runs,
+                        t.runs,
+                        t.run_factor.unwrap_or(f64::NAN)
+                    ));
+                }
+                if let Some(why) = &t.not_counted {
+                    s.push_str(&format!(" (not counted: {why})"));
                 }
                 if !t.first_outside.is_empty() {
                     let shown: Vec<String> =
@@ -275,19 +304,22 @@ impl TableComparison {
                 "ratio_median": t.ratios.map(|r| r.1),
                 "ratio_max": t.ratios.map(|r| r.2),
                 "cells_differ": t.differ,
+                "judged_between_runs": t.between_runs,
+                "committed_runs": t.runs,
+                "run_factor": t.run_factor,
             },
         })
     }
 }
 
 /// A table's header and rows as text.
-struct Cells {
-    header: Vec<String>,
-    rows: Vec<Vec<String>>,
+pub(super) struct Cells {
+    pub(super) header: Vec<String>,
+    pub(super) rows: Vec<Vec<String>>,
 }
 
 /// Reads a table (gzip-decompressed if its name ends in `.gz`).
-fn read_cells(path: &Path) -> Result<Cells, OutputError> {
+pub(super) fn read_cells(path: &Path) -> Result<Cells, OutputError> {
     let raw =
         std::fs::read(path).map_err(|e| OutputError::new(path, format!("cannot read: {e}")))?;
     let text = if path.extension().is_some_and(|e| e == "gz") {
@@ -323,6 +355,7 @@ pub fn compare(
     old: &Side,
     new: &Side,
     judge_timings: bool,
+    spread: Option<&RunSpread>,
 ) -> Result<Vec<TableComparison>, OutputError> {
     let mut names: Vec<String> = old.meta.columns.keys().cloned().collect();
     for (t, _) in old.tables.iter().chain(&new.tables) {
@@ -378,7 +411,14 @@ pub fn compare(
                     c.mapped = mapped;
                     c.problems.extend(differ);
                 }
-                compare_table(&mut c, &cells, &read_cells(b)?, &classes, new_classes);
+                compare_table(
+                    &mut c,
+                    &cells,
+                    &read_cells(b)?,
+                    &classes,
+                    new_classes,
+                    spread,
+                );
             }
             (None, Some(_)) => c.problems.push(
                 "missing in the result (declared in its metadata or written by the rerun)".into(),
@@ -417,6 +457,7 @@ fn compare_table(
     b: &Cells,
     classes: &[ColumnInfo],
     new_classes: &[ColumnInfo],
+    spread: Option<&RunSpread>,
 ) {
     structure_problems(c, a, b, classes, new_classes);
     let class_of =
@@ -432,6 +473,8 @@ fn compare_table(
         new: y.to_string(),
     };
     let mut ratios = Vec::new();
+    // Cells held to the committed runs' band: (offset, variance), the cell.
+    let mut pending: Vec<((f64, f64), CellDiff)> = Vec::new();
     // Every column of the result that the rerun has, found by name.
     for (ca, name) in a.header.iter().enumerate() {
         let Some(cb) = at(b, name) else { continue };
@@ -461,6 +504,7 @@ fn compare_table(
         if se.is_some() {
             c.timings.with_interval += 1;
         }
+        let band = spread.and_then(|s| s.column(&c.table, name));
         for (r, (x, y)) in pairs {
             let (u, v) = (number(&x[ca]), number(&y[cb]));
             if x[ca] != y[cb] {
@@ -476,6 +520,15 @@ fn compare_table(
                 c.timings.inside += 1;
                 continue;
             }
+            // Where the result has separate committed runs, their spread gives the band a new
+            // run is held to, judged below once every cell's offset is known (`run_spread`).
+            if let Some((band, v)) = band.zip(v) {
+                if let Some(off) = band.offset(r, v, number(&y[sb]).unwrap_or(f64::NAN)) {
+                    c.timings.runs = band.runs;
+                    pending.push((off, diff(r, name, &x[ca], &y[cb])));
+                    continue;
+                }
+            }
             // An interval that cannot be formed (one replica: SE NaN) judges nothing.
             if let (Some(u), Some(v), Some(su), Some(sv)) = (u, v, number(&x[sa]), number(&y[sb])) {
                 if (u - v).abs() <= TIMING_SIGMAS * su.hypot(sv) {
@@ -490,6 +543,22 @@ fn compare_table(
         }
     }
     c.timings.ratios = summary(&mut ratios);
+    let offsets: Vec<(f64, f64)> = pending.iter().map(|p| p.0).collect();
+    let (factor, inside) = judge_offsets(&offsets);
+    if !pending.is_empty() {
+        c.timings.run_factor = Some(factor.exp());
+    }
+    for ((_, cell), ok) in pending.into_iter().zip(inside) {
+        c.timings.between_runs += 1;
+        if ok {
+            c.timings.inside += 1;
+        } else {
+            c.timings.outside += 1;
+            if c.timings.first_outside.len() < SHOWN {
+                c.timings.first_outside.push(cell);
+            }
+        }
+    }
 }
 
 /// The table's shape against the rerun's: headers, columns without a class, classes that moved,
@@ -594,6 +663,11 @@ mod tests {
         }
     }
 
+    /// `new` compared with `OLD`, both under [`classes`], no committed runs.
+    fn against_old(c: &mut TableComparison, new: &str) {
+        compare_table(c, &cells(OLD), &cells(new), &classes(), &classes(), None);
+    }
+
     fn fresh(table: &str) -> TableComparison {
         TableComparison {
             table: table.into(),
@@ -628,7 +702,7 @@ mod tests {
     fn a_counted_cell_that_differs_is_named() {
         let mut c = fresh("main");
         let new = "point,n_mean,t_mean,t_se,wall_s\n0,1.5,10,1,2\n1,2.50,20,1,4\n";
-        compare_table(&mut c, &cells(OLD), &cells(new), &classes(), &classes());
+        against_old(&mut c, new);
         assert_eq!((c.compared, c.cells_differ), (2, 1));
         assert_eq!(c.columns_differ, ["n_mean"]);
         assert_eq!(
@@ -652,7 +726,7 @@ mod tests {
         let inside = "point,n_mean,t_mean,t_se,wall_s\n0,1.5,10,1,4\n1,2.5,24,1,8\n";
         let mut c = fresh("main");
         c.timings.not_counted = None;
-        compare_table(&mut c, &cells(OLD), &cells(inside), &classes(), &classes());
+        against_old(&mut c, inside);
         assert_eq!((c.timings.inside, c.timings.outside), (2, 0));
         assert_eq!(c.timings.ratios, Some((1.2, 2.0, 2.0)));
         assert!(c.same(), "{}", c.line());
@@ -660,13 +734,13 @@ mod tests {
         let outside = "point,n_mean,t_mean,t_se,wall_s\n0,1.5,10,1,4\n1,2.5,25,1,8\n";
         let mut c = fresh("main");
         c.timings.not_counted = None;
-        compare_table(&mut c, &cells(OLD), &cells(outside), &classes(), &classes());
+        against_old(&mut c, outside);
         assert_eq!((c.timings.inside, c.timings.outside), (1, 1));
         assert!(!c.same());
         assert!(c.line().contains("row 1 (point 1) t_mean"), "{}", c.line());
         let mut c = fresh("main");
         c.timings.not_counted = Some("another CPU".into());
-        compare_table(&mut c, &cells(OLD), &cells(outside), &classes(), &classes());
+        against_old(&mut c, outside);
         assert!(c.same(), "{}", c.line());
         assert!(
             c.line().contains("not counted: another CPU"),
@@ -679,29 +753,23 @@ mod tests {
     fn another_header_or_row_count_or_class_is_a_difference() {
         let mut c = fresh("main");
         let renamed = "point,n_mean,t_mean,t_se,wall\n0,1.5,10,1,2\n1,2.5,20,1,4\n";
-        compare_table(&mut c, &cells(OLD), &cells(renamed), &classes(), &classes());
+        against_old(&mut c, renamed);
         assert!(c.problems[0].contains("only in the result [wall_s], only in the rerun [wall]"));
         assert_eq!(c.compared, 2, "the other columns are still compared");
         let mut c = fresh("main");
         let reordered = "point,t_mean,n_mean,t_se,wall_s\n0,10,1.5,1,2\n1,20,2.6,1,4\n";
-        compare_table(
-            &mut c,
-            &cells(OLD),
-            &cells(reordered),
-            &classes(),
-            &classes(),
-        );
+        against_old(&mut c, reordered);
         assert!(c.problems[0].contains("another order"), "{:?}", c.problems);
         assert_eq!((c.compared, c.cells_differ), (2, 1), "compared by name");
         assert_eq!(c.first[0].new, "2.6");
         let mut c = fresh("main");
         let short = "point,n_mean,t_mean,t_se,wall_s\n0,1.5,10,1,2\n";
-        compare_table(&mut c, &cells(OLD), &cells(short), &classes(), &classes());
+        against_old(&mut c, short);
         assert!(c.problems[0].contains("2 rows in the result, 1 in the rerun"));
         let mut other = classes();
         other[1].class = Class::Timing;
         let mut c = fresh("main");
-        compare_table(&mut c, &cells(OLD), &cells(OLD), &classes(), &other);
+        compare_table(&mut c, &cells(OLD), &cells(OLD), &classes(), &other, None);
         assert!(
             c.problems[0].contains("n_mean measured → timing"),
             "{:?}",

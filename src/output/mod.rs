@@ -18,6 +18,7 @@ pub mod meta;
 pub mod progress;
 pub mod readback;
 pub mod row;
+pub mod run_spread;
 pub mod sink;
 pub mod summary;
 pub mod table;

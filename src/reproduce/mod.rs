@@ -23,7 +23,7 @@ use crate::crossover::input::Results;
 use crate::error::{Error, OutputError};
 use crate::experiment::plan::Plan;
 use crate::experiment::runner::{self, RunOptions, Shard};
-use crate::output::compare::{compare, Side, TableComparison};
+use crate::output::compare::{compare, RunSpread, Side, TableComparison};
 use crate::output::meta::{changed_input, Build, InputFile, Meta};
 
 /// What `raycost reproduce` was asked.
@@ -464,10 +464,22 @@ fn reproduce_run(
         let new_meta = Meta::read(&new_dir.join(format!("{stem}.meta.toml")))?;
         let old = Side::of_run(&o.dir, &results.name, meta.clone())?;
         let new = Side::of_run(&new_dir, &stem, new_meta)?;
-        Ok(compare(&old, &new, o.judge_timings)?)
+        let spread = committed_runs_spread(&o.dir, &results.name)?;
+        Ok(compare(&old, &new, o.judge_timings, spread.as_ref())?)
     });
     rerun.push(("rerun".into(), new_dir.display().to_string()));
     finish(o, out, temporary, rerun, notes, outcome)
+}
+
+/// The spread between the separate runs committed beside the result in `dir` (its `runs/R`
+/// folders, or its siblings when it is one of them), if there are at least two.
+fn committed_runs_spread(dir: &Path, name: &str) -> Result<Option<RunSpread>, Error> {
+    let mut sides = Vec::new();
+    for folder in RunSpread::sibling_runs(dir, name) {
+        let meta = Meta::read(&folder.join(format!("{name}.meta.toml")))?;
+        sides.push(Side::of_run(&folder, name, meta)?);
+    }
+    Ok(RunSpread::of_runs(&sides)?)
 }
 
 /// Refuses a rerun that could not reproduce the result: the spec (or its keys' defaults), an input
@@ -675,7 +687,7 @@ fn reproduce_crossover(o: &Options, meta_path: &Path) -> Result<Report, Error> {
         }
         let old = Side::of_crossover(&o.dir, meta.clone());
         let new = Side::of_crossover(&out, new_meta);
-        Ok(compare(&old, &new, o.judge_timings)?)
+        Ok(compare(&old, &new, o.judge_timings, None)?)
     });
     finish(o, out, temporary, rerun, notes, outcome)
 }

@@ -18,14 +18,49 @@
 //! NaN (0·∞: a ray lying in a dilated box face with a zero direction component) is ignored by the
 //! min/max (it constrains nothing), which again only widens the interval. The t bounds are
 //! rounded outward to f32 too (t_min down, the cull distance up).
+//!
+//! # Why the f32 triangle pre-test never drops a hit the f64 test would find
+//! Before a leaf's packets get the exact f64 test, [`avx2::keep`] runs Möller–Trumbore without its
+//! division in f32 on two packets at once (eight lanes) and clears the lanes it can *prove* the f64
+//! test rejects; the f64 test then runs, unchanged, on every packet with a lane left, so answers
+//! are bit for bit those of [`crate::lt::shapes::Triangle::intersect`]. With the f64 inputs o, d,
+//! v₀, e₁, e₂ taken as exact reals, s = o − v₀, p = d × e₂, q = s × e₁, the exact values are
+//! D = e₁·p, U = s·p, V = d·q, T = e₂·q, and the f64 test accepts iff D ≠ 0, u = U/D ∈ [τ, 1 − τ],
+//! v = V/D ≥ τ, u + v ≤ 1 − τ and t = T/D > t_min (τ = −10⁻¹², each quotient with two f64
+//! roundings). Write ε = 2⁻²⁴, R = max|oᵢ|, Vm = max|v₀ᵢ|, Dm = max|dᵢ|, E₁ = max|e₁ᵢ|,
+//! E₂ = max|e₂ᵢ| (all rounded up to f32), S the largest |component| of the f32 s. Each input
+//! rounded to f32 moves by ≤ ε of itself, each f32 operation by ≤ ε of its result, so
+//! - s: |Δs| ≤ eS = 4ε(R + Vm) + κ (two roundings of the inputs, one of the difference), and
+//!   every |sᵢ| ≤ Sb = S + eS;
+//! - D: |ΔD| ≤ 48ε·E₁·Dm·E₂ ≤ eD = 128ε·E₁·Dm·E₂ + κ;
+//! - U: |ΔU| ≤ 6·Dm·E₂·eS + 42ε·Sb·Dm·E₂ ≤ eU = 16·Dm·E₂·(eS + 8ε·Sb) + κ, and V, T alike
+//!   (eV with Dm·E₁, eT with E₁·E₂: the same counts).
+//!
+//! κ = 2⁻¹⁰⁰ covers gradual underflow (≤ 2⁻¹⁵⁰ per operation, times factors ≤ 2³² that follow),
+//! and the domain (every magnitude ≤ 2³⁰, else the bounds are +∞ and nothing is rejected) keeps
+//! every product below f32's overflow. The f64 evaluation's own error (≤ 2⁻⁴⁸ of the same
+//! magnitudes) and the f32 rounding of the comparisons below (≤ 2ε of each side, i.e. ≤ 12ε·E₁Dm·E₂
+//! and ≤ 12ε·Sb·Dm·E) fit in the slack between the counts and the factors (80ε·E₁DmE₂ and
+//! ≥ 86ε·Sb·Dm·E). With C = |D̄| > eD the sign σ of D is known (the lane is otherwise kept), and
+//! with A = σŪ, B = σV̄, C′ = C + eD ≥ |D|, g = 2·10⁻¹²·C′, a lane is rejected when
+//! A + eU + g < 0 (u < τ), A − eU − g > C′ (u > 1 − τ), B + eV + g < 0 (v < τ),
+//! A + B − (eU + g) − (eV + g) > C′ (u + v > 1 − τ), or σT̄ + eT < t_min·(C − eD) with t_min ≥ 0
+//! rounded down to f32 (t ≤ t_min; for t_min < 0 this test is off). Each comparison is false on
+//! NaN, so a NaN anywhere keeps the lane. Tested on adversarial triangles and rays (every
+//! rejected lane is an f64 miss) and through every traversal against the portable path, which has
+//! no pre-test.
 
 use std::mem::MaybeUninit;
 
-use super::layout::{f32_down, f32_up, ChildRef, Node, Packet, LANES, WIDTH};
+use super::layout::{
+    f32_down, f32_up, ChildRef, Node, Packet, PacketF32, F32_DOMAIN, LANES, WIDTH,
+};
 
 /// Barycentric tolerance of [`crate::lt::shapes::Triangle::intersect`].
 const TOL: f64 = -1e-12;
 const HI: f64 = 1.0 - TOL;
+/// The f32 pre-test's absolute slack for gradual underflow, 2⁻¹⁰⁰ (module doc).
+const KAPPA: f32 = f32::from_bits(27 << 23);
 
 /// Stack entries: the build bounds the binary depth by 40 + log₂ n ≤ 72, so a wide node path holds
 /// at most 72 nodes, each leaving at most 7 siblings on the stack.
@@ -42,6 +77,14 @@ pub struct RayData {
     pub inv: [f32; 3],
     /// Per axis: index of the near plane's row in a node (`lo` rows 0..3, `hi` rows 3..6).
     pub near_row: [usize; 3],
+    /// The triangle pre-test's ray: o and d rounded to the nearest f32.
+    pub o32: [f32; 3],
+    pub d32: [f32; 3],
+    /// max |oᵢ| and max |dᵢ| rounded up; `dmag` is +∞ when either exceeds
+    /// [`F32_DOMAIN`](super::layout::F32_DOMAIN) or is not finite, or until
+    /// [`RayData::with_pretest`] sets them (the pre-test then keeps every lane).
+    pub omag: f32,
+    pub dmag: f32,
 }
 
 impl RayData {
@@ -56,6 +99,10 @@ impl RayData {
             org_far: [0.0; 3],
             inv: [0.0; 3],
             near_row: [0; 3],
+            o32: [0.0; 3],
+            d32: [0.0; 3],
+            omag: f32::INFINITY,
+            dmag: f32::INFINITY,
         };
         for a in 0..3 {
             let inv = (1.0 / d[a]) as f32;
@@ -68,6 +115,21 @@ impl RayData {
             r.near_row[a] = if neg { 3 + a } else { a };
         }
         r
+    }
+
+    /// The same ray with the f32 triangle pre-test's fields set (without them `dmag` is +∞ and
+    /// the pre-test keeps every lane): only the pre-test path pays for them.
+    pub fn with_pretest(mut self) -> Self {
+        let (o, d) = (self.o, self.d);
+        let omax = o.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let dmax = d.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        self.o32 = o.map(|x| x as f32);
+        self.d32 = d.map(|x| x as f32);
+        self.omag = f32_up(omax);
+        if omax <= F32_DOMAIN && dmax <= F32_DOMAIN && o.iter().chain(&d).all(|x| x.is_finite()) {
+            self.dmag = f32_up(dmax);
+        }
+        self
     }
 
     /// The far plane's row for axis `a`.
@@ -163,6 +225,22 @@ fn lane(p: &Packet, l: usize, o: &[f64; 3], d: &[f64; 3], t_min: f64) -> Option<
     (t > t_min).then_some(t)
 }
 
+/// The portable path has no pre-test: every live lane of `a` and `b` goes to the f64 test.
+#[inline(always)]
+pub fn keep_all(a: &PacketF32, b: &PacketF32, _: &RayData, _: f32) -> u32 {
+    a.live | b.live << LANES
+}
+
+/// t_min as the pre-test takes it: rounded down to f32 if t_min ≥ 0, else −∞ (its t test is off).
+#[inline(always)]
+pub fn pretest_t_min(t_min: f64) -> f32 {
+    if t_min >= 0.0 {
+        f32_down(t_min)
+    } else {
+        f32::NEG_INFINITY
+    }
+}
+
 /// Portable packet test: bit `l` set if lane `l` is hit at `t[l]`.
 #[inline(always)]
 pub fn packet_scalar(p: &Packet, r: &RayData, t_min: f64, t: &mut [f64; LANES]) -> u32 {
@@ -182,8 +260,8 @@ pub mod avx2 {
     //! every f64 operation the scalar one (no FMA), so the packet test is bit-identical.
     use std::arch::x86_64::*;
 
-    use super::{RayData, HI, LANES, TOL, WIDTH};
-    use crate::lt::bvh::layout::{Node, Packet};
+    use super::{RayData, HI, KAPPA, LANES, TOL, WIDTH};
+    use crate::lt::bvh::layout::{Node, Packet, PacketF32};
 
     /// [`super::node_scalar`] in AVX2.
     #[target_feature(enable = "avx2")]
@@ -210,6 +288,90 @@ pub mod avx2 {
         }
         _mm256_storeu_ps(near.as_mut_ptr(), tn);
         _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32
+    }
+
+    /// The f32 pre-test (module doc) of packets `a` and `b` (lanes 0–3 and 4–7): bit k set
+    /// unless lane k is empty or provably missed at t > t_min, where `t_lo` is t_min rounded down
+    /// to f32 if t_min ≥ 0, else −∞.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub unsafe fn keep(a: &PacketF32, b: &PacketF32, r: &RayData, t_lo: f32) -> u32 {
+        let ld = |x: &[f32; LANES], y: &[f32; LANES]| {
+            _mm256_set_m128(_mm_loadu_ps(y.as_ptr()), _mm_loadu_ps(x.as_ptr()))
+        };
+        let rows = |x: &[[f32; LANES]; 3], y: &[[f32; LANES]; 3]| {
+            [ld(&x[0], &y[0]), ld(&x[1], &y[1]), ld(&x[2], &y[2])]
+        };
+        let s1 = |x: f32| _mm256_set1_ps(x);
+        let (mul, sub, add) = (
+            |x, y| _mm256_mul_ps(x, y),
+            |x, y| _mm256_sub_ps(x, y),
+            |x, y| _mm256_add_ps(x, y),
+        );
+        let cross = |u: [__m256; 3], v: [__m256; 3]| {
+            [
+                sub(mul(u[1], v[2]), mul(v[1], u[2])),
+                sub(mul(u[2], v[0]), mul(v[2], u[0])),
+                sub(mul(u[0], v[1]), mul(v[0], u[1])),
+            ]
+        };
+        let dot = |u: [__m256; 3], v: [__m256; 3]| {
+            add(add(mul(u[0], v[0]), mul(u[1], v[1])), mul(u[2], v[2]))
+        };
+        let (e1, e2, v0) = (rows(&a.e1, &b.e1), rows(&a.e2, &b.e2), rows(&a.v0, &b.v0));
+        let d = r.d32.map(s1);
+        let s = [
+            sub(s1(r.o32[0]), v0[0]),
+            sub(s1(r.o32[1]), v0[1]),
+            sub(s1(r.o32[2]), v0[2]),
+        ];
+        let p = cross(d, e2);
+        let det = dot(e1, p);
+        let uu = dot(s, p);
+        let q = cross(s, e1);
+        let vv = dot(d, q);
+        let tt = dot(e2, q);
+        // The error bounds of the module doc.
+        let sign_bit = s1(-0.0);
+        let abs = |x| _mm256_andnot_ps(sign_bit, x);
+        let (vm, e1m, e2m) = (
+            ld(&a.mag[0], &b.mag[0]),
+            ld(&a.mag[1], &b.mag[1]),
+            ld(&a.mag[2], &b.mag[2]),
+        );
+        const EPS: f32 = f32::EPSILON / 2.0;
+        let kappa = s1(KAPPA);
+        let es = add(mul(s1(4.0 * EPS), add(s1(r.omag), vm)), kappa);
+        let smax = _mm256_max_ps(_mm256_max_ps(abs(s[0]), abs(s[1])), abs(s[2]));
+        let sb = add(smax, es);
+        let dm = s1(r.dmag);
+        let ed = add(mul(mul(s1(128.0 * EPS), e1m), mul(dm, e2m)), kappa);
+        let w = mul(s1(16.0), add(es, mul(s1(8.0 * EPS), sb)));
+        let eu = add(mul(mul(dm, e2m), w), kappa);
+        let ev = add(mul(mul(dm, e1m), w), kappa);
+        let et = add(mul(mul(e1m, e2m), w), kappa);
+        // Sign-normalised: A = σU, B = σV, σT; C = |D|.
+        let sign = _mm256_and_ps(det, sign_bit);
+        let c = abs(det);
+        let (au, bv, ts) = (
+            _mm256_xor_ps(uu, sign),
+            _mm256_xor_ps(vv, sign),
+            _mm256_xor_ps(tt, sign),
+        );
+        let ce = add(c, ed);
+        let g = mul(s1(2e-12), ce);
+        let (mu, mv) = (add(eu, g), add(ev, g));
+        let lt = |x, y| _mm256_cmp_ps::<_CMP_LT_OQ>(x, y);
+        let gt = |x, y| _mm256_cmp_ps::<_CMP_GT_OQ>(x, y);
+        let or = |x, y| _mm256_or_ps(x, y);
+        let zero = _mm256_setzero_ps();
+        let bary = or(
+            or(lt(add(au, mu), zero), gt(sub(au, mu), ce)),
+            or(lt(add(bv, mv), zero), gt(sub(add(au, bv), add(mu, mv)), ce)),
+        );
+        let behind = lt(add(ts, et), mul(s1(t_lo), sub(c, ed)));
+        let reject = _mm256_and_ps(gt(c, ed), or(bary, behind));
+        !(_mm256_movemask_ps(reject) as u32) & (a.live | b.live << LANES)
     }
 
     /// [`super::packet_scalar`] in AVX2.
@@ -264,25 +426,51 @@ pub mod avx2 {
     }
 }
 
+/// What a traversal walks: the nodes, the packets, their f32 copies, the root.
+#[derive(Clone, Copy)]
+pub struct Tree<'a> {
+    pub nodes: &'a [Node],
+    pub packets: &'a [Packet],
+    pub pretest: &'a [PacketF32],
+    pub root: ChildRef,
+}
+
+/// The exact test of one packet inside a traversal: offers each hit (but triangle `skip`) to the
+/// query, and returns from the traversal when the query says stop.
+macro_rules! exact_test {
+    ($packet:path, $p:expr, $ray:expr, $t_min:expr, $ts:ident, $skip:expr, $q:expr) => {
+        let p = $p;
+        // SAFETY: the traversal's caller checked the instruction set.
+        let mut m = unsafe { $packet(p, $ray, $t_min, &mut $ts) };
+        while m != 0 {
+            let l = m.trailing_zeros() as usize;
+            m &= m - 1;
+            if p.id[l] != $skip && $q.offer($ts[l], p.id[l]) {
+                return;
+            }
+        }
+    };
+}
+
 /// Defines a traversal over one instruction set's tests (a macro, not a generic function, so that
 /// the tests inline into a function compiled with their instruction set).
 macro_rules! traversal {
-    ($(#[$m:meta])* fn $name:ident, $node:path, $packet:path) => {
+    ($(#[$m:meta])* fn $name:ident, $node:path, $keep:path, $packet:path, $pretest:expr) => {
         $(#[$m])*
         #[allow(clippy::missing_safety_doc, unused_unsafe)]
         pub unsafe fn $name<Q: Query>(
-            nodes: &[Node],
-            packets: &[Packet],
-            root: ChildRef,
+            tree: &Tree<'_>,
             ray: &RayData,
             t_min: f64,
             skip: u32,
             q: &mut Q,
         ) {
+            let Tree { nodes, packets, pretest, root } = *tree;
             let mut stack = [const { MaybeUninit::<(ChildRef, f32)>::uninit() }; STACK];
             stack[0].write((root, f32::NEG_INFINITY));
             let mut top = 1;
             let tmin = f32_down(t_min);
+            let t_lo = pretest_t_min(t_min);
             let mut ts = [0.0f64; LANES];
             let mut near = [0.0f32; WIDTH];
             // The cull distance in f32 (rounded up), recomputed only after a leaf's offers.
@@ -295,16 +483,33 @@ macro_rules! traversal {
                     continue;
                 }
                 if r.is_leaf() {
-                    for p in &packets[r.packets()] {
-                        // SAFETY: the caller checked the instruction set.
-                        let mut m = unsafe { $packet(p, ray, t_min, &mut ts) };
-                        while m != 0 {
-                            let l = m.trailing_zeros() as usize;
-                            m &= m - 1;
-                            if p.id[l] != skip && q.offer(ts[l], p.id[l]) {
-                                return;
-                            }
+                    let range = r.packets();
+                    if !$pretest {
+                        for p in &packets[range] {
+                            exact_test!($packet, p, ray, t_min, ts, skip, q);
                         }
+                        bound = f32_up(q.bound());
+                        continue;
+                    }
+                    // Packets in pairs through the pre-test (a last odd one goes straight to the
+                    // exact test), then the exact test on each packet it left a lane in.
+                    let mut i = range.start;
+                    while i < range.end {
+                        let j = (i + 1).min(range.end - 1);
+                        let kept = if j > i {
+                            // SAFETY: the caller checked the instruction set.
+                            unsafe { $keep(&pretest[i], &pretest[j], ray, t_lo) }
+                        } else {
+                            0xF
+                        };
+                        let halves = [(i, kept & 0xF), (j, if j > i { kept >> LANES } else { 0 })];
+                        for (k, half) in halves {
+                            if half == 0 {
+                                continue;
+                            }
+                            exact_test!($packet, &packets[k], ray, t_min, ts, skip, q);
+                        }
+                        i += 2;
                     }
                     bound = f32_up(q.bound());
                     continue;
@@ -335,12 +540,21 @@ macro_rules! traversal {
 
 traversal!(
     /// Traversal with the portable tests.
-    fn traverse_scalar, node_scalar, packet_scalar
+    fn traverse_scalar, node_scalar, keep_all, packet_scalar, false
 );
 
 #[cfg(target_arch = "x86_64")]
 traversal!(
     /// Traversal with the AVX2 tests; the caller checks that the CPU has AVX2.
     #[target_feature(enable = "avx2")]
-    fn traverse_avx2, avx2::node, avx2::packet
+    fn traverse_avx2, avx2::node, keep_all, avx2::packet, false
+);
+
+#[cfg(target_arch = "x86_64")]
+traversal!(
+    /// Traversal with the AVX2 tests and the f32 triangle pre-test before the exact one (module
+    /// doc); the caller checks that the CPU has AVX2. Same answers as [`traverse_avx2`], measured
+    /// slower (docs/bench.md), so only chosen on request.
+    #[target_feature(enable = "avx2")]
+    fn traverse_avx2_pretest, avx2::node, avx2::keep, avx2::packet, true
 );

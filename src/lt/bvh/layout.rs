@@ -135,6 +135,67 @@ impl Packet {
     }
 }
 
+/// Magnitudes above this (2³⁰) turn a packet's f32 pre-test off (see [`PacketF32`]).
+pub const F32_DOMAIN: f64 = (1u64 << 30) as f64;
+
+/// A packet's four triangles in f32, for the conservative pre-test that spares the exact f64 test
+/// the lanes it can prove missed (`kernel::avx2::keep`; the proof is in the kernel's doc):
+/// vertex 0 and the two edges, each f64 value of [`Packet`] rounded to the nearest f32, and per lane
+/// the largest |component| of each of the three, rounded up. A lane whose magnitudes exceed
+/// [`F32_DOMAIN`] (or are not finite) gets +∞ magnitudes, which make every error bound +∞ or NaN:
+/// the pre-test then never rejects it. Unused lanes are not live (their bit in `live` is clear).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+pub struct PacketF32 {
+    /// Vertex 0, per axis, per lane.
+    pub v0: [[f32; LANES]; 3],
+    /// Edge v1 − v0.
+    pub e1: [[f32; LANES]; 3],
+    /// Edge v2 − v0.
+    pub e2: [[f32; LANES]; 3],
+    /// Per lane: max |v0ᵢ|, max |e1ᵢ|, max |e2ᵢ|, rounded up.
+    pub mag: [[f32; LANES]; 3],
+    /// Bit l set if lane l holds a triangle.
+    pub live: u32,
+}
+
+impl PacketF32 {
+    /// The f32 copy of `p`.
+    pub fn new(p: &Packet) -> Self {
+        let mut f = Self {
+            v0: [[0.0; LANES]; 3],
+            e1: [[0.0; LANES]; 3],
+            e2: [[0.0; LANES]; 3],
+            mag: [[0.0; LANES]; 3],
+            live: 0,
+        };
+        for l in 0..LANES {
+            if p.id[l] != u32::MAX {
+                f.live |= 1 << l;
+            }
+            let rows = [&p.v0, &p.e1, &p.e2];
+            let mut mags = [0.0f64; 3];
+            for (r, row) in rows.iter().enumerate() {
+                for a in 0..3 {
+                    mags[r] = mags[r].max(row[a][l].abs());
+                }
+            }
+            let in_domain = mags.iter().all(|m| *m <= F32_DOMAIN);
+            for a in 0..3 {
+                f.v0[a][l] = p.v0[a][l] as f32;
+                f.e1[a][l] = p.e1[a][l] as f32;
+                f.e2[a][l] = p.e2[a][l] as f32;
+            }
+            for (row, m) in f.mag.iter_mut().zip(mags) {
+                // (A NaN component is ignored by `max` here but makes the lane's f32 values NaN, and
+                // NaN fails every comparison the pre-test rejects by: the lane is kept.)
+                row[l] = if in_domain { f32_up(m) } else { f32::INFINITY };
+            }
+        }
+        f
+    }
+}
+
 /// The largest f32 not above `x` (−∞ below f32's range).
 pub fn f32_down(x: f64) -> f32 {
     let y = x as f32;

@@ -14,7 +14,10 @@
 //! # Instruction sets
 //! AVX2 where the CPU has it, else portable scalar code ([`Path::detect`]; `RAYCOST_BVH=scalar`
 //! forces the portable path). Both run the same f64 operations on every triangle, so they give
-//! identical answers (tested by forcing each path).
+//! identical answers (tested by forcing each path). A third path, [`Path::Avx2Pretest`]
+//! (`RAYCOST_BVH=avx2-pretest`), puts a conservative f32 test in front of the f64 one that skips
+//! only lanes it proves missed — the same answers, but measured 3–5 % slower on the bench scenes
+//! (docs/bench.md), so it is not the default.
 //!
 //! # Exactness
 //! Which triangles a ray hits, and at which t, is decided only by the f64 test, never by a box: the
@@ -49,7 +52,7 @@ mod tests;
 use glam::DVec3;
 
 use self::kernel::{Query, RayData};
-use self::layout::{ChildRef, Node, Packet};
+use self::layout::{ChildRef, Node, Packet, PacketF32};
 use super::shapes::Triangle;
 
 /// Scenes of at most this many triangles are one leaf (measured: the Cornell box's 32 triangles
@@ -224,13 +227,20 @@ pub enum Path {
     Scalar,
     /// AVX2.
     Avx2,
+    /// AVX2 with the f32 triangle pre-test in front of the exact test: the same answers, measured
+    /// slower than [`Path::Avx2`] (docs/bench.md), so chosen only by `RAYCOST_BVH=avx2-pretest` or
+    /// [`Bvh::with_path`] (the bench times it beside the default).
+    Avx2Pretest,
 }
 
 impl Path {
-    /// AVX2 if this CPU has it, unless `RAYCOST_BVH=scalar` asks for the portable path.
+    /// AVX2 if this CPU has it, unless `RAYCOST_BVH=scalar` asks for the portable path
+    /// (`RAYCOST_BVH=avx2-pretest`: AVX2 with the f32 pre-test, where the CPU has AVX2).
     pub fn detect() -> Self {
-        let forced_scalar = std::env::var("RAYCOST_BVH").is_ok_and(|v| v == "scalar");
-        if !forced_scalar && Self::Avx2.available() {
+        let asked = std::env::var("RAYCOST_BVH").unwrap_or_default();
+        if asked == "avx2-pretest" && Self::Avx2Pretest.available() {
+            Self::Avx2Pretest
+        } else if asked != "scalar" && Self::Avx2.available() {
             Self::Avx2
         } else {
             Self::Scalar
@@ -242,9 +252,9 @@ impl Path {
         match self {
             Self::Scalar => true,
             #[cfg(target_arch = "x86_64")]
-            Self::Avx2 => is_x86_feature_detected!("avx2"),
+            Self::Avx2 | Self::Avx2Pretest => is_x86_feature_detected!("avx2"),
             #[cfg(not(target_arch = "x86_64"))]
-            Self::Avx2 => false,
+            Self::Avx2 | Self::Avx2Pretest => false,
         }
     }
 
@@ -253,6 +263,7 @@ impl Path {
         match self {
             Self::Scalar => "scalar",
             Self::Avx2 => "avx2",
+            Self::Avx2Pretest => "avx2-pretest",
         }
     }
 }
@@ -263,6 +274,8 @@ pub struct Bvh {
     nodes: Vec<Node>,
     /// Triangles by rank (packets hold ranks, answers map them back to indices).
     packets: Vec<Packet>,
+    /// The same packets in f32 for the pre-test (one per packet, same index).
+    pretest: Vec<PacketF32>,
     /// Rank → triangle index.
     id_of: Vec<u32>,
     /// Triangle index → rank.
@@ -278,6 +291,7 @@ impl Default for Bvh {
         Self {
             nodes: Vec::new(),
             packets: Vec::new(),
+            pretest: Vec::new(),
             id_of: Vec::new(),
             key_of: Vec::new(),
             root: ChildRef::EMPTY,
@@ -309,6 +323,7 @@ impl Bvh {
         let bound = built.lo.abs().max(built.hi.abs()).max_element();
         Self {
             nodes: built.nodes,
+            pretest: built.packets.iter().map(PacketF32::new).collect(),
             packets: built.packets,
             id_of,
             key_of,
@@ -339,6 +354,7 @@ impl Bvh {
     pub fn bytes(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<Node>()
             + self.packets.len() * std::mem::size_of::<Packet>()
+            + self.pretest.len() * std::mem::size_of::<PacketF32>()
             + 8 * self.id_of.len()
     }
 
@@ -367,16 +383,29 @@ impl Bvh {
             return;
         }
         let skip = self.key(skip);
-        let ray = RayData::new(o.to_array(), d.to_array(), self.bound);
-        let (n, p, r) = (&self.nodes[..], &self.packets[..], self.root);
+        let mut ray = RayData::new(o.to_array(), d.to_array(), self.bound);
+        if self.path == Path::Avx2Pretest {
+            ray = ray.with_pretest();
+        }
+        let tree = kernel::Tree {
+            nodes: &self.nodes,
+            packets: &self.packets,
+            pretest: &self.pretest,
+            root: self.root,
+        };
         match self.path {
             // SAFETY: the portable tests need nothing.
-            Path::Scalar => unsafe { kernel::traverse_scalar(n, p, r, &ray, t_min, skip, q) },
+            Path::Scalar => unsafe { kernel::traverse_scalar(&tree, &ray, t_min, skip, q) },
             // SAFETY: `with_path` and `detect` only choose AVX2 where the CPU has it.
             #[cfg(target_arch = "x86_64")]
-            Path::Avx2 => unsafe { kernel::traverse_avx2(n, p, r, &ray, t_min, skip, q) },
+            Path::Avx2 => unsafe { kernel::traverse_avx2(&tree, &ray, t_min, skip, q) },
+            // SAFETY: as above.
+            #[cfg(target_arch = "x86_64")]
+            Path::Avx2Pretest => unsafe {
+                kernel::traverse_avx2_pretest(&tree, &ray, t_min, skip, q)
+            },
             #[cfg(not(target_arch = "x86_64"))]
-            Path::Avx2 => unreachable!("AVX2 is never chosen off x86-64"),
+            Path::Avx2 | Path::Avx2Pretest => unreachable!("AVX2 is never chosen off x86-64"),
         }
     }
 
