@@ -62,9 +62,13 @@ const HI: f64 = 1.0 - TOL;
 /// The f32 pre-test's absolute slack for gradual underflow, 2⁻¹⁰⁰ (module doc).
 const KAPPA: f32 = f32::from_bits(27 << 23);
 
+/// Subtrees a first pass keeps for the second to resume from ([`Culled`]), at most.
+pub const CULLED: usize = 64;
+
 /// Stack entries: the build bounds the binary depth by 40 + log₂ n ≤ 72, so a wide node path holds
-/// at most 72 nodes, each leaving at most 7 siblings on the stack.
-const STACK: usize = 512;
+/// at most 72 nodes, each leaving at most 7 siblings on the stack (504), plus a resumed pass's
+/// starting subtrees.
+const STACK: usize = 512 + CULLED;
 
 /// A ray as the tests read it.
 #[derive(Clone, Copy, Debug)]
@@ -426,13 +430,88 @@ pub mod avx2 {
     }
 }
 
-/// What a traversal walks: the nodes, the packets, their f32 copies, the root.
+/// What a traversal walks: the nodes, the packets, their f32 copies, the root, and where it
+/// starts (the root, or the subtrees an earlier pass culled).
 #[derive(Clone, Copy)]
 pub struct Tree<'a> {
     pub nodes: &'a [Node],
     pub packets: &'a [Packet],
     pub pretest: &'a [PacketF32],
     pub root: ChildRef,
+    pub start: Option<&'a Culled>,
+}
+
+/// Where a traversal puts the subtrees it culls (a box that starts beyond the distance that still
+/// matters): nowhere ([`Forget`]), or a list a later pass resumes from ([`Culled`]).
+pub trait Deferred {
+    /// Whether culled subtrees are kept: node tests then run to +∞ and cull by entry afterwards,
+    /// which passes the same children as testing to the bound (tn ≤ min(exit, b) ⇔ tn ≤ exit and
+    /// tn ≤ b).
+    const KEEP: bool;
+    /// A culled subtree and its entry distance.
+    fn keep(&mut self, c: ChildRef, entry: f32);
+}
+
+/// Culled subtrees are dropped (every query but the first pass of the two-nearest query).
+pub struct Forget;
+
+impl Deferred for Forget {
+    const KEEP: bool = false;
+    #[inline(always)]
+    fn keep(&mut self, _: ChildRef, _: f32) {}
+}
+
+/// Up to [`CULLED`] culled subtrees; past that `overflow` is set and the list is not complete.
+pub struct Culled {
+    list: [MaybeUninit<(ChildRef, f32)>; CULLED],
+    len: usize,
+    /// More were culled than the list holds.
+    pub overflow: bool,
+}
+
+impl Culled {
+    /// An empty list.
+    pub fn new() -> Self {
+        Self {
+            list: [const { MaybeUninit::uninit() }; CULLED],
+            len: 0,
+            overflow: false,
+        }
+    }
+
+    /// Orders the list so that a traversal starting from it pops the nearest subtree first.
+    pub fn sort_far_first(&mut self) {
+        // SAFETY: entries below `len` were written.
+        let kept = &mut self.list[..self.len];
+        kept.sort_unstable_by(|a, b| unsafe { b.assume_init().1.total_cmp(&a.assume_init().1) });
+    }
+
+    /// The subtrees kept, in their order (the last is popped first).
+    pub fn entries(&self) -> impl Iterator<Item = (ChildRef, f32)> + '_ {
+        // SAFETY: entries below `len` were written.
+        self.list[..self.len]
+            .iter()
+            .map(|e| unsafe { e.assume_init() })
+    }
+}
+
+impl Default for Culled {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Deferred for Culled {
+    const KEEP: bool = true;
+    #[inline(always)]
+    fn keep(&mut self, c: ChildRef, entry: f32) {
+        if self.len < CULLED {
+            self.list[self.len].write((c, entry));
+            self.len += 1;
+        } else {
+            self.overflow = true;
+        }
+    }
 }
 
 /// The exact test of one packet inside a traversal: offers each hit (but triangle `skip`) to the
@@ -458,17 +537,30 @@ macro_rules! traversal {
     ($(#[$m:meta])* fn $name:ident, $node:path, $keep:path, $packet:path, $pretest:expr) => {
         $(#[$m])*
         #[allow(clippy::missing_safety_doc, unused_unsafe)]
-        pub unsafe fn $name<Q: Query>(
+        pub unsafe fn $name<Q: Query, D: Deferred>(
             tree: &Tree<'_>,
             ray: &RayData,
             t_min: f64,
             skip: u32,
             q: &mut Q,
+            culled: &mut D,
         ) {
-            let Tree { nodes, packets, pretest, root } = *tree;
+            let Tree { nodes, packets, pretest, root, start } = *tree;
             let mut stack = [const { MaybeUninit::<(ChildRef, f32)>::uninit() }; STACK];
-            stack[0].write((root, f32::NEG_INFINITY));
-            let mut top = 1;
+            // From the root, or from the subtrees an earlier pass culled.
+            let mut top = 0;
+            match start {
+                None => {
+                    stack[0].write((root, f32::NEG_INFINITY));
+                    top = 1;
+                }
+                Some(list) => {
+                    for e in list.entries() {
+                        stack[top].write(e);
+                        top += 1;
+                    }
+                }
+            }
             let tmin = f32_down(t_min);
             let t_lo = pretest_t_min(t_min);
             let mut ts = [0.0f64; LANES];
@@ -480,6 +572,7 @@ macro_rules! traversal {
                 // SAFETY: entries below `top` were written.
                 let (r, entry) = unsafe { stack[top].assume_init() };
                 if entry > bound {
+                    culled.keep(r, entry);
                     continue;
                 }
                 if r.is_leaf() {
@@ -516,7 +609,8 @@ macro_rules! traversal {
                 }
                 let node = &nodes[r.index()];
                 // SAFETY: as above.
-                let mut m = unsafe { $node(node, ray, tmin, bound, &mut near) };
+                let t_max = if D::KEEP { f32::INFINITY } else { bound };
+                let mut m = unsafe { $node(node, ray, tmin, t_max, &mut near) };
                 assert!(top + WIDTH <= STACK, "BVH deeper than its traversal stack");
                 // Push the hit children farthest first, so the nearest is traversed next.
                 let first = top;
@@ -524,6 +618,10 @@ macro_rules! traversal {
                     let k = m.trailing_zeros() as usize;
                     m &= m - 1;
                     let e = (node.child[k], near[k]);
+                    if D::KEEP && e.1 > bound {
+                        culled.keep(e.0, e.1);
+                        continue;
+                    }
                     let mut i = top;
                     // SAFETY: entries first..top were written in this loop.
                     while i > first && unsafe { stack[i - 1].assume_init() }.1 < e.1 {

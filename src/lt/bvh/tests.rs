@@ -417,6 +417,25 @@ fn f32_pretest_never_clears_a_hit_lane() {
     }
 }
 
+/// The culled list keeps up to its size, says when it overflowed (the second pass then starts at
+/// the root), and orders itself so the nearest subtree is popped first.
+#[test]
+fn culled_subtrees_are_kept_in_order_until_the_list_overflows() {
+    use super::kernel::{Culled, Deferred, CULLED};
+    let mut c = Culled::new();
+    for k in 0..CULLED {
+        c.keep(ChildRef::node(k), ((k * 37) % CULLED) as f32);
+    }
+    assert!(!c.overflow);
+    c.sort_far_first();
+    let entries: Vec<f32> = c.entries().map(|e| e.1).collect();
+    assert_eq!(entries.len(), CULLED);
+    assert!(entries.windows(2).all(|w| w[0] >= w[1]), "{entries:?}");
+    c.keep(ChildRef::node(0), 0.0);
+    assert!(c.overflow);
+    assert_eq!(c.entries().count(), CULLED);
+}
+
 /// Conservativeness of the f32 box test: every point of a box, reached along any ray at parameter
 /// t, passes the test with t_min = t_max = t (origins far and near, tiny and zero direction
 /// components, points on faces and corners).
