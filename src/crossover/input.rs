@@ -12,13 +12,12 @@
 //! class must be the declaration's: a column renamed, or given another meaning since the result was
 //! written, is refused by name rather than read as something it is not.
 
-use std::io::Read as _;
 use std::path::{Path, PathBuf};
 
 use crate::error::OutputError;
 use crate::output::column::{Class, Column, ColumnInfo, Shape};
 use crate::output::meta::Meta;
-use crate::output::readback::{check_table, Torn};
+use crate::output::readback::{check_table, finished_table_bytes, text_cells, Torn};
 
 /// A spec key whose value every row records in its parameter column (`detp.photons`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -165,17 +164,7 @@ impl Csv {
     /// Reads and checks `path` (gzip-decompressed if its name ends in `.gz`); with `declared`, its
     /// header must be exactly those columns, and typed reads check their unit and class.
     pub fn read(path: &Path, declared: Option<Vec<ColumnInfo>>) -> Result<Csv, OutputError> {
-        let raw =
-            std::fs::read(path).map_err(|e| OutputError::new(path, format!("cannot read: {e}")))?;
-        let text = if path.extension().is_some_and(|e| e == "gz") {
-            let mut out = Vec::new();
-            flate2::read::GzDecoder::new(raw.as_slice())
-                .read_to_end(&mut out)
-                .map_err(|e| OutputError::new(path, format!("is not a readable gzip file: {e}")))?;
-            out
-        } else {
-            raw
-        };
+        let text = finished_table_bytes(path)?;
         let names: Option<Vec<String>> = declared
             .as_ref()
             .map(|d| d.iter().map(|c| c.name.clone()).collect());
@@ -187,21 +176,7 @@ impl Csv {
 
     /// Cells of checked CSV text.
     fn parse(path: &Path, text: &[u8]) -> Result<Csv, OutputError> {
-        let mut reader = ::csv::ReaderBuilder::new()
-            .has_headers(true)
-            .from_reader(text);
-        let bad = |e: ::csv::Error| OutputError::new(path, format!("unreadable CSV: {e}"));
-        let columns = reader
-            .headers()
-            .map_err(bad)?
-            .iter()
-            .map(str::to_string)
-            .collect();
-        let rows = reader
-            .records()
-            .map(|r| r.map(|r| r.iter().map(str::to_string).collect()))
-            .collect::<Result<Vec<Vec<String>>, _>>()
-            .map_err(bad)?;
+        let (columns, rows) = text_cells(path, text)?;
         Ok(Csv {
             path: path.to_path_buf(),
             columns,

@@ -18,12 +18,12 @@
 //! A table declared in the first side's metadata but missing from either side is a counted
 //! difference: a result that cannot be compared is not reproduced.
 
-use std::io::Read as _;
 use std::path::{Path, PathBuf};
 
 use super::column::{Class, ColumnInfo};
 use super::header_changes;
 use super::meta::Meta;
+use super::readback::{finished_table_bytes, text_cells};
 use super::run_spread::judge_offsets;
 pub use super::run_spread::RunSpread;
 use crate::error::OutputError;
@@ -320,32 +320,7 @@ pub(super) struct Cells {
 
 /// Reads a table (gzip-decompressed if its name ends in `.gz`).
 pub(super) fn read_cells(path: &Path) -> Result<Cells, OutputError> {
-    let raw =
-        std::fs::read(path).map_err(|e| OutputError::new(path, format!("cannot read: {e}")))?;
-    let text = if path.extension().is_some_and(|e| e == "gz") {
-        let mut out = Vec::new();
-        flate2::read::GzDecoder::new(raw.as_slice())
-            .read_to_end(&mut out)
-            .map_err(|e| OutputError::new(path, format!("is not a readable gzip file: {e}")))?;
-        out
-    } else {
-        raw
-    };
-    let mut reader = ::csv::ReaderBuilder::new()
-        .has_headers(true)
-        .from_reader(text.as_slice());
-    let bad = |e: ::csv::Error| OutputError::new(path, format!("unreadable CSV: {e}"));
-    let header = reader
-        .headers()
-        .map_err(bad)?
-        .iter()
-        .map(str::to_string)
-        .collect();
-    let rows = reader
-        .records()
-        .map(|r| r.map(|r| r.iter().map(str::to_string).collect()))
-        .collect::<Result<Vec<Vec<String>>, _>>()
-        .map_err(bad)?;
+    let (header, rows) = text_cells(path, &finished_table_bytes(path)?)?;
     Ok(Cells { header, rows })
 }
 

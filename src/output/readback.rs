@@ -126,6 +126,43 @@ pub fn read_table(
     check_table(path, text, declared, torn)
 }
 
+/// The bytes of a finished table, gzip-decompressed if its name ends in `.gz` (as large committed
+/// tables are kept): what `raycost reproduce` and `raycost crossover` read results from.
+pub fn finished_table_bytes(path: &Path) -> Result<Vec<u8>, OutputError> {
+    let raw = std::fs::read(path).map_err(|e| err(path, format!("cannot read: {e}")))?;
+    if path.extension().is_none_or(|e| e != "gz") {
+        return Ok(raw);
+    }
+    let mut out = Vec::new();
+    flate2::read::GzDecoder::new(raw.as_slice())
+        .read_to_end(&mut out)
+        .map_err(|e| err(path, format!("is not a readable gzip file: {e}")))?;
+    Ok(out)
+}
+
+/// The header and the rows of CSV text `text` (of table `path`, which errors name), as text cells.
+pub fn text_cells(
+    path: &Path,
+    text: &[u8],
+) -> Result<(Vec<String>, Vec<Vec<String>>), OutputError> {
+    let mut reader = ::csv::ReaderBuilder::new()
+        .has_headers(true)
+        .from_reader(text);
+    let bad = |e: ::csv::Error| err(path, format!("unreadable CSV: {e}"));
+    let header = reader
+        .headers()
+        .map_err(bad)?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let rows = reader
+        .records()
+        .map(|r| r.map(|r| r.iter().map(str::to_string).collect()))
+        .collect::<Result<Vec<Vec<String>>, _>>()
+        .map_err(bad)?;
+    Ok((header, rows))
+}
+
 /// Checks the bytes `text` of table `path` (see [`read_table`]).
 pub fn check_table(
     path: &Path,
