@@ -13,6 +13,8 @@ import os
 import sys
 import tomllib
 
+import shrinking_list
+
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
 
@@ -46,27 +48,13 @@ def dirty_results(results, root):
     return found
 
 
-def read_allow(path):
-    """The allow-list's paths (comments and blank lines skipped)."""
-    if not os.path.exists(path):
-        return []
-    with open(path) as f:
-        return [line.strip() for line in f if line.strip() and not line.lstrip().startswith("#")]
-
-
 def problems(results, allow_path, root):
     """(errors, notes): unlisted dirty results and stale lines are errors; listed ones are notes."""
-    dirty = dirty_results(results, root)
-    allowed = read_allow(allow_path)
-    errors, notes = [], []
-    for p, places in sorted(dirty.items()):
-        line = "%s: git_dirty = \"true\" in %s" % (p, ", ".join(places))
-        (notes if p in allowed else errors).append(line)
-    for p in allowed:
-        if p not in dirty:
-            why = "no longer exists" if not os.path.exists(os.path.join(root, p)) else "is clean now"
-            errors.append("%s: listed in %s but %s: remove the line" % (p, os.path.relpath(allow_path, root), why))
-    return errors, notes
+    refused = {p: "%s: git_dirty = \"true\" in %s" % (p, ", ".join(places))
+               for p, places in dirty_results(results, root).items()}
+    return shrinking_list.judge(refused, shrinking_list.read(allow_path),
+                                lambda p: os.path.exists(os.path.join(root, p)),
+                                os.path.relpath(allow_path, root), "is clean now")
 
 
 def main():
@@ -75,16 +63,11 @@ def main():
     ap.add_argument("--allow", default=os.path.join(ROOT, ".ci", "known-dirty-results.txt"))
     args = ap.parse_args()
     errors, notes = problems(args.results, args.allow, ROOT)
-    for n in notes:
-        print("known dirty, awaiting regeneration: %s" % n)
-    for e in errors:
-        print("error: %s" % e, file=sys.stderr)
-    if errors:
-        print("error: committed results must come from a clean build of a commit on main (rerun them; "
-              "a result awaiting that may be listed in .ci/known-dirty-results.txt)", file=sys.stderr)
-        return 1
-    print("results: no dirty build outside the %d known awaiting regeneration" % len(notes))
-    return 0
+    return shrinking_list.report(
+        errors, notes, "known dirty, awaiting regeneration",
+        "committed results must come from a clean build of a commit on main (rerun them; "
+        "a result awaiting that may be listed in .ci/known-dirty-results.txt)",
+        "results: no dirty build outside the %d known awaiting regeneration" % len(notes))
 
 
 if __name__ == "__main__":

@@ -16,6 +16,8 @@ import subprocess
 import sys
 import tomllib
 
+import shrinking_list
+
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 RERUNNABLE = ("run", "merge", "crossover")
 
@@ -36,15 +38,6 @@ def result_folders(results, root=ROOT):
     return sorted(out)
 
 
-def read_allow(path):
-    """The allow-list's folders (comments and blank lines skipped)."""
-    if not os.path.exists(path):
-        return []
-    with open(path) as f:
-        return [line.split("#")[0].strip().rstrip("/") for line in f
-                if line.strip() and not line.lstrip().startswith("#")]
-
-
 def check(raycost, folder, root=ROOT):
     """(rerunnable, the check's last line)."""
     p = subprocess.run([raycost, "reproduce", folder, "--check"], cwd=root, capture_output=True, text=True)
@@ -54,22 +47,15 @@ def check(raycost, folder, root=ROOT):
 
 def problems(raycost, results, allow_path, root=ROOT):
     """(errors, stale, folders): a refused result not listed, a listed one rerunnable now or gone
-    are errors; refused listed ones are the stale ones."""
-    allowed = read_allow(allow_path)
+    are errors; refused listed ones are the stale ones (each with the check's reason)."""
     folders = result_folders(results, root)
-    listed_in = os.path.relpath(allow_path, root)
-    errors, stale = [], []
+    refused = {}
     for f in folders:
         ok, line = check(raycost, f, root)
-        if ok and f in allowed:
-            errors.append("%s: listed in %s but rerunnable now: remove the line" % (f, listed_in))
-        elif not ok and f not in allowed:
-            errors.append("%s: cannot be rerun as recorded: %s" % (f, line))
-        elif not ok:
-            stale.append(f)
-    for a in allowed:
-        if a not in folders:
-            errors.append("%s: listed in %s but no such result: remove the line" % (a, listed_in))
+        if not ok:
+            refused[f] = "%s: cannot be rerun as recorded: %s" % (f, line)
+    errors, stale = shrinking_list.judge(refused, shrinking_list.read(allow_path), lambda f: f in folders,
+                                         os.path.relpath(allow_path, root), "rerunnable now")
     return errors, stale, folders
 
 
@@ -80,16 +66,11 @@ def main():
     ap.add_argument("--allow", default=os.path.join(ROOT, ".ci", "known-stale-results.txt"))
     args = ap.parse_args()
     errors, stale, folders = problems(os.path.abspath(args.raycost), args.results, args.allow)
-    for s in stale:
-        print("known stale, awaiting a rerun on the current code: %s" % s)
-    for e in errors:
-        print("error: %s" % e, file=sys.stderr)
-    if errors:
-        print("error: every committed result must rerun from its metadata (`raycost reproduce DIR`); rerun it "
-              "on the current code, or list it in .ci/known-stale-results.txt until then", file=sys.stderr)
-        return 1
-    print("results: %d rerunnable as recorded, %d known stale awaiting a rerun" % (len(folders) - len(stale), len(stale)))
-    return 0
+    return shrinking_list.report(
+        errors, stale, "known stale, awaiting a rerun on the current code",
+        "every committed result must rerun from its metadata (`raycost reproduce DIR`); rerun it "
+        "on the current code, or list it in .ci/known-stale-results.txt until then",
+        "results: %d rerunnable as recorded, %d known stale awaiting a rerun" % (len(folders) - len(stale), len(stale)))
 
 
 if __name__ == "__main__":
