@@ -12,6 +12,8 @@ Run from the repository root:  python3 scripts/detp_doc_numbers.py [--results DI
   the robots the points where the reference is exactly 0 and those where DETP is exactly 0 too.
 - predict-engine: the frames at which the separate runs (same seed, same photons; the pick is taken
   on seconds) picked different engines.
+- nstar-crossover-{cornell,museum}: the refined sweeps' N* with their intervals where a head-to-head
+  run measured the crossing, and the measured crossing over the predicted point.
 
 Tables are read through scripts/raycost_tables.py (the columns each meta.toml declares).
 """
@@ -144,6 +146,34 @@ def predictor_quotes(results):
             % (len(picks), span(pairs, count), len(keys), any_differs)]
 
 
+SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
+
+
+def sci(x):
+    """A number as the findings write it, two significant digits: 4.9·10³."""
+    mantissa, exponent = ("%.1e" % x).split("e")
+    return "%s·10%s" % (mantissa, str(int(exponent)).translate(SUPERSCRIPT))
+
+
+def nstar_quotes(results):
+    """Per scene with a head-to-head run: each confirmed engine's refined N* [interval] and the
+    measured crossing over that point."""
+    out = []
+    ratios = {}
+    for scene in ["cornell", "museum"]:
+        rows = rp.read_csv(os.path.join(results, "nstar-crossover-%s" % scene, "crossover.csv"),
+                           ["method", "n_star", "n_star_lo", "n_star_hi", "n_star_head_to_head"])
+        confirmed = [r for r in rows if r["n_star_head_to_head"] == r["n_star_head_to_head"]]  # not NaN
+        order = {"disc-index": 0, "sphere-cache": 1}
+        for r in sorted(confirmed, key=lambda r: order[r["method"]]):
+            out.append("%s [%s, %s]" % (sci(r["n_star"]), sci(r["n_star_lo"]), sci(r["n_star_hi"])))
+            ratios.setdefault(scene, []).append("%.2f×" % (r["n_star_head_to_head"] / r["n_star"]))
+    c, m = ratios["cornell"], ratios["museum"]
+    out.append("at %s and %s the point prediction on the Cornell box and %s and %s on the museum"
+               % (c[0], c[1], m[0], m[1]))
+    return out
+
+
 def facing_quotes(results):
     """The fixed kitchen points facing into another surface closer than d along their normal, as
     fronts-kitchen's metadata warns for its sweep points (each warning names its first point, whose
@@ -164,7 +194,7 @@ def quotes(results):
     """[(the doc under docs/, the phrase it must hold)]."""
     rows, conf, points = speed_vs_error(results)
     findings = (covered_points(results) + kitchen_quotes(conf, rows, points) + robots_quotes(conf, rows, points)
-                + predictor_quotes(results))
+                + predictor_quotes(results) + nstar_quotes(results))
     return [("findings-detp.md", q) for q in findings] + [("reference.md", q) for q in facing_quotes(results)]
 
 
