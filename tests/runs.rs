@@ -353,4 +353,33 @@ disc_radius = {d}
     for c in ["points", "irradiance_mean", "tests_sphere_cache"] {
         assert_eq!(column(&a, c), column(&b, c), "{c}");
     }
+    // Each table states the unit its lengths are in: r_s where the spec wrote them in root units,
+    // the scene's length where it wrote them in the scene's; the same d in each.
+    for (table, lengths, d) in [(&a, "r_s", "0.03"), (&b, "length", d.as_str())] {
+        let unit = declared_units(table);
+        for c in ["detp.disc_radius", "detp.point_spacing", "disc_radius_used"] {
+            assert_eq!(unit(c), lengths, "{c} in {}", table.display());
+        }
+        assert_eq!(unit("detp.photons"), "photons");
+        assert_eq!(unit("detp.q"), "");
+        assert_eq!(unit("disc_radius_used_root"), "r_s");
+        let d: f64 = d.parse().expect("d");
+        for c in ["detp.disc_radius", "disc_radius_used"] {
+            let v: f64 = column(table, c)[0].parse().expect("a number");
+            assert!((v / d - 1.0).abs() < 1e-12, "{c}: {v} against {d}");
+        }
+    }
+}
+
+/// Column name → the unit `csv`'s metadata declares for it in the main table.
+fn declared_units(csv: &Path) -> impl Fn(&str) -> String {
+    let meta = raycost::output::meta::Meta::read(&csv.with_extension("meta.toml")).expect("meta");
+    let main = meta.columns.get("main").expect("main columns").clone();
+    move |name| {
+        main.iter()
+            .find(|c| c.name == name)
+            .unwrap_or_else(|| panic!("no column {name}"))
+            .unit
+            .clone()
+    }
 }

@@ -16,6 +16,7 @@ use crate::output::meta::{available_memory, InputFile};
 use crate::output::row::Value;
 use crate::spec::{KeyError, Spec};
 use crate::toml_text::find_key;
+use crate::toml_text::keys::KeyDoc;
 
 const GIB: f64 = (1u64 << 30) as f64;
 
@@ -28,7 +29,9 @@ pub struct Plan {
     /// Every point, configured (index = point index).
     pub points: Vec<Box<dyn DynPoint>>,
     /// Every point's parameter columns (see [`parameters`]).
-    pub params: Vec<Vec<(String, Value)>>,
+    pub params: Vec<Vec<Param>>,
+    /// The unit every point's spec lengths are in (see [`lengths_in_force`]).
+    pub lengths: Vec<&'static str>,
     /// Every file the points read, with content hashes.
     pub inputs: Vec<InputFile>,
     /// The normalised spec (`base`: the kind's struct with defaults, `sweep`).
@@ -92,10 +95,11 @@ impl Plan {
                 return Err(spec.locate_axis(key, format!("cannot be swept: {why}")));
             }
         }
-        let keys: Vec<String> = kind.keys().into_iter().map(|k| k.key).collect();
+        let keys = kind.keys();
         let mut inputs = Inputs::new(&spec.dir);
         let mut points = Vec::with_capacity(spec.points.len());
         let mut params = Vec::with_capacity(spec.points.len());
+        let mut lengths = Vec::with_capacity(spec.points.len());
         let mut batches = Vec::with_capacity(spec.points.len());
         for p in &spec.points {
             crate::spec::magnitude::check_point(&p.tree)
@@ -114,6 +118,7 @@ impl Plan {
             })?;
             batches.push(check_memory(&spec, p.index, kind, point.as_ref(), threads)?);
             params.push(parameters(&keys, &p.params, &reading.normalized));
+            lengths.push(lengths_in_force(&reading.normalized));
             points.push(point);
         }
         let mut normalized = toml::Table::new();
@@ -136,6 +141,7 @@ impl Plan {
             kind,
             points,
             params,
+            lengths,
             inputs: inputs.files(),
             normalized,
             hash,
@@ -343,36 +349,95 @@ const NOT_PARAMETERS: &[&str] = &[
     "detp.photon_batches",
 ];
 
+/// One parameter column of a point: the spec key, the unit its value is in, and the value.
+#[derive(Debug, Clone)]
+pub struct Param {
+    /// The spec key (the column's name).
+    pub key: String,
+    /// The unit the value is in: the key's declared unit, a length resolved by
+    /// [`unit_in_force`].
+    pub unit: &'static str,
+    /// The value in force.
+    pub value: Value,
+}
+
 /// Every parameter of a point, in column order: the swept or `--set` keys first (as `check`
 /// lists them), then every other key the kind declares (`keys`), in declaration order, with the
-/// value in force (`normalized`: the point's reading, defaults filled in); a key without a value
-/// (an optional key left out) is missing (NaN). An array of tables (`scene.class`) is one column
-/// with its TOML text.
+/// value in force (`normalized`: the point's reading, defaults filled in) and the unit that value
+/// is in (a length in the unit its table's `length_unit` names); a key without a value (an
+/// optional key left out) is missing (NaN). An array of tables (`scene.class`) is one column with
+/// its TOML text.
 pub fn parameters(
-    keys: &[String],
+    keys: &[KeyDoc],
     swept: &[(String, toml::Value)],
     normalized: &toml::Value,
-) -> Vec<(String, Value)> {
-    let mut out: Vec<(String, Value)> = swept
+) -> Vec<Param> {
+    // `scene.class[].radius` → the column `scene.class`.
+    let column = |key: &str| -> String {
+        match key.split_once('[') {
+            Some((head, _)) => head.to_string(),
+            None => key.to_string(),
+        }
+    };
+    let unit = |name: &str| -> &'static str {
+        let declared = keys.iter().find(|k| k.key == name).map_or("", |k| k.unit);
+        unit_in_force(name, declared, normalized)
+    };
+    let mut out: Vec<Param> = swept
         .iter()
-        .map(|(k, v)| (k.clone(), param_value(v)))
+        .map(|(k, v)| Param {
+            unit: unit(k),
+            key: k.clone(),
+            value: param_value(v),
+        })
         .collect();
     for key in keys {
-        // `scene.class[].radius` → the column `scene.class`.
-        let key = match key.split_once("[]") {
-            Some((head, _)) => head,
-            None => key.as_str(),
-        };
-        if NOT_PARAMETERS.contains(&key) || out.iter().any(|(k, _)| k == key) {
+        let name = column(&key.key);
+        if NOT_PARAMETERS.contains(&name.as_str()) || out.iter().any(|p| p.key == name) {
             continue;
         }
-        let value = key
+        let value = name
             .split('.')
             .try_fold(normalized, |v, seg| v.get(seg))
             .map_or(Value::F(f64::NAN), param_value);
-        out.push((key.to_string(), value));
+        out.push(Param {
+            unit: if name == key.key { unit(&name) } else { "" },
+            key: name,
+            value,
+        });
     }
     out
+}
+
+/// The unit a point's lengths are in: a table with a `length_unit` key (`[detp]`) writes its
+/// lengths in that unit, so with `length_unit = "root"` they are in r_s (the radius of the sphere
+/// around the scene's bounds), `"r_s"`; otherwise in the scene's own, `"length"`.
+pub fn lengths_in_force(normalized: &toml::Value) -> &'static str {
+    let root = normalized.as_table().is_some_and(|t| {
+        t.values()
+            .any(|table| table.get("length_unit").and_then(toml::Value::as_str) == Some("root"))
+    });
+    if root {
+        "r_s"
+    } else {
+        "length"
+    }
+}
+
+/// The unit a key declared in `declared` is in at this point: a length (`"length"`) of a table
+/// with a `length_unit` key in the unit that key names ([`lengths_in_force`]), every other unit
+/// as declared.
+fn unit_in_force(key: &str, declared: &'static str, normalized: &toml::Value) -> &'static str {
+    let table = key.split_once('.').map_or("", |(t, _)| t);
+    let has_unit_key = normalized
+        .get(table)
+        .and_then(|t| t.get("length_unit"))
+        .is_some();
+    if declared == "length" && has_unit_key {
+        lengths_in_force(normalized)
+    } else {
+        declared
+    }
 }
 
 /// Refuses a point whose structures would not fit: over the spec's budget key (unless its photons

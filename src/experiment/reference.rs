@@ -191,7 +191,11 @@ pub fn columns() -> String {
          edit. Every table starts with `point`; the main table then has every parameter of the \
          point (class `parameter`, named by its dotted spec key, `docs/spec.md`): the swept or \
          `--set` keys first, then every other key the kind accepts, with the value in force \
-         (defaults filled in). **Missing values are written `NaN`** in every table, numeric or \
+         (defaults filled in) in its key's unit; the metadata (`NAME.meta.toml`, \
+         `[[columns.main]]`) records each column's unit as it was in that run: a length of a \
+         table with a `length_unit` key (`[detp]`), and a column below in unit `spec length`, is \
+         in `r_s` (the radius of the sphere around the scene's bounds) where that key is \
+         `\"root\"`, else in the scene's `length`. **Missing values are written `NaN`** in every table, numeric or \
          text (an optional key left out, the standard error of one sample, a theory without a \
          closed form, a check that did not run); no field is ever empty. Classes: `measured` (identical for one spec and seed on any machine, thread \
          count or shard split), `timing` (clocks: may differ between runs), `theory` (closed forms), \

@@ -8,9 +8,9 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use super::kind::{Check, Context, DynKind, ErasedOutput};
-use super::plan::Plan;
+use super::plan::{Param, Plan};
 use crate::error::{Context as _, Error};
-use crate::output::column::{declaration, Class, ColumnInfo, POINT};
+use crate::output::column::{declaration, resolve_unit, Class, ColumnInfo, POINT};
 use crate::output::meta::Meta;
 use crate::output::progress::progress;
 use crate::output::row::{Row, Value};
@@ -125,14 +125,18 @@ fn start_meta(plan: &Plan, opts: &RunOptions, warnings: Vec<String>) -> Meta {
     meta
 }
 
-/// Prepends `point` and the parameter columns to a result row.
-fn with_point_columns(index: usize, params: &[(String, Value)], row: &Row) -> Row {
+/// Prepends `point` and the parameter columns to a result row, and states a length written as
+/// the spec writes lengths in the unit this point's are in (`lengths`, see [`resolve_unit`]).
+fn with_point_columns(index: usize, params: &[Param], lengths: &'static str, row: &Row) -> Row {
     let mut r = Row::default();
     r.put(&POINT, index as u64);
-    for (k, v) in params {
-        r.param(k, v.clone());
+    for p in params {
+        r.param(&p.key, p.unit, p.value.clone());
     }
     r.extend(row);
+    for cell in &mut r.0 {
+        cell.unit = resolve_unit(cell.unit, lengths);
+    }
     r
 }
 
@@ -404,12 +408,15 @@ fn keep_point(
     for (name, rows) in &out.tables {
         check_declared(kind, name, rows).map_err(at)?;
     }
-    let row = with_point_columns(i, &plan.params[i], &out.row);
+    let row = with_point_columns(i, &plan.params[i], plan.lengths[i], &out.row);
     let side: Vec<(&'static str, Vec<Row>)> = out
         .tables
         .iter()
         .map(|(name, rows)| {
-            let rows = rows.iter().map(|r| with_point_columns(i, &[], r)).collect();
+            let rows = rows
+                .iter()
+                .map(|r| with_point_columns(i, &[], plan.lengths[i], r))
+                .collect();
             (*name, rows)
         })
         .collect();
@@ -540,18 +547,28 @@ fn describe_failure(i: usize, params: &str, c: &Check) -> String {
     )
 }
 
-/// Records the columns of `row` as those of `table`: the first row of a table defines them, and a
-/// column any later row writes as a timing (a value decided by seconds in that row) is a timing.
+/// Records the columns of `row` as those of `table`: the first row of a table defines them, a
+/// column any later row writes as a timing (a value decided by seconds in that row) is a timing,
+/// and one whose rows are in different units (lengths where a sweep changes `length_unit`) says
+/// so ([`MIXED_UNITS`]).
 fn record_columns(columns: &mut BTreeMap<String, Vec<ColumnInfo>>, table: &str, row: &Row) {
     let cols = columns
         .entry(table.to_string())
         .or_insert_with(|| row.columns());
-    for cell in row.0.iter().filter(|c| c.class == Class::Timing) {
+    for cell in &row.0 {
         if let Some(c) = cols.iter_mut().find(|c| c.name == cell.name) {
-            c.class = Class::Timing;
+            if cell.class == Class::Timing {
+                c.class = Class::Timing;
+            }
+            if c.unit != cell.unit {
+                c.unit = MIXED_UNITS.to_string();
+            }
         }
     }
 }
+
+/// The unit recorded for a column whose rows are in different units.
+const MIXED_UNITS: &str = "per row: length or r_s, as the row's length_unit";
 
 fn short(key: &str) -> &str {
     key.rsplit('.').next().unwrap_or(key)

@@ -274,6 +274,22 @@ pub fn declaration<'a>(declared: &'a [Column], name: &str) -> Option<(&'a Column
         .map(|(_, c, class)| (c, class))
 }
 
+/// The unit of a length written as the spec writes lengths: in the unit its table's `length_unit`
+/// names. A run records it per result as what it is there ([`resolve_unit`]): `"r_s"` (the radius
+/// of the sphere around the scene's bounds) with `length_unit = "root"`, else `"length"` (the
+/// scene's own).
+pub const SPEC_LENGTH: &str = "spec length";
+
+/// The unit a cell declared in `unit` is in at a point whose lengths are in `lengths` (`"r_s"` or
+/// `"length"`): [`SPEC_LENGTH`] becomes `lengths`, every other unit stays as declared.
+pub fn resolve_unit(unit: &'static str, lengths: &'static str) -> &'static str {
+    if unit == SPEC_LENGTH {
+        lengths
+    } else {
+        unit
+    }
+}
+
 /// The point index column that starts every table.
 pub const POINT: Column = Column::value(
     "point",

@@ -92,7 +92,8 @@ pub struct Cell {
     pub name: String,
     /// Its class.
     pub class: Class,
-    /// Its unit (from the declaration; empty for parameters, whose units the spec reference gives).
+    /// Its unit: the declaration's, a parameter's spec key's (a length in the unit its table's
+    /// `length_unit` names), as the run resolved it for this point.
     pub unit: &'static str,
     /// Its value.
     pub value: Value,
@@ -159,9 +160,9 @@ impl Row {
         self.push(format!("{stem}{suffix}"), class, unit, v)
     }
 
-    /// Appends a parameter column (a spec key of the point).
-    pub fn param(&mut self, name: &str, v: Value) -> &mut Self {
-        self.push(name.to_string(), Class::Parameter, "", v)
+    /// Appends a parameter column (a spec key of the point, its value in `unit`).
+    pub fn param(&mut self, name: &str, unit: &'static str, v: Value) -> &mut Self {
+        self.push(name.to_string(), Class::Parameter, unit, v)
     }
 
     /// Puts `other`'s cells after this row's.

@@ -70,7 +70,7 @@ pub const EDGE_RADIUS: Column = Column::value(
 /// The disc radius the engines used, as the spec writes lengths.
 pub const DISC_RADIUS_USED: Column = Column::value(
     "disc_radius_used",
-    "length",
+    crate::output::column::SPEC_LENGTH,
     Class::Measured,
     "d the engines used, in detp.length_unit: detp.disc_radius, or with detp.radius_schedule_photons the schedule's d(N) = d_ref·(N/N_ref)^(−β) at this point's photons (an edge remedy clamps each disc below it; with detp.radius_crossings it is the largest radius a disc's k-th crossing may have, see radius_crossings_ratio)",
 );
