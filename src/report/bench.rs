@@ -4,25 +4,29 @@
 //! is linked beside it.
 
 use super::table::{display, Table};
+use crate::bench::columns as bc;
+use crate::output::column::Column;
 
-/// The columns shown, in this order, when present.
-const SHOWN: &[&str] = &[
-    "engine",
-    "n",
-    "threads",
-    "cell_width",
-    "rays",
-    "rounds",
-    "rays_per_s",
-    "ray_sphere_tests_per_s",
-    "ray_disc_tests_per_s",
-    "round_median_s",
-    "frame_s",
-    "build_s",
-    "structure_bytes",
-    "peak_mem_bytes",
-    "checked",
-    "mismatches",
+/// The columns shown, in this order, when present: named by the bench's own declarations, so a
+/// renamed column is followed here (and a removed one fails to compile) instead of silently
+/// dropping out of the page.
+const SHOWN: &[Column] = &[
+    bc::ENGINE,
+    bc::N,
+    bc::THREADS,
+    bc::CELL_WIDTH,
+    bc::RAYS,
+    bc::ROUNDS,
+    bc::RAYS_PER_S,
+    bc::RAY_SPHERE_TESTS_PER_S,
+    bc::RAY_DISC_TESTS_PER_S,
+    bc::ROUND_MEDIAN_S,
+    bc::FRAME_S,
+    bc::BUILD_S,
+    bc::STRUCTURE_BYTES,
+    bc::PEAK_MEM_BYTES,
+    bc::CHECKED,
+    bc::MISMATCHES,
 ];
 
 /// The shown part of a bench table: header and display cells.
@@ -38,7 +42,7 @@ pub struct BenchTable {
 pub fn shown(t: &Table) -> BenchTable {
     let cols: Vec<&str> = SHOWN
         .iter()
-        .copied()
+        .map(|c| c.name)
         .filter(|c| {
             t.has(c) && (0..t.rows.len()).any(|r| !display(t.cell(r, c).unwrap_or("")).is_empty())
         })

@@ -33,6 +33,7 @@ use std::path::Path;
 use serde::Deserialize;
 
 use crate::error::InputError;
+use crate::output::column::POINT;
 use crate::output::summary::measured;
 use crate::stats::verdict::z_verdict;
 use crate::stats::Estimate;
@@ -300,7 +301,7 @@ fn from_table(
 ) -> Result<(Estimate, String), (&'static str, String)> {
     let row = match point {
         Some(p) => (0..t.rows.len())
-            .find(|&r| t.cell(r, "point") == Some(p.to_string().as_str()))
+            .find(|&r| t.cell(r, POINT.name) == Some(p.to_string().as_str()))
             .ok_or((
                 "point",
                 format!("no row with point = {p} in the source table"),

@@ -22,6 +22,7 @@
 use std::fmt;
 use std::str::FromStr;
 
+use crate::output::column::POINT;
 use crate::output::summary::measured;
 pub use crate::stats::verdict::Tone;
 use crate::stats::verdict::{Theory, Verdict};
@@ -153,7 +154,7 @@ pub fn claims(t: &Table, sweep_keys: &[String]) -> Vec<PointClaims> {
                 .join(" ");
             let claims = stems.iter().map(|s| claim(t, r, s)).collect();
             PointClaims {
-                point: t.cell(r, "point").map_or(r.to_string(), str::to_string),
+                point: t.cell(r, POINT.name).map_or(r.to_string(), str::to_string),
                 params,
                 claims,
             }

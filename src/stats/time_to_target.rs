@@ -14,9 +14,10 @@
 //!   other points there are). A target ε needs N_ε = c/(ε² − B) photons, and none if √B ≥ ε (a
 //!   bias floor). Its seconds are [`CostModel::seconds`](N_ε, n_P).
 //! - **The crossover** N* solves T_DETP(n_P) = T_PT(n_P). With D(x) = T_DETP(x) − T_PT(x) =
-//!   A + b·N_ε·x^γ + (c − p)·x (A = fixed + a·N_ε > 0, p = n·t_path the path tracer's seconds per
-//!   point, γ ∈ [0, 1]), D is concave with D(0) = A > 0, so it has at most one positive root: DETP
-//!   wins beyond it. It exists iff DETP's seconds per added point eventually fall below the path
+//!   A + b·N_ε·x^γ + (c − p)·x (A = fixed + a·N_ε ≥ 0, p = n·t_path the path tracer's seconds per
+//!   point, γ ∈ [0, 1]), D is concave and positive just above 0 (D(0) = A > 0, or for 0 < γ < 1 and
+//!   b > 0 the x^γ term, whose slope at 0 is infinite, even when the fit leaves A = 0), so it has at
+//!   most one positive root: DETP wins beyond it. Only with A = 0 and no x^γ term is it 0. It exists iff DETP's seconds per added point eventually fall below the path
 //!   tracer's: b·N_ε + c < p for γ = 1, c < p for γ < 1. Otherwise "never": DETP's cost per point
 //!   (its tests per disc, i.e. its variance per disc) is not below the path tracer's.
 //! - **Frames**: F frames of a quasi-static scene cost DETP T₁ + (F − 1)·t_f (the first frame in
@@ -191,14 +192,17 @@ pub fn points_crossover(
             path_tracing: p,
         });
     }
-    if once <= 0.0 {
-        return Crossover::At(0.0);
-    }
-    if cost.gamma >= 1.0 || cost.per_photon_point == 0.0 {
+    // 0 < γ < 1 with b > 0: b·N·x^γ outgrows p·x near 0 (its slope there is infinite), so D is
+    // positive just above 0 even where the fit put nothing in A; γ = 0 puts b·N into A.
+    let concave = cost.gamma > 0.0 && cost.gamma < 1.0 && cost.per_photon_point * n > 0.0;
+    if !concave {
+        if once <= 0.0 {
+            return Crossover::At(0.0);
+        }
         return Crossover::At(once / (p - per_point));
     }
-    // γ < 1: D is concave, D(0) > 0 and D → −∞; bracket the one root, then bisect.
-    let mut hi = once / (p - per_point);
+    // D is concave, positive just above 0 and D → −∞: bracket the one root, then bisect.
+    let mut hi = (once / (p - per_point)).max(1.0);
     while d(hi) > 0.0 && hi < f64::MAX / 4.0 {
         hi *= 2.0;
     }
@@ -505,6 +509,62 @@ mod tests {
         };
         let d = detp_seconds(&err, &model, x, 0.05).unwrap();
         assert!((d / pt.seconds(x, 0.05) - 1.0).abs() < 1e-9, "{x}");
+    }
+
+    /// The fit may leave nothing paid once (A = 0: no fixed cost, no cost per photon), as the
+    /// Cornell box's refined sweep did for the sphere cache (γ = 0.2, seconds = b·N·n_P^0.2).
+    /// DETP is still the dearer method at few points (b·N·x^γ ≫ p·x near 0): N* is the root
+    /// (b·N/p)^(1/(1−γ)), not 0. With no x^γ term either, DETP costs nothing at 0 points: N* = 0.
+    #[test]
+    fn nothing_paid_once_still_crosses_at_the_root() {
+        let pt = PathTracingCost {
+            cv: 1.0,
+            seconds_per_path: 1e-6,
+        };
+        let err = ErrorFit {
+            floor2: 0.0,
+            c: 10.0,
+            measured_min: 0.0,
+            exponent: 1.0,
+        };
+        let (b, gamma, target) = (1e-7, 0.2, 0.05);
+        let model = CostModel {
+            fixed: 0.0,
+            per_photon: 0.0,
+            per_photon_point: b,
+            per_point: 0.0,
+            gamma,
+        };
+        let n = err.photons_for(target).expect("reachable");
+        let p = pt.seconds(1.0, target);
+        let root = (b * n / p).powf(1.0 / (1.0 - gamma));
+        let Crossover::At(x) = points_crossover(&pt, &err, &model, target) else {
+            panic!("a crossover");
+        };
+        assert!((x / root - 1.0).abs() < 1e-9, "{x} against {root}");
+        assert!(detp_seconds(&err, &model, 0.5 * x, target).unwrap() > pt.seconds(0.5 * x, target));
+        assert!(detp_seconds(&err, &model, 2.0 * x, target).unwrap() < pt.seconds(2.0 * x, target));
+        // A root below one point is found too (the bracket starts at 1).
+        let tiny = CostModel {
+            per_photon_point: 1e-12,
+            ..model
+        };
+        let root = (1e-12 * n / p).powf(1.0 / (1.0 - gamma));
+        assert!(root < 1.0);
+        let Crossover::At(x) = points_crossover(&pt, &err, &tiny, target) else {
+            panic!("a crossover");
+        };
+        assert!((x / root - 1.0).abs() < 1e-9, "{x} against {root}");
+        // Nothing paid once and no x^γ term: DETP costs c·x < p·x from the first point on.
+        let linear = CostModel {
+            per_photon_point: 0.0,
+            per_point: 1e-5,
+            ..model
+        };
+        assert_eq!(
+            points_crossover(&pt, &err, &linear, target),
+            Crossover::At(0.0)
+        );
     }
 
     #[test]
