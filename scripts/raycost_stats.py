@@ -675,8 +675,9 @@ def fit_costs_ci(x_cols, y, y_se, draws=2000, seed=1, dofs=None, level=0.95):
     """fit_costs with intervals that carry the fit's misfit: every draw resamples the cases (table
     rows) with replacement, and moves each drawn y within its SE (Student-t on `dofs`), then refits
     the columns the full fit selected (non-zero constants). A column left at 0 adds nothing the data
-    can separate and gets (0, 0). Draws with fewer distinct cases than constants are counted in
-    `undefined`, not dropped silently."""
+    can separate and gets (0, 0). Draws with fewer distinct cases than constants, and draws that
+    move a y to ≤ 0 (relative residuals need a positive value; a time drawn within a wide SE can
+    cross 0), are counted in `undefined`, not dropped silently and not fitted on a clamped value."""
     best = fit_costs(x_cols, y)
     if best is None:
         raise ValueError("no non-negative fit")
@@ -692,9 +693,12 @@ def fit_costs_ci(x_cols, y, y_se, draws=2000, seed=1, dofs=None, level=0.95):
         if len(set(idx)) <= len(active):
             failed += 1
             continue
-        yy = [max(y[i] + (y_se[i] * draw_error(rng, dofs[i]) if y_se[i] == y_se[i] else 0.0), 1e-300) for i in idx]
+        yy = [y[i] + (y_se[i] * draw_error(rng, dofs[i]) if y_se[i] == y_se[i] else 0.0) for i in idx]
+        if not all(v > 0 for v in yy):
+            failed += 1
+            continue
         sub = fit_costs([[x_cols[j][i] for i in idx] for j in active], yy)
-        if sub is None:
+        if sub is None or not all(math.isfinite(v) for v in sub[0]):
             failed += 1
             continue
         got.append(dict(zip(active, sub[0])))

@@ -238,6 +238,24 @@ class FittedSeconds(unittest.TestCase):
         self.assertGreater(coverage(60, lambda rng: make(rng, True), 3.0), 0.8)
         self.assertLess(coverage(60, lambda rng: make(rng, False), 3.0), 0.2)
 
+    def test_a_time_drawn_below_zero_is_an_unfit_draw_not_a_clamped_one(self):
+        """One case's SE is as large as its value, so about one draw in six moves it below 0. Such
+        a draw has no relative residual; clamping it to a tiny positive time made it dominate the
+        fit (weights 1/y) and gave NaN bounds. It is counted unfit, and every bound stays finite
+        and positive around the true constant."""
+        a = [float(i) for i in range(1, 11)]
+        y = [2.0 * x for x in a]
+        se = [1e-3 * v for v in y]
+        se[0] = y[0]
+        f = S.fit_costs_ci([a], y, se, draws=400, seed=3)
+        self.assertGreater(f.undefined, 0.05)
+        self.assertLess(f.undefined, 0.5)
+        lo, hi = f.cis[0]
+        self.assertTrue(math.isfinite(lo) and math.isfinite(hi), f.cis)
+        self.assertLess(0.0, lo)
+        self.assertLessEqual(lo, 2.0)
+        self.assertLessEqual(2.0, hi)
+
 
 class Shapley(unittest.TestCase):
     def test_factors_multiply_to_the_total_whatever_the_order(self):
