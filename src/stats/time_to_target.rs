@@ -17,9 +17,10 @@
 //!   A + b·N_ε·x^γ + (c − p)·x (A = fixed + a·N_ε ≥ 0, p = n·t_path the path tracer's seconds per
 //!   point, γ ∈ [0, 1]), D is concave and positive just above 0 (D(0) = A > 0, or for 0 < γ < 1 and
 //!   b > 0 the x^γ term, whose slope at 0 is infinite, even when the fit leaves A = 0), so it has at
-//!   most one positive root: DETP wins beyond it. Only with A = 0 and no x^γ term is it 0. It exists iff DETP's seconds per added point eventually fall below the path
-//!   tracer's: b·N_ε + c < p for γ = 1, c < p for γ < 1. Otherwise "never": DETP's cost per point
-//!   (its tests per disc, i.e. its variance per disc) is not below the path tracer's.
+//!   most one positive root: DETP wins beyond it (0 only with A = 0 and no x^γ term). It exists
+//!   iff DETP's seconds per added point eventually fall below the path tracer's: b·N_ε + c < p for
+//!   γ = 1, c < p for γ < 1. Otherwise "never": DETP's cost per point (its tests per disc, i.e. its
+//!   variance per disc) is not below the path tracer's.
 //! - **Frames**: F frames of a quasi-static scene cost DETP T₁ + (F − 1)·t_f (the first frame in
 //!   full, then incremental frames) against F·T_PT; DETP wins from F* = (T₁ − t_f)/(T_PT − t_f)
 //!   frames on, if t_f < T_PT ([`frames_crossover`]).
@@ -439,12 +440,27 @@ mod tests {
         }
     }
 
+    /// A path tracer with cv 1 at `seconds_per_path`.
+    fn path_tracer(seconds_per_path: f64) -> PathTracingCost {
+        PathTracingCost {
+            cv: 1.0,
+            seconds_per_path,
+        }
+    }
+
+    /// An error MSE = floor² + c/N with no measured range.
+    fn error(floor: f64, c: f64) -> ErrorFit {
+        ErrorFit {
+            floor2: floor * floor,
+            c,
+            measured_min: 0.0,
+            exponent: 1.0,
+        }
+    }
+
     #[test]
     fn paths_per_point_follow_cv_over_target_squared() {
-        let pt = PathTracingCost {
-            cv: 1.0,
-            seconds_per_path: 2e-6,
-        };
+        let pt = path_tracer(2e-6);
         assert_eq!(pt.paths_for(0.1), 100);
         assert_eq!(pt.paths_for(0.05), 400);
         assert_eq!(pt.paths_for(0.03), 1112);
@@ -466,12 +482,7 @@ mod tests {
             cv: 1.2,
             seconds_per_path: 2e-6,
         };
-        let err = ErrorFit {
-            floor2: 0.01f64.powi(2),
-            c: 50.0,
-            measured_min: 0.0,
-            exponent: 1.0,
-        };
+        let err = error(0.01, 50.0);
         let model = cost(1e-12, 2e-6, 1.0);
         for target in [0.1, 0.05, 0.02] {
             let Crossover::At(x) = points_crossover(&pt, &err, &model, target) else {
@@ -493,16 +504,8 @@ mod tests {
     /// γ < 1: the bisection finds the one root of the concave difference.
     #[test]
     fn a_sublinear_point_cost_crosses_once() {
-        let pt = PathTracingCost {
-            cv: 1.0,
-            seconds_per_path: 1e-6,
-        };
-        let err = ErrorFit {
-            floor2: 0.0,
-            c: 10.0,
-            measured_min: 0.0,
-            exponent: 1.0,
-        };
+        let pt = path_tracer(1e-6);
+        let err = error(0.0, 10.0);
         let model = cost(1e-9, 1e-6, 0.5);
         let Crossover::At(x) = points_crossover(&pt, &err, &model, 0.05) else {
             panic!("a crossover");
@@ -517,16 +520,8 @@ mod tests {
     /// (b·N/p)^(1/(1−γ)), not 0. With no x^γ term either, DETP costs nothing at 0 points: N* = 0.
     #[test]
     fn nothing_paid_once_still_crosses_at_the_root() {
-        let pt = PathTracingCost {
-            cv: 1.0,
-            seconds_per_path: 1e-6,
-        };
-        let err = ErrorFit {
-            floor2: 0.0,
-            c: 10.0,
-            measured_min: 0.0,
-            exponent: 1.0,
-        };
+        let pt = path_tracer(1e-6);
+        let err = error(0.0, 10.0);
         let (b, gamma, target) = (1e-7, 0.2, 0.05);
         let model = CostModel {
             fixed: 0.0,
@@ -569,16 +564,8 @@ mod tests {
 
     #[test]
     fn never_says_why() {
-        let pt = PathTracingCost {
-            cv: 1.0,
-            seconds_per_path: 1e-6,
-        };
-        let biased = ErrorFit {
-            floor2: 0.08f64.powi(2),
-            c: 10.0,
-            measured_min: 0.0,
-            exponent: 1.0,
-        };
+        let pt = path_tracer(1e-6);
+        let biased = error(0.08, 10.0);
         assert_eq!(
             points_crossover(&pt, &biased, &cost(0.0, 1e-6, 1.0), 0.05),
             Crossover::Never(Never::ErrorFloor {
@@ -588,12 +575,7 @@ mod tests {
         );
         // Reachable (N_ε = 10/0.05² = 4000 photons), but each added point costs DETP
         // b·N_ε = 1 s against the path tracer's 400 paths × 1 µs.
-        let unbiased = ErrorFit {
-            floor2: 0.0,
-            c: 10.0,
-            measured_min: 0.0,
-            exponent: 1.0,
-        };
+        let unbiased = error(0.0, 10.0);
         match points_crossover(&pt, &unbiased, &cost(2.5e-4, 0.0, 1.0), 0.05) {
             Crossover::Never(Never::PerPointCost { detp, path_tracing }) => {
                 assert!((detp - 1.0).abs() < 1e-12 && (path_tracing - 4e-4).abs() < 1e-15);
