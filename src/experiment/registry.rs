@@ -73,36 +73,69 @@ mod tests {
     }
 
     /// One name, one meaning: wherever kinds declare the same column name, it carries the same
-    /// unit and class. The shapes may differ only as one observation against its estimate (a
-    /// frame's `frame_s` in the frames table, `frame_s_mean`/`_se` over frames in the main table),
-    /// which write different CSV names.
+    /// unit and class, and the same shape, with one exception that writes different CSV names: a
+    /// per-row value and its estimate over those rows ([`Column::mean_over`]: a frame's `frame_s`
+    /// in the frames table, `frame_s_mean`/`_se` over frames in the main table). A kind may write
+    /// such an estimate only of a value it writes itself in another table, so `X_mean` is always
+    /// the mean of the rows that say `X`.
     #[test]
     fn a_column_name_means_one_thing_across_kinds_and_tables() {
+        use crate::output::column::Shape;
         use std::collections::BTreeMap;
-        let mut by: BTreeMap<&str, Vec<(String, &str, crate::output::column::Class)>> =
-            BTreeMap::new();
+        struct Seen {
+            kind: &'static str,
+            table: String,
+            unit: &'static str,
+            class: &'static str,
+            shape: Shape,
+        }
+        let mut by: BTreeMap<&str, Vec<Seen>> = BTreeMap::new();
         for k in KINDS {
             for (t, cols) in k.columns() {
                 for c in cols {
-                    by.entry(c.name).or_default().push((
-                        format!("{}.{t}", k.name()),
-                        c.unit,
-                        c.class,
+                    by.entry(c.name).or_default().push(Seen {
+                        kind: k.name(),
+                        table: t.to_string(),
+                        unit: c.unit,
+                        class: c.class.as_str(),
+                        shape: c.shape,
+                    });
+                }
+            }
+        }
+        let mut two = Vec::new();
+        for (name, seen) in &by {
+            let where_ = |s: &Seen| format!("{}.{}", s.kind, s.table);
+            let units: BTreeSet<_> = seen.iter().map(|s| (s.unit, s.class)).collect();
+            if units.len() > 1 {
+                two.push(format!("{name}: unit and class {units:?}"));
+            }
+            let estimates: BTreeSet<String> = seen
+                .iter()
+                .filter(|s| s.shape != Shape::Value)
+                .map(|s| format!("{:?}", s.shape))
+                .collect();
+            if estimates.len() > 1 {
+                two.push(format!("{name}: estimated as {estimates:?}"));
+            }
+            for e in seen.iter().filter(|s| s.shape != Shape::Value) {
+                let of_its_own = seen
+                    .iter()
+                    .any(|v| v.shape == Shape::Value && v.kind == e.kind && v.table != e.table);
+                let values: Vec<String> = seen
+                    .iter()
+                    .filter(|v| v.shape == Shape::Value)
+                    .map(where_)
+                    .collect();
+                if !values.is_empty() && !of_its_own {
+                    two.push(format!(
+                        "{name}: an estimate in {} but a value in {values:?}, none of them {}'s own rows",
+                        where_(e),
+                        e.kind
                     ));
                 }
             }
         }
-        let two: Vec<String> = by
-            .iter()
-            .filter(|(_, v)| {
-                v.iter()
-                    .map(|(_, u, c)| (*u, c.as_str()))
-                    .collect::<BTreeSet<_>>()
-                    .len()
-                    > 1
-            })
-            .map(|(n, v)| format!("{n}: {v:?}"))
-            .collect();
         assert!(
             two.is_empty(),
             "names with two meanings:\n{}",

@@ -174,6 +174,32 @@ impl Column {
         }
     }
 
+    /// The estimate (`_mean`, `_se`, `_n`, `_clusters`) of this per-row value over the rows of
+    /// another table (a frame's `frame_s` in the frames table, `frame_s_mean`/`_se` over frames in
+    /// the main table): one quantity, one declaration; the name, unit, class and flags are kept,
+    /// `doc` says what the mean is over.
+    pub const fn mean_over(self, doc: &'static str) -> Self {
+        Self {
+            shape: Shape::Estimate,
+            doc,
+            ..self
+        }
+    }
+
+    /// The same estimate, held against a prediction (`_theory` beside it).
+    pub const fn against_prediction(self) -> Self {
+        Self {
+            shape: Shape::EstimateVsPrediction,
+            ..self
+        }
+    }
+
+    /// The same quantity described for another table (what its rows are): name, unit, class,
+    /// shape and flags kept.
+    pub const fn described(self, doc: &'static str) -> Self {
+        Self { doc, ..self }
+    }
+
     /// The same column, with ±∞ allowed (an open-ended bin edge).
     pub const fn open_ended(self) -> Self {
         Self {

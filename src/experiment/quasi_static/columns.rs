@@ -13,6 +13,7 @@ use super::spec::QuasiStaticConfig;
 use super::theorem2::{self, Assumption};
 use crate::detp::quasi_static::FrameStats;
 use crate::experiment::detp::columns as detp;
+use crate::experiment::detp::estimators::path_tracing;
 use crate::output::column::{Class, Column, Shape};
 use crate::output::row::Value;
 use crate::output::table::{col, Against, Cell, Cells, Entry, Line, Table};
@@ -84,23 +85,20 @@ pub const WARNINGS: Column = measured(
 );
 
 /// Segments a frame re-traces or removes.
-pub const RETRACED_RAYS: Column = Column::vs_prediction(
-    "retraced_rays",
-    "segments",
+pub const RETRACED_RAYS: Column = frame::RETRACED_RAYS.mean_over(
     "segments meeting an object at its old or new pose, per frame; theory f_R = n_R·Σ(r_D/r_0)²",
-);
+)
+    .against_prediction();
 /// Segments meeting the new pose.
-pub const RAYS_MEETING_OBJECT: Column = Column::vs_prediction(
-    "rays_meeting_object",
-    "segments",
+pub const RAYS_MEETING_OBJECT: Column = frame::RAYS_MEETING_OBJECT.mean_over(
     "segments meeting an object at its new pose, per frame; theory f_R",
-);
+)
+    .against_prediction();
 /// Segments meeting the pose after the re-trace: eq. 11's one-pose count.
-pub const RAYS_AT_POSE: Column = Column::vs_prediction(
-    "rays_at_pose",
-    "segments",
+pub const RAYS_AT_POSE: Column = frame::RAYS_AT_POSE.mean_over(
     "segments meeting an object at its new pose after the frame's re-trace (eq. 11's one-pose count: unlike rays_meeting_object, a segment the old pose cut short is counted as re-traced, and the radius is not padded), per frame; theory f_R",
-);
+)
+    .against_prediction();
 /// The union's expectation for μ-random lines.
 pub const RETRACED_RAYS_UNION_THEORY: Column = Column::estimate(
     "retraced_rays_union_theory",
@@ -121,12 +119,9 @@ pub const DYNAMIC_CACHE_WORK_PER_RAY: Column = Column::estimate(
 )
 .decided_by_timing();
 /// Rays reaching the dynamic points' disc index.
-pub const DYNAMIC_RAYS_REACHING: Column = Column::estimate(
-    "dynamic_rays_reaching",
-    "segments",
+pub const DYNAMIC_RAYS_REACHING: Column = frame::DYNAMIC_RAYS_REACHING.mean_over(
     "segments that reach the dynamic points' disc index: enter one of its cells or nodes, or start beyond its reach and test every disc (0 with the sphere cache), per frame",
-)
-.decided_by_timing();
+);
 /// A3 of Theorem 2's proof.
 pub const DYNAMIC_REACH_SHARE: Column = Column::estimate(
     "dynamic_reach_share",
@@ -142,29 +137,24 @@ pub const DYNAMIC_INDEX_TESTS_PER_RAY: Column = Column::estimate(
 )
 .decided_by_timing();
 /// Photons re-traced.
-pub const PHOTONS_RETRACED: Column =
-    Column::estimate("photons_retraced", "photons", "photons re-traced per frame");
+pub const PHOTONS_RETRACED: Column = frame::PHOTONS_RETRACED.mean_over(
+    "photons re-traced per frame",
+);
 /// Segments re-traced.
-pub const SEGMENTS_RETRACED: Column = Column::estimate(
-    "segments_retraced",
-    "segments",
+pub const SEGMENTS_RETRACED: Column = frame::SEGMENTS_RETRACED.mean_over(
     "segments re-traced per frame",
 );
 /// Segments changed.
 pub const SEGMENTS_CHANGED: Column =
     Column::estimate("segments_changed", "segments", "segments added per frame");
 /// Search tests.
-pub const SEARCH_TESTS: Column = Column::estimate(
-    "search_tests",
-    "tests",
+pub const SEARCH_TESTS: Column = frame::SEARCH_TESTS.mean_over(
     "segment–object tests finding the affected segments, per frame (with --photon-shard: summed over the shards' own indexes, and classed timing)",
-).accelerator_work();
+);
 /// Search cells.
-pub const SEARCH_CELLS: Column = Column::estimate(
-    "search_cells",
-    "cells",
+pub const SEARCH_CELLS: Column = frame::SEARCH_CELLS.mean_over(
     "segment-index cells visited by the search, per frame (with --photon-shard: summed over the shards' own indexes, and classed timing)",
-).accelerator_work();
+);
 /// Static points' tests.
 pub const STATIC_TESTS: Column = Column::estimate(
     "static_tests",
@@ -179,98 +169,65 @@ pub const DYNAMIC_TESTS: Column = Column::estimate(
 )
 .decided_by_timing();
 /// Dynamic points' sphere tests.
-pub const DYNAMIC_SPHERE_TESTS: Column = Column::estimate(
-    "dynamic_sphere_tests",
-    "tests",
+pub const DYNAMIC_SPHERE_TESTS: Column = frame::DYNAMIC_SPHERE_TESTS.mean_over(
     "ray–sphere tests of the dynamic points' sphere cache, per frame",
-)
-.decided_by_timing();
+);
 /// disc-index traversal updating the static points, per frame.
-pub const STATIC_TRAVERSAL: Column = Column::estimate(
-    "static_traversal",
-    "steps",
+pub const STATIC_TRAVERSAL: Column = frame::STATIC_TRAVERSAL.mean_over(
     "disc-index traversal updating the static points: segment–box slab tests + DDA steps (0 when a sphere cache does them), per frame",
 );
 /// segments copied into sphere-cache lists updating the static points (0 with the disc index), per frame.
-pub const STATIC_RAYS_COPIED: Column = Column::estimate(
-    "static_rays_copied",
-    "segments",
+pub const STATIC_RAYS_COPIED: Column = frame::STATIC_RAYS_COPIED.mean_over(
     "segments copied into sphere-cache lists updating the static points (0 with the disc index), per frame",
 );
 /// the static points' counted cost, per frame.
-pub const STATIC_COUNTED_COST: Column = Column::estimate(
-    "static_counted_cost",
-    "tests",
+pub const STATIC_COUNTED_COST: Column = frame::STATIC_COUNTED_COST.mean_over(
     "the static points' counted cost: ray–disc + ray–sphere tests + box tests + DDA steps, weight 1 each, per frame",
 );
 /// disc-index traversal of the dynamic points, per frame.
-pub const DYNAMIC_TRAVERSAL: Column = Column::estimate(
-    "dynamic_traversal",
-    "steps",
+pub const DYNAMIC_TRAVERSAL: Column = frame::DYNAMIC_TRAVERSAL.mean_over(
     "disc-index traversal of the dynamic points: segment–box slab tests + DDA steps (0 with the sphere cache), per frame",
-)
-.decided_by_timing();
+);
 /// segments copied into the dynamic points' sphere-cache lists, root list included (0 with the disc index), per frame.
-pub const DYNAMIC_RAYS_COPIED: Column = Column::estimate(
-    "dynamic_rays_copied",
-    "segments",
+pub const DYNAMIC_RAYS_COPIED: Column = frame::DYNAMIC_RAYS_COPIED.mean_over(
     "segments copied into the dynamic points' sphere-cache lists, root list included (0 with the disc index), per frame",
-)
-.decided_by_timing();
+);
 /// spheres the dynamic points' sphere cache built, root included (0 with the disc index), per frame.
-pub const DYNAMIC_SPHERES_BUILT: Column = Column::estimate(
-    "dynamic_spheres_built",
-    "spheres",
+pub const DYNAMIC_SPHERES_BUILT: Column = frame::DYNAMIC_SPHERES_BUILT.mean_over(
     "spheres the dynamic points' sphere cache built, root included (0 with the disc index), per frame",
-)
-.decided_by_timing();
+);
 /// segment-index cells read + segments tested to feed the dynamic points' engine (dynamic.feed; 0 when it gets every segment); not in dynamic_counted_cost, per frame.
-pub const DYNAMIC_FEED: Column = Column::estimate(
-    "dynamic_feed",
-    "steps",
+pub const DYNAMIC_FEED: Column = frame::DYNAMIC_FEED.mean_over(
     "segment-index cells read + segments tested to feed the dynamic points' engine (dynamic.feed; 0 when it gets every segment); not in dynamic_counted_cost, per frame (with --photon-shard: summed over the shards' own indexes, and classed timing)",
-)
-.decided_by_timing()
-.accelerator_work();
+);
 /// the dynamic points' counted cost with the engine used, per frame.
-pub const DYNAMIC_COUNTED_COST: Column = Column::estimate(
-    "dynamic_counted_cost",
-    "tests",
+pub const DYNAMIC_COUNTED_COST: Column = frame::DYNAMIC_COUNTED_COST.mean_over(
     "the dynamic points' counted cost with the engine used: ray–disc + ray–sphere tests + box tests + DDA steps, weight 1 each (copies and the feed apart), per frame",
-)
-.decided_by_timing();
+);
 /// Search seconds.
-pub const SEARCH_S: Column = Column::timed_estimate(
-    "search_s",
-    "s",
+pub const SEARCH_S: Column = frame::SEARCH_S.mean_over(
     "seconds finding the affected segments, per frame",
 );
 /// Re-trace seconds.
-pub const RETRACE_S: Column =
-    Column::timed_estimate("retrace_s", "s", "seconds re-tracing photons, per frame");
+pub const RETRACE_S: Column = frame::RETRACE_S.mean_over(
+    "seconds re-tracing photons, per frame",
+);
 /// Static update seconds.
-pub const STATIC_S: Column = Column::timed_estimate(
-    "static_s",
-    "s",
+pub const STATIC_S: Column = frame::STATIC_S.mean_over(
     "seconds updating the static points, per frame",
 );
 /// Dynamic seconds.
-pub const DYNAMIC_S: Column = Column::timed_estimate(
-    "dynamic_s",
-    "s",
+pub const DYNAMIC_S: Column = frame::DYNAMIC_S.mean_over(
     "seconds gathering the dynamic points, per frame",
-)
-.decided_by_timing();
+);
 /// The dynamic points' disc-index traversal alone, seconds.
-pub const DYNAMIC_TRAVERSAL_S: Column = Column::timed_estimate(
-    "dynamic_traversal_s",
-    "s",
+pub const DYNAMIC_TRAVERSAL_S: Column = frame::DYNAMIC_TRAVERSAL_S.mean_over(
     "seconds of the disc index's traversal alone for the dynamic points: each object's index walked again for the same segments as its pass (cells or nodes, box tests, DDA steps, candidate lists) but testing no disc, timed apart after the pass (in neither dynamic_s nor frame_s); over dynamic_s it is eq. 8's traversal share in seconds. Objects on the sphere cache add nothing (0 with the sphere cache, as dynamic_traversal). Per frame",
-)
-.decided_by_timing();
+);
 /// Frame seconds.
-pub const FRAME_S: Column =
-    Column::timed_estimate("frame_s", "s", "seconds of an incremental frame");
+pub const FRAME_S: Column = frame::FRAME_S.mean_over(
+    "seconds of an incremental frame",
+);
 
 /// How a per-frame metric reads one frame's stats.
 pub type FrameValue = fn(&FrameStats) -> f64;
@@ -314,9 +271,7 @@ pub const PER_FRAME_VALUES: &[(Column, FrameValue)] = &[
 ];
 
 /// Full recalculation seconds.
-pub const FULL_FRAME_S: Column = Column::timed_estimate(
-    "full_frame_s",
-    "s",
+pub const FULL_FRAME_S: Column = frame::FULL_FRAME_S.mean_over(
     "seconds of a full recalculation of a checked frame",
 );
 /// Frame 0.
@@ -433,15 +388,11 @@ pub const PATH_TRACING_POINTS: Column = measured(
     "\"path-tracing\" in detp.engines: the points path-traced at frame 0 and at each checked frame (detp.path_points of the frame's points, a keyed subset, or all)",
 );
 /// Path tracing's seconds per path.
-pub const PATH_TRACING_S_PER_PATH: Column = Column::timed_estimate(
-    "path_tracing_s_per_path",
-    "s",
+pub const PATH_TRACING_S_PER_PATH: Column = frame::PATH_TRACING_S_PER_PATH.mean_over(
     "path tracing in the scene posed at frame 0 and each checked frame: wall seconds per path (detp.path_samples paths at each of path_tracing_points points), over those frames of every replica (one cluster per replica); in no other timing",
 );
 /// Path tracing's cv.
-pub const PATH_TRACING_CV: Column = Column::estimate(
-    "path_tracing_cv",
-    "1",
+pub const PATH_TRACING_CV: Column = frame::PATH_TRACING_CV.mean_over(
     "path tracing at frame 0 and each checked frame: √(mean_i σ_i²)/mean_i Ê_i over its points (σ_i² the per-path variance, Ê_i the mean of the detp.path_samples paths), the relative RMSE of one path per point; over those frames of every replica (one cluster per replica)",
 );
 /// Path tracing's continuation rays.
@@ -845,15 +796,11 @@ pub mod frame {
         "points differing from the full recalculation (empty if not checked)",
     );
     /// Path tracing's seconds per path at this frame.
-    pub const PATH_TRACING_S_PER_PATH: Column = timing(
-        "path_tracing_s_per_path",
-        "s",
+    pub const PATH_TRACING_S_PER_PATH: Column = path_tracing::PATH_TRACING_S_PER_PATH.described(
         "\"path-tracing\" in detp.engines: wall seconds per path in the scene posed at this frame (frame 0 and the checked frames; NaN on the others)",
     );
     /// Path tracing's cv at this frame.
-    pub const PATH_TRACING_CV: Column = measured(
-        "path_tracing_cv",
-        "1",
+    pub const PATH_TRACING_CV: Column = path_tracing::PATH_TRACING_CV.described(
         "path tracing at this frame: √(mean_i σ_i²)/mean_i Ê_i over its points (frame 0 and the checked frames; NaN on the others)",
     );
 }
