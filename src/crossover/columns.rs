@@ -38,7 +38,7 @@ pub const METHOD: Column = value(
     "method",
     "",
     Class::Parameter,
-    "sphere-cache | disc-index | photon-map | photon-map-growing | path-tracing",
+    "the method, by its name in detp.engines: each estimator of kind detp that declares how the crossover compares it (the DETP engines, the photon maps, path tracing)",
 );
 /// detp.direct.
 pub const DIRECT: Column = value(

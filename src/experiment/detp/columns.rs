@@ -203,7 +203,7 @@ pub const IRRADIANCE_REF_RMSE: Column = Column::estimate(
 pub const BASELINE_REF_BIAS: Column = Column::estimate(
     "{}_ref_bias",
     "W/m²",
-    "a baseline (photon_map, photon_map_growing, path_tracing): mean error against engine reference, as irradiance_ref_bias, over the points it ran on (photon maps: with one replica its per-point SE is E/√k; path tracing: at detp.path_samples paths, with one replica its per-point SE is σ_i/√K)",
+    "a baseline, by its column name (each estimator that is neither a DETP engine nor the reference): mean error against engine reference, as irradiance_ref_bias, over the points it ran on (photon maps: with one replica its per-point SE is E/√k; path tracing: at detp.path_samples paths, with one replica its per-point SE is σ_i/√K)",
 );
 /// A baseline against the reference: RMSE.
 pub const BASELINE_REF_RMSE: Column = Column::estimate(

@@ -60,7 +60,7 @@ pub const ESTIMATOR: Column = Column::value(
     "estimator",
     "",
     Class::Measured,
-    "the estimator judged: detp (every DETP engine: they agree bit for bit) or a photon map (photon_map, photon_map_growing)",
+    "the estimator judged: detp (every DETP engine: they agree bit for bit) or a baseline that keeps one estimate per replica, by its column name (the photon maps)",
 );
 
 /// Relative MSE of one replica.
