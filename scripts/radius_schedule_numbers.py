@@ -73,18 +73,21 @@ def slope(points):
 
 
 def floor(points):
-    """√B of RMSE² = c/N + B and its interval (None if the fit keeps B at 0)."""
-    fit = S.fit_costs_ci([[1.0 / p[0] for p in points], [1.0] * len(points)],
+    """√B of RMSE² = B + c/N and its interval: the error model's fit (raycost_stats.fit_relative_iterated,
+    the one `raycost crossover` makes), every bootstrap draw resampling the N and moving each RMSE²
+    within its SE."""
+    fit = S.fit_costs_ci([[1.0] * len(points), [1.0 / p[0] for p in points]],
                          [p[1] ** 2 for p in points], [2 * p[1] * p[2] for p in points],
-                         draws=DRAWS)
-    b, (lo, hi) = fit.constants[1], fit.cis[1]
+                         draws=DRAWS, fit=S.fit_relative_iterated)
+    b, (lo, hi) = fit.constants[0], fit.cis[0]
     return math.sqrt(b), math.sqrt(max(lo, 0.0)), math.sqrt(max(hi, 0.0))
 
 
 def floor_fit(points):
-    """B of RMSE² = c/N + B, non-negative least squares on relative residuals (None: no fit)."""
-    best = S.fit_costs([[1.0 / p[0] for p in points], [1.0] * len(points)], [p[1] ** 2 for p in points])
-    return None if best is None else best[0][1]
+    """B of RMSE² = B + c/N by the error model's fit (None: no fit)."""
+    best = S.fit_relative_iterated([[1.0] * len(points), [1.0 / p[0] for p in points]],
+                                   [p[1] ** 2 for p in points])
+    return None if best is None else best[0][0]
 
 
 def floor_slope(configs):

@@ -665,20 +665,78 @@ def fit_costs(x_cols, y):
     return best
 
 
+def weighted_nnls(x_cols, y, w):
+    """Non-negative weighted least squares y ≈ Σ_j c_j·x_cols[j], weights w: every subset of the
+    columns solved (at most four), the all-zero solution included, the least Σ w·(y − f)² kept
+    (ties keep the earlier subset, as the Rust `nnls` does). Returns c."""
+    k, n = len(x_cols), len(y)
+
+    def ssr(c):
+        return sum(w[i] * (y[i] - sum(c[j] * x_cols[j][i] for j in range(k))) ** 2 for i in range(n))
+
+    best = ([0.0] * k, ssr([0.0] * k))
+    for mask in range(1, 1 << k):
+        cols = [j for j in range(k) if mask >> j & 1]
+        if n < len(cols):
+            continue
+        ata = [[sum(w[i] * x_cols[a][i] * x_cols[b][i] for i in range(n)) for b in cols] for a in cols]
+        atb = [sum(w[i] * x_cols[a][i] * y[i] for i in range(n)) for a in cols]
+        sub = solve(ata, atb)
+        if sub is None or any(v < 0 for v in sub):
+            continue
+        c = [0.0] * k
+        for j, v in zip(cols, sub):
+            c[j] = v
+        r = ssr(c)
+        if r < best[1]:
+            best = (c, r)
+    return best[0]
+
+
+def fit_relative_iterated(x_cols, y, rounds=3):
+    """The error model's fit (the Rust `ErrorFit::fit_relative`, held equal to it on the shared
+    cases of tests/data/error_fit_cases.txt): non-negative least squares weighted by 1/f², f the
+    fitted value, an MSE estimate's noise being proportional to its size. It starts from the
+    measured values (weights 1/y², a value ≤ 0 getting the smallest positive value's weight) and
+    reweighs by the fitted ones `rounds` times. Rows with a non-finite value are skipped. Returns
+    (c, relative residuals (y − f)/f), the shape of fit_costs' answer, or None without a row."""
+    keep = [i for i in range(len(y)) if math.isfinite(y[i]) and all(math.isfinite(col[i]) for col in x_cols)]
+    if not keep:
+        return None
+    cols = [[col[i] for i in keep] for col in x_cols]
+    yy = [y[i] for i in keep]
+    smallest = min((v for v in yy if v > 0), default=math.inf)
+
+    def weight(v):
+        return 1.0 / max(v, smallest) ** 2
+
+    def fitted(c):
+        return [sum(c[j] * cols[j][i] for j in range(len(cols))) for i in range(len(yy))]
+
+    c = weighted_nnls(cols, yy, [weight(v) for v in yy])
+    for _ in range(rounds):
+        c = weighted_nnls(cols, yy, [weight(f) for f in fitted(c)])
+    res = [(v - f) / f if f > 0 else math.nan for v, f in zip(yy, fitted(c))]
+    return c, res
+
+
 CostFit = namedtuple("CostFit", "constants residuals cis undefined")
 CostFit.__doc__ = """Fitted seconds per counted operation: constants, relative residuals (the misfit),
 per-constant (lo, hi) from the case-resampling bootstrap, and the share of draws that could not be
 fitted (too few distinct cases)."""
 
 
-def fit_costs_ci(x_cols, y, y_se, draws=2000, seed=1, dofs=None, level=0.95):
+def fit_costs_ci(x_cols, y, y_se, draws=2000, seed=1, dofs=None, level=0.95, fit=None):
     """fit_costs with intervals that carry the fit's misfit: every draw resamples the cases (table
     rows) with replacement, and moves each drawn y within its SE (Student-t on `dofs`), then refits
     the columns the full fit selected (non-zero constants). A column left at 0 adds nothing the data
     can separate and gets (0, 0). Draws with fewer distinct cases than constants, and draws that
     move a y to ≤ 0 (relative residuals need a positive value; a time drawn within a wide SE can
-    cross 0), are counted in `undefined`, not dropped silently and not fitted on a clamped value."""
-    best = fit_costs(x_cols, y)
+    cross 0), are counted in `undefined`, not dropped silently and not fitted on a clamped value.
+    `fit` is the fit refitted in every draw (fit_costs unless given: fit_relative_iterated is the
+    error model's)."""
+    fit = fit or fit_costs
+    best = fit(x_cols, y)
     if best is None:
         raise ValueError("no non-negative fit")
     c, res = best
@@ -697,7 +755,7 @@ def fit_costs_ci(x_cols, y, y_se, draws=2000, seed=1, dofs=None, level=0.95):
         if not all(v > 0 for v in yy):
             failed += 1
             continue
-        sub = fit_costs([[x_cols[j][i] for i in idx] for j in active], yy)
+        sub = fit([[x_cols[j][i] for i in idx] for j in active], yy)
         if sub is None or not all(math.isfinite(v) for v in sub[0]):
             failed += 1
             continue

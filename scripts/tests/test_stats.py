@@ -404,5 +404,56 @@ class CostFitShared(unittest.TestCase):
             self.assertAlmostEqual(got / want, 1.0, places=12)
 
 
+
+def error_fit_cases():
+    """The shared cases of data/error_fit_cases.txt: ([(photons, mse)], expected [B, c])."""
+    cases = []
+    with open(os.path.join(DATA, "error_fit_cases.txt")) as f:
+        for line in f:
+            word, *rest = line.split()
+            if word == "case":
+                cases.append(([], None))
+            elif word == "sample":
+                cases[-1][0].append(tuple(float(v) for v in rest))
+            elif word == "expect":
+                cases[-1] = (cases[-1][0], [float(v) for v in rest])
+    return cases
+
+
+class ErrorFitShared(unittest.TestCase):
+    """The error model's fit MSE = B + c/N lives in two languages (raycost_stats.fit_relative_iterated,
+    which the radius-schedule numbers use, and the Rust ErrorFit::fit_relative, which the crossover
+    uses); both are held to the shared cases, which the Rust side reads too: the same zeros and the
+    fitted MSE within 1e-9 relative at every finite sample."""
+
+    def test_the_error_fit_gives_the_shared_answers(self):
+        cases = error_fit_cases()
+        self.assertEqual(len(cases), 6)
+        for samples, expect in cases:
+            ns = [n for n, _ in samples]
+            coef, _ = S.fit_relative_iterated([[1.0] * len(ns), [1.0 / n for n in ns]],
+                                              [y for _, y in samples])
+            self.assertEqual([c == 0 for c in coef], [c == 0 for c in expect], coef)
+            for n, y in samples:
+                got, want = coef[0] + coef[1] / n, expect[0] + expect[1] / n
+                self.assertLessEqual(abs(got - want), 1e-9 * want, (n, y))
+
+    def test_the_noise_free_case_gives_its_floor_and_variance_back(self):
+        _, expect = error_fit_cases()[0]
+        self.assertAlmostEqual(expect[0] / 1e-4, 1.0, places=9)
+        self.assertAlmostEqual(expect[1] / 50.0, 1.0, places=9)
+
+    def test_weights_follow_the_fitted_value_not_the_measured_one(self):
+        # One low outlier at the largest N: weighted by its own small value (1/y²) it pulls the floor
+        # down hard; weighted by the fitted value it counts like its neighbours.
+        ns = [1e4, 1e5, 1e6, 1e7]
+        ys = [1e-3 + 1.0 / n for n in ns]
+        ys[-1] *= 0.5
+        once = S.fit_relative_iterated([[1.0] * 4, [1.0 / n for n in ns]], ys, rounds=0)[0]
+        iterated = S.fit_relative_iterated([[1.0] * 4, [1.0 / n for n in ns]], ys)[0]
+        self.assertLess(once[0], iterated[0])
+        self.assertLess(iterated[0], 1e-3)
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -386,6 +386,44 @@ fn solve_support<const K: usize>(
 mod tests {
     use super::*;
 
+    /// The error fit's second copy, in Python (`scripts/raycost_stats.py`,
+    /// `fit_relative_iterated`, which the radius-schedule numbers use), is held to the same shared
+    /// cases (`scripts/tests/data/error_fit_cases.txt`, Python's answers, with a value below 0 and
+    /// a NaN among them): the same zeros and the fitted MSE within 1e-9 relative at every sample.
+    #[test]
+    fn the_error_fit_equals_the_python_copy() {
+        let text = include_str!("../../scripts/tests/data/error_fit_cases.txt");
+        let mut cases: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> = Vec::new();
+        for line in text.lines().filter(|l| !l.starts_with('#')) {
+            let mut words = line.split_whitespace();
+            let word = words.next();
+            let values: Vec<f64> = words.map(|w| w.parse().unwrap()).collect();
+            match word {
+                Some("case") => cases.push((Vec::new(), Vec::new(), Vec::new())),
+                Some("sample") => {
+                    let c = cases.last_mut().unwrap();
+                    c.0.push(values[0]);
+                    c.1.push(values[1]);
+                }
+                Some("expect") => cases.last_mut().unwrap().2 = values,
+                _ => {}
+            }
+        }
+        assert_eq!(cases.len(), 6);
+        for (photons, mse, expect) in &cases {
+            let fit = ErrorFit::fit_relative(photons, mse);
+            assert_eq!(
+                [fit.floor2 == 0.0, fit.c == 0.0],
+                [expect[0] == 0.0, expect[1] == 0.0],
+                "{fit:?} against {expect:?}"
+            );
+            for &n in photons {
+                let (a, b) = (fit.mse(n), expect[0] + expect[1] / n);
+                assert!((a - b).abs() <= 1e-9 * b, "at {n}: {a} against {b}");
+            }
+        }
+    }
+
     /// The cost fit's second copy, in Python (`scripts/raycost_stats.py`, `fit_costs`), is held to
     /// the same shared cases (`scripts/tests/data/cost_fit_cases.txt`, Python's answers): the same
     /// columns kept and fitted seconds within 1e-9 relative at every sample. Both solve the same
