@@ -15,7 +15,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::OutputError;
-use crate::output::column::{Class, Column, ColumnInfo, Shape};
+use crate::output::column::{part, Class, Column, ColumnInfo, Shape};
 use crate::output::meta::Meta;
 use crate::output::readback::{check_table, finished_table_bytes, text_cells, Torn};
 
@@ -264,7 +264,7 @@ impl Csv {
             .next()
             .expect("a declaration expands to at least one column");
         debug_assert!(
-            c.shape == Shape::Value || want.name.ends_with("_mean"),
+            c.shape == Shape::Value || part::stem(&want.name, part::MEAN).is_some(),
             "{}",
             want.name
         );

@@ -12,6 +12,38 @@
 
 use serde::{Deserialize, Serialize};
 
+/// The suffixes after a stem that name an estimate's CSV columns: the one place they are spelled.
+/// [`Column::expand`] and the row writer write them, and every reader of a table (the report,
+/// `reproduce`'s comparison, the crossover's typed reads) finds an estimate's parts by them.
+pub mod part {
+    /// The mean.
+    pub const MEAN: &str = "_mean";
+    /// Its standard error.
+    pub const SE: &str = "_se";
+    /// The samples behind it.
+    pub const N: &str = "_n";
+    /// The independent clusters (replicas, batches) its SE was estimated from.
+    pub const CLUSTERS: &str = "_clusters";
+    /// The closed form it is held against.
+    pub const THEORY: &str = "_theory";
+    /// A band's lower edge.
+    pub const LOWER: &str = "_lower";
+    /// A band's upper edge.
+    pub const UPPER: &str = "_upper";
+    /// Where the 95 % CI falls in the band (a verdict).
+    pub const BAND: &str = "_band";
+
+    /// The CSV name of part `suffix` of the estimate of stem `stem`.
+    pub fn name(stem: &str, suffix: &str) -> String {
+        format!("{stem}{suffix}")
+    }
+
+    /// The stem of `name` if it names part `suffix` of an estimate (`n_i_mean` → `n_i`).
+    pub fn stem<'a>(name: &'a str, suffix: &str) -> Option<&'a str> {
+        name.strip_suffix(suffix).filter(|s| !s.is_empty())
+    }
+}
+
 /// What a column holds: decides which columns may differ between two runs of one spec and seed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -242,18 +274,18 @@ impl Column {
             name: format!("{stem}{suffix}"),
             class,
             unit: match suffix {
-                "_n" | "_clusters" | "_band" => "1".into(),
+                part::N | part::CLUSTERS | part::BAND => "1".into(),
                 _ => self.unit.into(),
             },
         };
         let est = |v: &mut Vec<ColumnInfo>| {
-            v.push(c("_mean", self.class));
-            v.push(c("_se", self.class));
+            v.push(c(part::MEAN, self.class));
+            v.push(c(part::SE, self.class));
             // The number of samples, and of the independent clusters (replicas or batches) the SE
             // was estimated from, which sets a CI's degrees of freedom: neither depends on the
             // machine, even for a timing estimate.
-            v.push(c("_n", Class::Measured));
-            v.push(c("_clusters", Class::Measured));
+            v.push(c(part::N, Class::Measured));
+            v.push(c(part::CLUSTERS, Class::Measured));
         };
         let mut v = Vec::new();
         match self.shape {
@@ -261,14 +293,14 @@ impl Column {
             Shape::Estimate => est(&mut v),
             Shape::EstimateVsPrediction => {
                 est(&mut v);
-                v.push(c("_theory", Class::Theory));
+                v.push(c(part::THEORY, Class::Theory));
             }
             Shape::EstimateVsBand => {
                 est(&mut v);
-                v.push(c("_theory", Class::Theory));
-                v.push(c("_lower", Class::Theory));
-                v.push(c("_upper", Class::Theory));
-                v.push(c("_band", Class::Check));
+                v.push(c(part::THEORY, Class::Theory));
+                v.push(c(part::LOWER, Class::Theory));
+                v.push(c(part::UPPER, Class::Theory));
+                v.push(c(part::BAND, Class::Check));
             }
         }
         v

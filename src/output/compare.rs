@@ -20,7 +20,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::column::{Class, ColumnInfo};
+use super::column::{part, Class, ColumnInfo};
 use super::header_changes;
 use super::meta::Meta;
 use super::readback::{finished_table_bytes, text_cells};
@@ -472,7 +472,7 @@ fn compare_table(
             continue;
         }
         c.timings.columns += 1;
-        let se_name = name.strip_suffix("_mean").map(|stem| format!("{stem}_se"));
+        let se_name = part::stem(name, part::MEAN).map(|stem| part::name(stem, part::SE));
         let se = se_name
             .as_deref()
             .and_then(|n| Some((at(a, n)?, at(b, n)?)));

@@ -4,7 +4,7 @@
 //! declared tables; [`Row::put`] is for the few cells written by hand (the runner's `point`
 //! column, `raycost bench`'s tables).
 
-use super::column::{Class, Column, ColumnInfo, Shape};
+use super::column::{part, Class, Column, ColumnInfo, Shape};
 use crate::stats::Estimate;
 
 /// How every table writes a missing value.
@@ -137,15 +137,25 @@ impl Row {
 
     /// Appends the estimate cells of `c` under `stem` (`M_mean, M_se, M_n, M_clusters`).
     pub(crate) fn estimate_cells(&mut self, c: &Column, stem: &str, e: &Estimate) -> &mut Self {
-        self.push(format!("{stem}_mean"), c.class, c.unit, Value::F(e.mean))
-            .push(format!("{stem}_se"), c.class, c.unit, Value::F(e.se))
-            .push(format!("{stem}_n"), Class::Measured, "1", Value::U(e.n))
-            .push(
-                format!("{stem}_clusters"),
-                Class::Measured,
-                "1",
-                Value::U(e.clusters),
-            )
+        self.push(
+            part::name(stem, part::MEAN),
+            c.class,
+            c.unit,
+            Value::F(e.mean),
+        )
+        .push(part::name(stem, part::SE), c.class, c.unit, Value::F(e.se))
+        .push(
+            part::name(stem, part::N),
+            Class::Measured,
+            "1",
+            Value::U(e.n),
+        )
+        .push(
+            part::name(stem, part::CLUSTERS),
+            Class::Measured,
+            "1",
+            Value::U(e.clusters),
+        )
     }
 
     /// Appends a theory or check cell that belongs to the estimate `stem` (`_theory`, `_band`, …).

@@ -20,7 +20,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use super::column::Class;
+use super::column::{part, Class};
 use super::compare::{read_cells, Side, TIMING_SIGMAS};
 use crate::error::OutputError;
 
@@ -115,7 +115,7 @@ impl RunSpread {
                 continue;
             }
             for info in classes {
-                if info.class != Class::Timing || !info.name.ends_with("_mean") {
+                if info.class != Class::Timing || part::stem(&info.name, part::MEAN).is_none() {
                     continue;
                 }
                 let Some(col) = header.iter().position(|h| *h == info.name) else {

@@ -18,7 +18,7 @@
 //! [`Column::accelerator_work`] in a row merged from photon shards (the work summed across the
 //! shards' own accelerators), so the reproducibility checks do not compare them there ([`Demote`]).
 
-use super::column::{Class, Column, Shape};
+use super::column::{part, Class, Column, Shape};
 use super::row::{Row, Value};
 use super::summary::SummaryLine;
 use crate::stats::verdict::{not_judged, z_verdict, Theory, Verdict};
@@ -286,7 +286,7 @@ fn write(
                 (Shape::EstimateVsPrediction, Theory::Prediction(p)) => {
                     row.estimate_cells(c, stem, e).derived_cell(
                         stem,
-                        "_theory",
+                        part::THEORY,
                         Class::Theory,
                         c.unit,
                         Value::F(*p),
@@ -304,14 +304,14 @@ fn write(
                     row.estimate_cells(c, stem, e)
                         .derived_cell(
                             stem,
-                            "_theory",
+                            part::THEORY,
                             Class::Theory,
                             c.unit,
                             Value::F(*prediction),
                         )
-                        .derived_cell(stem, "_lower", Class::Theory, c.unit, Value::F(*lower))
-                        .derived_cell(stem, "_upper", Class::Theory, c.unit, Value::F(*upper))
-                        .derived_cell(stem, "_band", Class::Check, "1", Value::S(verdict));
+                        .derived_cell(stem, part::LOWER, Class::Theory, c.unit, Value::F(*lower))
+                        .derived_cell(stem, part::UPPER, Class::Theory, c.unit, Value::F(*upper))
+                        .derived_cell(stem, part::BAND, Class::Check, "1", Value::S(verdict));
                 }
                 _ => return Err(mismatch()),
             }

@@ -33,7 +33,7 @@ use std::path::Path;
 use serde::Deserialize;
 
 use crate::error::InputError;
-use crate::output::column::POINT;
+use crate::output::column::{part, POINT};
 use crate::output::summary::measured;
 use crate::stats::verdict::z_verdict;
 use crate::stats::Estimate;
@@ -314,7 +314,7 @@ fn from_table(
             ))
         }
     };
-    if t.has(&format!("{col}_mean")) {
+    if t.has(&part::name(col, part::MEAN)) {
         let est = super::verdicts::estimate(t, row, col);
         Ok((est, measured(&est)))
     } else if t.has(col) {
@@ -330,7 +330,10 @@ fn from_table(
     } else {
         Err((
             "column",
-            format!("the source table has neither {col}_mean nor {col}"),
+            format!(
+                "the source table has neither {} nor {col}",
+                part::name(col, part::MEAN)
+            ),
         ))
     }
 }

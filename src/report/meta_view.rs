@@ -10,6 +10,7 @@
 use std::path::Path;
 
 use crate::error::InputError;
+use crate::output::column::ColumnInfo;
 use crate::output::meta::{Meta, SCHEMA};
 
 /// Provenance of one result folder, as the page lists it.
@@ -49,6 +50,10 @@ pub struct MetaView {
     pub sweep_keys: Vec<String>,
     /// The run's counted warnings (schema 2 only).
     pub warnings: Vec<String>,
+    /// The columns the metadata declares for the main table, in header order (schema 2 only;
+    /// empty where it declares none): the report checks the table's header against them and
+    /// takes each column's class from them.
+    pub main_columns: Vec<ColumnInfo>,
 }
 
 impl MetaView {
@@ -129,6 +134,7 @@ fn schema2(m: &Meta) -> MetaView {
         load_end: m.run.load_end.clone(),
         sweep_keys: sweep_keys(&m.spec),
         warnings: m.warnings.clone(),
+        main_columns: m.columns.get("main").cloned().unwrap_or_default(),
     }
 }
 
@@ -167,6 +173,7 @@ fn schema1(t: &toml::Table) -> MetaView {
         load_end: Vec::new(),
         sweep_keys: sweep_keys(&spec),
         warnings: Vec::new(),
+        main_columns: Vec::new(),
     }
 }
 

@@ -235,7 +235,10 @@ pub fn assemble(
             report.bench = Some(BenchSection { meta, table, files });
         } else if let Some(meta) = meta {
             let points = match &f.main_table {
-                Some(p) => verdicts::claims(&table::Table::read(p)?, &meta.sweep_keys),
+                Some(p) => {
+                    let t = table::Table::read(p)?.declared(p, &meta.main_columns)?;
+                    verdicts::claims(&t, &meta.sweep_keys)
+                }
                 None => Vec::new(),
             };
             report.experiments.push(ExperimentSection {

@@ -6,6 +6,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use crate::error::InputError;
+use crate::output::column::{Class, ColumnInfo};
 
 /// A CSV table: its header and its rows.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -15,6 +16,8 @@ pub struct Table {
     /// Rows of cells, each as long as the header.
     pub rows: Vec<Vec<String>>,
     index: HashMap<String, usize>,
+    /// The class the run's metadata declares for each column (empty: it declares none).
+    classes: HashMap<String, Class>,
 }
 
 impl Table {
@@ -49,7 +52,41 @@ impl Table {
             header,
             rows,
             index,
+            classes: HashMap::new(),
         })
+    }
+
+    /// The table checked against the columns its metadata declares (`declared`, in header order;
+    /// empty for a run that declares none, whose header is taken as it stands): a header that
+    /// differs (a table edited by hand, or paired with another run's metadata) is an
+    /// [`InputError`] naming the file and the first column that differs. Each column then has the
+    /// declared class ([`Table::class`]).
+    pub fn declared(mut self, path: &Path, declared: &[ColumnInfo]) -> Result<Table, InputError> {
+        if declared.is_empty() {
+            return Ok(self);
+        }
+        let names: Vec<&str> = declared.iter().map(|c| c.name.as_str()).collect();
+        if self.header != names {
+            let at = (0..self.header.len().max(names.len()))
+                .find(|&i| self.header.get(i).map(String::as_str) != names.get(i).copied())
+                .unwrap_or(0);
+            return Err(InputError::new(
+                path.display().to_string(),
+                format!(
+                    "the header is not the columns its metadata declares: column {} is {} in the table, {} in the metadata",
+                    at + 1,
+                    self.header.get(at).map_or("missing".to_string(), |h| format!("'{h}'")),
+                    names.get(at).map_or("missing".to_string(), |h| format!("'{h}'")),
+                ),
+            ));
+        }
+        self.classes = declared.iter().map(|c| (c.name.clone(), c.class)).collect();
+        Ok(self)
+    }
+
+    /// The class the metadata declares for column `name` (None: undeclared).
+    pub fn class(&self, name: &str) -> Option<Class> {
+        self.classes.get(name).copied()
     }
 
     /// Whether column `name` exists.

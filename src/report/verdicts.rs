@@ -22,7 +22,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use crate::output::column::POINT;
+use crate::output::column::{part, Class, POINT};
 use crate::output::summary::measured;
 pub use crate::stats::verdict::Tone;
 use crate::stats::verdict::{Theory, Verdict};
@@ -175,12 +175,15 @@ fn metric_stems(t: &Table) -> Vec<Stem> {
     t.header
         .iter()
         .filter_map(|h| {
-            if let Some(stem) = h.strip_suffix("_mean") {
-                t.has(&format!("{stem}_theory"))
-                    .then(|| Stem::Estimate(stem.to_string()))
+            // A theory column, declared as one where the metadata declares classes.
+            let theory = |stem: &str| {
+                let n = part::name(stem, part::THEORY);
+                t.has(&n) && t.class(&n).is_none_or(|c| c == Class::Theory)
+            };
+            if let Some(stem) = part::stem(h, part::MEAN) {
+                theory(stem).then(|| Stem::Estimate(stem.to_string()))
             } else {
-                (t.has(&format!("{h}_theory")) && !t.has(&format!("{h}_se")))
-                    .then(|| Stem::Value(h.clone()))
+                (theory(h) && !t.has(&part::name(h, part::SE))).then(|| Stem::Value(h.clone()))
             }
         })
         .collect()
@@ -190,15 +193,15 @@ fn metric_stems(t: &Table) -> Vec<Stem> {
 /// `M_clusters` where the table has it, else `M_n` (see the module doc).
 pub fn estimate(t: &Table, r: usize, m: &str) -> Estimate {
     let count = |suffix: &str| {
-        let x = t.number(r, &format!("{m}{suffix}"));
+        let x = t.number(r, &part::name(m, suffix));
         (x.is_finite() && x >= 0.0).then_some(x as u64)
     };
-    let n = count("_n").unwrap_or(0);
+    let n = count(part::N).unwrap_or(0);
     Estimate {
-        mean: t.number(r, &format!("{m}_mean")),
-        se: t.number(r, &format!("{m}_se")),
+        mean: t.number(r, &part::name(m, part::MEAN)),
+        se: t.number(r, &part::name(m, part::SE)),
         n,
-        clusters: count("_clusters").unwrap_or(n),
+        clusters: count(part::CLUSTERS).unwrap_or(n),
     }
 }
 
@@ -206,21 +209,25 @@ pub fn estimate(t: &Table, r: usize, m: &str) -> Estimate {
 fn claim(t: &Table, r: usize, s: &Stem) -> Claim {
     match s {
         Stem::Estimate(m) => {
-            let num = |suffix: &str| t.number(r, &format!("{m}{suffix}"));
+            let num = |suffix: &str| t.number(r, &part::name(m, suffix));
             let est = estimate(t, r, m);
-            let theory = if t.has(&format!("{m}_lower")) && t.has(&format!("{m}_upper")) {
+            let theory = if t.has(&part::name(m, part::LOWER)) && t.has(&part::name(m, part::UPPER))
+            {
                 Theory::Band {
-                    prediction: num("_theory"),
-                    lower: num("_lower"),
-                    upper: num("_upper"),
+                    prediction: num(part::THEORY),
+                    lower: num(part::LOWER),
+                    upper: num(part::UPPER),
                 }
             } else {
-                Theory::Prediction(num("_theory"))
+                Theory::Prediction(num(part::THEORY))
             };
             let verdict = theory.verdict(&est);
             let mut text = verdict.to_string();
             // The run's own band verdict, read as a verdict (a text that is none is shown too).
-            if let Some(run) = t.cell(r, &format!("{m}_band")).filter(|c| !c.is_empty()) {
+            if let Some(run) = t
+                .cell(r, &part::name(m, part::BAND))
+                .filter(|c| !c.is_empty())
+            {
                 if run.parse::<Verdict>().ok().as_ref() != Some(&verdict) {
                     text = format!("{text} (the run: {run})");
                 }
@@ -234,7 +241,7 @@ fn claim(t: &Table, r: usize, s: &Stem) -> Claim {
             }
         }
         Stem::Value(m) => {
-            let (v, th) = (t.number(r, m), t.number(r, &format!("{m}_theory")));
+            let (v, th) = (t.number(r, m), t.number(r, &part::name(m, part::THEORY)));
             let verdict = if v.is_finite() && th.is_finite() && th != 0.0 {
                 Verdict::OneValue(v / th)
             } else {
@@ -286,6 +293,48 @@ n_s_mean,n_s_se,n_s_n,n_s_theory,trace_s,tests,tests_theory\n\
         assert_eq!(p[1].claims[2].verdict, "n/a", "theory 0: no ratio");
         assert_eq!(p[1].claims[2].tone, Tone::Inconclusive);
         assert_eq!(p[0].claims[2].tone, Tone::NotJudged);
+    }
+
+    /// With the metadata's declarations, a column is a metric's theory only if declared as one:
+    /// a measured column that happens to end in `_theory` is no prediction; and a header unlike
+    /// the declarations is refused, naming the first column that differs.
+    #[test]
+    fn declarations_decide_what_is_a_theory_and_the_header_must_match_them() {
+        use crate::output::column::ColumnInfo;
+        let t = Table::parse(CSV).expect("csv");
+        let declared: Vec<ColumnInfo> = t
+            .header
+            .iter()
+            .map(|h| ColumnInfo {
+                name: h.clone(),
+                class: if h == "n_s_theory" {
+                    Class::Measured
+                } else if h.ends_with("_theory") {
+                    Class::Theory
+                } else {
+                    Class::Measured
+                },
+                unit: String::new(),
+            })
+            .collect();
+        let path = std::path::Path::new("r/r.csv");
+        let d = t
+            .clone()
+            .declared(path, &declared)
+            .expect("the header matches");
+        let names: Vec<String> = claims(&d, &[])[0]
+            .claims
+            .iter()
+            .map(|c| c.metric.clone())
+            .collect();
+        assert_eq!(names, ["n_i", "tests"], "n_s_theory is declared measured");
+        let mut other = declared.clone();
+        other.swap(2, 3);
+        let e = t.declared(path, &other).unwrap_err().to_string();
+        assert!(
+            e.contains("r/r.csv") && e.contains("column 3 is 'n_i_mean'"),
+            "{e}"
+        );
     }
 
     /// A past defect: every claim of the committed report was coloured as a disagreement, because
