@@ -73,6 +73,30 @@ mod tests {
         assert!(cases > 100, "{cases} cases");
     }
 
+    /// The t quantiles Python's `raycost_stats.t_for_level` is held to (`statrs_t_quantiles.txt`,
+    /// written from statrs) are this function's: the shared file is read by both test suites, so a
+    /// change of statrs (or of the switch to the normal) fails here as it would in Python.
+    #[test]
+    fn t_quantiles_are_the_shared_ones_python_is_held_to() {
+        let text = include_str!("../../scripts/tests/data/statrs_t_quantiles.txt");
+        let mut cases = 0;
+        for line in text.lines().filter(|l| !l.starts_with('#')) {
+            let w: Vec<&str> = line.split_whitespace().collect();
+            let (level, dof, t): (f64, u64, f64) = (
+                w[0].parse().expect("level"),
+                w[1].parse().expect("dof"),
+                w[2].parse().expect("quantile"),
+            );
+            let got = super::t_for_level(level, dof);
+            assert!(
+                (got - t).abs() <= 1e-12 * t,
+                "level {level}, dof {dof}: {got} against {t}"
+            );
+            cases += 1;
+        }
+        assert!(cases > 50, "{cases} cases");
+    }
+
     #[test]
     fn t_quantiles_match_tables() {
         assert!((super::t_for_level(0.99, 3) - 5.8409).abs() < 1e-3);
