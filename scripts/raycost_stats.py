@@ -644,25 +644,14 @@ def log_slope_statistic(xs):
 
 def fit_costs(x_cols, y):
     """Non-negative least squares on relative residuals: y ≈ Σ_j c_j·x_cols[j] with c ≥ 0, each point
-    weighted by 1/y. Solves every subset of columns (there are at most four) and keeps the best
-    non-negative solution. Returns (c, relative residuals), or None if no subset solves."""
-    k, n = len(x_cols), len(y)
-    w = [[x_cols[j][i] / y[i] for j in range(k)] for i in range(n)]
-    best = None
-    for mask in range(1, 1 << k):
-        cols = [j for j in range(k) if mask >> j & 1]
-        ata = [[sum(w[i][a] * w[i][b] for i in range(n)) for b in cols] for a in cols]
-        atb = [sum(w[i][a] for i in range(n)) for a in cols]
-        sub = solve(ata, atb)
-        if sub is None or any(v < 0 for v in sub):
-            continue
-        c = [0.0] * k
-        for j, v in zip(cols, sub):
-            c[j] = v
-        res = [(sum(c[j] * x_cols[j][i] for j in range(k)) - y[i]) / y[i] for i in range(n)]
-        if best is None or sum(r * r for r in res) < sum(r * r for r in best[1]):
-            best = (c, res)
-    return best
+    weighted by 1/y (weighted_nnls with weights 1/y²). Returns (c, relative residuals), or None if
+    no subset of the columns fits with non-negative coefficients."""
+    c = weighted_nnls(x_cols, y, [1.0 / (v * v) for v in y])
+    if not any(v > 0 for v in c):
+        return None
+    k = len(x_cols)
+    res = [(sum(c[j] * x_cols[j][i] for j in range(k)) - y[i]) / y[i] for i in range(len(y))]
+    return c, res
 
 
 def weighted_nnls(x_cols, y, w):
