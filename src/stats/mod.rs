@@ -53,24 +53,35 @@ pub fn z_for_level(level: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    /// The rows of a shared case file (`scripts/tests/data/`, read by the Python tests too): its
+    /// non-comment lines, each as three fields.
+    fn shared_rows(text: &str) -> Vec<[&str; 3]> {
+        text.lines()
+            .filter(|l| !l.starts_with('#'))
+            .map(|l| {
+                let w: Vec<&str> = l.split_whitespace().collect();
+                [w[0], w[1], w[2]]
+            })
+            .collect()
+    }
+
     /// The percentile convention Python's bootstrap uses too: the shared cases (written by
     /// `scripts/tests/data/make_percentile_cases.py`, checked by `scripts/tests/test_stats.py`).
     #[test]
     fn percentile_gives_the_ranks_python_gives() {
-        let text = include_str!("../../scripts/tests/data/percentile_cases.txt");
-        let mut cases = 0;
-        for line in text.lines().filter(|l| !l.starts_with('#')) {
-            let w: Vec<&str> = line.split_whitespace().collect();
+        let rows = shared_rows(include_str!(
+            "../../scripts/tests/data/percentile_cases.txt"
+        ));
+        assert!(rows.len() > 100, "{} cases", rows.len());
+        for [n, q, rank] in rows {
             let (n, q, rank): (usize, f64, f64) = (
-                w[0].parse().expect("n"),
-                w[1].parse().expect("q"),
-                w[2].parse().expect("rank"),
+                n.parse().expect("n"),
+                q.parse().expect("q"),
+                rank.parse().expect("rank"),
             );
             let values: Vec<f64> = (0..n).map(|i| i as f64).collect();
             assert_eq!(super::percentile(&values, q), rank, "n {n}, q {q}");
-            cases += 1;
         }
-        assert!(cases > 100, "{cases} cases");
     }
 
     /// The t quantiles Python's `raycost_stats.t_for_level` is held to (`statrs_t_quantiles.txt`,
@@ -78,23 +89,22 @@ mod tests {
     /// change of statrs (or of the switch to the normal) fails here as it would in Python.
     #[test]
     fn t_quantiles_are_the_shared_ones_python_is_held_to() {
-        let text = include_str!("../../scripts/tests/data/statrs_t_quantiles.txt");
-        let mut cases = 0;
-        for line in text.lines().filter(|l| !l.starts_with('#')) {
-            let w: Vec<&str> = line.split_whitespace().collect();
+        let rows = shared_rows(include_str!(
+            "../../scripts/tests/data/statrs_t_quantiles.txt"
+        ));
+        assert!(rows.len() > 50, "{} cases", rows.len());
+        for [level, dof, t] in rows {
             let (level, dof, t): (f64, u64, f64) = (
-                w[0].parse().expect("level"),
-                w[1].parse().expect("dof"),
-                w[2].parse().expect("quantile"),
+                level.parse().expect("level"),
+                dof.parse().expect("dof"),
+                t.parse().expect("quantile"),
             );
             let got = super::t_for_level(level, dof);
             assert!(
                 (got - t).abs() <= 1e-12 * t,
                 "level {level}, dof {dof}: {got} against {t}"
             );
-            cases += 1;
         }
-        assert!(cases > 50, "{cases} cases");
     }
 
     #[test]
